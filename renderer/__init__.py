@@ -1,0 +1,1 @@
+"""Lantern's renderer: everything that computes an image. No GUI import anywhere below here."""

@@ -1,0 +1,173 @@
+"""Progressive accumulation of radiance samples on the device.
+
+Each pixel keeps a running mean and Welford's sum of squared deviations (m2) instead of a plain
+sum: the mean of a constant stays exactly that constant after any number of samples, and the
+variance needs no catastrophic `sum(x^2) - n * mean^2` subtraction in f32.
+
+Fields are indexed [x, y] with y pointing up. Only the active region [0:width, 0:height] is used,
+so a viewer can render at a lower internal resolution into the same (max-size) film.
+"""
+
+import math
+
+import numpy as np
+import taichi as ti
+
+LUMINANCE_WEIGHTS = (0.2126, 0.7152, 0.0722)  # Rec.709
+NOISE_LUMINANCE_FLOOR = 1e-3  # relative error of near-black pixels would blow up without it
+
+
+@ti.func
+def luminance(rgb):
+    return LUMINANCE_WEIGHTS[0] * rgb[0] + LUMINANCE_WEIGHTS[1] * rgb[1] + LUMINANCE_WEIGHTS[2] * rgb[2]
+
+
+@ti.func
+def is_finite_f32(value):
+    # Tests on the bit pattern: with fast math (Taichi's default) `v != v` is folded to False.
+    # An all-ones exponent means +-inf or NaN.
+    bits = ti.bit_cast(value, ti.i32)
+    return (bits & 0x7F800000) != 0x7F800000
+
+
+@ti.func
+def is_finite_vec3(value):
+    return is_finite_f32(value[0]) and is_finite_f32(value[1]) and is_finite_f32(value[2])
+
+
+@ti.data_oriented
+class Film:
+    def __init__(self, max_width: int, max_height: int):
+        if max_width < 1 or max_height < 1:
+            raise ValueError(f"film size must be positive, got {max_width}x{max_height}")
+        self.max_width = max_width
+        self.max_height = max_height
+        shape = (max_width, max_height)
+        self.mean = ti.Vector.field(3, ti.f32, shape=shape)
+        self.m2 = ti.Vector.field(3, ti.f32, shape=shape)
+        self.count = ti.field(ti.i32, shape=shape)
+        self.rejected = ti.field(ti.i32, shape=shape)
+        # Reduction results of stats(): [min spp, total rejected, pixels with a noise estimate],
+        # [spp sum, sum of squared relative errors].
+        self._int_totals = ti.field(ti.i32, shape=3)
+        self._float_totals = ti.field(ti.f32, shape=2)
+        self.width = max_width
+        self.height = max_height
+
+    def reset(self, width: int, height: int) -> None:
+        """Clear all accumulated samples and make [0:width, 0:height] the active region."""
+        if not (1 <= width <= self.max_width and 1 <= height <= self.max_height):
+            raise ValueError(
+                f"active size {width}x{height} outside 1x1..{self.max_width}x{self.max_height}"
+            )
+        self.width = width
+        self.height = height
+        self.mean.fill(0.0)
+        self.m2.fill(0.0)
+        self.count.fill(0)
+        self.rejected.fill(0)
+
+    @ti.func
+    def add_sample(self, x: ti.i32, y: ti.i32, value: ti.math.vec3):
+        """Welford update of pixel (x, y); a sample with any NaN/inf component is only counted.
+
+        Not atomic: within one kernel launch, a given pixel must be updated by a single thread.
+        """
+        if is_finite_vec3(value):
+            n = self.count[x, y] + 1
+            self.count[x, y] = n
+            delta = value - self.mean[x, y]
+            new_mean = self.mean[x, y] + delta / ti.cast(n, ti.f32)
+            self.mean[x, y] = new_mean
+            self.m2[x, y] += delta * (value - new_mean)
+        else:
+            self.rejected[x, y] += 1
+
+    # --- downloads of the active region (numpy, row 0 = top) ---------------------------------
+
+    def mean_image(self) -> np.ndarray:
+        """Per-pixel mean radiance, float32 (height, width, 3)."""
+        out = np.empty((self.height, self.width, 3), dtype=np.float32)
+        self._copy_vec3(self.mean, out, self.width, self.height)
+        return out
+
+    def variance_of_mean_image(self) -> np.ndarray:
+        """Per-channel variance of the pixel mean, s^2 / n, float32 (height, width, 3).
+
+        s^2 is the unbiased sample variance. With fewer than 2 samples it is unknown: +inf.
+        """
+        out = np.empty((self.height, self.width, 3), dtype=np.float32)
+        self._copy_variance_of_mean(out, self.width, self.height)
+        return out
+
+    def sample_counts(self) -> np.ndarray:
+        """Accepted samples per pixel, int32 (height, width)."""
+        return self._active_rows(self.count.to_numpy())
+
+    def rejected_counts(self) -> np.ndarray:
+        """Dropped non-finite samples per pixel, int32 (height, width)."""
+        return self._active_rows(self.rejected.to_numpy())
+
+    def stats(self) -> dict:
+        """Summary of the active region, reduced on the device.
+
+        noise: root mean square over pixels of the relative standard error of the pixel mean in
+        luminance, sqrt(var / n) / max(luminance(mean), 1e-3). The luminance standard error is
+        taken as luminance(per-channel standard error): an upper bound that is exact when the
+        channels are fully correlated (grey). Pixels with < 2 samples have no estimate; if no pixel
+        has one, noise is +inf.
+        """
+        self._reduce_stats(self.width, self.height)
+        min_spp, rejected, noise_pixels = (int(v) for v in self._int_totals.to_numpy())
+        spp_sum, squared_error_sum = (float(v) for v in self._float_totals.to_numpy())
+        noise = math.sqrt(squared_error_sum / noise_pixels) if noise_pixels else math.inf
+        return {
+            "min_spp": min_spp,
+            "mean_spp": spp_sum / (self.width * self.height),
+            "rejected": rejected,
+            "noise": noise,
+        }
+
+    def _active_rows(self, full: np.ndarray) -> np.ndarray:
+        # [x, y] y-up  ->  [row, column] row 0 = top
+        return np.ascontiguousarray(full[: self.width, : self.height].T[::-1])
+
+    @ti.kernel
+    def _copy_vec3(self, source: ti.template(), out: ti.types.ndarray(), width: ti.i32, height: ti.i32):
+        for x, y in ti.ndrange(width, height):
+            for c in ti.static(range(3)):
+                out[height - 1 - y, x, c] = source[x, y][c]
+
+    @ti.kernel
+    def _copy_variance_of_mean(self, out: ti.types.ndarray(), width: ti.i32, height: ti.i32):
+        for x, y in ti.ndrange(width, height):
+            variance = self._variance_of_mean(x, y)
+            for c in ti.static(range(3)):
+                out[height - 1 - y, x, c] = variance[c]
+
+    @ti.func
+    def _variance_of_mean(self, x, y):
+        n = self.count[x, y]
+        result = ti.math.vec3(ti.math.inf)
+        if n >= 2:
+            nf = ti.cast(n, ti.f32)
+            result = self.m2[x, y] / ((nf - 1.0) * nf)
+        return result
+
+    @ti.kernel
+    def _reduce_stats(self, width: ti.i32, height: ti.i32):
+        self._int_totals[0] = 2147483647
+        self._int_totals[1] = 0
+        self._int_totals[2] = 0
+        self._float_totals[0] = 0.0
+        self._float_totals[1] = 0.0
+        for x, y in ti.ndrange(width, height):
+            n = self.count[x, y]
+            ti.atomic_min(self._int_totals[0], n)
+            self._int_totals[1] += self.rejected[x, y]
+            self._float_totals[0] += ti.cast(n, ti.f32)
+            if n >= 2:
+                standard_error = ti.sqrt(ti.max(self._variance_of_mean(x, y), 0.0))
+                relative = luminance(standard_error) / ti.max(luminance(self.mean[x, y]), NOISE_LUMINANCE_FLOOR)
+                self._float_totals[1] += relative * relative
+                self._int_totals[2] += 1

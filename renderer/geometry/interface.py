@@ -1,0 +1,28 @@
+"""The contract between integrators and geometry, SDF or mesh alike.
+
+A geometry object provides these Taichi funcs:
+  intersect(ray, t_max) -> Hit          closest hit along ray.d in (0, t_max)
+  occluded(ray, t_max) -> bool          any hit in (0, t_max): shadow rays stop at the first
+  surface(ray, hit) -> Surface          what the integrator shades
+  spawn(surface, direction) -> Ray      a ray leaving the surface, offset so it cannot hit itself
+Integrators, materials, lights, camera and film never know which kind they run on.
+
+Rays carry a cone (width at the origin, spread per metre) so that the SDF marcher can grow its
+hit threshold with the pixel footprint; mesh geometry ignores it.
+"""
+import taichi as ti
+
+vec3 = ti.math.vec3
+
+Ray = ti.types.struct(o=vec3, d=vec3, cone_width=ti.f32, cone_spread=ti.f32)
+
+# `work` counts the geometry's own effort for the debug views and benchmarks: march steps for SDF
+# scenes, node visits for BVH scenes; `tests` counts primitive tests (BVH only).
+Hit = ti.types.struct(hit=ti.i32, t=ti.f32, work=ti.i32, tests=ti.i32)
+
+# n_geo: outward geometric normal; n_shading: outward shading normal; eps: the distance within
+# which a spawned ray must not find this surface again.
+Surface = ti.types.struct(p=vec3, n_geo=vec3, n_shading=vec3, uv=ti.math.vec2, material=ti.i32,
+                          front_face=ti.i32, eps=ti.f32, cone_width=ti.f32, cone_spread=ti.f32)
+
+INF = 1e30  # "no hit yet"; far beyond any scene extent and still finite in f32

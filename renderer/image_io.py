@@ -1,0 +1,142 @@
+"""Reading environment maps and writing rendered images.
+
+All images cross this module as numpy arrays of shape (height, width, 3) with row 0 at the top.
+Environment maps are equirectangular, so row 0 is the zenith (+y). Values are linear Rec.709 RGB
+except for PNG, which holds display-referred values.
+"""
+from __future__ import annotations
+
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from renderer.scene.errors import SceneError
+
+ENVIRONMENT_EXTENSIONS = (".exr", ".hdr")
+
+
+class NegativePixelsWarning(UserWarning):
+    """An environment map had negative values (lossy-compression ringing); they were clamped to 0."""
+
+
+def read_environment(path: str | os.PathLike) -> np.ndarray:
+    """Load an .exr or .hdr environment map as float32 (H, W, 3), row 0 = top.
+
+    Raises SceneError for a missing, unsupported, unreadable or non-finite map. Negative values
+    are clamped to 0 with a NegativePixelsWarning: a light source cannot emit negative radiance.
+    """
+    name = path  # errors show the path exactly as the caller gave it
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(name, "environment map not found")
+    extension = path.suffix.lower()
+    if extension == ".exr":
+        image = _read_exr_rgb(name)
+    elif extension == ".hdr":
+        image = _read_radiance_hdr(name)
+    else:
+        raise SceneError(
+            name,
+            f"unsupported environment map format '{path.suffix or '(none)'}' "
+            f"(expected one of {', '.join(ENVIRONMENT_EXTENSIONS)})",
+        )
+
+    non_finite = int(np.count_nonzero(~np.isfinite(image).all(axis=2)))
+    if non_finite:
+        raise SceneError(name, f"{non_finite} pixels have non-finite values (NaN or infinity)")
+    negative = image < 0
+    negative_values = int(np.count_nonzero(negative))
+    if negative_values:
+        negative_pixels = int(np.count_nonzero(negative.any(axis=2)))
+        warnings.warn(
+            f"{os.fspath(name)}: clamped {negative_values} negative values "
+            f"(in {negative_pixels} pixels) to 0",
+            NegativePixelsWarning,
+            stacklevel=2,
+        )
+        np.maximum(image, 0.0, out=image)
+    return image
+
+
+def read_exr(path: str | os.PathLike) -> np.ndarray:
+    """Read an EXR as float32 (H, W, 3), row 0 = top, values untouched (no clamping)."""
+    if not Path(path).is_file():
+        raise SceneError(path, "file not found")
+    return _read_exr_rgb(path)
+
+
+def write_exr(path: str | os.PathLike, rgb: np.ndarray) -> None:
+    """Write linear float RGB (H, W, 3), row 0 = top, as a float32 ZIP-compressed EXR."""
+    import OpenEXR
+
+    pixels = np.ascontiguousarray(_check_rgb_shape(rgb), dtype=np.float32)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(header, {"RGB": pixels}) as exr:
+        exr.write(str(path))
+
+
+def write_png(path: str | os.PathLike, rgb: np.ndarray) -> None:
+    """Write display-referred RGB (H, W, 3): uint8 as is, floats in [0, 1] (clipped) quantised."""
+    import imageio.v3 as iio
+
+    rgb = _check_rgb_shape(rgb)
+    if rgb.dtype != np.uint8:
+        rgb = np.clip(np.nan_to_num(rgb.astype(np.float32), nan=0.0), 0.0, 1.0)
+        rgb = np.floor(rgb * 255.0 + 0.5).astype(np.uint8)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    iio.imwrite(path, rgb, extension=".png")
+
+
+def _check_rgb_shape(rgb: np.ndarray) -> np.ndarray:
+    rgb = np.asarray(rgb)
+    if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.shape[0] == 0 or rgb.shape[1] == 0:
+        raise ValueError(f"expected an image of shape (height, width, 3), got {rgb.shape}")
+    return rgb
+
+
+def _read_exr_rgb(path: str | os.PathLike) -> np.ndarray:
+    import OpenEXR
+
+    try:
+        # Separate channels so R/G/B in mixed half/float types or with alpha all read the same way.
+        with OpenEXR.File(os.fspath(path), separate_channels=True) as exr:
+            channels = {name: channel.pixels for name, channel in exr.channels().items()}
+    except Exception as error:  # the binding raises plain Exceptions/RuntimeErrors on bad files
+        raise SceneError(path, f"cannot read EXR file ({_one_line(error)})") from None
+
+    if all(name in channels for name in "RGB"):
+        planes = [channels[name] for name in "RGB"]
+    elif "Y" in channels:  # luminance-only map: grey
+        planes = [channels["Y"]] * 3
+    else:
+        found = ", ".join(sorted(channels)) or "none"
+        raise SceneError(path, f"EXR has no R, G, B (or Y) channels (found: {found})")
+    image = np.stack([np.asarray(plane, dtype=np.float32) for plane in planes], axis=2)
+    if image.ndim != 3 or image.shape[0] == 0 or image.shape[1] == 0:
+        raise SceneError(path, "EXR image is empty")
+    return image
+
+
+def _read_radiance_hdr(path: str | os.PathLike) -> np.ndarray:
+    import cv2
+
+    # OpenCV logs its own multi-line error for corrupt files; our SceneError says it in one line.
+    previous_level = cv2.utils.logging.getLogLevel()
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    try:
+        bgr = cv2.imread(os.fspath(path), cv2.IMREAD_ANYDEPTH | cv2.IMREAD_COLOR)
+    finally:
+        cv2.utils.logging.setLogLevel(previous_level)
+    if bgr is None or bgr.ndim != 3 or bgr.shape[2] != 3 or bgr.size == 0:
+        raise SceneError(path, "cannot read Radiance HDR file (corrupt or not RGBE)")
+    return np.ascontiguousarray(bgr[:, :, ::-1], dtype=np.float32)
+
+
+def _one_line(error: Exception) -> str:
+    text = str(error).strip().splitlines()
+    return text[0] if text else type(error).__name__

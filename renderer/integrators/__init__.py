@@ -1,0 +1,24 @@
+"""Integrators: each computes the radiance (or a debug quantity) carried by one camera ray.
+
+An integrator is a data-oriented class with
+  name, description                 for the command line, HUD and help
+  display_tonemapper                None (the user's choice) or a tone mapper name its output wants
+  li(ctx, ray, key, max_depth)      a Taichi func returning (value vec3, geometry work, rays traced)
+`ctx` is the RenderProgram: ctx.geometry, ctx.bsdf, ctx.environment, ctx.features.
+"""
+from renderer.integrators.debug import AlbedoView, DepthView, NormalsView, StepsView
+from renderer.integrators.path import PathTracer
+
+_ALL = (PathTracer, NormalsView, AlbedoView, DepthView, StepsView)
+INTEGRATORS = {cls.name: cls for cls in _ALL}
+
+
+def integrator_names() -> list[str]:
+    return list(INTEGRATORS)
+
+
+def make_integrator(name: str):
+    try:
+        return INTEGRATORS[name]()
+    except KeyError:
+        raise ValueError(f"unknown integrator '{name}' (known: {', '.join(INTEGRATORS)})") from None

@@ -1,0 +1,85 @@
+"""Debug views: what the first hit is, not how it is lit. One ray per sample."""
+import taichi as ti
+
+from renderer.geometry.interface import INF
+
+vec3 = ti.math.vec3
+
+
+@ti.func
+def heat(x):
+    """A perceptually ordered black-purple-orange-yellow ramp for x in [0, 1]."""
+    t = ti.math.clamp(x, 0.0, 1.0) * 4.0
+    c0 = vec3(0.0, 0.0, 0.02)
+    c1 = vec3(0.34, 0.06, 0.43)
+    c2 = vec3(0.73, 0.21, 0.33)
+    c3 = vec3(0.98, 0.55, 0.04)
+    c4 = vec3(0.99, 1.0, 0.64)
+    c = c0
+    if t < 1.0:
+        c = ti.math.mix(c0, c1, t)
+    elif t < 2.0:
+        c = ti.math.mix(c1, c2, t - 1.0)
+    elif t < 3.0:
+        c = ti.math.mix(c2, c3, t - 2.0)
+    else:
+        c = ti.math.mix(c3, c4, t - 3.0)
+    return c
+
+
+@ti.data_oriented
+class NormalsView:
+    name = "normals"
+    description = "shading normal at the first hit, mapped to [0, 1]"
+    display_tonemapper = "none"
+
+    @ti.func
+    def li(self, ctx, ray, key, max_depth):
+        hit = ctx.geometry.intersect(ray, INF)
+        value = vec3(0.0)
+        if hit.hit == 1:
+            value = ctx.geometry.surface(ray, hit).n_shading * 0.5 + 0.5
+        return value, hit.work, 1
+
+
+@ti.data_oriented
+class AlbedoView:
+    name = "albedo"
+    description = "base colour at the first hit"
+    display_tonemapper = "none"
+
+    @ti.func
+    def li(self, ctx, ray, key, max_depth):
+        hit = ctx.geometry.intersect(ray, INF)
+        value = vec3(0.0)
+        if hit.hit == 1:
+            value = ctx.bsdf.albedo(ctx.bsdf.get(ctx.geometry.surface(ray, hit).material))
+        return value, hit.work, 1
+
+
+@ti.data_oriented
+class DepthView:
+    name = "depth"
+    description = "distance to the first hit in metres (0 for misses); shown as d / (1 + d)"
+    display_tonemapper = "reinhard"
+
+    @ti.func
+    def li(self, ctx, ray, key, max_depth):
+        hit = ctx.geometry.intersect(ray, INF)
+        value = vec3(0.0)
+        if hit.hit == 1:
+            value = vec3(hit.t)
+        return value, hit.work, 1
+
+
+@ti.data_oriented
+class StepsView:
+    name = "steps"
+    description = "geometry work per camera ray (march steps) as a heat map of work / 256"
+    display_tonemapper = "none"
+
+    @ti.func
+    def li(self, ctx, ray, key, max_depth):
+        hit = ctx.geometry.intersect(ray, INF)
+        # 256 is the default step limit: the ramp saturates where rays give up.
+        return heat(hit.work / 256.0), hit.work, 1

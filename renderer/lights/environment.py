@@ -1,0 +1,79 @@
+"""The environment seen by rays that leave the scene: an equirectangular HDR map, a sky gradient or
+a constant colour. Which of the three is compiled in is a `Features` decision; intensity and rotation
+are data (a small field), so the viewer's sliders never recompile a kernel.
+
+Map convention (as Mitsuba's `envmap`): u = atan2(d.x, -d.z) / 2pi, v = acos(d.y) / pi, row 0 at
+the zenith; a rotation turns the map about +y.
+"""
+import math
+
+import numpy as np
+import taichi as ti
+
+from renderer.sampling.warps import PI
+
+KINDS = ("map", "sky", "constant")
+
+
+@ti.data_oriented
+class Environment:
+    def __init__(self, spec, image: np.ndarray | None):
+        """spec: EnvironmentSpec; image: (H, W, 3) float32 for kind 'map', else None."""
+        self.kind = spec.kind
+        if self.kind == "map":
+            if image is None:
+                raise ValueError("an environment map needs its image")
+            self.height, self.width = image.shape[:2]
+            self.texels = ti.Vector.field(3, ti.f32, shape=(self.height, self.width))
+            self.texels.from_numpy(np.ascontiguousarray(image, dtype=np.float32))
+        # intensity, rotation (radians), and the three sky / constant colours
+        self.scalars = ti.field(ti.f32, shape=2)
+        self.colors = ti.Vector.field(3, ti.f32, shape=3)
+        self.set_spec(spec)
+
+    def set_spec(self, spec):
+        self.scalars.from_numpy(np.array([spec.intensity, math.radians(spec.rotation)], np.float32))
+        colours = [spec.color, spec.zenith, spec.horizon] if spec.kind == "constant" else [spec.zenith, spec.horizon, spec.ground]
+        self.colors.from_numpy(np.array(colours, np.float32))
+
+    @ti.func
+    def radiance(self, d):
+        value = ti.math.vec3(0.0)
+        if ti.static(self.kind == "map"):
+            value = self._lookup(d)
+        elif ti.static(self.kind == "sky"):
+            value = self._sky(d)
+        else:
+            value = self.colors[0]
+        return value * self.scalars[0]
+
+    @ti.func
+    def _sky(self, d):
+        zenith, horizon, ground = self.colors[0], self.colors[1], self.colors[2]
+        y = ti.math.clamp(d.y, -1.0, 1.0)
+        result = ti.math.mix(horizon, ground, ti.min(1.0, -y * 8.0))  # a short fade below the horizon
+        if y >= 0.0:
+            result = ti.math.mix(horizon, zenith, ti.sqrt(y))
+        return result
+
+    @ti.func
+    def _lookup(self, d):
+        """Bilinear lookup; wraps in u, clamps in v."""
+        phi = ti.atan2(d.x, -d.z) - self.scalars[1]
+        u = phi / (2.0 * PI)
+        u -= ti.floor(u)
+        v = ti.acos(ti.math.clamp(d.y, -1.0, 1.0)) / PI
+        x = u * self.width - 0.5
+        y = ti.math.clamp(v * self.height - 0.5, 0.0, self.height - 1.0)
+        x0f = ti.floor(x)
+        y0f = ti.floor(y)
+        fx = x - x0f
+        fy = y - y0f
+        x0 = ti.cast(x0f, ti.i32) % self.width
+        x0 = x0 + self.width if x0 < 0 else x0
+        x1 = (x0 + 1) % self.width
+        y0 = ti.cast(y0f, ti.i32)
+        y1 = ti.min(y0 + 1, self.height - 1)
+        top = ti.math.mix(self.texels[y0, x0], self.texels[y0, x1], fx)
+        bottom = ti.math.mix(self.texels[y1, x0], self.texels[y1, x1], fx)
+        return ti.math.mix(top, bottom, fy)

@@ -1,0 +1,1 @@
+"""BSDFs and the device-side material table."""

@@ -1,0 +1,93 @@
+"""GGX (Trowbridge-Reitz) microfacet distribution with visible-normal sampling.
+
+All vectors are in the local shading frame (z = normal). `alpha` is the GGX width (roughness^2).
+Masking-shadowing is Smith's height-correlated form, G2 = 1 / (1 + Lambda(wo) + Lambda(wi)).
+"""
+import taichi as ti
+
+from renderer.sampling.warps import PI
+
+
+@ti.func
+def ggx_d(h, alpha):
+    a2 = alpha * alpha
+    t = (h.x * h.x + h.y * h.y) / a2 + h.z * h.z
+    return 1.0 / (PI * a2 * t * t)
+
+
+@ti.func
+def smith_lambda(w, alpha):
+    # Lambda = (sqrt(1 + alpha^2 tan^2) - 1) / 2, written without tan so that z -> 0 gives a large
+    # finite value; callers reject z <= 0 before this is reached.
+    z2 = ti.max(w.z * w.z, 1e-20)
+    return 0.5 * (ti.sqrt(1.0 + alpha * alpha * (w.x * w.x + w.y * w.y) / z2) - 1.0)
+
+
+@ti.func
+def smith_g1(w, alpha):
+    return 1.0 / (1.0 + smith_lambda(w, alpha))
+
+
+@ti.func
+def smith_g2(wo, wi, alpha):
+    return 1.0 / (1.0 + smith_lambda(wo, alpha) + smith_lambda(wi, alpha))
+
+
+@ti.func
+def sample_visible_normal(wo, alpha, u):
+    """Heitz 2018, 'Sampling the GGX distribution of visible normals'. wo.z must be > 0."""
+    vh = ti.math.normalize(ti.math.vec3(alpha * wo.x, alpha * wo.y, wo.z))
+    lensq = vh.x * vh.x + vh.y * vh.y
+    t1 = ti.math.vec3(1.0, 0.0, 0.0)
+    if lensq > 0.0:
+        t1 = ti.math.vec3(-vh.y, vh.x, 0.0) / ti.sqrt(lensq)
+    t2 = vh.cross(t1)
+    r = ti.sqrt(u.x)
+    phi = 2.0 * PI * u.y
+    p1 = r * ti.cos(phi)
+    p2 = r * ti.sin(phi)
+    s = 0.5 * (1.0 + vh.z)
+    p2 = (1.0 - s) * ti.sqrt(ti.max(0.0, 1.0 - p1 * p1)) + s * p2
+    nh = p1 * t1 + p2 * t2 + ti.sqrt(ti.max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh
+    return ti.math.normalize(ti.math.vec3(alpha * nh.x, alpha * nh.y, ti.max(1e-6, nh.z)))
+
+
+@ti.func
+def visible_normal_pdf(wo, h, alpha):
+    """Density of h under sample_visible_normal: G1(wo) max(0, wo.h) D(h) / wo.z."""
+    return smith_g1(wo, alpha) * ti.max(0.0, wo.dot(h)) * ggx_d(h, alpha) / wo.z
+
+
+@ti.func
+def fresnel_schlick(f0, cos_theta):
+    m = ti.math.clamp(1.0 - cos_theta, 0.0, 1.0)
+    m2 = m * m
+    return f0 + (1.0 - f0) * (m2 * m2 * m)
+
+
+@ti.func
+def fresnel_dielectric(cos_i, eta):
+    """Exact unpolarised Fresnel reflectance. eta = n_transmitted / n_incident, cos_i in (0, 1].
+
+    Returns (F, cos_t); F = 1 and cos_t = 0 under total internal reflection.
+    """
+    sin2_t = (1.0 - cos_i * cos_i) / (eta * eta)
+    f = 1.0
+    cos_t = 0.0
+    if sin2_t < 1.0:
+        cos_t = ti.sqrt(1.0 - sin2_t)
+        rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+        rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+        f = 0.5 * (rs * rs + rp * rp)
+    return f, cos_t
+
+
+@ti.func
+def reflect(wo, h):
+    return 2.0 * wo.dot(h) * h - wo
+
+
+@ti.func
+def refract(wo, h, eta, cos_t):
+    """Refract wo (on the side h points to) through the microfacet h; eta = n_t / n_i."""
+    return -wo / eta + (wo.dot(h) / eta - cos_t) * h

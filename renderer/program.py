@@ -1,0 +1,51 @@
+"""One compiled rendering program: a (geometry, integrator, Features) combination and its kernels.
+
+Taichi compiles a data-oriented object's kernels once per instance, so a RenderProgram *is* the
+kernel cache entry: the Renderer keeps one per (integrator, Features) and switching back to a
+combination already seen compiles nothing.
+"""
+import taichi as ti
+
+from renderer.camera import generate_ray
+from renderer.geometry.interface import INF
+from renderer.materials.bsdf import Bsdf
+from renderer.sampling.rng import sample_key
+
+
+@ti.data_oriented
+class RenderProgram:
+    def __init__(self, geometry, materials, environment, integrator, film, work, features):
+        self.geometry = geometry
+        self.bsdf = Bsdf(materials, features)
+        self.environment = environment
+        self.integrator = integrator
+        self.film = film
+        self.work = work  # per-pixel [geometry work, rays traced] summed over samples
+        self.features = features
+
+    @ti.kernel
+    def render(self, width: ti.i32, height: ti.i32, spp: ti.i32, first_sample: ti.i32, seed: ti.u32,
+               max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3, right: ti.math.vec3,
+               up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
+        for x, y in ti.ndrange(width, height):
+            pixel = y * width + x
+            for s in range(spp):
+                key = sample_key(pixel, first_sample + s, seed)
+                ray = generate_ray(x, y, width, height, key, origin, forward, right, up, tan_half_fov,
+                                   aperture, focus, self.features.depth_of_field)
+                value, work, rays = self.integrator.li(self, ray, key, max_depth)
+                self.film.add_sample(x, y, value)
+                self.work[x, y] += ti.math.vec2(work, rays)
+
+    @ti.kernel
+    def probe(self, u: ti.f32, v: ti.f32, width: ti.i32, height: ti.i32, origin: ti.math.vec3,
+              forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32,
+              out: ti.template()):
+        """Distance along `forward` to the surface under (u, v) in [0,1]^2 (y up); -1 on a miss."""
+        aspect = width / height
+        d = ti.math.normalize(forward + (2.0 * u - 1.0) * tan_half_fov * aspect * right
+                              + (2.0 * v - 1.0) * tan_half_fov * up)
+        ray = generate_ray(0, 0, 1, 1, ti.u32(0), origin, forward, right, up, tan_half_fov, 0.0, 1.0, False)
+        ray.d = d
+        hit = self.geometry.intersect(ray, INF)
+        out[None] = hit.t * d.dot(forward) if hit.hit == 1 else -1.0

@@ -1,0 +1,95 @@
+"""The Renderer: uploads a scene once, then renders progressive passes into its film.
+
+It is what the viewer, the command line and the benchmarks drive; it knows nothing of windows.
+"""
+from __future__ import annotations
+
+import numpy as np
+import taichi as ti
+
+from renderer.camera import CameraFrame
+from renderer.film import Film
+from renderer.image_io import read_environment
+from renderer.integrators import make_integrator
+from renderer.lights.environment import Environment
+from renderer.materials.bsdf import MaterialTable
+from renderer.program import RenderProgram
+from renderer.scene.features import Features, scene_features
+from renderer.scene.model import Scene
+
+
+def make_geometry(scene: Scene):
+    if scene.geometry == "sdf":
+        from shaders_sdf.geometry import SdfGeometry
+
+        return SdfGeometry(scene, scene.material_index)
+    raise ValueError(f"unknown geometry kind '{scene.geometry}'")
+
+
+class Renderer:
+    def __init__(self, scene: Scene, max_size: tuple[int, int] | None = None):
+        self.scene = scene
+        width, height = max_size or (scene.render.width, scene.render.height)
+        image = read_environment(scene.environment.file) if scene.environment.kind == "map" else None
+        self.environment = Environment(scene.environment, image)
+        self.materials = MaterialTable(scene.materials)
+        self.geometry = make_geometry(scene)
+        self.film = Film(width, height)
+        self.work = ti.Vector.field(2, ti.f32, shape=(width, height))
+        self._probe_out = ti.field(ti.f32, shape=())
+        self._programs: dict[tuple[str, Features], RenderProgram] = {}
+        self._launched: set[tuple[str, Features]] = set()
+        self.samples_done = 0
+        self.reset(width, height)
+
+    # --- programs ------------------------------------------------------------------------------
+    def features(self, camera: CameraFrame | None = None) -> Features:
+        return scene_features(self.scene, aperture=None if camera is None else camera.aperture)
+
+    def program(self, integrator: str, features: Features) -> RenderProgram:
+        key = (integrator, features)
+        if key not in self._programs:
+            self._programs[key] = RenderProgram(self.geometry, self.materials, self.environment,
+                                                make_integrator(integrator), self.film, self.work, features)
+        return self._programs[key]
+
+    def is_compiled(self, integrator: str, features: Features) -> bool:
+        """False until the combination has run once in this process (its first call compiles)."""
+        return (integrator, features) in self._launched
+
+    # --- rendering -----------------------------------------------------------------------------
+    def reset(self, width: int | None = None, height: int | None = None) -> None:
+        self.film.reset(width or self.film.width, height or self.film.height)
+        self.work.fill(0.0)
+        self.samples_done = 0
+
+    def render(self, camera: CameraFrame, spp: int, integrator: str | None = None, max_depth: int | None = None,
+               seed: int | None = None, features: Features | None = None) -> None:
+        """Add `spp` samples per pixel to the film's active region."""
+        settings = self.scene.render
+        integrator = integrator or settings.integrator
+        features = features or self.features(camera)
+        program = self.program(integrator, features)
+        program.render(self.film.width, self.film.height, spp, self.samples_done,
+                       (settings.seed if seed is None else seed) & 0xFFFFFFFF,
+                       settings.max_depth if max_depth is None else max_depth, *camera.kernel_args())
+        self._launched.add((integrator, features))
+        self.samples_done += spp
+
+    def focus_distance_at(self, camera: CameraFrame, u: float, v: float, integrator: str | None = None) -> float | None:
+        """Distance along the view direction to the surface under (u, v) in [0,1]^2 (y up)."""
+        program = self.program(integrator or self.scene.render.integrator, self.features(camera))
+        args = camera.kernel_args()
+        program.probe(u, v, self.film.width, self.film.height, *args[:5], self._probe_out)
+        distance = float(self._probe_out[None])
+        return distance if distance > 0 else None
+
+    def work_stats(self) -> dict:
+        """Mean geometry work (march steps / node visits) per ray, and rays per sample."""
+        totals = self.work.to_numpy()[: self.film.width, : self.film.height].reshape(-1, 2).sum(axis=0, dtype=np.float64)
+        samples = max(1, self.samples_done * self.film.width * self.film.height)
+        return {"work_per_ray": totals[0] / max(totals[1], 1.0), "rays_per_sample": totals[1] / samples}
+
+    def image(self) -> np.ndarray:
+        """The linear mean image (H, W, 3), row 0 at the top."""
+        return self.film.mean_image()

@@ -1,0 +1,36 @@
+"""Scene description: the plain-data model, the TOML loader and its error type."""
+from .errors import SceneError
+from .model import (
+    ENVIRONMENT_KINDS,
+    GEOMETRY_KINDS,
+    MATERIAL_KINDS,
+    SDF_OPERATORS,
+    SDF_PRIMITIVES,
+    CameraSpec,
+    EnvironmentSpec,
+    MarchSettings,
+    MaterialSpec,
+    RenderSettings,
+    Scene,
+    SdfNode,
+    Transform,
+)
+from .toml_loader import load_scene
+
+__all__ = [
+    "load_scene",
+    "SceneError",
+    "CameraSpec",
+    "EnvironmentSpec",
+    "MarchSettings",
+    "MaterialSpec",
+    "RenderSettings",
+    "Scene",
+    "SdfNode",
+    "Transform",
+    "ENVIRONMENT_KINDS",
+    "GEOMETRY_KINDS",
+    "MATERIAL_KINDS",
+    "SDF_OPERATORS",
+    "SDF_PRIMITIVES",
+]

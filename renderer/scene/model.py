@@ -1,0 +1,146 @@
+"""Plain-data description of a scene, as the loaders produce it and the renderer consumes it.
+
+Everything here is numpy or frozen dataclasses: no Taichi, so loading and validation are testable
+without kernels. Units are metres; angles are stored in degrees exactly as written in scene files
+and converted to radians where they are used.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+Vec3 = tuple[float, float, float]
+
+# Kinds known to the renderer. The loader refuses anything else with a one-line error.
+MATERIAL_KINDS = ("diffuse", "conductor", "dielectric")
+SDF_PRIMITIVES = ("sphere", "box", "rounded_box", "torus", "capsule", "cylinder", "cone", "plane")
+SDF_OPERATORS = ("union", "intersection", "subtraction", "smooth_union", "repeat")
+ENVIRONMENT_KINDS = ("map", "sky", "constant")
+GEOMETRY_KINDS = ("sdf",)
+
+
+@dataclass(frozen=True)
+class CameraSpec:
+    position: Vec3 = (0.0, 1.0, 5.0)
+    look_at: Vec3 = (0.0, 0.0, 0.0)
+    up: Vec3 = (0.0, 1.0, 0.0)
+    fov: float = 45.0  # vertical field of view, degrees
+    aperture: float = 0.0  # lens radius in metres; 0 is a pinhole
+    focus_distance: float = 5.0  # metres along the view direction
+
+
+@dataclass(frozen=True)
+class MarchSettings:
+    """Sphere-tracing knobs (SDF scenes only)."""
+
+    hit_threshold: float = 1.0  # hit when distance < hit_threshold * pixel footprint at that range
+    min_threshold: float = 1e-4  # absolute floor on the hit distance, metres
+    max_steps: int = 256
+    max_distance: float = 100.0  # metres
+    over_relaxation: float = 1.6  # 1.0 is plain sphere tracing
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    width: int = 640
+    height: int = 360
+    spp: int = 64
+    max_depth: int = 8  # Mitsuba convention: 1 = emitters seen directly, 2 = direct light, ...
+    integrator: str = "path"
+    seed: int = 0
+    march: MarchSettings = field(default_factory=MarchSettings)
+
+
+@dataclass(frozen=True)
+class EnvironmentSpec:
+    kind: str = "sky"  # "map" | "sky" | "constant"
+    file: Optional[Path] = None  # resolved absolute path, for kind == "map"
+    intensity: float = 1.0
+    rotation: float = 0.0  # degrees about +y
+    color: Vec3 = (1.0, 1.0, 1.0)  # kind == "constant"
+    zenith: Vec3 = (0.25, 0.45, 0.9)  # kind == "sky"
+    horizon: Vec3 = (0.9, 0.9, 1.0)
+    ground: Vec3 = (0.3, 0.28, 0.25)
+
+
+@dataclass(frozen=True)
+class MaterialSpec:
+    name: str
+    kind: str = "diffuse"  # one of MATERIAL_KINDS
+    base_color: Vec3 = (0.8, 0.8, 0.8)  # albedo (diffuse), F0 (conductor), transmittance tint (dielectric)
+    roughness: float = 0.5  # perceptual roughness in [0, 1]; alpha = roughness^2; 0 is a perfect mirror
+    ior: float = 1.5  # dielectric index of refraction
+    emission: Vec3 = (0.0, 0.0, 0.0)  # emitted radiance, linear RGB (colour times strength)
+
+    @property
+    def is_emissive(self) -> bool:
+        return max(self.emission) > 0.0
+
+
+@dataclass(frozen=True)
+class Transform:
+    translate: Vec3 = (0.0, 0.0, 0.0)
+    rotate: Vec3 = (0.0, 0.0, 0.0)  # Euler degrees, applied about x, then y, then z (R = Rz Ry Rx)
+    scale: float = 1.0  # uniform only: a non-uniform scale would break the distance bound
+
+    @property
+    def is_identity(self) -> bool:
+        return self.translate == (0.0, 0.0, 0.0) and self.rotate == (0.0, 0.0, 0.0) and self.scale == 1.0
+
+    def rotation_matrix(self) -> np.ndarray:
+        rx, ry, rz = np.radians(self.rotate)
+        cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
+        mx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+        my = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+        mz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+        return mz @ my @ mx
+
+
+@dataclass(frozen=True)
+class SdfNode:
+    """One node of an SDF tree: a primitive (leaf) or an operator over children.
+
+    `params` holds the kind's numeric parameters with defaults filled in, e.g. sphere {"radius": r},
+    box {"size": (x, y, z)}, smooth_union {"k": k}, repeat {"period": (x, y, z), "limit": (...) or None}.
+    `material` is set on top-level objects only; children inherit their top-level object's material.
+    """
+
+    kind: str
+    params: tuple[tuple[str, object], ...] = ()
+    children: tuple["SdfNode", ...] = ()
+    transform: Transform = field(default_factory=Transform)
+    material: Optional[str] = None
+
+    def param(self, name: str):
+        return dict(self.params)[name]
+
+    @property
+    def is_primitive(self) -> bool:
+        return self.kind in SDF_PRIMITIVES
+
+    def walk(self):
+        yield self
+        for child in self.children:
+            yield from child.walk()
+
+
+@dataclass(frozen=True)
+class Scene:
+    name: str
+    path: Optional[Path]  # the file it came from, for error messages
+    geometry: str  # one of GEOMETRY_KINDS
+    camera: CameraSpec
+    render: RenderSettings
+    environment: EnvironmentSpec
+    materials: tuple[MaterialSpec, ...]
+    sdf_objects: tuple[SdfNode, ...] = ()
+    description: str = ""
+
+    def material_index(self, name: str) -> int:
+        for i, m in enumerate(self.materials):
+            if m.name == name:
+                return i
+        raise KeyError(name)

@@ -1,0 +1,599 @@
+"""The scene file format, as data: every section, field, type, default, range and meaning.
+
+This module is the single source of truth. The TOML loader validates against it and
+docs/scene-format.md is generated from it by `render_markdown()` (a test keeps the two equal).
+Regenerate the document with:
+
+    python -c "from renderer.scene.schema import write_markdown; write_markdown()"
+
+Defaults here must equal the dataclass defaults in model.py; a test checks that too.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Optional
+
+from .model import ENVIRONMENT_KINDS, GEOMETRY_KINDS, MATERIAL_KINDS
+
+
+class _Required:
+    """Marker default for fields that must be written in the file."""
+
+    def __repr__(self) -> str:
+        return "REQUIRED"
+
+
+REQUIRED = _Required()
+
+# Value kinds a field can have. The loader converts raw TOML values according to these.
+VALUE_KINDS = {
+    "string": "string",
+    "int": "integer",
+    "float": "float",
+    "vec3": "array of 3 floats",
+    "dir3": "array of 3 floats",  # a direction: non-zero, normalised by the loader
+    "int3": "array of 3 integers",
+    "scale": "float, or array of 3 equal floats",
+    "table": "table",
+    "tables": "array of tables",
+}
+
+
+def format_number(x: float) -> str:
+    """Numbers as a person would write them: 1 rather than 1.0 in ranges and messages."""
+    if isinstance(x, float) and x.is_integer() and abs(x) < 1e15:
+        return str(int(x))
+    return repr(x)
+
+
+@dataclass(frozen=True)
+class Range:
+    """A numeric interval (bounds may be open or absent) plus isolated extra values."""
+
+    lo: Optional[float] = None
+    hi: Optional[float] = None
+    lo_open: bool = False
+    hi_open: bool = False
+    also: tuple[float, ...] = ()  # e.g. -1 for render.max_depth
+
+    def __contains__(self, x: float) -> bool:
+        if x in self.also:
+            return True
+        if self.lo is not None and (x < self.lo or (self.lo_open and x == self.lo)):
+            return False
+        if self.hi is not None and (x > self.hi or (self.hi_open and x == self.hi)):
+            return False
+        return True
+
+    def __str__(self) -> str:
+        lo, hi = self.lo, self.hi
+        if lo is not None and hi is not None:
+            opening, closing = "(" if self.lo_open else "[", ")" if self.hi_open else "]"
+            text = f"{opening}{format_number(lo)}, {format_number(hi)}{closing}"
+        elif lo is not None:
+            text = f"{'>' if self.lo_open else '>='} {format_number(lo)}"
+        elif hi is not None:
+            text = f"{'<' if self.hi_open else '<='} {format_number(hi)}"
+        else:
+            text = "any"
+        extras = " or ".join(format_number(a) for a in self.also)
+        return f"{extras} or {text}" if extras else text
+
+
+POSITIVE = Range(0.0, lo_open=True)
+NON_NEGATIVE = Range(0.0)
+UNIT = Range(0.0, 1.0)
+AT_LEAST_ONE = Range(1)
+
+
+@dataclass(frozen=True)
+class Field:
+    name: str
+    kind: str  # a key of VALUE_KINDS
+    default: object
+    description: str
+    range: Optional[Range] = None  # applies to each component of a vector
+    choices: Optional[tuple[str, ...]] = None
+    only_for: Optional[tuple[str, ...]] = None  # the section `type`s this field belongs to
+    attr: Optional[str] = None  # model attribute when it differs from `name`
+    in_model: bool = True  # False: no model attribute of its own (e.g. emission_strength)
+    default_doc: Optional[str] = None  # shown instead of the default when it is computed
+    allowed_doc: Optional[str] = None  # shown instead of the range when another check applies
+
+    @property
+    def model_attr(self) -> str:
+        return self.attr or self.name
+
+    @property
+    def required(self) -> bool:
+        return self.default is REQUIRED
+
+    def applies_to(self, kind: Optional[str]) -> bool:
+        return self.only_for is None or kind in self.only_for
+
+
+@dataclass(frozen=True)
+class Rule:
+    """A constraint between fields. `check` gets the converted values (defaults filled in)
+    and returns a problem description, or None when the values are fine."""
+
+    text: str
+    check: Callable[[dict], Optional[str]]
+
+
+@dataclass(frozen=True)
+class Section:
+    name: str  # as written in the file, e.g. "render.march" or "materials.<name>"
+    description: str
+    fields: tuple[Field, ...]
+    rules: tuple[Rule, ...] = ()
+
+    def field(self, name: str) -> Field:
+        return next(f for f in self.fields if f.name == name)
+
+    def allowed(self, kind: Optional[str] = None) -> tuple[str, ...]:
+        """Names of the fields a table of this section (of the given `type`) may contain."""
+        return tuple(f.name for f in self.fields if f.applies_to(kind))
+
+
+@dataclass(frozen=True)
+class NodeKind:
+    """An SDF primitive (no children) or operator (children)."""
+
+    name: str
+    description: str
+    params: tuple[Field, ...] = ()
+    rules: tuple[Rule, ...] = ()
+    min_children: int = 0
+    max_children: Optional[int] = 0  # None: no upper limit
+
+    @property
+    def is_operator(self) -> bool:
+        return self.max_children != 0
+
+    def children_text(self) -> str:
+        if self.max_children == self.min_children:
+            return f"exactly {self.min_children} child" + ("" if self.min_children == 1 else "ren")
+        return f"at least {self.min_children} children"
+
+
+# --- rules -----------------------------------------------------------------------------------
+
+
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _norm(v) -> float:
+    return math.sqrt(sum(c * c for c in v))
+
+
+def _check_camera(v: dict) -> Optional[str]:
+    view = tuple(b - a for a, b in zip(v["position"], v["look_at"]))
+    if _norm(view) == 0.0:
+        return "position and look_at are the same point"
+    # Relative test so that tiny or huge scenes behave the same.
+    if _norm(_cross(view, v["up"])) <= 1e-9 * _norm(view) * _norm(v["up"]):
+        return "up is zero or parallel to the view direction (look_at - position)"
+    return None
+
+
+def _check_rounded_box(v: dict) -> Optional[str]:
+    half = min(v["size"]) / 2.0
+    if v["radius"] > half:
+        return (f"radius {format_number(v['radius'])} is larger than half the smallest size "
+                f"component ({format_number(half)})")
+    return None
+
+
+def _check_torus(v: dict) -> Optional[str]:
+    if v["minor_radius"] >= v["major_radius"]:
+        minor, major = format_number(v["minor_radius"]), format_number(v["major_radius"])
+        return f"minor_radius {minor} must be smaller than major_radius {major}"
+    return None
+
+
+# --- sections --------------------------------------------------------------------------------
+
+SCENE = Section(
+    "scene",
+    "What the file describes and which kind of geometry it holds. The section is required "
+    "because `geometry` is.",
+    (
+        Field("name", "string", None, "Display name of the scene.", in_model=False,
+              default_doc="the file name without extension"),
+        Field("description", "string", "", "Free text, shown in tools and reports."),
+        Field("geometry", "string", REQUIRED, "How objects are described. `sdf`: signed distance "
+              "fields in `[[objects]]`.", choices=GEOMETRY_KINDS),
+    ),
+)
+
+CAMERA = Section(
+    "camera",
+    "A thin-lens perspective camera. Every field is optional.",
+    (
+        Field("position", "vec3", (0.0, 1.0, 5.0), "Eye position, metres."),
+        Field("look_at", "vec3", (0.0, 0.0, 0.0), "Point the camera looks at, metres."),
+        Field("up", "vec3", (0.0, 1.0, 0.0), "Up direction (need not be unit length)."),
+        Field("fov", "float", 45.0, "Vertical field of view, degrees.", Range(1.0, 179.0)),
+        Field("aperture", "float", 0.0, "Lens radius, metres; 0 is a pinhole (no depth of field).",
+              NON_NEGATIVE),
+        Field("focus_distance", "float", 5.0, "Distance to the plane in focus, metres, along the "
+              "view direction.", POSITIVE),
+    ),
+    (Rule("`position` and `look_at` must differ, and `up` must not be parallel to the view "
+          "direction.", _check_camera),),
+)
+
+RENDER = Section(
+    "render",
+    "Image size, sampling and integrator. Every field is optional.",
+    (
+        Field("width", "int", 640, "Image width, pixels.", AT_LEAST_ONE),
+        Field("height", "int", 360, "Image height, pixels.", AT_LEAST_ONE),
+        Field("spp", "int", 64, "Samples per pixel.", AT_LEAST_ONE),
+        Field("max_depth", "int", 8, "Longest path, in segments: 1 shows emitters seen directly, "
+              "2 adds direct light, and so on. -1 means unlimited (Russian roulette ends paths).",
+              Range(1, also=(-1,))),
+        Field("integrator", "string", "path", "Integrator name, checked against the integrators "
+              "the renderer provides."),
+        Field("seed", "int", 0, "Random seed; the same seed gives the same image.", NON_NEGATIVE),
+        Field("march", "table", None, "Sphere-tracing settings, see `[render.march]`.",
+              in_model=False, default_doc="see below", allowed_doc="see below"),
+    ),
+)
+
+MARCH = Section(
+    "render.march",
+    "Sphere-tracing settings, used by `sdf` scenes. Every field is optional.",
+    (
+        Field("hit_threshold", "float", 1.0, "A ray hits when the distance is below this many "
+              "pixel footprints at that range.", POSITIVE),
+        Field("min_threshold", "float", 1e-4, "Absolute floor on the hit distance, metres.",
+              POSITIVE),
+        Field("max_steps", "int", 256, "Most steps along one ray before it counts as a miss.",
+              AT_LEAST_ONE),
+        Field("max_distance", "float", 100.0, "Rays stop after this distance, metres.", POSITIVE),
+        Field("over_relaxation", "float", 1.6, "Step scale; 1 is plain sphere tracing, larger "
+              "values take longer steps with a fallback.", Range(1.0, 2.0, hi_open=True)),
+    ),
+)
+
+_MAP, _SKY, _CONSTANT = ("map",), ("sky",), ("constant",)
+
+ENVIRONMENT = Section(
+    "environment",
+    "Light arriving from infinitely far away. A field that belongs to another `type` is an error.",
+    (
+        Field("type", "string", "sky", "Kind of environment.", choices=ENVIRONMENT_KINDS,
+              attr="kind"),
+        Field("file", "string", REQUIRED, "Image file, `.exr` or `.hdr` (latitude-longitude). A "
+              "relative path is relative to the scene file's folder.", only_for=_MAP,
+              default_doc="required", allowed_doc="an existing `.exr` or `.hdr` file"),
+        Field("intensity", "float", 1.0, "Multiplier on the emitted radiance.", NON_NEGATIVE),
+        Field("rotation", "float", 0.0, "Rotation about +y, degrees."),
+        Field("color", "vec3", (1.0, 1.0, 1.0), "Uniform radiance, linear RGB.", NON_NEGATIVE,
+              only_for=_CONSTANT),
+        Field("zenith", "vec3", (0.25, 0.45, 0.9), "Sky radiance straight up, linear RGB.",
+              NON_NEGATIVE, only_for=_SKY),
+        Field("horizon", "vec3", (0.9, 0.9, 1.0), "Sky radiance at the horizon, linear RGB.",
+              NON_NEGATIVE, only_for=_SKY),
+        Field("ground", "vec3", (0.3, 0.28, 0.25), "Radiance from below the horizon, linear RGB.",
+              NON_NEGATIVE, only_for=_SKY),
+    ),
+)
+
+MATERIAL = Section(
+    "materials.<name>",
+    "One table per material; the key is the material's name, which objects refer to. Materials "
+    "that no object uses are allowed.",
+    (
+        Field("type", "string", "diffuse", "Kind of material.", choices=MATERIAL_KINDS, attr="kind"),
+        Field("base_color", "vec3", (0.8, 0.8, 0.8), "Albedo (diffuse), reflectance at normal "
+              "incidence (conductor) or transmission tint (dielectric), linear RGB.", UNIT),
+        Field("roughness", "float", 0.5, "Perceptual roughness; 0 is a perfect mirror.", UNIT),
+        Field("ior", "float", 1.5, "Index of refraction.", Range(1.0, 4.0, lo_open=True),
+              only_for=("dielectric",)),
+        Field("emission", "vec3", (0.0, 0.0, 0.0), "Emitted radiance, linear RGB.", NON_NEGATIVE),
+        Field("emission_strength", "float", 1.0, "Multiplier folded into `emission`.",
+              NON_NEGATIVE, in_model=False),
+    ),
+)
+
+# Fields every [[objects]] node may have, whatever its type.
+NODE = Section(
+    "objects",
+    "The SDF objects of an `sdf` scene, one `[[objects]]` table each; a scene needs at least one. "
+    "An object is a primitive or an operator whose operands are written as "
+    "`[[objects.children]]` tables (nested to any depth: `[[objects.children.children]]`). "
+    "Every node may carry a transform, applied as scale, then rotation, then translation. "
+    "In error messages nodes are named by 0-based position, e.g. `objects[1].children[0]`.",
+    (
+        Field("type", "string", REQUIRED, "A primitive or operator name, see below.",
+              allowed_doc="see below"),
+        Field("material", "string", REQUIRED, "Name of a material defined under `[materials]`. "
+              "Required on top-level objects and not allowed on children, which use their "
+              "top-level object's material.", default_doc="required (top level only)",
+              allowed_doc="a defined material"),
+        Field("translate", "vec3", (0.0, 0.0, 0.0), "Translation, metres."),
+        Field("rotate", "vec3", (0.0, 0.0, 0.0), "Euler angles, degrees, applied about x, then "
+              "y, then z."),
+        Field("scale", "scale", 1.0, "Uniform scale. Three equal numbers are accepted; unequal "
+              "ones are an error, because a non-uniform scale breaks the distance bound.",
+              POSITIVE),
+        Field("children", "tables", None, "Operands of an operator (operators only).",
+              default_doc="none", allowed_doc="see the operator"),
+    ),
+)
+
+
+def _length(name: str, default: float, text: str) -> Field:
+    return Field(name, "float", default, text, POSITIVE)
+
+
+PRIMITIVES = (
+    NodeKind("sphere", "A sphere centred at the origin.",
+             (_length("radius", 0.5, "Radius."),)),
+    NodeKind("box", "An axis-aligned box centred at the origin.",
+             (Field("size", "vec3", (1.0, 1.0, 1.0), "Full edge lengths along x, y, z.", POSITIVE),)),
+    NodeKind("rounded_box", "A box with rounded edges; `size` is the outer size.",
+             (Field("size", "vec3", (1.0, 1.0, 1.0), "Full edge lengths along x, y, z.", POSITIVE),
+              _length("radius", 0.1, "Edge rounding radius.")),
+             (Rule("`radius` must be at most half the smallest `size` component.",
+                   _check_rounded_box),)),
+    NodeKind("torus", "A ring in the xz plane, centred at the origin.",
+             (_length("major_radius", 0.5, "Distance from the centre to the tube's centre line."),
+              _length("minor_radius", 0.15, "Tube radius.")),
+             (Rule("`minor_radius` must be smaller than `major_radius`.", _check_torus),)),
+    NodeKind("capsule", "A segment along y, centred at the origin, swept by a sphere.",
+             (_length("height", 1.0, "Length of the core segment (the caps add `radius` at each end)."),
+              _length("radius", 0.25, "Radius."))),
+    NodeKind("cylinder", "A capped cylinder along y, centred at the origin.",
+             (_length("height", 1.0, "Full height."),
+              _length("radius", 0.5, "Radius."))),
+    NodeKind("cone", "A capped cone along y: base at y = -height/2, apex at y = +height/2.",
+             (_length("height", 1.0, "Full height."),
+              _length("radius", 0.5, "Base radius."))),
+    NodeKind("plane", "The infinite plane dot(p, normal) = offset; the solid side is the one "
+             "the normal points away from.",
+             (Field("normal", "dir3", (0.0, 1.0, 0.0), "Plane normal; normalised on load.",),
+              Field("offset", "float", 0.0, "Signed distance of the plane from the origin, metres."))),
+)
+
+OPERATORS = (
+    NodeKind("union", "Everything inside any child.", min_children=2, max_children=None),
+    NodeKind("intersection", "Only what is inside every child.", min_children=2, max_children=None),
+    NodeKind("subtraction", "The first child minus all the others.", min_children=2,
+             max_children=None),
+    NodeKind("smooth_union", "A union whose seams are blended.",
+             (_length("k", 0.1, "Blend radius, metres."),), min_children=2, max_children=None),
+    NodeKind("repeat", "Copies of its child on a grid.",
+             (Field("period", "vec3", (1.0, 1.0, 1.0), "Grid spacing along x, y, z, metres; 0 "
+                    "means no repetition along that axis.", NON_NEGATIVE),
+              Field("limit", "int3", None, "Finite repetition: `[lx, ly, lz]` gives 2l+1 copies "
+                    "along each axis. Absent: infinite repetition.", NON_NEGATIVE,
+                    default_doc="none (infinite)")),
+             min_children=1, max_children=1),
+)
+
+NODE_KINDS = {k.name: k for k in PRIMITIVES + OPERATORS}
+
+# Top-level sections, in the order the documentation presents them.
+TOP_LEVEL = ("scene", "camera", "render", "environment", "materials", "objects")
+SECTIONS = (SCENE, CAMERA, RENDER, MARCH, ENVIRONMENT, MATERIAL)
+
+ENV_MAP_EXTENSIONS = (".exr", ".hdr")
+SCENE_EXTENSIONS = (".toml",)
+
+
+# --- documentation ---------------------------------------------------------------------------
+
+INTRO = """\
+# Scene file format
+
+A scene is a [TOML](https://toml.io) file with the extension `.toml`. Units are metres and
+angles are degrees. Colours are linear RGB. Relative file paths (such as an environment map)
+are relative to the folder of the scene file.
+
+Only `[scene]` (for its `geometry` field) and at least one object are required; every other
+field has the default listed below. The loader is strict: an unknown section or field, a value
+of the wrong type (including `true`/`false` where a number is expected), a vector of the wrong
+length, `nan` or `inf`, or a value out of range is an error. Every error is one line naming the
+file and the place in it, for example:
+
+```text
+assets/scenes/x.toml: unknown material 'golde' in objects[2] (known: gold, floor)
+assets/scenes/x.toml: materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, emission, emission_strength)
+```
+
+This document is generated from `renderer/scene/schema.py`; edit that file, then run
+`python -c "from renderer.scene.schema import write_markdown; write_markdown()"`.
+"""
+
+EXAMPLE = """\
+[scene]
+name = "showcase"
+description = "A gold sphere and a glass blob on a floor, lit by a park."
+geometry = "sdf"
+
+[camera]
+position = [0, 1.2, 5]
+look_at = [0, 0.5, 0]
+fov = 40
+aperture = 0.02
+focus_distance = 5.0
+
+[render]
+width = 960
+height = 540
+spp = 128
+max_depth = -1
+integrator = "path"
+seed = 7
+
+[render.march]
+max_steps = 400
+over_relaxation = 1.5
+
+[environment]
+type = "map"
+file = "../envmaps/park.exr"
+intensity = 1.2
+rotation = 90
+
+[materials.gold]
+type = "conductor"
+base_color = [1.0, 0.78, 0.34]
+roughness = 0.2
+
+[materials.glass]
+type = "dielectric"
+base_color = [1, 1, 1]
+roughness = 0.0
+ior = 1.5
+
+[materials.floor]
+base_color = [0.6, 0.6, 0.6]
+roughness = 0.8
+
+[materials.lamp]
+emission = [1.0, 0.9, 0.8]
+emission_strength = 5.0
+
+[[objects]]
+type = "sphere"
+material = "gold"
+radius = 0.5
+translate = [-1, 0.5, 0]
+
+[[objects]]
+type = "smooth_union"
+material = "glass"
+k = 0.2
+translate = [1, 0.6, 0]
+rotate = [0, 45, 0]
+[[objects.children]]
+type = "rounded_box"
+size = [0.8, 0.8, 0.8]
+radius = 0.1
+[[objects.children]]
+type = "sphere"
+radius = 0.5
+translate = [0, 0.4, 0]
+
+[[objects]]
+type = "repeat"
+material = "lamp"
+period = [2, 0, 2]
+limit = [2, 0, 2]
+translate = [0, 3, 0]
+[[objects.children]]
+type = "torus"
+major_radius = 0.3
+minor_radius = 0.05
+
+[[objects]]
+type = "plane"
+material = "floor"
+normal = [0, 1, 0]
+offset = 0
+"""
+
+
+def _format_value(value: object) -> str:
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, (tuple, list)):
+        return "[" + ", ".join(_format_value(v) for v in value) + "]"
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def _default_text(f: Field) -> str:
+    if f.default_doc is not None:
+        return f.default_doc
+    if f.required:
+        return "required"
+    return f"`{_format_value(f.default)}`"
+
+
+def _allowed_text(f: Field) -> str:
+    if f.allowed_doc is not None:
+        return f.allowed_doc
+    parts = []
+    if f.choices:
+        parts.append(", ".join(f"`\"{c}\"`" for c in f.choices))
+    if f.kind == "dir3":
+        parts.append("non-zero")
+    if f.range is not None:
+        each = "each component " if f.kind in ("vec3", "int3", "dir3") else ""
+        parts.append(f"{each}{f.range}")
+    return "; ".join(parts) or "any"
+
+
+def _description_text(f: Field) -> str:
+    if f.only_for:
+        kinds = " or ".join(f'`type = "{k}"`' for k in f.only_for)
+        return f"{f.description} Only with {kinds}."
+    return f.description
+
+
+def _field_table(fields: tuple[Field, ...]) -> list[str]:
+    lines = ["| Field | Type | Default | Allowed | Description |",
+             "| --- | --- | --- | --- | --- |"]
+    for f in fields:
+        lines.append(f"| `{f.name}` | {VALUE_KINDS[f.kind]} | {_default_text(f)} | "
+                     f"{_allowed_text(f)} | {_description_text(f)} |")
+    return lines
+
+
+def _rules_list(rules: tuple[Rule, ...]) -> list[str]:
+    return ["", *(f"- {r.text}" for r in rules)] if rules else []
+
+
+def _section_markdown(section: Section) -> list[str]:
+    brackets = "[[{}]]" if section is NODE else "[{}]"
+    return ["", f"## `{brackets.format(section.name)}`", "", section.description, "",
+            *_field_table(section.fields), *_rules_list(section.rules)]
+
+
+def _node_kind_markdown(kind: NodeKind) -> list[str]:
+    lines = ["", f"#### `{kind.name}`", "", kind.description]
+    if kind.is_operator:
+        lines[-1] += f" Takes {kind.children_text()}."
+    if kind.params:
+        lines += ["", *_field_table(kind.params)]
+    else:
+        lines += ["", "No parameters."]
+    return lines + _rules_list(kind.rules)
+
+
+def render_markdown() -> str:
+    """The complete text of docs/scene-format.md."""
+    lines = [INTRO.rstrip("\n")]
+    for section in SECTIONS:
+        lines += _section_markdown(section)
+    lines += _section_markdown(NODE)
+    lines += ["", "### Primitives", "",
+              "Primitives sit in their own frame, centred at the origin; y is the axis where "
+              "there is one. Lengths must be greater than 0."]
+    for kind in PRIMITIVES:
+        lines += _node_kind_markdown(kind)
+    lines += ["", "### Operators"]
+    for kind in OPERATORS:
+        lines += _node_kind_markdown(kind)
+    lines += ["", "## Complete example", "",
+              "With the scene in `assets/scenes/` and the map in `assets/envmaps/`:", "",
+              "```toml", EXAMPLE.rstrip("\n"), "```"]
+    return "\n".join(lines) + "\n"
+
+
+# docs/scene-format.md, found from this file: renderer/scene/schema.py -> repository root.
+DOC_PATH = Path(__file__).resolve().parents[2] / "docs" / "scene-format.md"
+
+
+def write_markdown(path: Path = DOC_PATH) -> None:
+    Path(path).write_text(render_markdown(), encoding="utf-8")

@@ -1,0 +1,402 @@
+"""Load a TOML scene file into the plain-data model, validating it against schema.py.
+
+Every problem becomes a one-line SceneError "<file>: <where>: <problem>", where <where> names
+the section, field or object (e.g. "objects[1].children[0].radius").
+"""
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from pathlib import Path, PurePath
+from typing import Optional
+
+from . import schema
+from .errors import SceneError
+from .model import (
+    CameraSpec,
+    EnvironmentSpec,
+    MarchSettings,
+    MaterialSpec,
+    RenderSettings,
+    Scene,
+    SdfNode,
+    Transform,
+)
+from .schema import Field, NodeKind, Section, format_number
+
+
+class _Invalid(Exception):
+    """A validation problem at a place in the file; load_scene adds the file path."""
+
+    def __init__(self, where: str, message: str):
+        super().__init__(where, message)
+        self.where = where
+        self.message = message
+
+    def text(self) -> str:
+        return f"{self.where}: {self.message}" if self.where else self.message
+
+
+def load_scene(path: str | os.PathLike) -> Scene:
+    """Read and validate a scene file. Raises SceneError (one line) on any problem."""
+    data = _read_toml(path)
+    try:
+        return _build_scene(data, Path(path))
+    except _Invalid as problem:
+        raise SceneError(path, problem.text()) from None
+
+
+# --- the file itself -------------------------------------------------------------------------
+
+
+def _extension_text(suffix: str) -> str:
+    return f"extension '{suffix}'" if suffix else "file without an extension"
+
+
+def _read_toml(path: str | os.PathLike) -> dict:
+    file = Path(path)
+    if not file.exists():
+        raise SceneError(path, "file not found")
+    if file.is_dir():
+        raise SceneError(path, "is a directory, not a scene file")
+    if file.suffix.lower() not in schema.SCENE_EXTENSIONS:
+        raise SceneError(path, f"unsupported scene {_extension_text(file.suffix)} (expected .toml)")
+    try:
+        raw = file.read_bytes()
+    except OSError as err:
+        raise SceneError(path, f"cannot read file: {err.strerror or err}") from None
+    try:
+        text = raw.decode("utf-8-sig")  # tolerate the byte-order mark some editors write
+    except UnicodeDecodeError as err:
+        raise SceneError(path, f"not UTF-8 text (bad byte at offset {err.start})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(path, f"invalid TOML: {err}") from None
+
+
+# --- raw values ------------------------------------------------------------------------------
+
+
+def _describe(raw: object) -> str:
+    """A raw TOML value as the user would recognise it, for 'expected X, got Y' messages."""
+    if isinstance(raw, bool):
+        return f"boolean {'true' if raw else 'false'}"
+    if isinstance(raw, int):
+        return f"integer {raw}"
+    if isinstance(raw, float):
+        return f"float {raw!r}"
+    if isinstance(raw, str):
+        return f"string {raw[:40]!r}"
+    if isinstance(raw, list):
+        return "array"
+    if isinstance(raw, dict):
+        return "table"
+    return f"date/time {raw}"
+
+
+def _toml_list(raw: list) -> str:
+    return "[" + ", ".join(str(x) if isinstance(x, int) else repr(x) for x in raw) + "]"
+
+
+def _number(raw: object, where: str) -> float:
+    # bool is a subclass of int in Python, but `true` is never a number in a scene file.
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)):
+        raise _Invalid(where, f"expected a number, got {_describe(raw)}")
+    value = float(raw)
+    if not math.isfinite(value):
+        raise _Invalid(where, f"{raw!r} is not a finite number")
+    return value
+
+
+def _integer(raw: object, where: str) -> int:
+    if isinstance(raw, bool) or not isinstance(raw, int):
+        raise _Invalid(where, f"expected an integer, got {_describe(raw)}")
+    return raw
+
+
+def _string(raw: object, where: str) -> str:
+    if not isinstance(raw, str):
+        raise _Invalid(where, f"expected a string, got {_describe(raw)}")
+    return raw
+
+
+def _table(raw: object, where: str) -> dict:
+    if not isinstance(raw, dict):
+        raise _Invalid(where, f"expected a table, got {_describe(raw)}")
+    return raw
+
+
+def _tables(raw: object, where: str) -> list[dict]:
+    if not isinstance(raw, list):
+        raise _Invalid(where, f"expected an array of tables, got {_describe(raw)}")
+    for i, item in enumerate(raw):
+        _table(item, f"{where}[{i}]")
+    return raw
+
+
+def _triple(raw: object, where: str, item) -> tuple:
+    if not isinstance(raw, list):
+        raise _Invalid(where, f"expected an array of 3 numbers, got {_describe(raw)}")
+    if len(raw) != 3:
+        raise _Invalid(where, f"expected 3 numbers, got {len(raw)}")
+    return tuple(item(x, f"{where}[{i}]") for i, x in enumerate(raw))
+
+
+def _direction(raw: object, where: str) -> tuple[float, float, float]:
+    v = _triple(raw, where, _number)
+    length = math.hypot(*v)  # hypot avoids underflow on tiny but non-zero vectors
+    if length == 0.0:
+        raise _Invalid(where, "must not be the zero vector")
+    return tuple(c / length for c in v)
+
+
+def _scale(raw: object, where: str) -> float:
+    if not isinstance(raw, list):
+        return _number(raw, where)
+    v = _triple(raw, where, _number)
+    if not v[0] == v[1] == v[2]:
+        raise _Invalid(where, f"non-uniform scale {_toml_list(raw)} breaks the SDF distance bound; "
+                              "use a uniform scale")
+    return v[0]
+
+
+_CONVERTERS = {
+    "string": _string,
+    "int": _integer,
+    "float": _number,
+    "vec3": lambda raw, where: _triple(raw, where, _number),
+    "dir3": _direction,
+    "int3": lambda raw, where: _triple(raw, where, _integer),
+    "scale": _scale,
+    "table": _table,
+    "tables": _tables,
+}
+
+
+def _check_range(field: Field, value, where: str) -> None:
+    if field.range is None:
+        return
+    components = value if isinstance(value, tuple) else (value,)
+    for i, c in enumerate(components):
+        if c not in field.range:
+            place = f"{where}[{i}]" if isinstance(value, tuple) else where
+            raise _Invalid(place, f"{format_number(c)} is out of range (allowed: {field.range})")
+
+
+def _convert(field: Field, raw: object, where: str):
+    value = _CONVERTERS[field.kind](raw, where)
+    if field.choices is not None and value not in field.choices:
+        raise _Invalid(where, f"unknown value '{value}' (allowed: {', '.join(field.choices)})")
+    _check_range(field, value, where)
+    return value
+
+
+# --- tables ----------------------------------------------------------------------------------
+
+
+def _check_keys(table: dict, fields: tuple[Field, ...], where: str, kind: Optional[str]) -> None:
+    by_name = {f.name: f for f in fields}
+    for key in table:
+        field = by_name.get(key)
+        if field is None:
+            allowed = ", ".join(f.name for f in fields if f.applies_to(kind))
+            raise _Invalid(where, f"unknown field '{key}' (allowed: {allowed})")
+        if not field.applies_to(kind):
+            owners = " or ".join(f"'{k}'" for k in field.only_for)
+            raise _Invalid(f"{where}.{key}", f"only allowed with type {owners}, not '{kind}'")
+
+
+def _read_fields(table: dict, fields: tuple[Field, ...], where: str,
+                 kind: Optional[str] = None) -> dict:
+    """Check the keys, convert the values present and fill in defaults for the rest."""
+    _check_keys(table, fields, where, kind)
+    values = {}
+    for field in fields:
+        if field.name in table:
+            values[field.name] = _convert(field, table[field.name], f"{where}.{field.name}")
+        elif field.required and field.applies_to(kind):
+            raise _Invalid(where, f"missing required field '{field.name}'")
+        else:
+            values[field.name] = None if field.required else field.default
+    return values
+
+
+def _read_section(raw: object, section: Section, where: str) -> dict:
+    """Read a table of `section`; a section with a `type` field has per-type fields."""
+    table = {} if raw is None else _table(raw, where)
+    kind = None
+    if "type" in section.allowed():
+        # The type decides which other fields belong here, so it is read first.
+        type_field = section.field("type")
+        kind = type_field.default
+        if "type" in table:
+            kind = _convert(type_field, table["type"], f"{where}.type")
+    values = _read_fields(table, section.fields, where, kind)
+    _apply_rules(section.rules, values, where)
+    return values
+
+
+def _apply_rules(rules, values: dict, where: str) -> None:
+    for rule in rules:
+        problem = rule.check(values)
+        if problem:
+            raise _Invalid(where, problem)
+
+
+def _model_kwargs(section: Section, values: dict) -> dict:
+    return {f.model_attr: values[f.name] for f in section.fields if f.in_model}
+
+
+# --- sections --------------------------------------------------------------------------------
+
+
+def _check_top_level(data: dict) -> None:
+    for key in data:
+        if key not in schema.TOP_LEVEL:
+            raise _Invalid("", f"unknown section '{key}' (allowed: {', '.join(schema.TOP_LEVEL)})")
+    if "scene" not in data:
+        raise _Invalid("", "missing [scene] section (it must set 'geometry')")
+
+
+def _read_render(raw: object) -> RenderSettings:
+    values = _read_section(raw, schema.RENDER, "render")
+    march = _read_section(values["march"], schema.MARCH, "render.march")
+    return RenderSettings(**_model_kwargs(schema.RENDER, values),
+                          march=MarchSettings(**_model_kwargs(schema.MARCH, march)))
+
+
+def _resolve_map(file: str, scene_path: Path) -> Path:
+    suffix = PurePath(file).suffix
+    if suffix.lower() not in schema.ENV_MAP_EXTENSIONS:
+        expected = " or ".join(schema.ENV_MAP_EXTENSIONS)
+        raise _Invalid("environment.file",
+                       f"unsupported environment map {_extension_text(suffix)} (expected {expected})")
+    resolved = (scene_path.parent / file).resolve()
+    if not resolved.exists():
+        raise _Invalid("environment", f"missing map file {file} (looked for {resolved})")
+    if not resolved.is_file():
+        raise _Invalid("environment", f"map file {file} is not a file")
+    return resolved
+
+
+def _read_environment(raw: object, scene_path: Path) -> EnvironmentSpec:
+    values = _read_section(raw, schema.ENVIRONMENT, "environment")
+    if values["type"] == "map":
+        values["file"] = _resolve_map(values["file"], scene_path)
+    return EnvironmentSpec(**_model_kwargs(schema.ENVIRONMENT, values))
+
+
+def _read_material(name: str, raw: object) -> MaterialSpec:
+    where = f"materials.{name}"
+    values = _read_section(raw, schema.MATERIAL, where)
+    emission = tuple(c * values["emission_strength"] for c in values["emission"])
+    if not all(math.isfinite(c) for c in emission):
+        raise _Invalid(where, "emission * emission_strength is too large to represent")
+    values["emission"] = emission
+    return MaterialSpec(name=name, **_model_kwargs(schema.MATERIAL, values))
+
+
+def _read_materials(raw: object) -> tuple[MaterialSpec, ...]:
+    table = {} if raw is None else _table(raw, "materials")
+    return tuple(_read_material(name, body) for name, body in table.items())
+
+
+# --- SDF objects -----------------------------------------------------------------------------
+
+
+def _node_kind(table: dict, where: str) -> NodeKind:
+    if "type" not in table:
+        raise _Invalid(where, "missing required field 'type'")
+    name = _string(table["type"], f"{where}.type")
+    kind = schema.NODE_KINDS.get(name)
+    if kind is None:
+        primitives = ", ".join(k.name for k in schema.PRIMITIVES)
+        operators = ", ".join(k.name for k in schema.OPERATORS)
+        raise _Invalid(where, f"unknown primitive '{name}' (known: {primitives}; operators: {operators})")
+    return kind
+
+
+def _node_fields(kind: NodeKind, top_level: bool) -> tuple[Field, ...]:
+    """The fields this node may have: common ones (children for operators, material at top
+    level only) followed by the kind's parameters."""
+    common = tuple(
+        f for f in schema.NODE.fields
+        if (f.name != "children" or kind.is_operator) and (f.name != "material" or top_level)
+    )
+    return common + kind.params
+
+
+def _read_children(kind: NodeKind, raw: object, where: str) -> tuple[SdfNode, ...]:
+    children = [] if raw is None else _tables(raw, f"{where}.children")
+    count = len(children)
+    too_many = kind.max_children is not None and count > kind.max_children
+    if count < kind.min_children or too_many:
+        raise _Invalid(where, f"'{kind.name}' needs {kind.children_text()}, got {count}")
+    return tuple(_read_node(child, f"{where}.children[{i}]", top_level=False)
+                 for i, child in enumerate(children))
+
+
+def _read_node(raw: object, where: str, top_level: bool) -> SdfNode:
+    table = _table(raw, where)
+    kind = _node_kind(table, where)
+    # Two common mistakes get a specific message rather than "unknown field".
+    if "children" in table and not kind.is_operator:
+        raise _Invalid(where, f"primitive '{kind.name}' cannot have children")
+    if "material" in table and not top_level:
+        raise _Invalid(where, "'material' is only allowed on top-level objects "
+                              "(children use their top-level object's material)")
+    values = _read_fields(table, _node_fields(kind, top_level), where)
+    params = {f.name: values[f.name] for f in kind.params}
+    _apply_rules(kind.rules, params, where)
+    return SdfNode(
+        kind=kind.name,
+        params=tuple(sorted(params.items())),
+        children=_read_children(kind, values["children"], where) if kind.is_operator else (),
+        transform=Transform(values["translate"], values["rotate"], values["scale"]),
+        material=values["material"] if top_level else None,
+    )
+
+
+def _read_sdf_objects(raw: object, materials: tuple[MaterialSpec, ...]) -> dict:
+    objects = [] if raw is None else _tables(raw, "objects")
+    if not objects:
+        raise _Invalid("objects", "the scene has no objects (add at least one [[objects]] table)")
+    known = [m.name for m in materials]
+    nodes = []
+    for i, body in enumerate(objects):
+        node = _read_node(body, f"objects[{i}]", top_level=True)
+        if node.material not in known:
+            listed = f"known: {', '.join(known)}" if known else "no materials are defined"
+            raise _Invalid("", f"unknown material '{node.material}' in objects[{i}] ({listed})")
+        nodes.append(node)
+    return {"sdf_objects": tuple(nodes)}
+
+
+# One reader per geometry kind; each returns the Scene fields holding its objects.
+_GEOMETRY_READERS = {"sdf": _read_sdf_objects}
+
+
+# --- the scene -------------------------------------------------------------------------------
+
+
+def _build_scene(data: dict, path: Path) -> Scene:
+    _check_top_level(data)
+    header = _read_section(data["scene"], schema.SCENE, "scene")
+    camera = _read_section(data.get("camera"), schema.CAMERA, "camera")
+    render = _read_render(data.get("render"))
+    environment = _read_environment(data.get("environment"), path)
+    materials = _read_materials(data.get("materials"))
+    geometry = _GEOMETRY_READERS[header["geometry"]](data.get("objects"), materials)
+    return Scene(
+        name=header["name"] if header["name"] is not None else path.stem,
+        path=path,
+        geometry=header["geometry"],
+        camera=CameraSpec(**_model_kwargs(schema.CAMERA, camera)),
+        render=render,
+        environment=environment,
+        materials=materials,
+        description=header["description"],
+        **geometry,
+    )

@@ -1,0 +1,174 @@
+"""Linear radiance -> display values: exposure, a tone mapper, then the sRGB OETF.
+
+The same pipeline exists twice, as Taichi funcs for the viewer and as float32 numpy for the
+command line; tests keep the two in agreement. Non-finite input never reaches the output:
+NaN and -inf become 0, +inf becomes the brightest representable radiance (white).
+"""
+
+import numpy as np
+import taichi as ti
+
+from renderer.film import is_finite_f32
+
+TONEMAPPERS = ("aces", "reinhard", "none")
+
+# Linear radiance is clamped to [0, MAX_RADIANCE] after exposure: far above where every mapper
+# saturates, yet small enough that the ACES rational fit (v * v) stays finite in f32.
+MAX_RADIANCE = 1.0e6
+
+# Stephen Hill's fit of the ACES RRT+ODT (BakingLab, ACES.hlsl): sRGB -> ACES-ish input matrix,
+# rational curve, and the output matrix back to linear sRGB.
+ACES_INPUT = np.array(
+    [[0.59719, 0.35458, 0.04823], [0.07600, 0.90834, 0.01566], [0.02840, 0.13383, 0.83777]],
+    dtype=np.float32,
+)
+ACES_OUTPUT = np.array(
+    [[1.60475, -0.53108, -0.07367], [-0.10208, 1.10813, -0.00605], [-0.00327, -0.07276, 1.07602]],
+    dtype=np.float32,
+)
+LUMINANCE_WEIGHTS = (0.2126, 0.7152, 0.0722)  # Rec.709
+
+# Plain nested lists: the Taichi funcs build compile-time constant matrices from them.
+_ACES_INPUT_ROWS = ACES_INPUT.tolist()
+_ACES_OUTPUT_ROWS = ACES_OUTPUT.tolist()
+
+
+def tonemapper_index(name: str) -> int:
+    try:
+        return TONEMAPPERS.index(name)
+    except ValueError:
+        raise ValueError(f"unknown tone mapper '{name}' (expected one of {', '.join(TONEMAPPERS)})") from None
+
+
+def exposure_scale(exposure_ev: float) -> float:
+    return float(np.float32(2.0 ** float(exposure_ev)))
+
+
+# --- Taichi -------------------------------------------------------------------------------------
+
+
+@ti.func
+def sanitize_radiance(rgb):
+    result = ti.math.vec3(0.0)
+    for c in ti.static(range(3)):
+        value = rgb[c]
+        if is_finite_f32(value):
+            result[c] = ti.math.clamp(value, 0.0, MAX_RADIANCE)
+        elif ti.bit_cast(value, ti.i32) == 0x7F800000:  # +inf; NaN and -inf stay 0
+            result[c] = MAX_RADIANCE
+    return result
+
+
+@ti.func
+def srgb_oetf(linear):
+    encoded = 12.92 * linear
+    if linear > 0.0031308:
+        encoded = 1.055 * ti.pow(linear, 1.0 / 2.4) - 0.055
+    return encoded
+
+
+@ti.func
+def aces_fitted(rgb):
+    v = ti.Matrix(_ACES_INPUT_ROWS, ti.f32) @ rgb
+    curve = (v * (v + 0.0245786) - 0.000090537) / (v * (0.983729 * v + 0.4329510) + 0.238081)
+    return ti.math.clamp(ti.Matrix(_ACES_OUTPUT_ROWS, ti.f32) @ curve, 0.0, 1.0)
+
+
+@ti.func
+def reinhard_luminance(rgb):
+    luminance = LUMINANCE_WEIGHTS[0] * rgb[0] + LUMINANCE_WEIGHTS[1] * rgb[1] + LUMINANCE_WEIGHTS[2] * rgb[2]
+    # L -> L / (1 + L), applied as a common scale so hue is kept.
+    return ti.math.clamp(rgb / (1.0 + luminance), 0.0, 1.0)
+
+
+@ti.func
+def display_value(linear, mapper):
+    """Exposed, sanitized linear radiance -> display value in [0, 1]."""
+    mapped = ti.math.clamp(linear, 0.0, 1.0)
+    if mapper == 0:
+        mapped = aces_fitted(linear)
+    elif mapper == 1:
+        mapped = reinhard_luminance(linear)
+    out = ti.math.vec3(0.0)
+    for c in ti.static(range(3)):
+        out[c] = ti.math.clamp(srgb_oetf(mapped[c]), 0.0, 1.0)
+    return out
+
+
+@ti.kernel
+def _tonemap_kernel(
+    mean: ti.template(), out: ti.template(), source_width: ti.i32, source_height: ti.i32,
+    scale: ti.f32, mapper: ti.i32,
+):
+    out_width, out_height = out.shape[0], out.shape[1]
+    step_x = ti.cast(source_width, ti.f32) / ti.cast(out_width, ti.f32)
+    step_y = ti.cast(source_height, ti.f32) / ti.cast(out_height, ti.f32)
+    for x, y in out:
+        # Pixel centres map to pixel centres; with equal sizes sx == x exactly, weight 0 on the
+        # neighbour, so the copy is 1:1.
+        sx = ti.math.clamp((ti.cast(x, ti.f32) + 0.5) * step_x - 0.5, 0.0, ti.cast(source_width - 1, ti.f32))
+        sy = ti.math.clamp((ti.cast(y, ti.f32) + 0.5) * step_y - 0.5, 0.0, ti.cast(source_height - 1, ti.f32))
+        x0 = ti.cast(ti.floor(sx), ti.i32)
+        y0 = ti.cast(ti.floor(sy), ti.i32)
+        x1 = ti.min(x0 + 1, source_width - 1)
+        y1 = ti.min(y0 + 1, source_height - 1)
+        fx = sx - ti.cast(x0, ti.f32)
+        fy = sy - ti.cast(y0, ti.f32)
+        bottom = sanitize_radiance(mean[x0, y0]) * (1.0 - fx) + sanitize_radiance(mean[x1, y0]) * fx
+        top = sanitize_radiance(mean[x0, y1]) * (1.0 - fx) + sanitize_radiance(mean[x1, y1]) * fx
+        linear = bottom * (1.0 - fy) + top * fy
+        out[x, y] = display_value(ti.math.clamp(linear * scale, 0.0, MAX_RADIANCE), mapper)
+
+
+def tonemap_into(film, out_field, exposure_ev: float, tonemapper_name: str) -> None:
+    """Fill `out_field` (vec3 f32, window size, [x, y] y-up) with display values in [0, 1].
+
+    The film's active region (film.width x film.height) is stretched over the whole field with
+    bilinear filtering of the exposed linear radiance.
+    """
+    _tonemap_kernel(
+        film.mean, out_field, film.width, film.height,
+        exposure_scale(exposure_ev), tonemapper_index(tonemapper_name),
+    )
+
+
+# --- numpy (float32, mirrors the Taichi code) ---------------------------------------------------
+
+
+def srgb_oetf_array(linear: np.ndarray) -> np.ndarray:
+    linear = np.asarray(linear, dtype=np.float32)
+    with np.errstate(invalid="ignore"):
+        curve = np.float32(1.055) * np.power(np.maximum(linear, 0.0), np.float32(1.0 / 2.4)) - np.float32(0.055)
+    return np.where(linear > np.float32(0.0031308), curve, np.float32(12.92) * linear).astype(np.float32)
+
+
+def display_array(linear_rgb: np.ndarray, exposure_ev: float, name: str) -> np.ndarray:
+    """Linear RGB (..., 3) -> display values in [0, 1], float32; same maths as the kernel."""
+    mapper = tonemapper_index(name)
+    rgb = np.asarray(linear_rgb, dtype=np.float32)
+    with np.errstate(invalid="ignore", over="ignore"):
+        rgb = np.nan_to_num(rgb, nan=0.0, posinf=MAX_RADIANCE, neginf=0.0)
+        rgb = np.clip(rgb, 0.0, MAX_RADIANCE) * np.float32(exposure_scale(exposure_ev))
+        rgb = np.clip(rgb, 0.0, MAX_RADIANCE).astype(np.float32)
+    if mapper == 0:
+        v = rgb @ ACES_INPUT.T
+        curve = (v * (v + np.float32(0.0245786)) - np.float32(0.000090537)) / (
+            v * (np.float32(0.983729) * v + np.float32(0.4329510)) + np.float32(0.238081)
+        )
+        mapped = np.clip(curve @ ACES_OUTPUT.T, 0.0, 1.0)
+    elif mapper == 1:
+        luminance = rgb @ np.array(LUMINANCE_WEIGHTS, dtype=np.float32)
+        mapped = np.clip(rgb / (np.float32(1.0) + luminance)[..., None], 0.0, 1.0)
+    else:
+        mapped = np.clip(rgb, 0.0, 1.0)
+    return np.clip(srgb_oetf_array(mapped), 0.0, 1.0).astype(np.float32)
+
+
+def quantize(display: np.ndarray) -> np.ndarray:
+    """Display values in [0, 1] -> uint8 with round-to-nearest."""
+    return np.floor(np.clip(display, 0.0, 1.0) * np.float32(255.0) + np.float32(0.5)).astype(np.uint8)
+
+
+def tonemap_array(linear_rgb: np.ndarray, exposure_ev: float, name: str) -> np.ndarray:
+    """Linear RGB (H, W, 3) -> uint8 display image (H, W, 3) for writing PNGs."""
+    return quantize(display_array(linear_rgb, exposure_ev, name))

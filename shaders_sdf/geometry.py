@@ -1,0 +1,116 @@
+"""The SDF side of the geometry interface: sphere tracing with over-relaxation.
+
+Marching (Keinert et al. 2014, 'Enhanced sphere tracing'): each step is omega times the distance
+bound. A step is accepted only if the unbounding spheres of its two ends overlap; if they do not,
+a surface may lie between, so the marcher goes back to the plain sphere-tracing point and
+continues with omega = 1. Hence no accepted step ever crosses a surface, whatever omega is.
+
+The hit threshold grows with the ray cone's width (the pixel footprint), so distant surfaces cost
+no more steps than they can show; `min_threshold` floors it where the footprint is tiny.
+A ray that starts inside a solid (sdf < 0 at its origin) marches on -sdf, so refracted rays travel
+through SDF glass and out again, and a camera inside a solid sees its inner faces.
+"""
+import numpy as np
+import taichi as ti
+
+from renderer.geometry.interface import Hit, Ray, Surface
+from shaders_sdf.scene_sdf import SdfProgram
+
+vec3 = ti.math.vec3
+
+# Spawned rays start this many hit thresholds off the surface: the hit point lies within one
+# threshold of it, so 2.5 leaves a margin of 1.5 thresholds before the marcher could stop again.
+SPAWN_OFFSET = 2.5
+
+
+@ti.data_oriented
+class SdfGeometry:
+    kind = "sdf"
+
+    def __init__(self, scene, material_index):
+        self.program = SdfProgram(scene.sdf_objects, material_index)
+        # march settings are data, so benchmarks sweep them without recompiling
+        self.march_f = ti.field(ti.f32, shape=4)  # hit_threshold, min_threshold, max_distance, omega
+        self.march_i = ti.field(ti.i32, shape=1)  # max_steps
+        self.set_march(scene.render.march)
+
+    def set_march(self, march):
+        self.march_f.from_numpy(np.array([march.hit_threshold, march.min_threshold, march.max_distance,
+                                          march.over_relaxation], np.float32))
+        self.march_i.from_numpy(np.array([march.max_steps], np.int32))
+
+    @ti.func
+    def threshold(self, cone_width):
+        return ti.max(self.march_f[1], self.march_f[0] * cone_width)
+
+    @ti.func
+    def intersect(self, ray, t_max):
+        t_limit = ti.min(t_max, self.march_f[2])
+        omega = self.march_f[3]
+        max_steps = self.march_i[0]
+        hit = Hit(hit=0, t=t_limit, work=0, tests=0)
+        side = 1.0
+        t = 0.0
+        step = 0.0
+        prev_radius = 0.0
+        for i in range(max_steps):
+            signed = self.program.distance(ray.o + t * ray.d)
+            if i == 0:
+                side = 1.0 if signed >= 0.0 else -1.0
+            signed *= side
+            radius = ti.abs(signed)
+            hit.work = i + 1
+            if omega > 1.0 and radius + prev_radius < step:
+                # Unbounding spheres do not overlap: go back to where plain sphere tracing would
+                # have stepped (t_prev + prev_radius = t - step + step / omega) and stop relaxing.
+                step = step / omega - step
+                omega = 1.0
+            else:
+                if radius < self.threshold(ray.cone_width + ray.cone_spread * t):
+                    hit.hit = 1
+                    hit.t = t
+                    break
+                if t > t_limit:
+                    break
+                step = signed * omega
+            prev_radius = radius
+            t += step
+        return hit
+
+    @ti.func
+    def occluded(self, ray, t_max):
+        return self.intersect(ray, t_max).hit == 1
+
+    @ti.func
+    def normal(self, p, h):
+        """Tetrahedral central differences: 4 evaluations, run as a loop so the SDF is inlined once."""
+        g = vec3(0.0)
+        for k in range(4):
+            e = vec3(1.0 if (k == 0 or k == 3) else -1.0, 1.0 if k >= 2 else -1.0, 1.0 if (k == 1 or k == 3) else -1.0)
+            g += e * self.program.distance(p + h * e)
+        length = g.norm()
+        n = vec3(0.0, 1.0, 0.0)
+        if length > 0.0:
+            n = g / length
+        return n
+
+    @ti.func
+    def surface(self, ray, hit):
+        p = ray.o + hit.t * ray.d
+        width = ray.cone_width + ray.cone_spread * hit.t
+        eps = self.threshold(width)
+        # The difference step must stay well above f32 resolution at |p| (~6e-8 |p|).
+        h = ti.max(0.5 * eps, 1e-5 * (1.0 + ti.max(ti.abs(p.x), ti.max(ti.abs(p.y), ti.abs(p.z)))))
+        n = self.normal(p, h)
+        if n.dot(n) < 0.5:  # degenerate gradient (never for a proper SDF); face the ray
+            n = -ray.d
+        material = ti.cast(self.program.distance_material(p).y, ti.i32)
+        return Surface(p=p, n_geo=n, n_shading=n, uv=ti.math.vec2(0.0), material=material,
+                       front_face=1 if ray.d.dot(n) < 0.0 else 0, eps=eps, cone_width=width,
+                       cone_spread=ray.cone_spread)
+
+    @ti.func
+    def spawn(self, surface, direction):
+        side = surface.n_geo if direction.dot(surface.n_geo) > 0.0 else -surface.n_geo
+        return Ray(o=surface.p + side * (SPAWN_OFFSET * surface.eps), d=direction,
+                   cone_width=surface.cone_width, cone_spread=surface.cone_spread)

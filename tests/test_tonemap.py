@@ -1,0 +1,153 @@
+import numpy as np
+import pytest
+import taichi as ti
+
+from renderer.film import Film
+from renderer.tonemap import (
+    TONEMAPPERS,
+    display_array,
+    display_value,
+    exposure_scale,
+    sanitize_radiance,
+    srgb_oetf,
+    srgb_oetf_array,
+    tonemap_array,
+    tonemap_into,
+    tonemapper_index,
+)
+
+
+def film_with_image(image_rows_top: np.ndarray, max_size=None) -> Film:
+    """A film whose active region holds `image_rows_top` (H, W, 3) as its mean."""
+    height, width = image_rows_top.shape[:2]
+    max_width, max_height = max_size or (width, height)
+    film = Film(max_width, max_height)
+    film.reset(width, height)
+    full = np.zeros((max_width, max_height, 3), dtype=np.float32)
+    full[:width, :height] = image_rows_top[::-1].transpose(1, 0, 2)  # row-0-top -> [x, y] y-up
+    film.mean.from_numpy(full)
+    return film
+
+
+def field_to_rows(field) -> np.ndarray:
+    return field.to_numpy().transpose(1, 0, 2)[::-1]
+
+
+def kernel_display(linear_rows_top: np.ndarray, exposure_ev: float, name: str) -> np.ndarray:
+    height, width = linear_rows_top.shape[:2]
+    out = ti.Vector.field(3, ti.f32, shape=(width, height))
+    tonemap_into(film_with_image(linear_rows_top), out, exposure_ev, name)
+    return field_to_rows(out)
+
+
+@ti.kernel
+def oetf_kernel(values: ti.types.ndarray(), out: ti.types.ndarray()):
+    for i in range(values.shape[0]):
+        out[i] = srgb_oetf(values[i])
+
+
+@ti.kernel
+def pointwise_display(film: ti.template(), out: ti.template(), scale: ti.f32, mapper: ti.i32):
+    for x, y in out:
+        out[x, y] = display_value(ti.math.clamp(sanitize_radiance(film.mean[x, y]) * scale, 0.0, 1.0e6), mapper)
+
+
+def test_srgb_oetf_known_values():
+    linear = np.array([0.0, 0.001, 0.0031308, 0.18, 0.5, 1.0], dtype=np.float32)
+    expected = np.array([0.0, 0.01292, 0.040449936, 0.4613561295, 0.7353569831, 1.0], dtype=np.float32)
+    out = np.zeros_like(linear)
+    oetf_kernel(linear, out)
+    np.testing.assert_allclose(out, expected, atol=2e-6)
+    np.testing.assert_allclose(srgb_oetf_array(linear), expected, atol=2e-6)
+
+
+def test_aces_grey_ramp_is_monotonic_from_black_to_white():
+    grey = np.geomspace(1e-4, 1e5, 512, dtype=np.float32)
+    ramp = np.concatenate([[0.0], grey]).astype(np.float32)
+    image = np.repeat(ramp[None, :, None], 3, axis=2)
+    display = kernel_display(image, 0.0, "aces")[0]
+    assert np.all(np.diff(display, axis=0) >= 0.0)
+    assert np.all(display[0] == 0.0)
+    assert np.all(display[-1] >= 0.999)
+    # Neutral stays neutral: the input matrix rows sum to 1.
+    np.testing.assert_allclose(display[:, 0], display[:, 1], atol=2e-3)
+
+
+def test_none_clamps_and_reinhard_halves_luminance_one():
+    image = np.array([[[2.0, -1.0, 0.5], [1.0, 1.0, 1.0]]], dtype=np.float32)
+    none = kernel_display(image, 0.0, "none")[0]
+    np.testing.assert_allclose(none[0], [1.0, 0.0, 0.7353569831], atol=2e-6)
+    reinhard = kernel_display(image, 0.0, "reinhard")[0]
+    np.testing.assert_allclose(reinhard[1], 0.7353569831, atol=2e-6)  # L=1 -> 1/(1+1)
+
+
+def test_exposure_is_in_stops():
+    assert exposure_scale(1.0) == 2.0 and exposure_scale(-2.0) == 0.25
+    image = np.full((1, 1, 3), 0.125, dtype=np.float32)
+    np.testing.assert_allclose(kernel_display(image, 2.0, "none"), 0.7353569831, atol=2e-6)
+
+
+def test_kernel_and_numpy_agree_and_output_is_finite():
+    rng = np.random.default_rng(3)
+    image = (rng.lognormal(-1.0, 2.0, size=(17, 23, 3))).astype(np.float32)
+    image[0, 0] = [np.nan, 1.0, 1.0]
+    image[1, 2] = [np.inf, 0.0, 0.0]
+    image[2, 3] = [0.5, -np.inf, 0.2]
+    image[3, 4] = [-0.5, 0.3, 3.0e38]
+    image[4, 5] = np.inf
+    for name in TONEMAPPERS:
+        for ev in (-3.0, 0.0, 1.5):
+            from_kernel = kernel_display(image, ev, name)
+            from_numpy = display_array(image, ev, name)
+            assert np.isfinite(from_kernel).all() and np.isfinite(from_numpy).all()
+            assert from_kernel.min() >= 0.0 and from_kernel.max() <= 1.0
+            np.testing.assert_allclose(from_kernel, from_numpy, atol=1e-5, err_msg=f"{name} ev={ev}")
+            bytes_kernel = np.floor(from_kernel * 255.0 + 0.5).astype(np.uint8)
+            bytes_numpy = tonemap_array(image, ev, name)
+            assert bytes_numpy.dtype == np.uint8 and bytes_numpy.shape == image.shape
+            assert np.abs(bytes_kernel.astype(int) - bytes_numpy).max() <= 1
+            assert np.mean(bytes_kernel == bytes_numpy) > 0.999
+        # +inf is white, NaN is black.
+        np.testing.assert_allclose(display_array(image, 0.0, name)[4, 5], 1.0, atol=1e-6)
+        np.testing.assert_array_equal(display_array(np.full((1, 1, 3), np.nan), 0.0, name), 0.0)
+
+
+def test_one_to_one_copy_has_no_blur():
+    checker = np.indices((6, 8)).sum(axis=0) % 2
+    image = np.where(checker[..., None] == 1, 0.9, 0.01).astype(np.float32) * np.array([1.0, 0.5, 0.25], np.float32)
+    film = film_with_image(image, max_size=(10, 9))
+    out = ti.Vector.field(3, ti.f32, shape=(8, 6))
+    reference = ti.Vector.field(3, ti.f32, shape=(8, 6))
+    for name in TONEMAPPERS:
+        tonemap_into(film, out, 0.5, name)
+        pointwise_display(film, reference, exposure_scale(0.5), tonemapper_index(name))
+        np.testing.assert_array_equal(out.to_numpy(), reference.to_numpy())
+        np.testing.assert_allclose(field_to_rows(out), display_array(image, 0.5, name), atol=1e-5)
+
+
+def test_bilinear_upscale_from_half_size_film():
+    # A linear ramp is reproduced exactly by bilinear filtering, so the expected value at each
+    # window pixel is the ramp evaluated at that pixel's centre mapped into the film.
+    width, height = 4, 3
+    def ramp(x, y):  # x right, y up, in film pixels
+        return 0.05 + 0.1 * x + 0.07 * y
+
+    xs, ys = np.meshgrid(np.arange(width), np.arange(height))
+    film_rows = ramp(xs, height - 1 - ys).astype(np.float32)  # row 0 = top = largest y
+    film = film_with_image(np.repeat(film_rows[..., None], 3, axis=2), max_size=(8, 8))
+    out = ti.Vector.field(3, ti.f32, shape=(2 * width, 2 * height))
+    tonemap_into(film, out, 0.0, "none")
+
+    window_x, window_y = np.meshgrid(np.arange(2 * width), np.arange(2 * height), indexing="ij")
+    source_x = np.clip((window_x + 0.5) / 2 - 0.5, 0, width - 1)
+    source_y = np.clip((window_y + 0.5) / 2 - 0.5, 0, height - 1)
+    expected_linear = ramp(source_x, source_y).astype(np.float32)  # [x, y]
+    expected = srgb_oetf_array(np.clip(expected_linear, 0.0, 1.0))
+    result = out.to_numpy()
+    for c in range(3):
+        np.testing.assert_allclose(result[:, :, c], expected, atol=1e-5)
+
+
+def test_unknown_tonemapper_is_named_in_the_error():
+    with pytest.raises(ValueError, match="filmic"):
+        tonemap_array(np.zeros((1, 1, 3), np.float32), 0.0, "filmic")

@@ -1,0 +1,1 @@
+"""Interactive viewer: camera state, free-look controller and key map."""
