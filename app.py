@@ -1,0 +1,192 @@
+#!/usr/bin/env python3
+"""Lantern: an interactive, progressive path tracer.
+
+  python app.py                      open the viewer (or, without a display, render the default scene)
+  python app.py view [SCENE]         the interactive viewer
+  python app.py render SCENE ...     render headless to a PNG (tone-mapped) or EXR (linear)
+  python app.py list                 scenes and integrators
+  python app.py info SCENE           size, settings and Features of a scene
+  python app.py bench NAME           benchmarks (see `python app.py bench --help`)
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import warnings
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"size must look like 640x360, got '{text}'") from None
+    if not (1 <= w <= 16384 and 1 <= h <= 16384):
+        raise argparse.ArgumentTypeError(f"size {w}x{h} is out of range (1..16384)")
+    return w, h
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def _max_depth(text: str) -> int:
+    value = int(text)
+    if value == 0 or value < -1:
+        raise argparse.ArgumentTypeError("max depth is -1 (unlimited) or at least 1")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from renderer.arch import ARCHES
+    from renderer.bench import BENCHMARKS
+    from renderer.tonemap import TONEMAPPERS
+
+    parser = argparse.ArgumentParser(prog="app.py", description="Lantern path tracer")
+    sub = parser.add_subparsers(dest="command")
+
+    view = sub.add_parser("view", help="open the interactive viewer")
+    view.add_argument("scene", nargs="?", default=None, help="scene name or file (default: showcase)")
+    view.add_argument("--size", type=_size, default=(960, 540), help="window size WxH (default 960x540)")
+    view.add_argument("--arch", choices=ARCHES, default="auto")
+    view.add_argument("--integrator", default=None)
+    view.add_argument("--frames", type=int, default=None, help="quit after this many frames")
+
+    render = sub.add_parser("render", help="render headless to a file")
+    render.add_argument("scene", help="scene name or file")
+    budget = render.add_mutually_exclusive_group()
+    budget.add_argument("--spp", type=_positive_int, help="samples per pixel (default: the scene's)")
+    budget.add_argument("--time", type=float, dest="seconds", help="render for this many seconds")
+    render.add_argument("--size", type=_size, help="image size WxH (default: the scene's)")
+    render.add_argument("--integrator", help="integrator name (see `list`)")
+    render.add_argument("--out", type=Path, help="output .png (tone-mapped) or .exr (linear float32)")
+    render.add_argument("--max-depth", type=_max_depth, help="1 = emitters seen directly, 2 = direct light...")
+    render.add_argument("--seed", type=int, help="random seed (same seed, same image)")
+    render.add_argument("--arch", choices=ARCHES, default="auto")
+    render.add_argument("--exposure", type=float, default=0.0, help="exposure in EV stops (PNG only)")
+    render.add_argument("--tonemapper", choices=TONEMAPPERS, help="PNG tone mapper (default aces)")
+
+    sub.add_parser("list", help="list scenes and integrators")
+    info = sub.add_parser("info", help="describe a scene")
+    info.add_argument("scene")
+
+    bench = sub.add_parser("bench", help="run a benchmark")
+    bench.add_argument("name", choices=sorted(BENCHMARKS))
+    bench.add_argument("--quick", action="store_true", help="a short run (smaller sizes, fewer repeats)")
+    bench.add_argument("--out-dir", type=Path, default=ROOT / "reports")
+    return parser
+
+
+def has_display() -> bool:
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def cmd_render(args) -> int:
+    from renderer.arch import init_taichi
+    from renderer.headless import RenderJob, check_output_path, display_tonemapper, progress_bar, render, save
+    from renderer.scene import load_scene
+    from renderer.scene.catalog import resolve_scene
+
+    scene = load_scene(resolve_scene(args.scene))
+    integrator = args.integrator or scene.render.integrator
+    out = args.out or ROOT / "out" / f"{scene.name}_{integrator}.png"
+    check_output_path(out)
+    if args.seconds is not None and args.seconds <= 0:
+        raise ValueError("--time must be positive")
+    used = init_taichi(args.arch)
+    job = RenderJob(spp=args.spp, seconds=args.seconds, size=args.size, integrator=integrator,
+                    max_depth=args.max_depth, seed=args.seed)
+    print(f"rendering {scene.name} with {integrator} on {used}", file=sys.stderr)
+    result = render(scene, job, progress=progress_bar())
+    print(file=sys.stderr)
+    save(result, out, args.exposure, display_tonemapper(integrator, args.tonemapper))
+    rejected = f", {result.rejected} non-finite samples dropped" if result.rejected else ""
+    print(f"{out}  ({result.spp} spp in {result.seconds:.1f} s{rejected})")
+    return 0
+
+
+def cmd_list(_args) -> int:
+    from renderer.integrators import INTEGRATORS
+    from renderer.scene import load_scene
+    from renderer.scene.catalog import scene_files
+
+    print("scenes:")
+    for path in scene_files():
+        scene = load_scene(path)
+        print(f"  {scene.name:<14} {scene.geometry:<5} {scene.description}")
+    print("integrators:")
+    for name, cls in INTEGRATORS.items():
+        print(f"  {name:<14} {cls.description}")
+    return 0
+
+
+def cmd_info(args) -> int:
+    from renderer.scene import load_scene
+    from renderer.scene.catalog import resolve_scene
+    from renderer.scene.features import scene_features
+
+    scene = load_scene(resolve_scene(args.scene))
+    r = scene.render
+    print(f"scene:       {scene.name}  ({scene.path})")
+    print(f"description: {scene.description}")
+    print(f"geometry:    {scene.geometry}, {len(scene.sdf_objects)} top-level objects, "
+          f"{sum(1 for o in scene.sdf_objects for _ in o.walk())} nodes")
+    print(f"materials:   {', '.join(f'{m.name} ({m.kind})' for m in scene.materials)}")
+    env = scene.environment
+    print(f"environment: {env.kind}" + (f" {env.file.name}" if env.file else "") + f", intensity {env.intensity}")
+    print(f"render:      {r.width}x{r.height}, {r.spp} spp, max depth {r.max_depth}, {r.integrator}")
+    print("features:")
+    for key, value in scene_features(scene).describe().items():
+        print(f"  {key:<16} {value}")
+    return 0
+
+
+def cmd_view(args) -> int:
+    from renderer.arch import init_taichi
+    from renderer.scene.catalog import DEFAULT_SCENE, resolve_scene
+    from viewer.window import run_viewer
+
+    path = resolve_scene(args.scene or DEFAULT_SCENE)
+    init_taichi(args.arch)
+    return run_viewer(path, size=args.size, integrator=args.integrator, max_frames=args.frames)
+
+
+def cmd_bench(args) -> int:
+    from renderer.bench import BENCHMARKS
+
+    return BENCHMARKS[args.name](quick=args.quick, out_dir=args.out_dir)
+
+
+def _one_line_warning(message, category, filename, lineno, line=None):
+    return f"warning: {message}\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    sys.path.insert(0, str(ROOT))
+    warnings.formatwarning = _one_line_warning
+    from renderer.scene.errors import SceneError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        if has_display():
+            args = parser.parse_args(["view"])
+        else:
+            print("no display: rendering the default scene headless instead of opening the viewer", file=sys.stderr)
+            args = parser.parse_args(["render", "showcase", "--spp", "32"])
+    handlers = {"view": cmd_view, "render": cmd_render, "list": cmd_list, "info": cmd_info, "bench": cmd_bench}
+    try:
+        return handlers[args.command](args)
+    except (SceneError, ValueError, RuntimeError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,31 @@
+"""Taichi initialisation, done once from an entry point (never at import time)."""
+import ctypes.util
+import os
+
+import taichi as ti
+
+ARCHES = ("auto", "cpu", "cuda", "vulkan")
+
+
+def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str | None = None) -> str:
+    """Initialise Taichi on `arch` and return the name of the back-end actually in use.
+
+    'auto' takes CUDA when a CUDA GPU is there, else the CPU. It does not take Vulkan by itself:
+    on a machine without a GPU the Vulkan device is a software rasteriser, far slower than the
+    CPU back-end.
+    """
+    if arch not in ARCHES:
+        raise ValueError(f"unknown arch '{arch}' (choose from {', '.join(ARCHES)})")
+    kwargs = {"offline_cache": offline_cache, "log_level": ti.WARN}
+    if cache_dir:
+        kwargs["offline_cache_file_path"] = cache_dir
+    if os.environ.get("LANTERN_TAICHI_DEBUG"):
+        kwargs["debug"] = True
+    if arch == "auto" and ctypes.util.find_library("cuda") is None:
+        arch = "cpu"  # no CUDA driver: skip Taichi's noisy probe-and-fall-back
+    wanted = {"auto": ti.cuda, "cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan}[arch]
+    ti.init(arch=wanted, **kwargs)
+    used = ti.lang.impl.current_cfg().arch
+    if arch in ("cuda", "vulkan") and used != wanted:
+        raise RuntimeError(f"arch '{arch}' is not available on this machine")
+    return str(used).split(".")[-1]

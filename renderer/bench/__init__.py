@@ -1,0 +1,16 @@
+"""Benchmarks behind "what accuracy costs in time": each prints a table and writes JSON + plots."""
+
+
+def _sdf(**kw):
+    from renderer.bench.sdf import run
+
+    return run(**kw)
+
+
+def _startup(**kw):
+    from renderer.bench.startup import run
+
+    return run(**kw)
+
+
+BENCHMARKS = {"sdf": _sdf, "startup": _startup}

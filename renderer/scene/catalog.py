@@ -1,0 +1,33 @@
+"""The scenes that ship in assets/scenes, and resolution of a SCENE argument to a file."""
+from pathlib import Path
+
+from renderer.scene.errors import SceneError
+
+ASSETS = Path(__file__).resolve().parents[2] / "assets"
+SCENES_DIR = ASSETS / "scenes"
+# The viewer's order (next/previous scene); scenes not listed follow alphabetically.
+PREFERRED_ORDER = ("showcase", "mirror_field", "hard_cases")
+DEFAULT_SCENE = "showcase"
+
+
+def scene_files() -> list[Path]:
+    files = {p.stem: p for p in SCENES_DIR.glob("*.toml")}
+    ordered = [files.pop(name) for name in PREFERRED_ORDER if name in files]
+    return ordered + [files[k] for k in sorted(files)]
+
+
+def scene_names() -> list[str]:
+    return [p.stem for p in scene_files()]
+
+
+def resolve_scene(argument: str) -> Path:
+    """A scene name from assets/scenes, or a path to a scene file."""
+    path = Path(argument)
+    if path.suffix or path.exists() or "/" in argument:
+        if not path.exists():
+            raise SceneError(argument, "file not found")
+        return path
+    for candidate in scene_files():
+        if candidate.stem == argument:
+            return candidate
+    raise SceneError(argument, f"unknown scene (known: {', '.join(scene_names())}; or give a file path)")
