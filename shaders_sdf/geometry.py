@@ -21,6 +21,9 @@ vec3 = ti.math.vec3
 # Spawned rays start this many hit thresholds off the surface: the hit point lies within one
 # threshold of it, so 2.5 leaves a margin of 1.5 thresholds before the marcher could stop again.
 SPAWN_OFFSET = 2.5
+# The least cosine between a hit's normal and the incoming ray, on the side the ray came from.
+# Small enough to leave true grazing hits alone, large enough to survive f32 rounding of the dot.
+MIN_FACING_COSINE = 1e-3
 
 
 @ti.data_oriented
@@ -48,7 +51,7 @@ class SdfGeometry:
         t_limit = ti.min(t_max, self.march_f[2])
         omega = self.march_f[3]
         max_steps = self.march_i[0]
-        hit = Hit(hit=0, t=t_limit, work=0, tests=0)
+        hit = Hit(hit=0, t=t_limit, work=0, tests=0, inside=0)
         side = 1.0
         t = 0.0
         step = 0.0
@@ -57,6 +60,7 @@ class SdfGeometry:
             signed = self.program.distance(ray.o + t * ray.d)
             if i == 0:
                 side = 1.0 if signed >= 0.0 else -1.0
+                hit.inside = 0 if signed >= 0.0 else 1
             signed *= side
             radius = ti.abs(signed)
             hit.work = i + 1
@@ -101,16 +105,27 @@ class SdfGeometry:
         eps = self.threshold(width)
         # The difference step must stay well above f32 resolution at |p| (~6e-8 |p|).
         h = ti.max(0.5 * eps, 1e-5 * (1.0 + ti.max(ti.abs(p.x), ti.max(ti.abs(p.y), ti.abs(p.z)))))
+        # The side the ray travelled on: the outward normal must face against it from outside
+        # and along it from inside.
+        along = -ray.d if hit.inside == 0 else ray.d
         n = self.normal(p, h)
-        if n.dot(n) < 0.5:  # degenerate gradient (never for a proper SDF); face the ray
-            n = -ray.d
+        if n.dot(n) < 0.5:  # degenerate gradient (never for a proper SDF)
+            n = along
+        # The march stops within `eps` of a surface, which near a silhouette can be just past the
+        # tangent point, where the outward normal already faces away from the ray. Tilt it
+        # towards the ray just enough that the ray meets it from the side it travelled on.
+        c = n.dot(along)
+        if c < MIN_FACING_COSINE:
+            n = ti.math.normalize(n + (MIN_FACING_COSINE - c) * along)
         material = ti.cast(self.program.distance_material(p).y, ti.i32)
         return Surface(p=p, n_geo=n, n_shading=n, uv=ti.math.vec2(0.0), material=material,
-                       front_face=1 if ray.d.dot(n) < 0.0 else 0, eps=eps, cone_width=width,
-                       cone_spread=ray.cone_spread)
+                       front_face=1 - hit.inside, eps=eps, cone_width=width, cone_spread=ray.cone_spread)
 
     @ti.func
     def spawn(self, surface, direction):
         side = surface.n_geo if direction.dot(surface.n_geo) > 0.0 else -surface.n_geo
+        # The spawned ray keeps the footprint it arrived with but does not grow it further: a
+        # threshold that grew along a grazing ray faster than the ray leaves a convex surface
+        # would let the ray find its own surface again.
         return Ray(o=surface.p + side * (SPAWN_OFFSET * surface.eps), d=direction,
-                   cone_width=surface.cone_width, cone_spread=surface.cone_spread)
+                   cone_width=surface.cone_width, cone_spread=0.0)

@@ -1,0 +1,294 @@
+"""Helpers shared by the benchmarks: timing, image error, JSON reports, plots and tables.
+
+Nothing here touches Taichi at import time; the benchmarks initialise it themselves.
+
+Image error follows Rousselle et al. ("Adaptive rendering with non-local means filtering", 2012):
+relative MSE is mean((x - ref)^2 / (ref^2 + eps)) with eps = 1e-2, taken over pixels and channels,
+so dark regions do not dominate and bright ones do not vanish.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import platform
+import statistics
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterable, Sequence
+
+import numpy as np
+
+REL_MSE_EPS = 1e-2
+
+
+# --- timing --------------------------------------------------------------------------------------
+
+@dataclass
+class Timing:
+    """Wall-clock seconds of `runs` timed calls after `warmup` untimed ones."""
+
+    times: list[float]
+    warmup_times: list[float] = field(default_factory=list)
+
+    @property
+    def median(self) -> float:
+        return statistics.median(self.times)
+
+    @property
+    def spread(self) -> float:
+        """(max - min) / median of the timed runs: a rough stability indicator."""
+        return (max(self.times) - min(self.times)) / self.median if self.median > 0 else 0.0
+
+    def as_dict(self) -> dict:
+        return {"median_s": self.median, "times_s": list(self.times), "warmup_s": list(self.warmup_times),
+                "spread": self.spread}
+
+
+def time_call(fn: Callable[[], object], runs: int = 3, warmup: int = 1,
+              clock: Callable[[], float] = time.perf_counter) -> Timing:
+    """Call `fn` `warmup` times untimed (compilation, caches), then `runs` times timed.
+
+    `fn` must itself wait for any asynchronous device work it starts (e.g. end with ti.sync()).
+    """
+    if runs < 1:
+        raise ValueError("runs must be at least 1")
+    warm = []
+    for _ in range(warmup):
+        t0 = clock()
+        fn()
+        warm.append(clock() - t0)
+    times = []
+    for _ in range(runs):
+        t0 = clock()
+        fn()
+        times.append(clock() - t0)
+    return Timing(times, warm)
+
+
+# --- image error ---------------------------------------------------------------------------------
+
+def _pair(image, reference) -> tuple[np.ndarray, np.ndarray]:
+    x = np.asarray(image, np.float64)
+    r = np.asarray(reference, np.float64)
+    if x.shape != r.shape:
+        raise ValueError(f"image shape {x.shape} differs from reference shape {r.shape}")
+    return x, r
+
+
+def mse(image, reference) -> float:
+    x, r = _pair(image, reference)
+    return float(np.mean((x - r) ** 2))
+
+
+def rmse(image, reference) -> float:
+    return math.sqrt(mse(image, reference))
+
+
+def rel_mse_map(image, reference, eps: float = REL_MSE_EPS) -> np.ndarray:
+    """Per-element (x - ref)^2 / (ref^2 + eps)."""
+    x, r = _pair(image, reference)
+    return (x - r) ** 2 / (r * r + eps)
+
+
+def rel_mse(image, reference, eps: float = REL_MSE_EPS) -> float:
+    return float(np.mean(rel_mse_map(image, reference, eps)))
+
+
+def _per_pixel(values: np.ndarray) -> np.ndarray:
+    """Average the channel axis of an (H, W, C) map; leave (H, W) maps alone."""
+    return values.mean(axis=-1) if values.ndim == 3 else values
+
+
+@dataclass
+class ErrorDifference:
+    """metric(a) - metric(b) for two renderings of the same scene against one reference.
+
+    The standard error comes from the per-pixel differences of the squared errors: pixels are
+    sampled independently, so SE = std(d_pixel) / sqrt(pixels). When a and b share random numbers
+    (same seed) the pairing cancels most of the Monte Carlo noise and the test is sharp.
+    """
+
+    metric: str
+    a: float
+    b: float
+    difference: float
+    standard_error: float
+
+    @property
+    def z(self) -> float:
+        if self.standard_error > 0:
+            return self.difference / self.standard_error
+        return 0.0 if self.difference == 0 else math.copysign(math.inf, self.difference)
+
+    @property
+    def relative(self) -> float:
+        """difference / b (0 when b is 0)."""
+        return self.difference / self.b if self.b else 0.0
+
+    def as_dict(self) -> dict:
+        return {"metric": self.metric, "a": self.a, "b": self.b, "difference": self.difference,
+                "relative_difference": self.relative, "standard_error": self.standard_error, "z": self.z}
+
+
+def error_difference(image_a, image_b, reference, metric: str = "rel_mse") -> ErrorDifference:
+    if metric == "rel_mse":
+        ea = _per_pixel(rel_mse_map(image_a, reference))
+        eb = _per_pixel(rel_mse_map(image_b, reference))
+    elif metric == "mse":
+        xa, r = _pair(image_a, reference)
+        xb, _ = _pair(image_b, reference)
+        ea, eb = _per_pixel((xa - r) ** 2), _per_pixel((xb - r) ** 2)
+    else:
+        raise ValueError(f"unknown metric '{metric}' (rel_mse or mse)")
+    d = (ea - eb).ravel()
+    se = float(np.std(d, ddof=1) / math.sqrt(d.size)) if d.size > 1 else math.inf
+    return ErrorDifference(metric, float(ea.mean()), float(eb.mean()), float(d.mean()), se)
+
+
+def image_errors(image, reference) -> dict:
+    return {"rmse": rmse(image, reference), "rel_mse": rel_mse(image, reference)}
+
+
+# --- reports -------------------------------------------------------------------------------------
+
+def _jsonable(value):
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, Path):
+        return str(value)
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    return value
+
+
+def write_json(path: Path, data: dict) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(_jsonable(data), indent=2) + "\n", encoding="utf-8")
+    return path
+
+
+def machine_info() -> dict:
+    info = {"python": sys.version.split()[0], "platform": platform.platform(), "cpus": os.cpu_count(),
+            "processor": platform.processor() or platform.machine()}
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    info["processor"] = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    try:
+        from importlib.metadata import version
+
+        info["taichi"] = version("taichi")
+    except Exception:  # noqa: BLE001 - informational only
+        pass
+    return info
+
+
+def pyplot():
+    """matplotlib.pyplot on the Agg back-end (no display needed)."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_figure(fig, path: Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    pyplot().close(fig)
+    return path
+
+
+# --- tables --------------------------------------------------------------------------------------
+
+def format_table(headers: Sequence[str], rows: Iterable[Sequence[object]], title: str | None = None) -> str:
+    """A plain aligned text table; numbers right-aligned, text left-aligned."""
+    cells = [[str(h) for h in headers]] + [[_cell(v) for v in row] for row in rows]
+    numeric = [all(_is_number(r[i]) for r in cells[1:]) if len(cells) > 1 else False for i in range(len(headers))]
+    widths = [max(len(r[i]) for r in cells) for i in range(len(headers))]
+
+    def line(row):
+        return "  ".join(c.rjust(w) if numeric[i] else c.ljust(w) for i, (c, w) in enumerate(zip(row, widths))).rstrip()
+
+    out = []
+    if title:
+        out.append(title)
+    out.append(line(cells[0]))
+    out.append("  ".join("-" * w for w in widths))
+    out.extend(line(r) for r in cells[1:])
+    return "\n".join(out)
+
+
+def print_table(headers, rows, title: str | None = None) -> None:
+    print(format_table(headers, rows, title), flush=True)
+    print(flush=True)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text.rstrip("%x").replace("+", "", 1))
+        return True
+    except ValueError:
+        return False
+
+
+def _cell(value) -> str:
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            return str(value)
+        if value == 0:
+            return "0"
+        magnitude = abs(value)
+        if magnitude >= 1000 or magnitude < 1e-3:
+            return f"{value:.3g}"
+        if magnitude >= 100:
+            return f"{value:.1f}"
+        if magnitude >= 10:
+            return f"{value:.2f}"
+        return f"{value:.3f}"
+    return str(value)
+
+
+def verdict(ok: bool) -> str:
+    return "PASS" if ok else "FAIL"
+
+
+def time_interleaved(calls: dict, runs: int = 3, warmup: int = 1,
+                     clock: Callable[[], float] = time.perf_counter) -> dict:
+    """Time several calls round-robin (a, b, c, a, b, c, ...) so slow drifts of the machine
+    (other processes, clock changes) spread over all of them instead of biasing one.
+
+    Returns {name: Timing}. Each call is warmed up `warmup` times first.
+    """
+    if runs < 1:
+        raise ValueError("runs must be at least 1")
+    warm = {name: [] for name in calls}
+    times = {name: [] for name in calls}
+    for name, fn in calls.items():
+        for _ in range(warmup):
+            t0 = clock()
+            fn()
+            warm[name].append(clock() - t0)
+    for _ in range(runs):
+        for name, fn in calls.items():
+            t0 = clock()
+            fn()
+            times[name].append(clock() - t0)
+    return {name: Timing(times[name], warm[name]) for name in calls}

@@ -1,0 +1,397 @@
+"""Shared pieces of the SDF tests: scenes built in code, numpy reference distances, test kernels.
+
+The kernels take the geometry as a template argument, so each SdfGeometry compiles its own copy:
+tests share geometries through module-scoped fixtures and batch thousands of rays per launch.
+"""
+
+import numpy as np
+import taichi as ti
+
+from renderer.geometry.interface import Ray
+from renderer.materials import microfacet as mf
+from renderer.scene.model import (
+    CameraSpec,
+    EnvironmentSpec,
+    MarchSettings,
+    MaterialSpec,
+    RenderSettings,
+    Scene,
+    SdfNode,
+    Transform,
+)
+from shaders_sdf.geometry import SPAWN_OFFSET, SdfGeometry
+
+vec3 = ti.math.vec3
+MATERIAL = "m"
+
+# Parameters of every primitive as the tests use them (sizes of order 1, smallest feature 0.15).
+PRIMITIVE_PARAMS = {
+    "sphere": {"radius": 0.6},
+    "box": {"size": (1.2, 0.8, 0.5)},
+    "rounded_box": {"size": (1.0, 0.7, 0.9), "radius": 0.15},
+    "torus": {"major_radius": 0.5, "minor_radius": 0.15},
+    "capsule": {"height": 0.8, "radius": 0.25},
+    "cylinder": {"height": 0.9, "radius": 0.4},
+    "cone": {"height": 1.0, "radius": 0.5},
+    "plane": {"normal": (0.0, 1.0, 0.0), "offset": 0.0},
+}
+PRIMITIVES = tuple(PRIMITIVE_PARAMS)
+BOUNDED_PRIMITIVES = tuple(k for k in PRIMITIVES if k != "plane")
+
+
+# --- scenes built in code ----------------------------------------------------------------------
+
+
+def node(kind: str, *children: SdfNode, translate=(0.0, 0.0, 0.0), rotate=(0.0, 0.0, 0.0),
+         scale: float = 1.0, material: str | None = None, **params) -> SdfNode:
+    """An SdfNode as the loader would build it (parameters sorted by name)."""
+    if kind in PRIMITIVE_PARAMS:
+        params = {**PRIMITIVE_PARAMS[kind], **params}
+    if kind == "plane":
+        n = np.asarray(params["normal"], np.float64)
+        params["normal"] = tuple(float(c) for c in n / np.linalg.norm(n))
+    if kind == "repeat":
+        params.setdefault("limit", None)
+    return SdfNode(kind=kind, params=tuple(sorted(params.items())), children=tuple(children),
+                   transform=Transform(tuple(map(float, translate)), tuple(map(float, rotate)), float(scale)),
+                   material=material)
+
+
+def make_scene(*objects: SdfNode, **march) -> Scene:
+    """A scene with one diffuse material 'm' on every top-level object."""
+    objects = tuple(o if o.material is not None else SdfNode(o.kind, o.params, o.children, o.transform, MATERIAL)
+                    for o in objects)
+    return Scene(name="test", path=None, geometry="sdf", camera=CameraSpec(),
+                 render=RenderSettings(march=MarchSettings(**march)), environment=EnvironmentSpec(),
+                 materials=(MaterialSpec(MATERIAL),), sdf_objects=objects)
+
+
+def make_geometry(*objects: SdfNode, **march) -> SdfGeometry:
+    scene = make_scene(*objects, **march)
+    return SdfGeometry(scene, scene.material_index)
+
+
+def set_march(geometry: SdfGeometry, **march) -> None:
+    geometry.set_march(MarchSettings(**march))
+
+
+# --- numpy references (float64), written from the geometric definitions ----------------------
+
+
+def _seg_dist2d(p, a, b):
+    """Distance from 2D points p (N,2) to the segment ab."""
+    a = np.asarray(a, np.float64)
+    b = np.asarray(b, np.float64)
+    ab = b - a
+    t = np.clip(((p - a) @ ab) / (ab @ ab), 0.0, 1.0)
+    return np.linalg.norm(p - (a + t[:, None] * ab), axis=1)
+
+
+def ref_sphere(p, radius):
+    return np.linalg.norm(p, axis=1) - radius
+
+
+def ref_box(p, size):
+    """Outside: distance to the clamped (closest) point; inside: minus the distance to the nearest face."""
+    half = 0.5 * np.asarray(size, np.float64)
+    closest = np.clip(p, -half, half)
+    outside = np.linalg.norm(p - closest, axis=1)
+    inside = np.min(half - np.abs(p), axis=1)
+    return np.where(outside > 0.0, outside, -inside)
+
+
+def ref_rounded_box(p, size, radius):
+    """The Minkowski sum of the inner box and a ball: offset of a convex set, exact both sides."""
+    inner = np.asarray(size, np.float64) - 2.0 * radius
+    return ref_box(p, inner) - radius
+
+
+def ref_torus(p, major_radius, minor_radius):
+    """Distance to the core circle (radius R in the xz plane) minus the tube radius."""
+    rho = np.hypot(p[:, 0], p[:, 2])
+    safe = np.where(rho > 0.0, rho, 1.0)
+    core = np.stack([p[:, 0] / safe * major_radius, np.zeros(len(p)), p[:, 2] / safe * major_radius], axis=1)
+    core[rho == 0.0] = (major_radius, 0.0, 0.0)  # every core point is equidistant from the axis
+    return np.linalg.norm(p - core, axis=1) - minor_radius
+
+
+def ref_capsule(p, height, radius):
+    """Distance to the core segment from (0, -h/2, 0) to (0, h/2, 0), minus the radius."""
+    h = 0.5 * height
+    y = np.clip(p[:, 1], -h, h)
+    core = np.stack([np.zeros(len(p)), y, np.zeros(len(p))], axis=1)
+    return np.linalg.norm(p - core, axis=1) - radius
+
+
+def _meridian(p):
+    return np.stack([np.hypot(p[:, 0], p[:, 2]), p[:, 1]], axis=1)
+
+
+def _polygon_sdf(q, vertices):
+    """Signed distance from 2D points to a convex polygon (counter-clockwise vertices)."""
+    v = np.asarray(vertices, np.float64)
+    dist = np.min([_seg_dist2d(q, v[i], v[(i + 1) % len(v)]) for i in range(len(v))], axis=0)
+    inside = np.ones(len(q), bool)
+    for i in range(len(v)):
+        e = v[(i + 1) % len(v)] - v[i]
+        w = q - v[i]
+        inside &= (e[0] * w[:, 1] - e[1] * w[:, 0]) > 0.0
+    return np.where(inside, -dist, dist)
+
+
+def ref_cylinder(p, height, radius):
+    """A solid of revolution: the 2D distance in the meridian plane to its profile (a rectangle)."""
+    h = 0.5 * height
+    return _polygon_sdf(_meridian(p), [(-radius, -h), (radius, -h), (radius, h), (-radius, h)])
+
+
+def ref_cone(p, height, radius):
+    """Profile: the triangle base (-r, -h/2)..(r, -h/2), apex (0, h/2)."""
+    h = 0.5 * height
+    return _polygon_sdf(_meridian(p), [(-radius, -h), (radius, -h), (0.0, h)])
+
+
+def ref_plane(p, normal, offset):
+    n = np.asarray(normal, np.float64)
+    return p @ (n / np.linalg.norm(n)) - offset
+
+
+REFERENCE = {
+    "sphere": ref_sphere, "box": ref_box, "rounded_box": ref_rounded_box, "torus": ref_torus,
+    "capsule": ref_capsule, "cylinder": ref_cylinder, "cone": ref_cone, "plane": ref_plane,
+}
+
+
+def reference_distance(kind: str, p: np.ndarray, **params) -> np.ndarray:
+    return REFERENCE[kind](np.asarray(p, np.float64), **{**PRIMITIVE_PARAMS[kind], **params})
+
+
+def bounding_half_extent(kind: str) -> float:
+    """Half the side of a centred cube that contains the primitive (plane: a 2 m region)."""
+    p = PRIMITIVE_PARAMS[kind]
+    return {
+        "sphere": lambda: p["radius"],
+        "box": lambda: 0.5 * max(p["size"]),
+        "rounded_box": lambda: 0.5 * max(p["size"]),
+        "torus": lambda: p["major_radius"] + p["minor_radius"],
+        "capsule": lambda: 0.5 * p["height"] + p["radius"],
+        "cylinder": lambda: max(0.5 * p["height"], p["radius"]),
+        "cone": lambda: max(0.5 * p["height"], p["radius"]),
+        "plane": lambda: 1.0,
+    }[kind]()
+
+
+# --- random directions -------------------------------------------------------------------------
+
+
+def random_directions(rng: np.random.Generator, n: int) -> np.ndarray:
+    d = rng.normal(size=(n, 3))
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+# --- test kernels ------------------------------------------------------------------------------
+
+
+@ti.kernel
+def _distance_kernel(geo: ti.template(), pts: ti.types.ndarray(dtype=vec3, ndim=1),
+                     out: ti.types.ndarray(dtype=ti.f32, ndim=1)):
+    for i in range(pts.shape[0]):
+        out[i] = geo.program.distance(pts[i])
+
+
+def sdf(geo: SdfGeometry, pts: np.ndarray) -> np.ndarray:
+    """The scene's Taichi distance at points (N, 3)."""
+    pts = np.ascontiguousarray(pts, np.float32).reshape(-1, 3)
+    out = np.zeros(len(pts), np.float32)
+    _distance_kernel(geo, pts, out)
+    return out
+
+
+# Columns of the trace kernel's outputs.
+I_COLS = ("hit", "work", "front_face", "material", "refl_hit", "refl_work", "trans_valid", "trans_hit",
+          "trans_work")
+F_COLS = ("t", "px", "py", "pz", "nx", "ny", "nz", "eps", "sdf_hit", "sdf_origin",
+          "refl_ox", "refl_oy", "refl_oz", "refl_dx", "refl_dy", "refl_dz", "refl_t", "refl_sdf_origin",
+          "trans_ox", "trans_oy", "trans_oz", "trans_dx", "trans_dy", "trans_dz", "trans_t", "trans_sdf_origin",
+          "nsx", "nsy", "nsz")
+_FI = {name: i for i, name in enumerate(F_COLS)}
+_II = {name: i for i, name in enumerate(I_COLS)}
+
+
+@ti.func
+def _put3(out: ti.template(), i, col: ti.template(), v):
+    out[i, col] = v.x
+    out[i, col + 1] = v.y
+    out[i, col + 2] = v.z
+
+
+@ti.kernel
+def _trace_kernel(geo: ti.template(), o: ti.types.ndarray(dtype=vec3, ndim=1),
+                  d: ti.types.ndarray(dtype=vec3, ndim=1), t_max: ti.f32, cone_width: ti.f32,
+                  cone_spread: ti.f32, eta: ti.f32, out_i: ti.types.ndarray(dtype=ti.i32, ndim=2),
+                  out_f: ti.types.ndarray(dtype=ti.f32, ndim=2)):
+    for i in range(o.shape[0]):
+        ray = Ray(o=o[i], d=d[i], cone_width=cone_width, cone_spread=cone_spread)
+        out_f[i, _FI["sdf_origin"]] = geo.program.distance(ray.o)
+        hit = geo.intersect(ray, t_max)
+        out_i[i, _II["hit"]] = hit.hit
+        out_i[i, _II["work"]] = hit.work
+        out_f[i, _FI["t"]] = hit.t
+        if hit.hit == 1:
+            s = geo.surface(ray, hit)
+            out_i[i, _II["front_face"]] = s.front_face
+            out_i[i, _II["material"]] = s.material
+            _put3(out_f, i, _FI["px"], s.p)
+            _put3(out_f, i, _FI["nx"], s.n_geo)
+            _put3(out_f, i, _FI["nsx"], s.n_shading)
+            out_f[i, _FI["eps"]] = s.eps
+            out_f[i, _FI["sdf_hit"]] = geo.program.distance(s.p)
+            # Mirror reflection about the geometric normal: leaves on the side the ray came from.
+            r = ray.d - 2.0 * ray.d.dot(s.n_geo) * s.n_geo
+            ray_r = geo.spawn(s, r)
+            _put3(out_f, i, _FI["refl_ox"], ray_r.o)
+            _put3(out_f, i, _FI["refl_dx"], ray_r.d)
+            out_f[i, _FI["refl_sdf_origin"]] = geo.program.distance(ray_r.o)
+            hit_r = geo.intersect(ray_r, t_max)
+            out_i[i, _II["refl_hit"]] = hit_r.hit
+            out_i[i, _II["refl_work"]] = hit_r.work
+            out_f[i, _FI["refl_t"]] = hit_r.t
+            # Refraction through the smooth surface (eta = n_inside / n_outside).
+            n_f = s.n_geo if s.front_face == 1 else -s.n_geo  # the side the ray came from
+            e = eta if s.front_face == 1 else 1.0 / eta
+            wo = -ray.d
+            f, cos_t = mf.fresnel_dielectric(ti.min(1.0, wo.dot(n_f)), e)
+            if f < 1.0:
+                out_i[i, _II["trans_valid"]] = 1
+                tdir = ti.math.normalize(mf.refract(wo, n_f, e, cos_t))
+                ray_t = geo.spawn(s, tdir)
+                _put3(out_f, i, _FI["trans_ox"], ray_t.o)
+                _put3(out_f, i, _FI["trans_dx"], ray_t.d)
+                out_f[i, _FI["trans_sdf_origin"]] = geo.program.distance(ray_t.o)
+                hit_t = geo.intersect(ray_t, t_max)
+                out_i[i, _II["trans_hit"]] = hit_t.hit
+                out_i[i, _II["trans_work"]] = hit_t.work
+                out_f[i, _FI["trans_t"]] = hit_t.t
+
+
+class TraceResult:
+    """Columns of one trace batch by name: r.t, r.hit, r.p (N,3), r.n, r.refl_o ..."""
+
+    def __init__(self, o, d, out_i, out_f, t_max, cone_width, cone_spread):
+        self.o = o.astype(np.float64)
+        self.d = d.astype(np.float64)
+        self._i = out_i
+        self._f = out_f
+        self.t_max = t_max
+        self.cone_width = cone_width
+        self.cone_spread = cone_spread
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        if name in _II:
+            return self._i[:, _II[name]]
+        if name in _FI:
+            return self._f[:, _FI[name]].astype(np.float64)
+        vectors = {"p": "px", "n": "nx", "n_shading": "nsx", "refl_o": "refl_ox", "refl_d": "refl_dx",
+                   "trans_o": "trans_ox", "trans_d": "trans_dx"}
+        if name in vectors:
+            c = _FI[vectors[name]]
+            return self._f[:, c:c + 3].astype(np.float64)
+        raise AttributeError(name)
+
+    def __len__(self):
+        return len(self.o)
+
+
+def trace(geo: SdfGeometry, o, d, t_max: float, cone_width: float = 0.0, cone_spread: float = 0.0,
+          eta: float = 1.5) -> TraceResult:
+    """Intersect, shade, spawn a reflected and a refracted ray and intersect those, for every ray."""
+    o = np.ascontiguousarray(o, np.float32).reshape(-1, 3)
+    d = np.ascontiguousarray(d, np.float32).reshape(-1, 3)
+    out_i = np.zeros((len(o), len(I_COLS)), np.int32)
+    out_f = np.zeros((len(o), len(F_COLS)), np.float32)
+    _trace_kernel(geo, o, d, t_max, cone_width, cone_spread, eta, out_i, out_f)
+    return TraceResult(o, d, out_i, out_f, t_max, cone_width, cone_spread)
+
+
+@ti.kernel
+def _segment_kernel(geo: ti.template(), o: ti.types.ndarray(dtype=vec3, ndim=1),
+                    d: ti.types.ndarray(dtype=vec3, ndim=1), length: ti.types.ndarray(dtype=ti.f32, ndim=1),
+                    coarse: ti.i32, fine: ti.f32, out: ti.types.ndarray(dtype=ti.f32, ndim=2)):
+    for i in range(o.shape[0]):
+        side = 1.0 if geo.program.distance(o[i]) >= 0.0 else -1.0
+        a = side * geo.program.distance(o[i])
+        crossing = -1.0
+        unresolved = 0
+        lowest = a
+        if length[i] > 0.0:
+            dt = length[i] / coarse
+            for j in range(1, coarse + 1):
+                s = j * dt
+                b = side * geo.program.distance(o[i] + s * d[i])
+                lowest = ti.min(lowest, b)
+                if b < 0.0:
+                    crossing = s
+                    break
+                if a + b <= dt:
+                    # Not certified by the Lipschitz bound: the unbounding spheres of the two samples
+                    # leave a gap in which a surface could hide. Resample that interval finely.
+                    m = ti.max(1, ti.cast(ti.ceil(dt / fine), ti.i32))
+                    sub = dt / m
+                    aa = a
+                    for k in range(1, m + 1):
+                        ss = s - dt + k * sub
+                        bb = side * geo.program.distance(o[i] + ss * d[i])
+                        lowest = ti.min(lowest, bb)
+                        if bb < 0.0:
+                            crossing = ss
+                            break
+                        if aa + bb <= sub:
+                            unresolved += 1
+                        aa = bb
+                    if crossing >= 0.0:
+                        break
+                a = b
+        out[i, 0] = crossing
+        out[i, 1] = unresolved
+        out[i, 2] = lowest
+
+
+def first_crossing(geo: SdfGeometry, o, d, length, coarse: int, fine: float):
+    """Check the segments o + s d, s in [0, length], for a change of the SDF's sign from the origin's.
+
+    Samples `coarse` points evenly; where two neighbours' distances a, b satisfy a + b <= spacing
+    (their unbounding spheres do not cover the interval, so a thin solid could fit in between), the
+    interval is resampled at spacing <= `fine`. With a Lipschitz-1 SDF a crossed solid whose chord
+    along the ray is longer than `fine` always puts a sample on the far side of the origin's sign;
+    a shorter one leaves an interval uncertified even at the fine spacing, counted as "unresolved"
+    (the segment passes within fine/2 of a surface there).
+
+    Returns (crossing s or -1, unresolved interval count, lowest origin-side distance seen).
+    """
+    o = np.ascontiguousarray(o, np.float32).reshape(-1, 3)
+    d = np.ascontiguousarray(d, np.float32).reshape(-1, 3)
+    length = np.ascontiguousarray(length, np.float32).reshape(-1)
+    out = np.zeros((len(o), 3), np.float32)
+    _segment_kernel(geo, o, d, length, coarse, fine, out)
+    return out[:, 0].astype(np.float64), out[:, 1].astype(np.int64), out[:, 2].astype(np.float64)
+
+
+@ti.kernel
+def _normal_kernel(geo: ti.template(), p: ti.types.ndarray(dtype=vec3, ndim=1), h: ti.f32,
+                   out: ti.types.ndarray(dtype=vec3, ndim=1)):
+    for i in range(p.shape[0]):
+        out[i] = geo.normal(p[i], h)
+
+
+def normals(geo: SdfGeometry, p, h: float) -> np.ndarray:
+    p = np.ascontiguousarray(p, np.float32).reshape(-1, 3)
+    out = np.zeros_like(p)
+    _normal_kernel(geo, p, h, out)
+    return out.astype(np.float64)
+
+
+__all__ = ["SPAWN_OFFSET", "node", "make_scene", "make_geometry", "set_march", "sdf", "trace", "first_crossing",
+           "normals", "reference_distance", "PRIMITIVES", "BOUNDED_PRIMITIVES", "PRIMITIVE_PARAMS",
+           "bounding_half_extent", "random_directions"]

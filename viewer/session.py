@@ -1,0 +1,453 @@
+"""The viewer's state machine, without a window: testable with fake clocks and fake timings.
+
+`ViewerSession` holds what the user controls (scene, integrator, camera, render and display
+settings) and decides, frame by frame, whether the accumulation must start over and at which
+internal resolution and sample count the next frame renders:
+
+- Only a change resets: camera motion, a scene or integrator switch, or a render setting (max
+  depth, field of view, aperture, focus distance). Exposure and tone mapper act on the display
+  only. An idle frame never resets; it adds samples.
+- While the camera moves (or a slider is being dragged) the frame renders fewer pixels so the
+  frame time stays near a target: `ResolutionController` picks the internal resolution from the
+  measured cost of the previous frames. Once the camera has been still for `settle_seconds`, the
+  next frame resets at full resolution and accumulates from there.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from datetime import datetime
+from pathlib import Path
+from typing import Callable, Hashable, Iterable, Optional
+
+from viewer.camera_state import CameraState
+from viewer.controller import FreeLookController
+
+ROOT = Path(__file__).resolve().parents[1]
+SCREENSHOT_ENV = "LANTERN_SCREENSHOT_DIR"
+DEFAULT_SCREENSHOT_DIR = ROOT / "screenshots"
+
+DEFAULT_TARGET_SECONDS = 0.050  # 20 fps while moving
+MIN_SCALE = 1.0 / 16.0  # smallest internal resolution, as a fraction of the window's width/height
+# However long the rest of the frame (tone mapping, upload, HUD, present) takes, the render gets
+# at least this fraction of the target: the resolution then bottoms out at MIN_SCALE instead of
+# chasing a budget of zero.
+MIN_RENDER_BUDGET_FRACTION = 0.25
+SETTLE_SECONDS = 0.10  # still this long before going back to full resolution (see plan_frame)
+MAX_SPP_PER_FRAME = 64
+COST_SMOOTHING = 0.35  # weight of the newest measurement in the moving averages
+SCALE_RISE = 0.5  # fraction of the way towards a larger target scale taken per frame
+INITIAL_MOVING_SCALE = 0.25  # before anything was measured
+
+NOISE_INTERVAL = 0.25  # seconds between noise / work reductions (they cost a pass over the film)
+MESSAGE_SECONDS = 4.0
+
+
+# --- internal resolution ----------------------------------------------------------------------
+
+
+class ResolutionController:
+    """Picks the internal resolution while moving and the samples per frame while still.
+
+    It keeps an exponential moving average of the render cost in seconds per pixel-sample (one
+    per context, e.g. per (scene, integrator), so switching back to a cheap view is right at
+    once) and of the frame's overhead outside rendering. The render budget is the target frame
+    time minus that overhead (at least MIN_RENDER_BUDGET_FRACTION of the target).
+
+    Moving: pixels = budget / cost, i.e. the pixel count scaled by target/measured; as a linear
+    scale of the window clamped to [min_scale, 1]. A lower target applies at once (the view
+    must stay responsive); a higher one is approached by SCALE_RISE per frame (no oscillation).
+    Still: full resolution with as many samples per pixel as fit the budget (at least 1).
+    """
+
+    def __init__(self, full_size: tuple[int, int], target_seconds: float = DEFAULT_TARGET_SECONDS,
+                 min_scale: float = MIN_SCALE, max_spp: int = MAX_SPP_PER_FRAME):
+        if target_seconds <= 0:
+            raise ValueError(f"target frame time must be positive, got {target_seconds}")
+        if not 0.0 < min_scale <= 1.0:
+            raise ValueError(f"min_scale must be in (0, 1], got {min_scale}")
+        self.full_size = (int(full_size[0]), int(full_size[1]))
+        self.target_seconds = float(target_seconds)
+        self.min_scale = float(min_scale)
+        self.max_spp = int(max_spp)
+        self.scale = INITIAL_MOVING_SCALE
+        self.overhead = 0.0
+        self._costs: dict[Hashable, float] = {}
+        self.context: Hashable = None
+
+    # -- measurements --
+    def set_context(self, key: Hashable) -> None:
+        """Costs are kept per context (scene, integrator...); a new one starts unmeasured."""
+        self.context = key
+
+    @property
+    def cost(self) -> Optional[float]:
+        """Smoothed seconds per pixel-sample in the current context, None before a measurement."""
+        return self._costs.get(self.context)
+
+    def record(self, render_seconds: float, pixel_samples: int, frame_seconds: Optional[float] = None) -> None:
+        """One frame's measurement: render time for `pixel_samples`, and the whole frame's time."""
+        if pixel_samples <= 0 or render_seconds <= 0 or not math.isfinite(render_seconds):
+            return
+        cost = render_seconds / pixel_samples
+        old = self._costs.get(self.context)
+        self._costs[self.context] = cost if old is None else old + COST_SMOOTHING * (cost - old)
+        if frame_seconds is not None and math.isfinite(frame_seconds):
+            overhead = max(0.0, frame_seconds - render_seconds)
+            self.overhead += COST_SMOOTHING * (overhead - self.overhead)
+
+    # -- decisions --
+    def render_budget(self) -> float:
+        return max(self.target_seconds - self.overhead, MIN_RENDER_BUDGET_FRACTION * self.target_seconds)
+
+    def target_scale(self) -> float:
+        """The linear scale whose pixel count fits the budget at the measured cost."""
+        cost = self.cost
+        if cost is None:
+            return self.scale
+        full_pixels = self.full_size[0] * self.full_size[1]
+        pixels = self.render_budget() / cost
+        return min(max(math.sqrt(pixels / full_pixels), self.min_scale), 1.0)
+
+    def moving_size(self) -> tuple[int, int]:
+        """Advance the smoothed scale one frame and return the internal size to render."""
+        target = self.target_scale()
+        if target < self.scale:
+            self.scale = target
+        else:
+            self.scale += SCALE_RISE * (target - self.scale)
+        self.scale = min(max(self.scale, self.min_scale), 1.0)
+        return self.size_for(self.scale)
+
+    def size_for(self, scale: float) -> tuple[int, int]:
+        w, h = self.full_size
+        return max(1, min(w, round(w * scale))), max(1, min(h, round(h * scale)))
+
+    def still_spp(self) -> int:
+        """Samples per pixel for a full-resolution frame that takes about the render budget."""
+        cost = self.cost
+        if cost is None:
+            return 1
+        pixels = self.full_size[0] * self.full_size[1]
+        return int(min(max(self.render_budget() // (cost * pixels), 1), self.max_spp))
+
+
+# --- settings ---------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Controls:
+    """The values the HUD's widgets edit."""
+
+    exposure: float  # EV, display only
+    tonemapper: str  # display only
+    max_depth: int  # -1 = unlimited
+    fov: float  # degrees
+    aperture: float  # lens radius, metres
+    focus_distance: float  # metres
+
+
+@dataclass(frozen=True)
+class FramePlan:
+    size: tuple[int, int]  # internal resolution of the film's active region
+    spp: int  # samples per pixel this frame
+    reset: bool  # start the accumulation over before rendering
+    interactive: bool  # rendering at the moving (reduced) resolution
+
+
+def fix_max_depth(new: int, old: int) -> int:
+    """A slider over -1..N passes through 0, which is not a depth: step over it."""
+    new = int(new)
+    if new == 0:
+        return 1 if old < 0 else -1
+    return max(new, -1)
+
+
+def camera_from_spec(spec) -> CameraState:
+    """The viewer's camera for a scene's CameraSpec (only a +y up vector is supported)."""
+    return CameraState.from_look_at(spec.position, spec.look_at, (0.0, 1.0, 0.0), spec.fov,
+                                    spec.aperture, spec.focus_distance)
+
+
+def scene_scale(spec) -> float:
+    """A length that says how big the scene looks from its camera: the distance to the target."""
+    d = math.dist(tuple(spec.position), tuple(spec.look_at))
+    return max(d, 0.1)
+
+
+class ViewerSession:
+    """All state of a viewing session except the window, the GPU and the clock.
+
+    `scenes` is the cycle of scene files ('n'/'b'); `integrators` the names ('i', digit keys).
+    Scene switching goes through `cycle_scene(step, load)` with a loader that raises on a bad
+    file; the session skips such files and reports them in `error`.
+    """
+
+    def __init__(self, scenes: list[Path], scene_index: int, integrators: list[str], integrator: str,
+                 window_size: tuple[int, int], target_seconds: float = DEFAULT_TARGET_SECONDS,
+                 settle_seconds: float = SETTLE_SECONDS, tonemapper: str = "aces"):
+        if not scenes:
+            raise ValueError("no scenes to show")
+        if integrator not in integrators:
+            raise ValueError(f"unknown integrator '{integrator}' (known: {', '.join(integrators)})")
+        self.scenes = list(scenes)
+        self.scene_index = scene_index
+        self.integrators = list(integrators)
+        self.integrator = integrator
+        self.window_size = (int(window_size[0]), int(window_size[1]))
+        self.resolution = ResolutionController(self.window_size, target_seconds)
+        self.settle_seconds = float(settle_seconds)
+        self.controller = FreeLookController(CameraState((0.0, 0.0, 0.0)))
+        self.home_camera = self.controller.state
+        self.scene_cameras: dict[Path, CameraState] = {}
+        self.max_depth = 8
+        self.exposure = 0.0
+        self.tonemapper = tonemapper
+        self.hud_visible = True
+        self.help_visible = False
+        self.error: Optional[str] = None
+        self.message: Optional[str] = None
+        self._message_until = 0.0
+        self._pending_reset = True
+        self._pending_interactive = False
+        self._last_motion: Optional[float] = None
+        self.active_size: Optional[tuple[int, int]] = None
+        self.resets = 0
+
+    # -- scene ---------------------------------------------------------------------------------
+    @property
+    def scene_path(self) -> Path:
+        return self.scenes[self.scene_index]
+
+    def enter_scene(self, index: int, scene) -> None:
+        """Make `scene` (loaded from scenes[index]) current: its camera, depth and move speed."""
+        self.scene_index = index
+        self.home_camera = camera_from_spec(scene.camera)
+        # Coming back to a scene seen before restores the view it was left with.
+        self.controller.set_state(self.scene_cameras.get(self.scene_path, self.home_camera))
+        self.controller.move_speed = 0.5 * scene_scale(scene.camera)
+        self.max_depth = scene.render.max_depth
+        self.request_reset()
+
+    def cycle_scene(self, step: int, load: Callable[[Path], object]) -> Optional[object]:
+        """Move `step` (+1/-1) through the scene list, skipping files `load` fails on.
+
+        Returns the loaded scene (already entered) or None when no other scene could be loaded;
+        failures are reported in `error` as one line each.
+        """
+        errors = []
+        n = len(self.scenes)
+        for k in range(1, n + 1):
+            index = (self.scene_index + step * k) % n
+            path = self.scenes[index]
+            try:
+                scene = load(path)
+            except Exception as error:  # a bad file must not end the session
+                errors.append(f"skipped {path.name}: {_one_line(error)}")
+                continue
+            self.error = "; ".join(errors) if errors else None
+            self.scene_cameras[self.scene_path] = self.controller.state
+            self.enter_scene(index, scene)
+            return scene
+        self.error = "; ".join(errors) if errors else None
+        return None
+
+    # -- integrator ----------------------------------------------------------------------------
+    def set_integrator(self, name: str) -> bool:
+        if name not in self.integrators:
+            raise ValueError(f"unknown integrator '{name}'")
+        if name == self.integrator:
+            return False
+        self.integrator = name
+        self.request_reset()
+        return True
+
+    def next_integrator(self, step: int = 1) -> str:
+        i = self.integrators.index(self.integrator)
+        self.set_integrator(self.integrators[(i + step) % len(self.integrators)])
+        return self.integrator
+
+    # -- settings ------------------------------------------------------------------------------
+    def controls(self) -> Controls:
+        s = self.controller.state
+        return Controls(self.exposure, self.tonemapper, self.max_depth, s.fov, s.aperture, s.focus_distance)
+
+    def apply_controls(self, new: Controls) -> bool:
+        """Take the HUD's values; True if the accumulation must restart.
+
+        Exposure and tone mapper only change the display. The others change what is rendered;
+        they count as interaction (reduced resolution while a slider is dragged).
+        """
+        self.exposure = float(new.exposure)
+        self.tonemapper = new.tonemapper
+        changed = False
+        depth = fix_max_depth(new.max_depth, self.max_depth)
+        if depth != self.max_depth:
+            self.max_depth = depth
+            changed = True
+        state = self.controller.state
+        try:
+            camera = state.replace(fov=new.fov, aperture=max(new.aperture, 0.0),
+                                   focus_distance=new.focus_distance)
+        except ValueError:  # out-of-range slider value: keep the old camera
+            camera = state
+        if self.controller.set_state(camera):
+            changed = True
+        if changed:
+            self.request_reset(interactive=True)
+        return changed
+
+    def set_focus_distance(self, distance: float) -> bool:
+        changed = self.controller.set_state(self.controller.state.replace(focus_distance=float(distance)))
+        if changed:
+            self.request_reset()
+        return changed
+
+    def reset_camera(self) -> None:
+        """The 'r' key: back to the scene's own camera, and start the accumulation over."""
+        self.controller.set_state(self.home_camera)
+        self.request_reset()
+
+    def cycle_tonemapper(self, names: Iterable[str]) -> str:
+        names = list(names)
+        i = names.index(self.tonemapper) if self.tonemapper in names else -1
+        self.tonemapper = names[(i + 1) % len(names)]
+        return self.tonemapper
+
+    def display_tonemapper(self, forced: Optional[str]) -> str:
+        """A debug integrator's own mapper (e.g. 'none' for normals) wins over the user's."""
+        return forced or self.tonemapper
+
+    # -- messages ------------------------------------------------------------------------------
+    def notify(self, text: str, now: float) -> None:
+        self.message = text
+        self._message_until = now + MESSAGE_SECONDS
+
+    def current_message(self, now: float) -> Optional[str]:
+        return self.message if self.message and now < self._message_until else None
+
+    # -- frame planning ------------------------------------------------------------------------
+    def request_reset(self, interactive: bool = False) -> None:
+        """Something that changes the image happened: the next frame starts over."""
+        self._pending_reset = True
+        self._pending_interactive = self._pending_interactive or interactive
+
+    def update_camera(self, dt: float, held_keys: set[str], cursor_px, dragging: bool) -> bool:
+        """Feed input to the free-look controller; a moved camera resets (interactively)."""
+        moved = self.controller.update(dt, held_keys, cursor_px, dragging)
+        if moved:
+            self.request_reset(interactive=True)
+        return moved
+
+    def plan_frame(self, now: float) -> FramePlan:
+        """Decide size, samples and reset for the frame about to render.
+
+        Interactive changes (camera motion, slider drags) render at the reduced resolution. A
+        frame counts as still only after `settle_seconds` without such a change: a drag whose
+        cursor paused for one frame must not flip to a full-resolution frame and back. The first
+        still frame at full resolution resets (the reduced image is not reused); later still
+        frames accumulate without resetting.
+        """
+        if self._pending_reset and self._pending_interactive:
+            self._last_motion = now
+        interactive = self._last_motion is not None and (now - self._last_motion) < self.settle_seconds
+        if self._pending_reset and self._pending_interactive:
+            interactive = True
+        if interactive:
+            size, spp = self.resolution.moving_size(), 1
+        else:
+            self._last_motion = None
+            size, spp = self.window_size, self.resolution.still_spp()
+        reset = self._pending_reset or size != self.active_size
+        if reset:
+            self.resets += 1
+        self._pending_reset = False
+        self._pending_interactive = False
+        self.active_size = size
+        return FramePlan(size=size, spp=spp, reset=reset, interactive=interactive)
+
+
+# --- rate limiting (noise estimate) -----------------------------------------------------------
+
+
+class Every:
+    """True at most once per `interval` seconds (and on the first call)."""
+
+    def __init__(self, interval: float = NOISE_INTERVAL):
+        self.interval = interval
+        self._last: Optional[float] = None
+
+    def __call__(self, now: float) -> bool:
+        if self._last is None or now - self._last >= self.interval:
+            self._last = now
+            return True
+        return False
+
+    def force(self) -> None:
+        self._last = None
+
+
+@dataclass
+class RateMeter:
+    """Events per second over a sliding window of about `window` seconds (fps, samples/s)."""
+
+    window: float = 1.0
+    _samples: list = field(default_factory=list)
+
+    def add(self, now: float, amount: float = 1.0) -> None:
+        self._samples.append((now, amount))
+        while len(self._samples) > 2 and now - self._samples[0][0] > self.window:
+            self._samples.pop(0)
+
+    def rate(self) -> float:
+        if len(self._samples) < 2:
+            return 0.0
+        span = self._samples[-1][0] - self._samples[0][0]
+        # The first entry opens the window; what came after it happened within `span`.
+        total = sum(a for _, a in self._samples[1:])
+        return total / span if span > 0 else 0.0
+
+
+# --- screenshots ------------------------------------------------------------------------------
+
+
+def screenshot_dir(configured: Optional[os.PathLike] = None) -> Path:
+    """Where screenshots go: the argument, else $LANTERN_SCREENSHOT_DIR, else <repo>/screenshots."""
+    if configured:
+        return Path(configured)
+    env = os.environ.get(SCREENSHOT_ENV)
+    return Path(env) if env else DEFAULT_SCREENSHOT_DIR
+
+
+def _safe(text: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_." else "-" for c in text) or "scene"
+
+
+def screenshot_stem(scene: str, integrator: str, spp: int, when: datetime) -> str:
+    """e.g. showcase_path_0128spp_20261122-010203"""
+    return f"{_safe(scene)}_{_safe(integrator)}_{int(spp):04d}spp_{when:%Y%m%d-%H%M%S}"
+
+
+def screenshot_paths(directory: os.PathLike, scene: str, integrator: str, spp: int,
+                     when: datetime) -> tuple[Path, Path]:
+    """(png, exr) paths that do not overwrite earlier screenshots (a -2, -3... suffix if needed)."""
+    directory = Path(directory)
+    stem = screenshot_stem(scene, integrator, spp, when)
+    candidate, n = stem, 1
+    while (directory / f"{candidate}.png").exists() or (directory / f"{candidate}.exr").exists():
+        n += 1
+        candidate = f"{stem}-{n}"
+    return directory / f"{candidate}.png", directory / f"{candidate}.exr"
+
+
+def _one_line(error: BaseException) -> str:
+    text = str(error).strip().splitlines()
+    return text[0] if text else type(error).__name__
+
+
+__all__ = [
+    "Controls", "Every", "FramePlan", "RateMeter", "ResolutionController", "ViewerSession",
+    "camera_from_spec", "fix_max_depth", "scene_scale", "screenshot_dir", "screenshot_paths",
+    "screenshot_stem", "SCREENSHOT_ENV",
+]
