@@ -162,6 +162,61 @@ REFERENCE = {
 }
 
 
+def _rotation(rotate) -> np.ndarray:
+    """R = Rz Ry Rx from Euler degrees (extrinsic x, then y, then z), built independently of the model."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_euler("xyz", rotate, degrees=True).as_matrix()
+
+
+def ref_node(n: SdfNode, p: np.ndarray) -> np.ndarray:
+    """Reference distance of an SDF tree at points (N, 3), float64.
+
+    Transforms: world = R (s q) + t. Repetition is evaluated as the minimum over explicit copies
+    of the child (not by folding space into a cell, as the renderer does), so it agrees with the
+    renderer only where the child fits inside its cell, as the tests arrange.
+    """
+    p = np.asarray(p, np.float64)
+    t = n.transform
+    q = (p - np.asarray(t.translate)) @ _rotation(t.rotate) / t.scale
+    params = dict(n.params)
+    if n.is_primitive:
+        d = REFERENCE[n.kind](q, **params)
+    elif n.kind == "union":
+        d = np.min([ref_node(c, q) for c in n.children], axis=0)
+    elif n.kind == "intersection":
+        d = np.max([ref_node(c, q) for c in n.children], axis=0)
+    elif n.kind == "subtraction":
+        d = np.max([ref_node(n.children[0], q)] + [-ref_node(c, q) for c in n.children[1:]], axis=0)
+    elif n.kind == "smooth_union":
+        k = params["k"]
+        d = ref_node(n.children[0], q)
+        for c in n.children[1:]:
+            e = ref_node(c, q)
+            h = np.maximum(k - np.abs(d - e), 0.0) / k
+            d = np.minimum(d, e) - h * h * k / 4.0
+    elif n.kind == "repeat":
+        period = np.asarray(params["period"], np.float64)
+        axes = period > 0.0
+        limit = params["limit"]
+        if limit is not None:
+            ranges = [range(-l, l + 1) if a else range(1) for l, a in zip(limit, axes)]
+            cells = np.array([(i, j, k) for i in ranges[0] for j in ranges[1] for k in ranges[2]], np.float64)
+            d = np.min([ref_node(n.children[0], q - period * c) for c in cells], axis=0)
+        else:
+            base = np.where(axes, np.round(q / np.where(axes, period, 1.0)), 0.0)
+            ranges = [range(-2, 3) if a else range(1) for a in axes]
+            offsets = [(i, j, k) for i in ranges[0] for j in ranges[1] for k in ranges[2]]
+            d = np.min([ref_node(n.children[0], q - period * (base + np.array(o))) for o in offsets], axis=0)
+    else:
+        raise ValueError(n.kind)
+    return d * t.scale
+
+
+def ref_scene(objects, p: np.ndarray) -> np.ndarray:
+    return np.min([ref_node(o, p) for o in objects], axis=0)
+
+
 def reference_distance(kind: str, p: np.ndarray, **params) -> np.ndarray:
     return REFERENCE[kind](np.asarray(p, np.float64), **{**PRIMITIVE_PARAMS[kind], **params})
 
@@ -394,4 +449,4 @@ def normals(geo: SdfGeometry, p, h: float) -> np.ndarray:
 
 __all__ = ["SPAWN_OFFSET", "node", "make_scene", "make_geometry", "set_march", "sdf", "trace", "first_crossing",
            "normals", "reference_distance", "PRIMITIVES", "BOUNDED_PRIMITIVES", "PRIMITIVE_PARAMS",
-           "bounding_half_extent", "random_directions"]
+           "bounding_half_extent", "random_directions", "ref_node", "ref_scene"]

@@ -1,0 +1,335 @@
+"""The interactive GGUI window: one `ViewerApp.step()` per frame.
+
+`run_viewer` drives `step()` from real GGUI input; tests call `step()` with a synthetic
+`FrameInput` on an off-screen window (`show_window=False`: GGUI then renders without presenting,
+`window.running` stays True, and no events arrive, so loops are bounded by frame counts).
+
+A frame: dispatch the keys pressed since the last frame, move the camera, decide (ViewerSession)
+whether to reset and at which internal resolution and sample count to render, render into the
+film, tone-map the film's active region into a window-sized field (upscaling it while moving),
+put it on the canvas, draw the HUD and present.
+
+Compiling a kernel takes seconds. Before a render that would compile (a new scene, integrator or
+lens), one frame shows the previous image with a "compiling..." notice; the next frame compiles.
+
+Keys GGUI (Taichi 1.7) reports are the letters a-z and a few named keys (Escape, Shift, Tab,
+arrows...); digits and punctuation never arrive, so the HUD has buttons for what the digit and
+'/' keys do.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
+from typing import Callable, Optional
+
+import numpy as np
+import taichi as ti
+
+from renderer.camera import CameraFrame
+from renderer.image_io import write_exr, write_png
+from renderer.integrators import INTEGRATORS, integrator_names
+from renderer.renderer import Renderer
+from renderer.scene import load_scene
+from renderer.scene.catalog import scene_files
+from renderer.tonemap import TONEMAPPERS, quantize, tonemap_into
+from viewer import hud
+from viewer.camera_state import CameraState
+from viewer.hotkeys import KeyMap
+from viewer.session import (DEFAULT_TARGET_SECONDS, SETTLE_SECONDS, Every, RateMeter, ViewerSession,
+                            scene_scale, screenshot_dir, screenshot_paths)
+
+TITLE = "Lantern"
+DEFAULT_SIZE = (960, 540)
+MOVEMENT_KEYS = ("w", "a", "s", "d", "q", "e")
+
+
+@dataclass(frozen=True)
+class FrameInput:
+    """One frame of user input, as GGUI reports it (or as a test makes it up).
+
+    pressed: keys pressed since the last frame, GGUI names ('p', 'Escape', 'LMB'...).
+    held:    movement keys held now, lower case ('w', ..., 'shift').
+    cursor:  GGUI cursor position, [0, 1]^2 with the origin at the bottom left; None = unknown.
+    buttons: mouse buttons held now ('LMB', 'RMB').
+    """
+
+    pressed: tuple[str, ...] = ()
+    held: frozenset = frozenset()
+    cursor: Optional[tuple[float, float]] = None
+    buttons: frozenset = frozenset()
+
+
+def poll_input(window) -> FrameInput:
+    pressed = tuple(e.key for e in window.get_events(ti.ui.PRESS))
+    window.get_events(ti.ui.RELEASE)  # drained, or GGUI keeps every release event queued
+    held = {k for k in MOVEMENT_KEYS if window.is_pressed(k)}
+    if window.is_pressed(ti.ui.SHIFT):
+        held.add("shift")
+    buttons = frozenset(b for b in (ti.ui.LMB, ti.ui.RMB) if window.is_pressed(b))
+    x, y = window.get_cursor_pos()
+    return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons)
+
+
+def camera_frame(state: CameraState) -> CameraFrame:
+    forward, right, up = state.basis()
+    return CameraFrame(tuple(state.position), tuple(forward), tuple(right), tuple(up), state.fov,
+                       state.aperture, state.focus_distance)
+
+
+def display_to_image(display: np.ndarray) -> np.ndarray:
+    """A window-sized display field's numpy copy ([x, y] y-up, values in [0, 1]) as uint8
+    (height, width, 3), row 0 at the top: the pixels the canvas shows."""
+    return quantize(np.ascontiguousarray(np.transpose(display, (1, 0, 2))[::-1]))
+
+
+def window_buffer_to_image(buffer: np.ndarray) -> np.ndarray:
+    """GGUI's get_image_buffer_as_numpy() ([x, y, rgba] y-up floats) as uint8 (H, W, 3)."""
+    return quantize(np.ascontiguousarray(np.transpose(buffer[:, :, :3], (1, 0, 2))[::-1]))
+
+
+class ViewerApp:
+    """The viewer: a GGUI window, one Renderer per scene visited, and a ViewerSession."""
+
+    def __init__(self, scene_path, size: tuple[int, int] = DEFAULT_SIZE, integrator: Optional[str] = None,
+                 show_window: bool = True, screenshot_folder=None, target_seconds: float = DEFAULT_TARGET_SECONDS,
+                 settle_seconds: float = SETTLE_SECONDS, scenes: Optional[list] = None,
+                 clock: Callable[[], float] = time.perf_counter):
+        self.size = (int(size[0]), int(size[1]))
+        self.show_window = show_window
+        self.clock = clock
+        self.screenshot_folder = screenshot_dir(screenshot_folder)
+        self.keymap = KeyMap(integrator_names())
+        self.renderers: dict[Path, Renderer] = {}
+
+        path = Path(scene_path).resolve()
+        scene_list = [Path(p).resolve() for p in (scenes if scenes is not None else scene_files())]
+        if path not in scene_list:
+            scene_list.insert(0, path)
+        first = self._renderer_for(path)  # a bad first scene is the caller's error: let it raise
+        chosen = integrator or first.scene.render.integrator
+        self.session = ViewerSession(scene_list, scene_list.index(path), integrator_names(), chosen, self.size,
+                                     target_seconds=target_seconds, settle_seconds=settle_seconds)
+        self.session.enter_scene(scene_list.index(path), first.scene)
+
+        self.window = ti.ui.Window(TITLE, self.size, vsync=False, show_window=show_window)
+        self.canvas = self.window.get_canvas()
+        self.gui = self.window.get_gui()
+        self.display = ti.Vector.field(3, ti.f32, shape=self.size)
+
+        self.running = True
+        self.frames = 0
+        self.last_plan = None
+        self.last_frame: Optional[np.ndarray] = None  # off-screen: GGUI's image of the last frame
+        self.last_screenshot: Optional[tuple[Path, Path]] = None
+        self.compiling: Optional[str] = None  # the notice shown on the frame before a compile
+        self._notice_key = None
+        self._last_time: Optional[float] = None
+        self._frame_ms = 0.0
+        self._fps = RateMeter()
+        self._samples = RateMeter()
+        self._stats_due = Every()
+        self._stats = {"noise": None, "rejected": 0, "work_per_ray": None}
+        self._drag_blocked = False
+        self._buttons_before: frozenset = frozenset()
+
+    # --- scenes -------------------------------------------------------------------------------
+    @property
+    def renderer(self) -> Renderer:
+        return self.renderers[self.session.scene_path]
+
+    def _renderer_for(self, path: Path) -> Renderer:
+        """The cached Renderer of a scene file, built (loaded and uploaded) on first use."""
+        path = Path(path).resolve()
+        if path not in self.renderers:
+            self.renderers[path] = Renderer(load_scene(path), max_size=self.size)
+        return self.renderers[path]
+
+    def _cycle_scene(self, step: int, now: float) -> None:
+        before = self.session.scene_index
+        scene = self.session.cycle_scene(step, lambda p: self._renderer_for(p).scene)
+        if scene is not None and self.session.scene_index != before:
+            self.session.notify(f"scene {scene.name}", now)
+
+    # --- actions ------------------------------------------------------------------------------
+    def dispatch(self, action: Optional[str], inp: FrameInput, now: float) -> None:
+        s = self.session
+        if action is None:
+            return
+        if action == "quit":
+            self.running = False
+        elif action == "next_scene":
+            self._cycle_scene(+1, now)
+        elif action == "prev_scene":
+            self._cycle_scene(-1, now)
+        elif action == "next_integrator":
+            s.next_integrator()
+        elif action.startswith("integrator:"):
+            s.set_integrator(action.split(":", 1)[1])
+        elif action == "reset":
+            s.reset_camera()
+        elif action == "screenshot":
+            self.save_screenshot(now)
+        elif action == "focus_at_cursor":
+            self.focus_at_cursor(inp.cursor, now)
+        elif action == "toggle_hud":
+            s.hud_visible = not s.hud_visible
+        elif action == "help":
+            s.help_visible = not s.help_visible
+        elif action == "speed_up":
+            s.controller.change_speed(+1)
+        elif action == "speed_down":
+            s.controller.change_speed(-1)
+        elif action == "cycle_tonemapper":
+            s.cycle_tonemapper(TONEMAPPERS)
+
+    def save_screenshot(self, now: Optional[float] = None) -> tuple[Path, Path]:
+        """The PNG exactly as the canvas shows the image (without the HUD) and the film's linear
+        mean as EXR (at the internal resolution of the moment)."""
+        r, s = self.renderer, self.session
+        png, exr = screenshot_paths(self.screenshot_folder, r.scene.name, s.integrator, r.samples_done, datetime.now())
+        write_png(png, display_to_image(self.display.to_numpy()))
+        write_exr(exr, r.image())
+        self.last_screenshot = (png, exr)
+        print(f"saved {png} and {exr.name}", file=sys.stderr)
+        s.notify(f"saved {png.name} (+ .exr)", self.clock() if now is None else now)
+        return png, exr
+
+    def focus_at_cursor(self, cursor, now: float) -> None:
+        if cursor is None:
+            return
+        u, v = (min(max(float(c), 0.0), 1.0) for c in cursor)  # GGUI: y up, like the probe
+        frame = camera_frame(self.session.controller.state)
+        distance = self.renderer.focus_distance_at(frame, u, v, self.session.integrator)
+        if distance is None:
+            self.session.notify("focus: nothing under the cursor", now)
+        else:
+            self.session.set_focus_distance(distance)
+            self.session.notify(f"focus {distance:.3g} m", now)
+
+    # --- one frame ----------------------------------------------------------------------------
+    def _drag(self, inp: FrameInput) -> bool:
+        """Looking drags with either button; a left drag that starts on the HUD is the HUD's."""
+        lmb, rmb = ti.ui.LMB in inp.buttons, ti.ui.RMB in inp.buttons
+        if lmb and ti.ui.LMB not in self._buttons_before:
+            self._drag_blocked = False
+            if self.session.hud_visible and inp.cursor is not None:
+                u, v = inp.cursor
+                self._drag_blocked = hud.hud_rect(self.size).contains(u, 1.0 - v)
+        self._buttons_before = inp.buttons
+        return rmb or (lmb and not self._drag_blocked)
+
+    def step(self, inp: Optional[FrameInput] = None) -> bool:
+        """Advance one frame; False once the viewer should quit."""
+        inp = inp or FrameInput()
+        start = time.perf_counter()
+        now = self.clock()
+        dt = 0.0 if self._last_time is None else now - self._last_time
+        self._last_time = now
+        self._fps.add(now)
+        self.frames += 1
+        s = self.session
+
+        for key in inp.pressed:
+            self.dispatch(self.keymap.action_for(key), inp, now)
+        if not self.running:
+            return False
+
+        w, h = self.size
+        cursor_px = None if inp.cursor is None else (inp.cursor[0] * w, (1.0 - inp.cursor[1]) * h)
+        s.update_camera(dt, set(inp.held), cursor_px, self._drag(inp))
+
+        renderer = self.renderer
+        integrator = s.integrator
+        frame = camera_frame(s.controller.state)
+        features = renderer.features(frame)
+        key = (id(renderer), integrator, features)
+        fresh = not renderer.is_compiled(integrator, features)
+        if fresh and self._notice_key != key:
+            # Show the notice on this frame; the next frame compiles (and blocks) while it is up.
+            self._notice_key = key
+            self.compiling = f"compiling {integrator} for {renderer.scene.name}..."
+            self._present(now)
+            return True
+        self.compiling = None
+        self._notice_key = None
+
+        s.resolution.set_context((s.scene_path, integrator, features))
+        plan = s.plan_frame(now)
+        self.last_plan = plan
+        if plan.reset:
+            renderer.reset(*plan.size)
+            self._stats_due.force()
+        t0 = time.perf_counter()
+        renderer.render(frame, plan.spp, integrator, s.max_depth, features=features)
+        ti.sync()
+        render_seconds = time.perf_counter() - t0
+        pixel_samples = plan.size[0] * plan.size[1] * plan.spp
+        self._samples.add(now, pixel_samples)
+
+        tonemap_into(renderer.film, self.display, s.exposure, self._display_tonemapper())
+        if self._stats_due(now):
+            stats = renderer.film.stats()
+            self._stats = {"noise": stats["noise"], "rejected": stats["rejected"],
+                           "work_per_ray": renderer.work_stats()["work_per_ray"]}
+        self._present(now)
+        frame_seconds = time.perf_counter() - start
+        self._frame_ms = 1000.0 * frame_seconds
+        if not fresh:  # a compiling frame says nothing about the render cost
+            s.resolution.record(render_seconds, pixel_samples, frame_seconds)
+        return self.running
+
+    def _display_tonemapper(self) -> str:
+        return self.session.display_tonemapper(INTEGRATORS[self.session.integrator].display_tonemapper)
+
+    def hud_stats(self) -> hud.HudStats:
+        s, r = self.session, self.renderer
+        features = r.features(camera_frame(s.controller.state))
+        return hud.HudStats(
+            scene=r.scene.name, scene_position=f"{s.scene_index + 1}/{len(s.scenes)}", integrator=s.integrator,
+            effects=features.active_effects(), fps=self._fps.rate(), frame_ms=self._frame_ms,
+            spp=r.samples_done, samples_per_second=self._samples.rate(),
+            internal_size=(r.film.width, r.film.height), window_size=self.size,
+            interactive=bool(self.last_plan and self.last_plan.interactive),
+            noise=self._stats["noise"], rejected=self._stats["rejected"],
+            work_per_ray=self._stats["work_per_ray"], speed=s.controller.move_speed)
+
+    def _present(self, now: float) -> None:
+        s = self.session
+        self.canvas.set_image(self.display)
+        if s.hud_visible:
+            forced = INTEGRATORS[s.integrator].display_tonemapper
+            controls, actions = hud.draw_hud(self.gui, self.size, self.hud_stats(), s.controls(),
+                                             scene_scale(self.renderer.scene.camera), forced,
+                                             s.error, s.current_message(now))
+            s.apply_controls(controls)
+            for action in actions:
+                self.dispatch(action, FrameInput(), now)
+        if s.help_visible:
+            hud.draw_help(self.gui, self.size, self.keymap.help_text())
+        if self.compiling:
+            hud.draw_notice(self.gui, self.size, self.compiling)
+        if self.show_window:
+            self.window.show()
+        else:
+            # Off-screen, reading the image back is what ends GGUI's frame (show() must not be
+            # called); keep it for tests.
+            self.last_frame = self.window.get_image_buffer_as_numpy()
+
+    # --- the loop -----------------------------------------------------------------------------
+    def run(self, max_frames: Optional[int] = None) -> int:
+        while self.running and self.window.running and (max_frames is None or self.frames < max_frames):
+            self.step(poll_input(self.window) if self.show_window else FrameInput())
+        return 0
+
+
+def run_viewer(path, size: tuple[int, int] = DEFAULT_SIZE, integrator: Optional[str] = None,
+               max_frames: Optional[int] = None, screenshot_folder=None) -> int:
+    """Open the viewer on a scene file; returns the process exit code.
+
+    Screenshots go to `screenshot_folder`, else $LANTERN_SCREENSHOT_DIR, else <repo>/screenshots.
+    """
+    app = ViewerApp(path, size=size, integrator=integrator, screenshot_folder=screenshot_folder)
+    return app.run(max_frames)
