@@ -110,10 +110,14 @@ class ResolutionController:
         pixels = self.render_budget() / cost
         return min(max(math.sqrt(pixels / full_pixels), self.min_scale), 1.0)
 
-    def moving_size(self) -> tuple[int, int]:
-        """Advance the smoothed scale one frame and return the internal size to render."""
+    def moving_size(self, starting: bool = False) -> tuple[int, int]:
+        """Advance the smoothed scale one frame and return the internal size to render.
+
+        `starting`: the first frame of a motion jumps straight to the target (the cost measured
+        while still is the best estimate there is).
+        """
         target = self.target_scale()
-        if target < self.scale:
+        if starting or target < self.scale:
             self.scale = target
         else:
             self.scale += SCALE_RISE * (target - self.scale)
@@ -212,6 +216,7 @@ class ViewerSession:
         self._pending_reset = True
         self._pending_interactive = False
         self._last_motion: Optional[float] = None
+        self._was_interactive = False
         self.active_size: Optional[tuple[int, int]] = None
         self.resets = 0
 
@@ -355,7 +360,7 @@ class ViewerSession:
         if self._pending_reset and self._pending_interactive:
             interactive = True
         if interactive:
-            size, spp = self.resolution.moving_size(), 1
+            size, spp = self.resolution.moving_size(starting=not self._was_interactive), 1
         else:
             self._last_motion = None
             size, spp = self.window_size, self.resolution.still_spp()
@@ -365,6 +370,7 @@ class ViewerSession:
         self._pending_reset = False
         self._pending_interactive = False
         self.active_size = size
+        self._was_interactive = interactive
         return FramePlan(size=size, spp=spp, reset=reset, interactive=interactive)
 
 

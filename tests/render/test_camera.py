@@ -1,0 +1,59 @@
+"""Camera rays: pinhole geometry and the thin lens's focus plane."""
+import math
+
+import numpy as np
+import taichi as ti
+
+from renderer.camera import CameraFrame, generate_ray
+from renderer.sampling.rng import sample_key
+
+
+def trace_camera(frame: CameraFrame, width, height, pixels, samples, dof):
+    n = len(pixels) * samples
+    origins = np.zeros((n, 3), np.float32)
+    dirs = np.zeros((n, 3), np.float32)
+    px = np.array(pixels, np.int32)
+
+    @ti.kernel
+    def kernel(px: ti.types.ndarray(), o: ti.types.ndarray(), d: ti.types.ndarray(),
+               origin: ti.math.vec3, forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3,
+               tan_half: ti.f32, aperture: ti.f32, focus: ti.f32):
+        for i in range(n):
+            p = i // samples
+            key = sample_key(p, i % samples, 3)
+            ray = generate_ray(px[p, 0], px[p, 1], width, height, key, origin, forward, right, up,
+                               tan_half, aperture, focus, dof)
+            for c in ti.static(range(3)):
+                o[i, c] = ray.o[c]
+                d[i, c] = ray.d[c]
+
+    kernel(px, origins, dirs, *frame.kernel_args())
+    return origins.reshape(len(pixels), samples, 3), dirs.reshape(len(pixels), samples, 3)
+
+
+def test_pinhole_rays_span_the_field_of_view():
+    frame = CameraFrame.look_at((1.0, 2.0, 3.0), (1.0, 2.0, 0.0), fov=60.0)
+    o, d = trace_camera(frame, 64, 32, [(0, 0), (63, 31), (32, 16)], 64, False)
+    assert np.allclose(o, [1.0, 2.0, 3.0])
+    assert np.allclose(np.linalg.norm(d, axis=-1), 1.0, atol=1e-6)
+    # On the image plane at distance 1 the image spans +-tan(fov/2) vertically; the bottom pixel
+    # row covers the lowest 1/16 of that span (2 of 32 half-rows).
+    tan_half = math.tan(math.radians(30.0))
+    plane_y = d[0, :, 1] / -d[0, :, 2]
+    assert np.all(plane_y >= -tan_half - 1e-5) and np.all(plane_y <= -tan_half * (1 - 2 / 32) + 1e-5)
+    assert np.all(d[0, :, 0] < 0) and np.all(d[1, :, 0] > 0)
+
+
+def test_thin_lens_rays_of_a_pixel_meet_on_the_focus_plane():
+    focus = 4.0
+    frame = CameraFrame.look_at((0.0, 0.0, 0.0), (0.0, 0.0, -1.0), fov=40.0, aperture=0.2, focus_distance=focus)
+    o, d = trace_camera(frame, 32, 32, [(16, 16), (3, 28)], 256, True)
+    # Lens points spread over the aperture disc...
+    radius = np.linalg.norm(o[..., :2], axis=-1)
+    assert radius.max() <= 0.2 + 1e-6 and radius.max() > 0.15
+    # ...yet every ray of a pixel crosses the plane z = -focus within that pixel's footprint.
+    t = (-focus - o[..., 2]) / d[..., 2]
+    hits = o + t[..., None] * d
+    footprint = 2 * focus * math.tan(math.radians(20.0)) / 32
+    spread = np.ptp(hits[..., :2], axis=1).max()
+    assert spread <= footprint * 1.01, (spread, footprint)
