@@ -51,7 +51,7 @@ class SdfGeometry:
         t_limit = ti.min(t_max, self.march_f[2])
         omega = self.march_f[3]
         max_steps = self.march_i[0]
-        hit = Hit(hit=0, t=t_limit, work=0, tests=0, inside=0)
+        hit = Hit(hit=0, t=t_limit, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0))
         side = 1.0
         t = 0.0
         step = 0.0
@@ -64,9 +64,12 @@ class SdfGeometry:
             signed *= side
             radius = ti.abs(signed)
             hit.work = i + 1
-            if omega > 1.0 and radius + prev_radius < step:
-                # Unbounding spheres do not overlap: go back to where plain sphere tracing would
-                # have stepped (t_prev + prev_radius = t - step + step / omega) and stop relaxing.
+            if omega > 1.0 and (radius + prev_radius < step or signed < 0.0):
+                # Unbounding spheres do not overlap, or the step landed on the far side of a surface
+                # (they only touch, at the surface: head-on at a flat face, radius + prev_radius ==
+                # step exactly, and f32 rounding decides the comparison): go back to where plain
+                # sphere tracing would have stepped (t_prev + prev_radius = t - step + step / omega)
+                # and stop relaxing.
                 step = step / omega - step
                 omega = 1.0
             else:

@@ -7,6 +7,7 @@ returns the edited `Controls` and the actions of any button clicked; the caller 
 from __future__ import annotations
 
 import math
+import textwrap
 from dataclasses import dataclass, replace
 from typing import Optional, Sequence
 
@@ -14,8 +15,9 @@ import numpy as np
 
 from viewer.session import Controls
 
-HUD_WIDTH_PX = 330
+HUD_WIDTH_PX = 360
 HUD_HEIGHT_PX = 520
+EFFECTS_WIDTH = 44  # characters per line of the effects list (wrapped)
 MARGIN_PX = 8
 HELP_WIDTH_PX = 330
 NOTICE_WIDTH_PX = 300
@@ -109,10 +111,11 @@ def hud_lines(s: HudStats) -> list[str]:
     percent = 100.0 * w / full_w
     state = "moving" if s.interactive else "still"
     work = "..." if s.work_per_ray is None else f"{s.work_per_ray:.1f}"
+    effects = textwrap.wrap(f"effects  {', '.join(s.effects) or '-'}", EFFECTS_WIDTH, subsequent_indent="  ")
     return [
         f"scene  {s.scene}  ({s.scene_position})",
         f"integrator  {s.integrator}",
-        f"effects  {', '.join(s.effects) or '-'}",
+        *effects,
         f"{s.fps:5.1f} fps   frame {s.frame_ms:6.1f} ms",
         f"spp {s.spp}   {format_rate(s.samples_per_second)}",
         f"resolution {w}x{h} ({percent:.0f}%, {state})",
@@ -160,7 +163,7 @@ def draw_hud(gui, window_size: tuple[int, int], stats: HudStats, controls: Contr
         elif g.button(f"tone mapper: {controls.tonemapper}"):
             actions.append("cycle_tonemapper")
         lo, hi = MAX_DEPTH_RANGE
-        depth = int(g.slider_int("max depth (-1 inf)", controls.max_depth, lo, max(hi, controls.max_depth)))
+        depth = int(g.slider_int("max depth", controls.max_depth, lo, max(hi, controls.max_depth)))
         fov = _slider_float(g, "field of view", controls.fov, *FOV_RANGE)
         aperture = _slider_float(g, "aperture (m)", controls.aperture, 0.0, APERTURE_PER_SCALE * scale)
         focus = _slider_float(g, "focus (m)", controls.focus_distance, MIN_FOCUS, FOCUS_PER_SCALE * scale)
@@ -169,10 +172,10 @@ def draw_hud(gui, window_size: tuple[int, int], stats: HudStats, controls: Contr
                               ("next scene  [n]", "next_scene"),
                               ("reset view  [r]", "reset"),
                               ("screenshot  [p]", "screenshot"),
-                              ("keys  [/]", "help")):
+                              ("help: all keys", "help")):
             if g.button(label):
                 actions.append(action)
-        _text(g, "h hides this panel")
+        _text(g, "max depth -1: no limit.  h hides this panel")
     edited = replace(controls, exposure=exposure, max_depth=depth, fov=fov, aperture=aperture, focus_distance=focus)
     return edited, actions
 

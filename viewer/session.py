@@ -235,6 +235,11 @@ class ViewerSession:
         self.max_depth = scene.render.max_depth
         self.request_reset()
 
+    def switch_scene(self, index: int, scene) -> None:
+        """Leave the current scene (its view is remembered) for scenes[index]."""
+        self.scene_cameras[self.scene_path] = self.controller.state
+        self.enter_scene(index, scene)
+
     def cycle_scene(self, step: int, load: Callable[[Path], object]) -> Optional[object]:
         """Move `step` (+1/-1) through the scene list, skipping files `load` fails on.
 
@@ -252,8 +257,7 @@ class ViewerSession:
                 errors.append(f"skipped {path.name}: {_one_line(error)}")
                 continue
             self.error = "; ".join(errors) if errors else None
-            self.scene_cameras[self.scene_path] = self.controller.state
-            self.enter_scene(index, scene)
+            self.switch_scene(index, scene)
             return scene
         self.error = "; ".join(errors) if errors else None
         return None

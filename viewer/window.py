@@ -6,8 +6,9 @@
 
 A frame: dispatch the keys pressed since the last frame, move the camera, decide (ViewerSession)
 whether to reset and at which internal resolution and sample count to render, render into the
-film, tone-map the film's active region into a window-sized field (upscaling it while moving),
-put it on the canvas, draw the HUD and present.
+film, tone-map the film's active region into a display field (window-sized when still; while
+moving, the smallest of a few reduced sizes that holds the internal image, which the canvas
+stretches over the window), put it on the canvas, draw the HUD and present.
 
 Compiling a kernel takes seconds. Before a render that would compile (a new scene, integrator or
 lens), one frame shows the previous image with a "compiling..." notice; the next frame compiles.
@@ -18,6 +19,7 @@ arrows...); digits and punctuation never arrive, so the HUD has buttons for what
 """
 from __future__ import annotations
 
+import os
 import sys
 import time
 from dataclasses import dataclass
@@ -44,6 +46,7 @@ from viewer.session import (DEFAULT_TARGET_SECONDS, SETTLE_SECONDS, Every, RateM
 TITLE = "Lantern"
 DEFAULT_SIZE = (960, 540)
 MOVEMENT_KEYS = ("w", "a", "s", "d", "q", "e")
+MAX_QUEUED_KEYS = 32
 
 
 @dataclass(frozen=True)
@@ -71,6 +74,28 @@ def poll_input(window) -> FrameInput:
     buttons = frozenset(b for b in (ti.ui.LMB, ti.ui.RMB) if window.is_pressed(b))
     x, y = window.get_cursor_pos()
     return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons)
+
+
+DISPLAY_LEVELS = 5  # window size / 1, 2, 4, 8, 16 (MIN_SCALE is 1/16)
+
+
+def display_level_sizes(size: tuple[int, int]) -> list[tuple[int, int]]:
+    w, h = size
+    sizes = []
+    for k in (2 ** i for i in range(DISPLAY_LEVELS)):
+        level = (max(1, w // k), max(1, h // k))
+        if level not in sizes:
+            sizes.append(level)
+    return sizes
+
+
+def display_level_for(sizes: list[tuple[int, int]], internal: tuple[int, int]) -> int:
+    """Index of the smallest display size that holds `internal` without losing pixels."""
+    best = 0
+    for i, (w, h) in enumerate(sizes):
+        if w >= internal[0] and h >= internal[1]:
+            best = i
+    return best
 
 
 def camera_frame(state: CameraState) -> CameraFrame:
@@ -117,9 +142,18 @@ class ViewerApp:
         self.window = ti.ui.Window(TITLE, self.size, vsync=False, show_window=show_window)
         self.canvas = self.window.get_canvas()
         self.gui = self.window.get_gui()
-        self.display = ti.Vector.field(3, ti.f32, shape=self.size)
+        # Display fields at the window size and at 1/2, 1/4... of it. A reduced internal image is
+        # tone-mapped into the smallest one that still holds all its pixels and the canvas
+        # stretches that over the window: tone mapping a full window costs ~20 ms on a 2-core CPU,
+        # most of the frame budget while moving.
+        self.display_levels = [ti.Vector.field(3, ti.f32, shape=level) for level in display_level_sizes(self.size)]
+        self.display = self.display_levels[0]  # the window-sized one
+        self.shown = self.display  # the one on the canvas now
+        self._warm_renderers: set[int] = set()
 
         self.running = True
+        self._queued_keys: list[str] = []
+        self._awaiting_render = False
         self.frames = 0
         self.last_plan = None
         self.last_frame: Optional[np.ndarray] = None  # off-screen: GGUI's image of the last frame
@@ -147,11 +181,25 @@ class ViewerApp:
             self.renderers[path] = Renderer(load_scene(path), max_size=self.size)
         return self.renderers[path]
 
+    def select_scene(self, path) -> None:
+        """Show a scene file (added to the cycle if it is not in it); raises if it cannot load."""
+        path = Path(path).resolve()
+        renderer = self._renderer_for(path)
+        if path not in self.session.scenes:
+            self.session.scenes.append(path)
+        self.session.switch_scene(self.session.scenes.index(path), renderer.scene)
+
     def _cycle_scene(self, step: int, now: float) -> None:
         before = self.session.scene_index
         scene = self.session.cycle_scene(step, lambda p: self._renderer_for(p).scene)
         if scene is not None and self.session.scene_index != before:
-            self.session.notify(f"scene {scene.name}", now)
+            self._announce(f"scene {scene.name}", now)
+        if self.session.error:
+            print(f"warning: {self.session.error}", file=sys.stderr)
+
+    def _announce(self, text: str, now: float) -> None:
+        self.session.notify(text, now)
+        print(text, file=sys.stderr)
 
     # --- actions ------------------------------------------------------------------------------
     def dispatch(self, action: Optional[str], inp: FrameInput, now: float) -> None:
@@ -166,8 +214,10 @@ class ViewerApp:
             self._cycle_scene(-1, now)
         elif action == "next_integrator":
             s.next_integrator()
+            self._announce(f"integrator {s.integrator}", now)
         elif action.startswith("integrator:"):
-            s.set_integrator(action.split(":", 1)[1])
+            if s.set_integrator(action.split(":", 1)[1]):
+                self._announce(f"integrator {s.integrator}", now)
         elif action == "reset":
             s.reset_camera()
         elif action == "screenshot":
@@ -190,6 +240,8 @@ class ViewerApp:
         mean as EXR (at the internal resolution of the moment)."""
         r, s = self.renderer, self.session
         png, exr = screenshot_paths(self.screenshot_folder, r.scene.name, s.integrator, r.samples_done, datetime.now())
+        if self.shown is not self.display:  # moving: the canvas stretches a smaller field
+            tonemap_into(r.film, self.display, s.exposure, self._display_tonemapper())
         write_png(png, display_to_image(self.display.to_numpy()))
         write_exr(exr, r.image())
         self.last_screenshot = (png, exr)
@@ -202,7 +254,11 @@ class ViewerApp:
             return
         u, v = (min(max(float(c), 0.0), 1.0) for c in cursor)  # GGUI: y up, like the probe
         frame = camera_frame(self.session.controller.state)
-        distance = self.renderer.focus_distance_at(frame, u, v, self.session.integrator)
+        try:
+            distance = self.renderer.focus_distance_at(frame, u, v, self.session.integrator)
+        except Exception as error:  # e.g. the probe kernel failing to compile: report, go on
+            self.session.error = f"focus failed: {_one_line(error)}"
+            return
         if distance is None:
             self.session.notify("focus: nothing under the cursor", now)
         else:
@@ -210,6 +266,24 @@ class ViewerApp:
             self.session.notify(f"focus {distance:.3g} m", now)
 
     # --- one frame ----------------------------------------------------------------------------
+    def _handle_keys(self, inp: FrameInput, now: float) -> None:
+        """Dispatch key presses in order. Keys typed after a scene or integrator switch wait until
+        a frame of the new state has rendered: typed ahead during a compile, 'n p' saves the new
+        scene, not the old image under the new name."""
+        keys = self._queued_keys + list(inp.pressed)
+        self._queued_keys = []
+        for i, key in enumerate(keys):
+            if self._awaiting_render:
+                self._queued_keys = keys[i:][:MAX_QUEUED_KEYS]
+                return
+            action = self.keymap.action_for(key)
+            before = (self.session.scene_index, self.session.integrator)
+            self.dispatch(action, inp, now)
+            if (self.session.scene_index, self.session.integrator) != before:
+                self._awaiting_render = True
+            if not self.running:
+                return
+
     def _drag(self, inp: FrameInput) -> bool:
         """Looking drags with either button; a left drag that starts on the HUD is the HUD's."""
         lmb, rmb = ti.ui.LMB in inp.buttons, ti.ui.RMB in inp.buttons
@@ -232,8 +306,7 @@ class ViewerApp:
         self.frames += 1
         s = self.session
 
-        for key in inp.pressed:
-            self.dispatch(self.keymap.action_for(key), inp, now)
+        self._handle_keys(inp, now)
         if not self.running:
             return False
 
@@ -261,15 +334,24 @@ class ViewerApp:
         self.last_plan = plan
         if plan.reset:
             renderer.reset(*plan.size)
-            self._stats_due.force()
+            self._stats["noise"] = None  # "..." until the next (rate-limited) estimate
         t0 = time.perf_counter()
         renderer.render(frame, plan.spp, integrator, s.max_depth, features=features)
         ti.sync()
+        self._awaiting_render = False
         render_seconds = time.perf_counter() - t0
         pixel_samples = plan.size[0] * plan.size[1] * plan.spp
         self._samples.add(now, pixel_samples)
 
-        tonemap_into(renderer.film, self.display, s.exposure, self._display_tonemapper())
+        level = display_level_for([f.shape for f in self.display_levels], (renderer.film.width, renderer.film.height))
+        if id(renderer) not in self._warm_renderers:
+            # Tone mapping compiles once per (film, display field): do all sizes now, while the
+            # first frame of this scene is slow anyway, rather than as hitches during motion.
+            self._warm_renderers.add(id(renderer))
+            for field in self.display_levels:
+                tonemap_into(renderer.film, field, s.exposure, self._display_tonemapper())
+        self.shown = self.display_levels[level]
+        tonemap_into(renderer.film, self.shown, s.exposure, self._display_tonemapper())
         if self._stats_due(now):
             stats = renderer.film.stats()
             self._stats = {"noise": stats["noise"], "rejected": stats["rejected"],
@@ -298,7 +380,7 @@ class ViewerApp:
 
     def _present(self, now: float) -> None:
         s = self.session
-        self.canvas.set_image(self.display)
+        self.canvas.set_image(self.shown)
         if s.hud_visible:
             forced = INTEGRATORS[s.integrator].display_tonemapper
             controls, actions = hud.draw_hud(self.gui, self.size, self.hud_stats(), s.controls(),
@@ -325,11 +407,20 @@ class ViewerApp:
         return 0
 
 
+def _one_line(error: BaseException) -> str:
+    lines = [line.strip() for line in str(error).strip().splitlines() if line.strip()]
+    return lines[-1] if lines else type(error).__name__
+
+
 def run_viewer(path, size: tuple[int, int] = DEFAULT_SIZE, integrator: Optional[str] = None,
                max_frames: Optional[int] = None, screenshot_folder=None) -> int:
     """Open the viewer on a scene file; returns the process exit code.
 
     Screenshots go to `screenshot_folder`, else $LANTERN_SCREENSHOT_DIR, else <repo>/screenshots.
     """
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        # GLFW would print "cannot initialize GLFW" and exit the process; say what to do instead.
+        raise RuntimeError("the viewer needs a display (DISPLAY is not set): use `app.py render`, "
+                           "or run it under Xvfb")
     app = ViewerApp(path, size=size, integrator=integrator, screenshot_folder=screenshot_folder)
     return app.run(max_frames)

@@ -102,13 +102,32 @@ def _per_pixel(values: np.ndarray) -> np.ndarray:
     return values.mean(axis=-1) if values.ndim == 3 else values
 
 
+def _top_mask(values: np.ndarray, trim: float) -> np.ndarray:
+    """True for the ceil(trim * n) largest entries of `values` (ties broken by position)."""
+    flat = values.ravel()
+    k = int(math.ceil(trim * flat.size)) if trim > 0 else 0
+    mask = np.zeros(flat.size, bool)
+    if k > 0:
+        mask[np.argpartition(flat, flat.size - k)[flat.size - k:]] = True
+    return mask.reshape(values.shape)
+
+
+def rel_mse_trimmed(image, reference, trim: float = 1e-3, eps: float = REL_MSE_EPS) -> float:
+    """relMSE without the `trim` fraction of pixels with the largest error (fireflies): rare
+    high-energy samples otherwise decide the comparison of two low-spp images on their own."""
+    per_pixel = _per_pixel(rel_mse_map(image, reference, eps))
+    return float(per_pixel[~_top_mask(per_pixel, trim)].mean())
+
+
 @dataclass
 class ErrorDifference:
     """metric(a) - metric(b) for two renderings of the same scene against one reference.
 
     The standard error comes from the per-pixel differences of the squared errors: pixels are
     sampled independently, so SE = std(d_pixel) / sqrt(pixels). When a and b share random numbers
-    (same seed) the pairing cancels most of the Monte Carlo noise and the test is sharp.
+    (same seed) the pairing cancels most of the Monte Carlo noise and the test is sharp. With
+    `trim` > 0, pixels among the `trim` fraction of largest errors of either image are left out
+    of both (the pairing is kept).
     """
 
     metric: str
@@ -116,6 +135,7 @@ class ErrorDifference:
     b: float
     difference: float
     standard_error: float
+    trim: float = 0.0
 
     @property
     def z(self) -> float:
@@ -129,11 +149,11 @@ class ErrorDifference:
         return self.difference / self.b if self.b else 0.0
 
     def as_dict(self) -> dict:
-        return {"metric": self.metric, "a": self.a, "b": self.b, "difference": self.difference,
+        return {"metric": self.metric, "trim": self.trim, "a": self.a, "b": self.b, "difference": self.difference,
                 "relative_difference": self.relative, "standard_error": self.standard_error, "z": self.z}
 
 
-def error_difference(image_a, image_b, reference, metric: str = "rel_mse") -> ErrorDifference:
+def error_difference(image_a, image_b, reference, metric: str = "rel_mse", trim: float = 0.0) -> ErrorDifference:
     if metric == "rel_mse":
         ea = _per_pixel(rel_mse_map(image_a, reference))
         eb = _per_pixel(rel_mse_map(image_b, reference))
@@ -143,13 +163,16 @@ def error_difference(image_a, image_b, reference, metric: str = "rel_mse") -> Er
         ea, eb = _per_pixel((xa - r) ** 2), _per_pixel((xb - r) ** 2)
     else:
         raise ValueError(f"unknown metric '{metric}' (rel_mse or mse)")
-    d = (ea - eb).ravel()
+    keep = ~(_top_mask(ea, trim) | _top_mask(eb, trim))
+    ea, eb = ea[keep], eb[keep]
+    d = ea - eb
     se = float(np.std(d, ddof=1) / math.sqrt(d.size)) if d.size > 1 else math.inf
-    return ErrorDifference(metric, float(ea.mean()), float(eb.mean()), float(d.mean()), se)
+    return ErrorDifference(metric, float(ea.mean()), float(eb.mean()), float(d.mean()), se, trim)
 
 
-def image_errors(image, reference) -> dict:
-    return {"rmse": rmse(image, reference), "rel_mse": rel_mse(image, reference)}
+def image_errors(image, reference, trim: float = 1e-3) -> dict:
+    return {"rmse": rmse(image, reference), "rel_mse": rel_mse(image, reference),
+            "rel_mse_trimmed": rel_mse_trimmed(image, reference, trim)}
 
 
 # --- reports -------------------------------------------------------------------------------------
@@ -177,9 +200,17 @@ def write_json(path: Path, data: dict) -> Path:
     return path
 
 
+def load_average() -> list[float] | None:
+    """1, 5 and 15 minute load averages: timings are only as quiet as the machine."""
+    try:
+        return [round(v, 2) for v in os.getloadavg()]
+    except OSError:
+        return None
+
+
 def machine_info() -> dict:
     info = {"python": sys.version.split()[0], "platform": platform.platform(), "cpus": os.cpu_count(),
-            "processor": platform.processor() or platform.machine()}
+            "processor": platform.processor() or platform.machine(), "load_average": load_average()}
     try:
         with open("/proc/cpuinfo", encoding="utf-8") as f:
             for line in f:

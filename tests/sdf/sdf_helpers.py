@@ -205,7 +205,7 @@ def ref_node(n: SdfNode, p: np.ndarray) -> np.ndarray:
             d = np.min([ref_node(n.children[0], q - period * c) for c in cells], axis=0)
         else:
             base = np.where(axes, np.round(q / np.where(axes, period, 1.0)), 0.0)
-            ranges = [range(-2, 3) if a else range(1) for a in axes]
+            ranges = [range(-1, 2) if a else range(1) for a in axes]
             offsets = [(i, j, k) for i in ranges[0] for j in ranges[1] for k in ranges[2]]
             d = np.min([ref_node(n.children[0], q - period * (base + np.array(o))) for o in offsets], axis=0)
     else:
@@ -263,12 +263,10 @@ def sdf(geo: SdfGeometry, pts: np.ndarray) -> np.ndarray:
 
 
 # Columns of the trace kernel's outputs.
-I_COLS = ("hit", "work", "front_face", "material", "refl_hit", "refl_work", "trans_valid", "trans_hit",
-          "trans_work")
-F_COLS = ("t", "px", "py", "pz", "nx", "ny", "nz", "eps", "sdf_hit", "sdf_origin",
-          "refl_ox", "refl_oy", "refl_oz", "refl_dx", "refl_dy", "refl_dz", "refl_t", "refl_sdf_origin",
-          "trans_ox", "trans_oy", "trans_oz", "trans_dx", "trans_dy", "trans_dz", "trans_t", "trans_sdf_origin",
-          "nsx", "nsy", "nsz")
+I_COLS = ("hit", "work", "front_face", "material", "trans_valid")
+F_COLS = ("t", "px", "py", "pz", "nx", "ny", "nz", "nsx", "nsy", "nsz", "eps",
+          "refl_ox", "refl_oy", "refl_oz", "refl_dx", "refl_dy", "refl_dz",
+          "trans_ox", "trans_oy", "trans_oz", "trans_dx", "trans_dy", "trans_dz")
 _FI = {name: i for i, name in enumerate(F_COLS)}
 _II = {name: i for i, name in enumerate(I_COLS)}
 
@@ -285,9 +283,10 @@ def _trace_kernel(geo: ti.template(), o: ti.types.ndarray(dtype=vec3, ndim=1),
                   d: ti.types.ndarray(dtype=vec3, ndim=1), t_max: ti.f32, cone_width: ti.f32,
                   cone_spread: ti.f32, eta: ti.f32, out_i: ti.types.ndarray(dtype=ti.i32, ndim=2),
                   out_f: ti.types.ndarray(dtype=ti.f32, ndim=2)):
+    # Only intersect and surface inline the SDF (compile time grows with every inlined copy);
+    # spawned rays are traced by launching this kernel again on them.
     for i in range(o.shape[0]):
         ray = Ray(o=o[i], d=d[i], cone_width=cone_width, cone_spread=cone_spread)
-        out_f[i, _FI["sdf_origin"]] = geo.program.distance(ray.o)
         hit = geo.intersect(ray, t_max)
         out_i[i, _II["hit"]] = hit.hit
         out_i[i, _II["work"]] = hit.work
@@ -300,17 +299,10 @@ def _trace_kernel(geo: ti.template(), o: ti.types.ndarray(dtype=vec3, ndim=1),
             _put3(out_f, i, _FI["nx"], s.n_geo)
             _put3(out_f, i, _FI["nsx"], s.n_shading)
             out_f[i, _FI["eps"]] = s.eps
-            out_f[i, _FI["sdf_hit"]] = geo.program.distance(s.p)
             # Mirror reflection about the geometric normal: leaves on the side the ray came from.
-            r = ray.d - 2.0 * ray.d.dot(s.n_geo) * s.n_geo
-            ray_r = geo.spawn(s, r)
+            ray_r = geo.spawn(s, ray.d - 2.0 * ray.d.dot(s.n_geo) * s.n_geo)
             _put3(out_f, i, _FI["refl_ox"], ray_r.o)
             _put3(out_f, i, _FI["refl_dx"], ray_r.d)
-            out_f[i, _FI["refl_sdf_origin"]] = geo.program.distance(ray_r.o)
-            hit_r = geo.intersect(ray_r, t_max)
-            out_i[i, _II["refl_hit"]] = hit_r.hit
-            out_i[i, _II["refl_work"]] = hit_r.work
-            out_f[i, _FI["refl_t"]] = hit_r.t
             # Refraction through the smooth surface (eta = n_inside / n_outside).
             n_f = s.n_geo if s.front_face == 1 else -s.n_geo  # the side the ray came from
             e = eta if s.front_face == 1 else 1.0 / eta
@@ -318,15 +310,9 @@ def _trace_kernel(geo: ti.template(), o: ti.types.ndarray(dtype=vec3, ndim=1),
             f, cos_t = mf.fresnel_dielectric(ti.min(1.0, wo.dot(n_f)), e)
             if f < 1.0:
                 out_i[i, _II["trans_valid"]] = 1
-                tdir = ti.math.normalize(mf.refract(wo, n_f, e, cos_t))
-                ray_t = geo.spawn(s, tdir)
+                ray_t = geo.spawn(s, ti.math.normalize(mf.refract(wo, n_f, e, cos_t)))
                 _put3(out_f, i, _FI["trans_ox"], ray_t.o)
                 _put3(out_f, i, _FI["trans_dx"], ray_t.d)
-                out_f[i, _FI["trans_sdf_origin"]] = geo.program.distance(ray_t.o)
-                hit_t = geo.intersect(ray_t, t_max)
-                out_i[i, _II["trans_hit"]] = hit_t.hit
-                out_i[i, _II["trans_work"]] = hit_t.work
-                out_f[i, _FI["trans_t"]] = hit_t.t
 
 
 class TraceResult:
@@ -361,7 +347,8 @@ class TraceResult:
 
 def trace(geo: SdfGeometry, o, d, t_max: float, cone_width: float = 0.0, cone_spread: float = 0.0,
           eta: float = 1.5) -> TraceResult:
-    """Intersect, shade, spawn a reflected and a refracted ray and intersect those, for every ray."""
+    """Intersect; on a hit, shade and spawn a mirror-reflected and a refracted ray (not traced here:
+    pass r.refl_o, r.refl_d to trace again)."""
     o = np.ascontiguousarray(o, np.float32).reshape(-1, 3)
     d = np.ascontiguousarray(d, np.float32).reshape(-1, 3)
     out_i = np.zeros((len(o), len(I_COLS)), np.int32)
@@ -447,6 +434,28 @@ def normals(geo: SdfGeometry, p, h: float) -> np.ndarray:
     return out.astype(np.float64)
 
 
-__all__ = ["SPAWN_OFFSET", "node", "make_scene", "make_geometry", "set_march", "sdf", "trace", "first_crossing",
+@ti.kernel
+def _intersect_kernel(geo: ti.template(), o: ti.types.ndarray(dtype=vec3, ndim=1),
+                      d: ti.types.ndarray(dtype=vec3, ndim=1), t_max: ti.f32, cone_width: ti.f32,
+                      cone_spread: ti.f32, out_i: ti.types.ndarray(dtype=ti.i32, ndim=2),
+                      out_t: ti.types.ndarray(dtype=ti.f32, ndim=1)):
+    for i in range(o.shape[0]):
+        hit = geo.intersect(Ray(o=o[i], d=d[i], cone_width=cone_width, cone_spread=cone_spread), t_max)
+        out_i[i, 0] = hit.hit
+        out_i[i, 1] = hit.work
+        out_t[i] = hit.t
+
+
+def intersect(geo: SdfGeometry, o, d, t_max: float, cone_width: float = 0.0, cone_spread: float = 0.0):
+    """Only the intersection: (hit, work, t) arrays. Compiles a single inlined copy of the SDF."""
+    o = np.ascontiguousarray(o, np.float32).reshape(-1, 3)
+    d = np.ascontiguousarray(d, np.float32).reshape(-1, 3)
+    out_i = np.zeros((len(o), 2), np.int32)
+    out_t = np.zeros(len(o), np.float32)
+    _intersect_kernel(geo, o, d, t_max, cone_width, cone_spread, out_i, out_t)
+    return out_i[:, 0], out_i[:, 1], out_t.astype(np.float64)
+
+
+__all__ = ["SPAWN_OFFSET", "intersect", "node", "make_scene", "make_geometry", "set_march", "sdf", "trace", "first_crossing",
            "normals", "reference_distance", "PRIMITIVES", "BOUNDED_PRIMITIVES", "PRIMITIVE_PARAMS",
            "bounding_half_extent", "random_directions", "ref_node", "ref_scene"]

@@ -1,0 +1,310 @@
+"""`python app.py bench startup`: time from process start to the first rendered frame.
+
+Every measurement is a fresh Python process (`python -m renderer.bench.startup --child ...`), so
+nothing is imported or compiled beforehand. The parent notes the wall clock just before it
+launches the child and passes it along; the child reports wall-clock marks after each phase:
+
+  interpreter   launch -> first line of this module runs (Python start-up, `-m` import)
+  import        taichi and the renderer (or viewer) modules
+  init          init_taichi("cpu", cache_dir=...)
+  scene         load the default scene
+  build         Renderer(scene, 960x540): fields, environment map, materials
+  first frame   render 1 spp with the scene's integrator and wait for it (compiles the kernels,
+                or loads them from Taichi's offline cache)
+
+Cold: an empty offline cache (a fresh temporary directory); warm: the same directory again, so
+the kernels load from the cache. (Python's own bytecode cache is warm in both.) The viewer is
+measured the same way off-screen: viewer.window.ViewerApp with show_window=False, its first
+step() (the window's first presented frame, showing a "compiling..." notice on a cold start)
+and the first step that shows a rendered image.
+
+Issue target: warm start to first frame at most 3 s. Writes <out_dir>/bench_startup.json.
+"""
+from __future__ import annotations
+
+import time
+
+_T_MAIN = time.time()  # as early as possible: the child's "module is running" mark
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import os  # noqa: E402
+import shutil  # noqa: E402
+import statistics  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+MARKER = "LANTERN-STARTUP "
+TARGET_SECONDS = 3.0
+DEFAULT_SIZE = (960, 540)
+CHILD_TIMEOUT = 600.0
+
+# phase name -> (mark it starts at, mark it ends at)
+RENDERER_PHASES = {
+    "interpreter": ("launch", "main"),
+    "import": ("main", "imported"),
+    "init": ("imported", "initialised"),
+    "scene": ("initialised", "scene_loaded"),
+    "build": ("scene_loaded", "built"),
+    "first_frame": ("built", "first_frame"),
+}
+VIEWER_PHASES = {
+    "interpreter": ("launch", "main"),
+    "import": ("main", "imported"),
+    "init": ("imported", "initialised"),
+    "app": ("initialised", "app_built"),
+    "first_window_frame": ("app_built", "first_window_frame"),
+    "first_frame": ("first_window_frame", "first_frame"),
+}
+
+
+# --- the child ---------------------------------------------------------------------------------
+
+def child_main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description="one start-up measurement (run by the startup benchmark)")
+    parser.add_argument("--mode", choices=("renderer", "viewer"), default="renderer")
+    parser.add_argument("--cache-dir", required=True)
+    parser.add_argument("--launched", type=float, required=True, help="parent's time.time() at launch")
+    parser.add_argument("--scene", default=None, help="scene name or file (default: the default scene)")
+    parser.add_argument("--size", default=f"{DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]}")
+    parser.add_argument("--integrator", default=None)
+    args = parser.parse_args(argv)
+    width, height = (int(v) for v in args.size.lower().split("x"))
+    marks = {"launch": args.launched, "main": _T_MAIN}
+    result = {"mode": args.mode, "marks": marks, "size": [width, height]}
+    try:
+        if args.mode == "renderer":
+            _child_renderer(args, (width, height), marks, result)
+        else:
+            _child_viewer(args, (width, height), marks, result)
+    except Exception as error:  # noqa: BLE001 - reported to the parent, which decides
+        result["error"] = f"{type(error).__name__}: {str(error).strip().splitlines()[-1] if str(error).strip() else ''}"
+    print(MARKER + json.dumps(result), flush=True)
+    return 0
+
+
+def _child_renderer(args, size, marks, result) -> None:
+    import taichi as ti
+
+    from renderer.arch import init_taichi
+    from renderer.camera import CameraFrame
+    from renderer.renderer import Renderer
+    from renderer.scene import load_scene
+    from renderer.scene.catalog import DEFAULT_SCENE, resolve_scene
+
+    marks["imported"] = time.time()
+    result["arch"] = init_taichi("cpu", cache_dir=args.cache_dir)
+    marks["initialised"] = time.time()
+    scene = load_scene(resolve_scene(args.scene or DEFAULT_SCENE))
+    marks["scene_loaded"] = time.time()
+    renderer = Renderer(scene, size)
+    camera = CameraFrame.from_spec(scene.camera)
+    marks["built"] = time.time()
+    integrator = args.integrator or scene.render.integrator
+    renderer.render(camera, 1, integrator)
+    ti.sync()
+    marks["first_frame"] = time.time()
+    result.update(scene=scene.name, integrator=integrator, spp=renderer.samples_done)
+
+
+def _child_viewer(args, size, marks, result) -> None:
+    from renderer.arch import init_taichi
+    from renderer.scene.catalog import DEFAULT_SCENE, resolve_scene
+    from viewer.window import ViewerApp
+
+    marks["imported"] = time.time()
+    result["arch"] = init_taichi("cpu", cache_dir=args.cache_dir)
+    marks["initialised"] = time.time()
+    app = ViewerApp(resolve_scene(args.scene or DEFAULT_SCENE), size=size, integrator=args.integrator,
+                    show_window=False, screenshot_folder=tempfile.gettempdir())
+    marks["app_built"] = time.time()
+    app.step()
+    marks["first_window_frame"] = time.time()
+    frames = 1
+    while app.renderer.samples_done == 0 and frames < 10:
+        app.step()
+        frames += 1
+    marks["first_frame"] = time.time()
+    result.update(scene=app.renderer.scene.name, integrator=app.session.integrator, spp=app.renderer.samples_done,
+                  frames=frames)
+
+
+# --- the parent --------------------------------------------------------------------------------
+
+def measure(mode: str, cache_dir: str | Path, scene: str | None = None, size: tuple[int, int] = DEFAULT_SIZE,
+            integrator: str | None = None, timeout: float = CHILD_TIMEOUT) -> dict:
+    """Run one child process and return its phases (seconds) and totals."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    cmd = [sys.executable, "-m", "renderer.bench.startup", "--child", "--mode", mode, "--cache-dir", str(cache_dir),
+           "--size", f"{size[0]}x{size[1]}"]
+    if scene:
+        cmd += ["--scene", str(scene)]
+    if integrator:
+        cmd += ["--integrator", integrator]
+    launched = time.time()
+    cmd += ["--launched", repr(launched)]
+    proc = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
+    exited = time.time()
+    return parse_child_output(proc.stdout, proc.stderr, proc.returncode, exited - launched, mode)
+
+
+def parse_child_output(stdout: str, stderr: str, returncode: int, process_seconds: float, mode: str) -> dict:
+    lines = [line for line in stdout.splitlines() if line.startswith(MARKER)]
+    if not lines:
+        tail = " | ".join(stderr.strip().splitlines()[-3:])
+        return {"mode": mode, "error": f"child exited with {returncode} and no report: {tail}",
+                "process_seconds": process_seconds}
+    result = json.loads(lines[-1][len(MARKER):])
+    result["process_seconds"] = process_seconds
+    result["returncode"] = returncode
+    marks = result.get("marks", {})
+    phases = VIEWER_PHASES if mode == "viewer" else RENDERER_PHASES
+    result["phases"] = {name: marks[b] - marks[a] for name, (a, b) in phases.items() if a in marks and b in marks}
+    if "first_frame" in marks:
+        result["start_to_first_frame"] = marks["first_frame"] - marks["launch"]
+        result["import_and_init"] = marks["initialised"] - marks["launch"]
+    if "first_window_frame" in marks:
+        result["start_to_first_window_frame"] = marks["first_window_frame"] - marks["launch"]
+    return result
+
+
+def measure_cold_warm(mode: str, warm_runs: int, log=None, **kwargs) -> dict:
+    """One cold run on an empty cache directory, then `warm_runs` on the same directory."""
+    cache_dir = tempfile.mkdtemp(prefix=f"lantern-startup-{mode}-")
+    try:
+        if log:
+            log(f"{mode}: cold (empty offline cache {cache_dir}) ...")
+        cold = measure(mode, cache_dir, **kwargs)
+        warm = []
+        for i in range(warm_runs):
+            if log:
+                log(f"{mode}: warm run {i + 1}/{warm_runs} ...")
+            warm.append(measure(mode, cache_dir, **kwargs))
+        cache_bytes = sum(f.stat().st_size for f in Path(cache_dir).rglob("*") if f.is_file())
+    finally:
+        shutil.rmtree(cache_dir, ignore_errors=True)
+    return {"mode": mode, "cold": cold, "warm_runs": warm, "warm": summarise(warm), "cache_bytes": cache_bytes}
+
+
+def summarise(runs: list[dict]) -> dict:
+    """Medians over the runs that worked, of every phase and total."""
+    ok = [r for r in runs if "error" not in r]
+    out = {"runs": len(runs), "ok": len(ok)}
+    if not ok:
+        out["error"] = runs[0].get("error") if runs else "no runs"
+        return out
+    for key in ("start_to_first_frame", "start_to_first_window_frame", "import_and_init", "process_seconds"):
+        values = [r[key] for r in ok if key in r]
+        if values:
+            out[key] = statistics.median(values)
+    out["phases"] = {name: statistics.median(r["phases"][name] for r in ok)
+                     for name in ok[0]["phases"]}
+    return out
+
+
+def _log(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def print_report(report: dict) -> None:
+    from renderer.bench.common import print_table, verdict
+
+    for entry in report["measurements"]:
+        mode = entry["mode"]
+        cold, warm = entry["cold"], entry["warm"]
+        phases = VIEWER_PHASES if mode == "viewer" else RENDERER_PHASES
+        rows = []
+        columns = [("cold", cold.get("phases", {}), cold), ("warm (median of %d)" % warm.get("ok", 0),
+                                                             warm.get("phases", {}), warm)]
+        for name in phases:
+            rows.append([name] + [f"{p[name]:.2f}" if name in p else "-" for _, p, _ in columns])
+        if mode == "viewer":
+            rows.append(["= start to window frame"] + [f"{r['start_to_first_window_frame']:.2f}"
+                                                       if "start_to_first_window_frame" in r else "-"
+                                                       for _, _, r in columns])
+        rows.append(["= import + init"] + [f"{r['import_and_init']:.2f}" if "import_and_init" in r else "-"
+                                           for _, _, r in columns])
+        rows.append(["= start to first frame"] + [f"{r['start_to_first_frame']:.2f}" if "start_to_first_frame" in r
+                                                  else "-" for _, _, r in columns])
+        rows.append(["process exit"] + [f"{r['process_seconds']:.2f}" if "process_seconds" in r else "-"
+                                        for _, _, r in columns])
+        what = ("viewer (ViewerApp off-screen, first step that shows a rendered image)" if mode == "viewer"
+                else "renderer (Renderer + 1 spp render)")
+        w, h = report["size"]
+        print_table(["phase (s)"] + [c for c, _, _ in columns], rows,
+                    title=f"{what}, {report['scene']} {w}x{h}, CPU; cache {entry['cache_bytes'] / 1e6:.1f} MB")
+        for label, r in (("cold", cold), ("warm", warm)):
+            if "error" in r:
+                print(f"  {label}: FAILED: {r['error']}")
+        if "warm_runs" in entry and entry["warm_runs"]:
+            firsts = [f"{r['start_to_first_frame']:.2f}" for r in entry["warm_runs"] if "start_to_first_frame" in r]
+            print(f"  warm runs, start to first frame: {', '.join(firsts)} s")
+        print()
+    for t in report["targets"]:
+        value = "n/a" if t["seconds"] is None else f"{t['seconds']:.2f} s"
+        print(f"Target: warm start to first frame <= {TARGET_SECONDS:g} s ({t['what']}): {value}  "
+              f"{verdict(bool(t['passed']))}")
+    if report.get("viewer_note"):
+        print(report["viewer_note"])
+    print(flush=True)
+
+
+def run(quick: bool = False, out_dir: Path = Path("reports"), warm_runs: int = 3, with_viewer: bool = True) -> int:
+    from renderer.bench.common import load_average, machine_info, write_json
+
+    from renderer.scene.catalog import DEFAULT_SCENE
+
+    out_dir = Path(out_dir)
+    t_start = time.time()
+    load_before = load_average()
+    measurements = [measure_cold_warm("renderer", warm_runs, log=_log)]
+    viewer_note = None
+    if with_viewer:
+        try:
+            import viewer.window  # noqa: F401 - only to see whether the viewer is there
+
+            measurements.append(measure_cold_warm("viewer", 1 if quick else warm_runs, log=_log))
+            if "error" in measurements[-1]["warm"]:
+                viewer_note = ("The off-screen viewer could not be measured (" + measurements[-1]["warm"]["error"]
+                               + "); the renderer path stands for it.")
+        except ImportError as error:
+            viewer_note = f"viewer.window is not importable ({error}); measured the renderer path only."
+    else:
+        viewer_note = "The viewer was not measured; the renderer path stands for it."
+
+    targets = []
+    for entry in measurements:
+        value = entry["warm"].get("start_to_first_frame")
+        what = ("viewer, first rendered image" if entry["mode"] == "viewer" else "renderer, 1 spp at 960x540")
+        targets.append({"what": what, "mode": entry["mode"], "seconds": value,
+                        "passed": value is not None and value <= TARGET_SECONDS})
+    report = {
+        "benchmark": "startup",
+        "quick": quick,
+        "scene": DEFAULT_SCENE,
+        "size": list(DEFAULT_SIZE),
+        "machine": machine_info(),
+        "load_average": {"before": load_before, "after": load_average()},
+        "target_seconds": TARGET_SECONDS,
+        "notes": ("Each run is a fresh Python process. Marks are wall-clock (time.time()) from just before "
+                  "the parent launched the process. Cold = empty Taichi offline cache (fresh temp dir via "
+                  "init_taichi(cache_dir=...)); warm = same dir again. Python bytecode caches are warm in both."),
+        "measurements": measurements,
+        "targets": targets,
+        "viewer_note": viewer_note,
+        "total_seconds": time.time() - t_start,
+    }
+    print_report(report)
+    path = write_json(out_dir / "bench_startup.json", report)
+    print(f"wrote {path}  (total {report['total_seconds']:.0f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    if len(sys.argv) > 1 and sys.argv[1] == "--child":
+        sys.exit(child_main(sys.argv[2:]))
+    sys.exit(run(quick="--quick" in sys.argv))

@@ -1,0 +1,189 @@
+"""Ray/primitive intersection for the mesh world: triangles (watertight and Moller-Trumbore),
+spheres, quads and discs, plus ray/box slabs. Every function returns hit flags and parametric
+distances in (0, t_max); none relies on an epsilon for correctness, since spawned rays are
+offset by `offset_ray_origin` instead.
+"""
+import taichi as ti
+
+vec3 = ti.math.vec3
+
+
+@ti.func
+def watertight_setup(d):
+    """Per-ray constants of Woop, Benthin and Wald 2013: the axis permutation (kx, ky, kz) putting
+    the largest |d| component last (swapping kx, ky when it is negative keeps the winding) and
+    the shear S mapping the ray onto +z."""
+    ad = ti.abs(d)
+    kz = 2
+    if ad.x >= ad.y and ad.x >= ad.z:
+        kz = 0
+    elif ad.y >= ad.z:
+        kz = 1
+    kx = (kz + 1) % 3
+    ky = (kx + 1) % 3
+    if d[kz] < 0.0:
+        swap = kx
+        kx = ky
+        ky = swap
+    s = vec3(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz])
+    return ti.math.ivec3(kx, ky, kz), s
+
+
+@ti.func
+def triangle_watertight(o, k, s, v0, v1, v2, t_max):
+    """Watertight ray/triangle test: edge functions on sheared, translated vertices are exact in
+    sign for points on shared edges, so no ray passes between two triangles sharing an edge.
+    Returns (hit, t, b1, b2) with barycentrics of v1, v2. (The paper's f64 fallback for edge
+    functions that are exactly 0 is omitted: f64 is not available on every GPU back-end; a zero
+    edge function counts as inside, which can only make an edge hit twice, never zero times.)"""
+    a = v0 - o
+    b = v1 - o
+    c = v2 - o
+    ax = a[k.x] - s.x * a[k.z]
+    ay = a[k.y] - s.y * a[k.z]
+    bx = b[k.x] - s.x * b[k.z]
+    by = b[k.y] - s.y * b[k.z]
+    cx = c[k.x] - s.x * c[k.z]
+    cy = c[k.y] - s.y * c[k.z]
+    u = cx * by - cy * bx
+    v = ax * cy - ay * cx
+    w = bx * ay - by * ax
+    hit = 0
+    t = 0.0
+    b1 = 0.0
+    b2 = 0.0
+    if not ((u < 0.0 or v < 0.0 or w < 0.0) and (u > 0.0 or v > 0.0 or w > 0.0)):
+        det = u + v + w
+        if det != 0.0:
+            az = s.z * a[k.z]
+            bz = s.z * b[k.z]
+            cz = s.z * c[k.z]
+            tt = u * az + v * bz + w * cz
+            if det < 0.0:
+                tt = -tt
+                det = -det
+            if tt > 0.0 and tt < t_max * det:
+                inv = 1.0 / det
+                hit = 1
+                t = tt * inv
+                b1 = v * inv
+                b2 = w * inv
+    return hit, t, b1, b2
+
+
+@ti.func
+def triangle_moller_trumbore(o, d, v0, v1, v2, t_max):
+    """Moller and Trumbore 1997: fewer operations, but not watertight at shared edges."""
+    e1 = v1 - v0
+    e2 = v2 - v0
+    p = d.cross(e2)
+    det = e1.dot(p)
+    hit = 0
+    t = 0.0
+    b1 = 0.0
+    b2 = 0.0
+    if det != 0.0:
+        inv = 1.0 / det
+        tv = o - v0
+        u = tv.dot(p) * inv
+        q = tv.cross(e1)
+        v = d.dot(q) * inv
+        tt = e2.dot(q) * inv
+        if u >= 0.0 and v >= 0.0 and u + v <= 1.0 and tt > 0.0 and tt < t_max:
+            hit = 1
+            t = tt
+            b1 = u
+            b2 = v
+    return hit, t, b1, b2
+
+
+@ti.func
+def sphere(o, d, center, radius, t_max):
+    """Ray/sphere with the precision-preserving form of Haines et al. 2019 (Ray Tracing Gems 7):
+    the discriminant from the closest-approach vector, the near root from the stable quotient.
+    d must be unit length. Returns (hit, t)."""
+    f = o - center
+    b = -f.dot(d)
+    l = f + b * d
+    disc = radius * radius - l.dot(l)
+    hit = 0
+    t = 0.0
+    if disc >= 0.0:
+        c = f.dot(f) - radius * radius
+        q = b + ti.math.sign(b) * ti.sqrt(disc) if b != 0.0 else ti.sqrt(disc)
+        t0 = c / q if q != 0.0 else 0.0
+        t1 = q
+        near = ti.min(t0, t1)
+        far = ti.max(t0, t1)
+        if near > 0.0 and near < t_max:
+            hit = 1
+            t = near
+        elif far > 0.0 and far < t_max:
+            hit = 1
+            t = far
+    return hit, t
+
+
+@ti.func
+def quad(o, d, corner, edge_u, edge_v, t_max):
+    """Parallelogram corner + a edge_u + b edge_v, a, b in [0, 1]. Returns (hit, t, a, b)."""
+    n = edge_u.cross(edge_v)
+    denom = n.dot(d)
+    hit = 0
+    t = 0.0
+    a = 0.0
+    b = 0.0
+    if denom != 0.0:
+        tt = n.dot(corner - o) / denom
+        if tt > 0.0 and tt < t_max:
+            p = o + tt * d - corner
+            # Coordinates in the (possibly non-orthogonal) edge basis via the normal's cross terms.
+            nn = n.dot(n)
+            a = n.dot(p.cross(edge_v)) / nn
+            b = n.dot(edge_u.cross(p)) / nn
+            if a >= 0.0 and a <= 1.0 and b >= 0.0 and b <= 1.0:
+                hit = 1
+                t = tt
+    return hit, t, a, b
+
+
+@ti.func
+def disc(o, d, center, normal, radius, t_max):
+    denom = normal.dot(d)
+    hit = 0
+    t = 0.0
+    if denom != 0.0:
+        tt = normal.dot(center - o) / denom
+        if tt > 0.0 and tt < t_max:
+            p = o + tt * d - center
+            if p.dot(p) <= radius * radius:
+                hit = 1
+                t = tt
+    return hit, t
+
+
+@ti.func
+def box_entry(o, inv_d, lo, hi, t_max):
+    """Slab test. Returns the entry distance, or t_max + 1 (a value no hit can beat) on a miss.
+    The far bound is widened by 2 ulp-scale factors so rounding never drops a box a ray grazes
+    (Ize 2013, 'Robust BVH ray traversal')."""
+    t0 = (lo - o) * inv_d
+    t1 = (hi - o) * inv_d
+    tmin = ti.min(t0, t1)
+    tmax = ti.max(t0, t1)
+    enter = ti.max(ti.max(tmin.x, tmin.y), ti.max(tmin.z, 0.0))
+    leave = ti.min(ti.min(tmax.x, tmax.y), ti.min(tmax.z, t_max)) * 1.00000024
+    return enter if enter <= leave else t_max + 1.0
+
+
+@ti.func
+def offset_ray_origin(p, n):
+    """Waechter and Binder 2019 (Ray Tracing Gems 6): move p off its surface along n by a few
+    ulps of p's own magnitude (integer steps on the float bit pattern), or by a small fixed
+    amount near the origin where ulps are tiny. Scale-aware: works from 1e-3 to 1e4 metres."""
+    of_i = ti.cast(256.0 * n, ti.i32)  # 256 ulps per unit of normal
+    result = p
+    for i in ti.static(range(3)):
+        pi = ti.bit_cast(ti.bit_cast(p[i], ti.i32) + (-of_i[i] if p[i] < 0.0 else of_i[i]), ti.f32)
+        result[i] = p[i] + (1.0 / 65536.0) * n[i] if ti.abs(p[i]) < (1.0 / 32.0) else pi
+    return result

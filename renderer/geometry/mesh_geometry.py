@@ -1,0 +1,288 @@
+"""The mesh side of the geometry interface: triangles and analytic spheres, quads and discs in one
+BVH, traversed on the device.
+
+Two traversals (a compile-time choice, benchmarked against each other):
+  "stack":     ordered traversal; both children's boxes are tested, the nearer visited first, the
+               farther pushed with its entry distance and skipped on pop once a closer hit is known.
+  "stackless": the depth-first next-pointer ("miss link") walk: no stack, no ordering.
+Two triangle tests: "watertight" (Woop et al. 2013, the default) and "moller" (Moller-Trumbore).
+Only the primitive kinds the scene has are compiled in.
+"""
+import numpy as np
+import taichi as ti
+
+from renderer.geometry import intersect as isect
+from renderer.geometry.interface import Hit, Ray, Surface
+from renderer.geometry.mesh_data import MeshData
+from renderer.sampling.warps import PI
+
+vec3 = ti.math.vec3
+STACK_SIZE = 64  # deeper than any tree the builder makes (its depth is bounded well below this)
+TRAVERSALS = ("stack", "stackless")
+TRIANGLE_TESTS = ("watertight", "moller")
+
+
+@ti.data_oriented
+class MeshGeometry:
+    kind = "mesh"
+
+    def __init__(self, data: MeshData, bvh, traversal="stack", triangle_test="watertight"):
+        if traversal not in TRAVERSALS:
+            raise ValueError(f"unknown traversal '{traversal}' (choose from {', '.join(TRAVERSALS)})")
+        if triangle_test not in TRIANGLE_TESTS:
+            raise ValueError(f"unknown triangle test '{triangle_test}' (choose from {', '.join(TRIANGLE_TESTS)})")
+        self.traversal = traversal
+        self.triangle_test = triangle_test
+        self.kinds = data.kinds()
+        self.has_normals = data.tri_normals is not None and len(data.tri_vertices) > 0
+        self.has_uvs = data.tri_uvs is not None and len(data.tri_vertices) > 0
+        self.node_total = len(bvh.node_count)
+        self._upload_bvh(bvh)
+        self._upload_primitives(data, bvh)
+
+    # --- upload --------------------------------------------------------------------------------
+    def _upload_bvh(self, bvh):
+        m = max(1, self.node_total)
+        self.node_lo = ti.Vector.field(3, ti.f32, shape=m)
+        self.node_hi = ti.Vector.field(3, ti.f32, shape=m)
+        self.node_link = ti.Vector.field(3, ti.i32, shape=m)  # (right child | first prim, count, skip)
+        if self.node_total:
+            self.node_lo.from_numpy(bvh.node_lo.astype(np.float32))
+            self.node_hi.from_numpy(bvh.node_hi.astype(np.float32))
+            self.node_link.from_numpy(np.stack([bvh.node_a, bvh.node_count, bvh.node_skip], axis=1).astype(np.int32))
+        else:  # an empty box no ray can enter
+            self.node_lo.fill(1e30)
+            self.node_hi.fill(-1e30)
+        self.slot_prim = ti.field(ti.i32, shape=max(1, len(bvh.prim_order)))
+        if len(bvh.prim_order):
+            self.slot_prim.from_numpy(bvh.prim_order.astype(np.int32))
+
+    def _upload_primitives(self, data: MeshData, bvh):
+        def vec_field(n, array, width=3):
+            f = ti.Vector.field(width, ti.f32, shape=max(1, n))
+            if n:
+                f.from_numpy(np.ascontiguousarray(array, np.float32))
+            return f
+
+        t = len(data.tri_vertices)
+        self.tri_v = ti.Vector.field(3, ti.f32, shape=(max(1, t), 3))
+        if t:
+            self.tri_v.from_numpy(np.ascontiguousarray(data.tri_vertices, np.float32))
+        if self.has_normals:
+            self.tri_n = ti.Vector.field(3, ti.f32, shape=(t, 3))
+            self.tri_n.from_numpy(np.ascontiguousarray(data.tri_normals, np.float32))
+        if self.has_uvs:
+            self.tri_uv = ti.Vector.field(2, ti.f32, shape=(t, 3))
+            self.tri_uv.from_numpy(np.ascontiguousarray(data.tri_uvs, np.float32))
+        self.spheres = vec_field(len(data.spheres), data.spheres, 4)
+        q = len(data.quads)
+        self.quads = ti.Vector.field(3, ti.f32, shape=(max(1, q), 3))
+        if q:
+            self.quads.from_numpy(np.ascontiguousarray(data.quads, np.float32))
+        discs = data.discs
+        self.discs_a = vec_field(len(discs), discs[:, [0, 1, 2, 6]], 4)  # centre xyz, radius
+        self.discs_n = vec_field(len(discs), discs[:, 3:6], 3)
+        materials = data.materials()
+        self.prim_material = ti.field(ti.i32, shape=max(1, len(materials)))
+        if len(materials):
+            self.prim_material.from_numpy(materials)
+        self.range_end = ti.field(ti.i32, shape=4)
+        self.range_end.from_numpy(data.range_ends())
+
+    def device_bytes(self) -> dict:
+        """Bytes on the device for the BVH and for the intersection data of triangles."""
+        nodes = self.node_total * (12 + 12 + 12)
+        slots = self.slot_prim.shape[0] * 4
+        triangles = self.tri_v.shape[0] * 36
+        return {"bvh": nodes + slots, "triangles": triangles}
+
+    # --- traversal -----------------------------------------------------------------------------
+    @ti.func
+    def _test_prim(self, g, o, d, k, s, t_max):
+        """Test primitive g; returns (hit, t, b1, b2) with primitive-specific surface coordinates."""
+        hit, t, b1, b2 = 0, 0.0, 0.0, 0.0
+        if ti.static("triangle" in self.kinds):
+            if g < self.range_end[0]:
+                if ti.static(self.triangle_test == "watertight"):
+                    hit, t, b1, b2 = isect.triangle_watertight(o, k, s, self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2], t_max)
+                else:
+                    hit, t, b1, b2 = isect.triangle_moller_trumbore(o, d, self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2], t_max)
+        if ti.static("sphere" in self.kinds):
+            if g >= self.range_end[0] and g < self.range_end[1]:
+                sp = self.spheres[g - self.range_end[0]]
+                hit, t = isect.sphere(o, d, sp.xyz, sp.w, t_max)
+        if ti.static("quad" in self.kinds):
+            if g >= self.range_end[1] and g < self.range_end[2]:
+                i = g - self.range_end[1]
+                hit, t, b1, b2 = isect.quad(o, d, self.quads[i, 0], self.quads[i, 1], self.quads[i, 2], t_max)
+        if ti.static("disc" in self.kinds):
+            if g >= self.range_end[2]:
+                i = g - self.range_end[2]
+                hit, t = isect.disc(o, d, self.discs_a[i].xyz, self.discs_n[i], self.discs_a[i].w, t_max)
+        return hit, t, b1, b2
+
+    @ti.func
+    def _leaf(self, node, o, d, k, s, hit: ti.template(), any_hit: ti.template()):
+        link = self.node_link[node]
+        for j in range(link[0], link[0] + link[1]):
+            g = self.slot_prim[j]
+            h, t, b1, b2 = self._test_prim(g, o, d, k, s, hit.t)
+            hit.tests += 1
+            if h == 1:
+                hit.hit = 1
+                hit.t = t
+                hit.prim = g
+                hit.bary = ti.math.vec2(b1, b2)
+                if ti.static(any_hit):
+                    break
+
+    @ti.func
+    def _traverse(self, ray, t_max, any_hit: ti.template()):
+        hit = Hit(hit=0, t=t_max, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0))
+        o = ray.o
+        d = ray.d
+        # A zero direction component would give 0 * inf = NaN in the slab test; a tiny stand-in
+        # gives the same ordering with finite arithmetic.
+        inv_d = 1.0 / ti.select(ti.abs(d) > 1e-30, d, 1e-30)
+        k, s = isect.watertight_setup(d)
+        if ti.static(self.traversal == "stackless"):
+            node = 0
+            while node < self.node_total:
+                hit.work += 1
+                link = self.node_link[node]
+                if isect.box_entry(o, inv_d, self.node_lo[node], self.node_hi[node], hit.t) <= hit.t:
+                    if link[1] > 0:
+                        self._leaf(node, o, d, k, s, hit, any_hit)
+                        if ti.static(any_hit):
+                            if hit.hit == 1:
+                                break
+                        node = link[2]
+                    else:
+                        node = node + 1
+                else:
+                    node = link[2]
+        else:
+            stack_node = ti.Vector([0] * STACK_SIZE, dt=ti.i32)
+            stack_t = ti.Vector([0.0] * STACK_SIZE, dt=ti.f32)
+            sp = 0
+            node = 0
+            if isect.box_entry(o, inv_d, self.node_lo[0], self.node_hi[0], hit.t) > hit.t:
+                node = -1
+            while node >= 0:
+                hit.work += 1
+                link = self.node_link[node]
+                next_node = -1
+                if link[1] > 0:
+                    self._leaf(node, o, d, k, s, hit, any_hit)
+                    if ti.static(any_hit):
+                        if hit.hit == 1:
+                            break
+                else:
+                    left = node + 1
+                    right = link[0]
+                    tl = isect.box_entry(o, inv_d, self.node_lo[left], self.node_hi[left], hit.t)
+                    tr = isect.box_entry(o, inv_d, self.node_lo[right], self.node_hi[right], hit.t)
+                    if tl <= hit.t and tr <= hit.t:
+                        near, far, t_far = left, right, tr
+                        if tr < tl:
+                            near, far, t_far = right, left, tl
+                        stack_node[sp] = far
+                        stack_t[sp] = t_far
+                        sp += 1
+                        next_node = near
+                    elif tl <= hit.t:
+                        next_node = left
+                    elif tr <= hit.t:
+                        next_node = right
+                # pop, skipping subtrees whose entry lies beyond the closest hit found since the push
+                while next_node < 0 and sp > 0:
+                    sp -= 1
+                    if stack_t[sp] <= hit.t:
+                        next_node = stack_node[sp]
+                node = next_node
+        return hit
+
+    @ti.func
+    def intersect(self, ray, t_max):
+        return self._traverse(ray, t_max, False)
+
+    @ti.func
+    def occluded(self, ray, t_max):
+        return self._traverse(ray, t_max, True).hit == 1
+
+    # --- shading -------------------------------------------------------------------------------
+    @ti.func
+    def surface(self, ray, hit):
+        g = hit.prim
+        p = ray.o + hit.t * ray.d
+        n = vec3(0.0, 1.0, 0.0)
+        ns = n
+        uv = ti.math.vec2(0.0)
+        if ti.static("triangle" in self.kinds):
+            if g < self.range_end[0]:
+                v0, v1, v2 = self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2]
+                b0 = 1.0 - hit.bary.x - hit.bary.y
+                # From barycentrics, not o + t d: stays on the triangle's plane to f32 precision.
+                p = b0 * v0 + hit.bary.x * v1 + hit.bary.y * v2
+                n = ti.math.normalize((v1 - v0).cross(v2 - v0))
+                ns = n
+                if ti.static(self.has_normals):
+                    interp = b0 * self.tri_n[g, 0] + hit.bary.x * self.tri_n[g, 1] + hit.bary.y * self.tri_n[g, 2]
+                    if interp.dot(interp) > 1e-12:  # zero-length normals fall back to the geometric one
+                        ns = ti.math.normalize(interp)
+                if ti.static(self.has_uvs):
+                    uv = b0 * self.tri_uv[g, 0] + hit.bary.x * self.tri_uv[g, 1] + hit.bary.y * self.tri_uv[g, 2]
+        if ti.static("sphere" in self.kinds):
+            if g >= self.range_end[0] and g < self.range_end[1]:
+                sp = self.spheres[g - self.range_end[0]]
+                n = ti.math.normalize(p - sp.xyz)
+                p = sp.xyz + sp.w * n  # back onto the sphere
+                ns = n
+                uv = ti.math.vec2(0.5 + ti.atan2(n.x, -n.z) / (2.0 * PI), ti.acos(ti.math.clamp(n.y, -1.0, 1.0)) / PI)
+        if ti.static("quad" in self.kinds):
+            if g >= self.range_end[1] and g < self.range_end[2]:
+                i = g - self.range_end[1]
+                p = self.quads[i, 0] + hit.bary.x * self.quads[i, 1] + hit.bary.y * self.quads[i, 2]
+                n = ti.math.normalize(self.quads[i, 1].cross(self.quads[i, 2]))
+                ns = n
+                uv = hit.bary
+        if ti.static("disc" in self.kinds):
+            if g >= self.range_end[2]:
+                i = g - self.range_end[2]
+                n = self.discs_n[i]
+                c = self.discs_a[i].xyz
+                p = p - (p - c).dot(n) * n  # back onto the plane
+                ns = n
+                r = (p - c).norm() / self.discs_a[i].w
+                uv = ti.math.vec2(r, 0.0)
+        front = 1 if ray.d.dot(n) < 0.0 else 0
+        ns = _consistent_shading_normal(ns, n, -ray.d)
+        return Surface(p=p, n_geo=n, n_shading=ns, uv=uv, material=self.prim_material[g], front_face=front,
+                       eps=0.0, cone_width=ray.cone_width + ray.cone_spread * hit.t, cone_spread=ray.cone_spread)
+
+    @ti.func
+    def spawn(self, surface, direction):
+        side = surface.n_geo if direction.dot(surface.n_geo) > 0.0 else -surface.n_geo
+        return Ray(o=isect.offset_ray_origin(surface.p, side), d=direction,
+                   cone_width=surface.cone_width, cone_spread=surface.cone_spread)
+
+
+# Least cosine between the viewing direction and the shading normal on the viewer's side. Small
+# enough to leave real shading detail alone, large enough to keep BSDF frames non-degenerate.
+MIN_SHADING_COSINE = 1e-2
+
+
+@ti.func
+def _consistent_shading_normal(ns, ng, wo):
+    """Keep the interpolated normal on the geometric normal's side, and keep the viewer in front of
+    it: where interpolation tilts ns away from wo (silhouettes of smooth low-poly meshes), bend it
+    towards wo just enough. Without this, such hits shade black (seams) or sample directions
+    below the true surface (light leaking through it)."""
+    result = ns
+    if result.dot(ng) < 0.0:
+        result = -result
+    side = 1.0 if wo.dot(ng) >= 0.0 else -1.0
+    c = side * result.dot(wo)
+    if c < MIN_SHADING_COSINE:
+        result = ti.math.normalize(result + side * (MIN_SHADING_COSINE - c) * wo)
+    return result

@@ -1,0 +1,343 @@
+"""Write the small models the mesh-loader tests read. Run from anywhere:
+
+    python tests/data/make_test_models.py
+
+Everything is generated from the numbers below (no binary is hand-edited), so the tests can
+compare what the loader returns with these exact values. Outputs, next to this script:
+
+- textured_quad.gltf + textured_quad.bin + checker.png, mr.png, normal.png:
+  one quad with NORMAL, TEXCOORD_0, TEXCOORD_1 (no TANGENT) and a material using every texture
+  slot, two samplers, KHR_texture_transform, KHR_materials_emissive_strength,
+  KHR_materials_transmission and KHR_materials_ior; a second material samples mr.png as colour.
+- textured_quad.glb: the same model as one binary file (buffer and images embedded).
+- two_nodes.gltf: a node hierarchy with TRS and matrix transforms, non-uniform scale, one mesh
+  instanced by two nodes, a mirrored node, a triangle strip, a primitive without a material,
+  TANGENT and normalized COLOR_0 attributes and a sparse accessor; the buffer is a data URI.
+- materials.obj + materials.mtl: four OBJ material groups (textured with -o/-s, glass, lamp, mirror).
+- pyramid.ply: ASCII PLY, triangles and a quad, vertex normals and 8-bit vertex colours.
+"""
+from __future__ import annotations
+
+import base64
+import json
+import math
+import struct
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+HERE = Path(__file__).resolve().parent
+
+# --- images (8-bit, so the loader's k / 255 decoding is exact) ---------------------------------
+
+CHECKER = np.array([[[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]],
+                    [[0, 0, 0], [128, 128, 128], [64, 32, 16], [200, 100, 50]],
+                    [[10, 20, 30], [40, 50, 60], [70, 80, 90], [100, 110, 120]],
+                    [[255, 255, 0], [0, 255, 255], [255, 0, 255], [1, 2, 3]]], dtype=np.uint8)
+MR = np.array([[[0, 64, 255], [0, 128, 0]],
+               [[0, 255, 128], [0, 32, 64]]], dtype=np.uint8)  # G = roughness, B = metallic
+NORMAL = np.array([[[128, 128, 255], [160, 128, 240]],
+                   [[128, 96, 240], [100, 150, 230]]], dtype=np.uint8)
+
+# --- textured quad ----------------------------------------------------------------------------
+
+QUAD_POSITIONS = np.array([[-1, 1, 0], [1, 1, 0], [1, -1, 0], [-1, -1, 0]], dtype=np.float32)
+QUAD_NORMALS = np.array([[0, 0, 1]] * 4, dtype=np.float32)
+QUAD_UV0 = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=np.float32)  # (0, 0) = top-left
+QUAD_UV1 = QUAD_UV0 * np.float32(2.0)
+QUAD_INDICES = np.array([0, 3, 2, 0, 2, 1], dtype=np.uint16)  # counter-clockwise seen from +z
+QUAD_TRANSLATION = [0.5, 0.0, 0.0]
+
+QUAD_MATERIAL = {
+    "name": "quad",
+    "pbrMetallicRoughness": {
+        "baseColorFactor": [0.9, 0.8, 0.7, 1.0],
+        "metallicFactor": 0.25,
+        "roughnessFactor": 0.625,
+        "baseColorTexture": {
+            "index": 0,
+            "texCoord": 0,
+            "extensions": {"KHR_texture_transform": {
+                "offset": [0.25, 0.5], "rotation": 0.5, "scale": [2.0, 3.0]}},
+        },
+        "metallicRoughnessTexture": {"index": 1, "texCoord": 1},
+    },
+    "normalTexture": {"index": 2, "scale": 0.75},
+    "occlusionTexture": {"index": 1},  # ignored by design
+    "emissiveTexture": {"index": 0},
+    "emissiveFactor": [1.0, 0.5, 0.25],
+    "alphaMode": "MASK",
+    "alphaCutoff": 0.25,
+    "doubleSided": True,
+    "extensions": {
+        "KHR_materials_emissive_strength": {"emissiveStrength": 4.0},
+        "KHR_materials_transmission": {"transmissionFactor": 0.375},
+        "KHR_materials_ior": {"ior": 1.33},
+    },
+}
+SECOND_MATERIAL = {"name": "second", "pbrMetallicRoughness": {"baseColorTexture": {"index": 3}}}
+SAMPLERS = [
+    {"wrapS": 10497, "wrapT": 33648, "magFilter": 9728, "minFilter": 9987},  # repeat / mirror
+    {"wrapS": 33071, "wrapT": 33071},  # clamp / clamp
+]
+TEXTURES = [{"source": 0, "sampler": 0}, {"source": 1, "sampler": 1}, {"source": 2},
+            {"source": 1, "sampler": 1}]
+
+# --- two nodes ----------------------------------------------------------------------------------
+
+# A triangle in the plane x + y = 1 with its plane normal, and a tangent orthogonal to it.
+TRI_POSITIONS = np.array([[1, 0, 0], [0, 1, 0], [0, 1, 1]], dtype=np.float32)
+TRI_NORMALS = np.array([[1, 1, 0]] * 3, dtype=np.float32) / np.float32(math.sqrt(2.0))
+TRI_TANGENTS = np.array([[0, 0, 1, -1]] * 3, dtype=np.float32)
+TRI_INDICES = np.array([0, 1, 2], dtype=np.uint8)
+
+STRIP_POSITIONS = np.array([[0, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0], [2, 0, 0]], dtype=np.float32)
+STRIP_COLORS = np.array([[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255], [0, 0, 0]],
+                        dtype=np.uint8)
+# Sparse accessor: the base positions are STRIP_POSITIONS, vertex 4 is replaced by SPARSE_VALUE.
+SPARSE_INDEX = 4
+SPARSE_VALUE = np.array([[2, 1, 0]], dtype=np.float32)
+
+PARENT = {"name": "parent", "translation": [1.0, 2.0, 3.0],
+          "rotation": [0.0, math.sin(math.pi / 4), 0.0, math.cos(math.pi / 4)],  # 90 deg about +y
+          "scale": [2.0, 1.0, 0.5]}
+CHILD_A_MATRIX = [0.5, 0, 0, 0, 0, 0.5, 0, 0, 0, 0, 0.5, 0, 0, 1, 0, 1]  # column-major
+CHILD_B = {"name": "child_b", "translation": [0.0, 0.0, 5.0]}
+MIRROR = {"name": "mirror", "scale": [-1.0, 1.0, 1.0], "translation": [0.0, -3.0, 0.0]}
+PAIR_MATERIAL = {"name": "pair", "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1.0],
+                                                         "metallicFactor": 0.0}}
+
+# --- OBJ and PLY ----------------------------------------------------------------------------------
+
+MTL = """\
+# test materials
+newmtl textured
+Kd 0.5 0.6 0.7
+Ks 0.5 0.5 0.5
+Ns 98
+map_Kd -o 0.25 0.5 -s 2 2 checker.png
+
+newmtl glass
+Kd 1 1 1
+Ks 1 1 1
+Ns 1000
+Ni 1.45
+d 0.1
+illum 7
+
+newmtl lamp
+Kd 0 0 0
+Ke 3 2 1
+
+newmtl mirror
+Kd 0 0 0
+Ks 0.9 0.8 0.7
+Pr 0.05
+"""
+
+OBJ = """\
+# four material groups
+mtllib materials.mtl
+v -1 1 0
+v 1 1 0
+v 1 -1 0
+v -1 -1 0
+v 0 0 1
+v 2 0 1
+vt 0 1
+vt 1 1
+vt 1 0
+vt 0 0
+vn 0 0 1
+usemtl textured
+f 1/1/1 4/4/1 3/3/1 2/2/1
+usemtl glass
+f 1 4 5
+usemtl lamp
+f 4 3 5
+usemtl mirror
+f 3 2 6
+"""
+
+PLY = """\
+ply
+format ascii 1.0
+comment square pyramid: four triangles and a quad base
+element vertex 5
+property float x
+property float y
+property float z
+property float nx
+property float ny
+property float nz
+property uchar red
+property uchar green
+property uchar blue
+element face 5
+property list uchar int vertex_indices
+end_header
+-1 0 -1 0 -1 0 255 0 0
+1 0 -1 0 -1 0 0 255 0
+1 0 1 0 -1 0 0 0 255
+-1 0 1 0 -1 0 128 128 128
+0 1 0 0 1 0 255 255 255
+3 0 4 1
+3 1 4 2
+3 2 4 3
+3 3 4 0
+4 0 1 2 3
+"""
+
+
+class BufferBuilder:
+    """Accumulates binary data into one glTF buffer with 4-byte aligned buffer views."""
+
+    def __init__(self):
+        self.data = bytearray()
+        self.views: list[dict] = []
+        self.accessors: list[dict] = []
+
+    def view(self, blob: bytes, target: int | None = None) -> int:
+        self.data += b"\0" * (-len(self.data) % 4)
+        view = {"buffer": 0, "byteOffset": len(self.data), "byteLength": len(blob)}
+        if target is not None:
+            view["target"] = target
+        self.data += blob
+        self.views.append(view)
+        return len(self.views) - 1
+
+    def accessor(self, array: np.ndarray, normalized: bool = False, sparse: dict | None = None,
+                 with_view: bool = True) -> int:
+        array = np.ascontiguousarray(array)
+        component = {np.dtype(np.float32): 5126, np.dtype(np.uint8): 5121,
+                     np.dtype(np.uint16): 5123, np.dtype(np.uint32): 5125}[array.dtype]
+        kind = {1: "SCALAR", 2: "VEC2", 3: "VEC3", 4: "VEC4"}[1 if array.ndim == 1 else array.shape[1]]
+        index_data = array.ndim == 1
+        accessor = {"componentType": component, "count": int(len(array)), "type": kind}
+        if with_view:
+            accessor["bufferView"] = self.view(array.tobytes(), 34963 if index_data else 34962)
+        if normalized:
+            accessor["normalized"] = True
+        if kind == "VEC3" and component == 5126:  # POSITION needs min / max
+            accessor["min"] = [float(v) for v in array.min(axis=0)]
+            accessor["max"] = [float(v) for v in array.max(axis=0)]
+        if sparse:
+            accessor["sparse"] = sparse
+        self.accessors.append(accessor)
+        return len(self.accessors) - 1
+
+
+def png_bytes(pixels: np.ndarray) -> bytes:
+    import io
+
+    out = io.BytesIO()
+    Image.fromarray(pixels).save(out, format="PNG")
+    return out.getvalue()
+
+
+def quad_document(embed_images: bool) -> tuple[dict, bytes]:
+    b = BufferBuilder()
+    attributes = {
+        "POSITION": b.accessor(QUAD_POSITIONS),
+        "NORMAL": b.accessor(QUAD_NORMALS),
+        "TEXCOORD_0": b.accessor(QUAD_UV0),
+        "TEXCOORD_1": b.accessor(QUAD_UV1),
+    }
+    indices = b.accessor(QUAD_INDICES)
+    names = ["checker.png", "mr.png", "normal.png"]
+    if embed_images:
+        images = [{"bufferView": b.view(png_bytes(p)), "mimeType": "image/png", "name": n}
+                  for p, n in zip((CHECKER, MR, NORMAL), names)]
+    else:
+        images = [{"uri": n} for n in names]
+    doc = {
+        "asset": {"version": "2.0", "generator": "Lantern tests/data/make_test_models.py"},
+        "extensionsUsed": ["KHR_texture_transform", "KHR_materials_emissive_strength",
+                           "KHR_materials_transmission", "KHR_materials_ior"],
+        "extensionsRequired": ["KHR_texture_transform"],
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "quad", "mesh": 0, "translation": QUAD_TRANSLATION}],
+        "meshes": [{"name": "quad", "primitives": [
+            {"attributes": attributes, "indices": indices, "material": 0}]}],
+        "materials": [QUAD_MATERIAL, SECOND_MATERIAL],
+        "textures": TEXTURES,
+        "samplers": SAMPLERS,
+        "images": images,
+        "accessors": b.accessors,
+        "bufferViews": b.views,
+        "buffers": [{"byteLength": len(b.data)}],
+    }
+    return doc, bytes(b.data)
+
+
+def two_nodes_document() -> dict:
+    b = BufferBuilder()
+    tri = {"attributes": {"POSITION": b.accessor(TRI_POSITIONS), "NORMAL": b.accessor(TRI_NORMALS),
+                          "TANGENT": b.accessor(TRI_TANGENTS)},
+           "indices": b.accessor(TRI_INDICES), "material": 0}
+    strip = {"attributes": {"POSITION": b.accessor(STRIP_POSITIONS),
+                            "COLOR_0": b.accessor(STRIP_COLORS, normalized=True)},
+             "mode": 5, "material": 0}
+    sparse = {"count": 1,
+              "indices": {"bufferView": b.view(np.array([SPARSE_INDEX], np.uint8).tobytes()),
+                          "componentType": 5121},
+              "values": {"bufferView": b.view(SPARSE_VALUE.tobytes())}}
+    base = b.accessors[strip["attributes"]["POSITION"]]
+    sparse_positions = dict(base, sparse=sparse)
+    sparse_positions["max"] = [2.0, 1.0, 0.0]
+    b.accessors.append(sparse_positions)
+    no_material = {"attributes": {"POSITION": len(b.accessors) - 1},
+                   "indices": b.accessor(np.array([0, 2, 1, 2, 4, 3], np.uint16))}
+    return {
+        "asset": {"version": "2.0", "generator": "Lantern tests/data/make_test_models.py"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 3]}],
+        "nodes": [
+            dict(PARENT, children=[1, 2]),
+            {"name": "child_a", "mesh": 0, "matrix": CHILD_A_MATRIX},
+            dict(CHILD_B, mesh=0),
+            dict(MIRROR, mesh=1),
+        ],
+        "meshes": [{"name": "tri", "primitives": [tri]},
+                   {"name": "pair", "primitives": [strip, no_material]}],
+        "materials": [PAIR_MATERIAL],
+        "accessors": b.accessors,
+        "bufferViews": b.views,
+        "buffers": [{"byteLength": len(b.data),
+                     "uri": "data:application/octet-stream;base64,"
+                            + base64.b64encode(bytes(b.data)).decode("ascii")}],
+    }
+
+
+def glb_bytes(doc: dict, binary: bytes) -> bytes:
+    text = json.dumps(doc, separators=(",", ":")).encode("utf-8")
+    text += b" " * (-len(text) % 4)
+    binary += b"\0" * (-len(binary) % 4)
+    length = 12 + 8 + len(text) + 8 + len(binary)
+    return (struct.pack("<III", 0x46546C67, 2, length)
+            + struct.pack("<II", len(text), 0x4E4F534A) + text
+            + struct.pack("<II", len(binary), 0x004E4942) + binary)
+
+
+def main(out: Path = HERE) -> None:
+    for name, pixels in (("checker.png", CHECKER), ("mr.png", MR), ("normal.png", NORMAL)):
+        (out / name).write_bytes(png_bytes(pixels))
+
+    doc, binary = quad_document(embed_images=False)
+    doc["buffers"][0]["uri"] = "textured_quad.bin"
+    (out / "textured_quad.bin").write_bytes(binary)
+    (out / "textured_quad.gltf").write_text(json.dumps(doc, indent=1) + "\n")
+
+    doc, binary = quad_document(embed_images=True)
+    (out / "textured_quad.glb").write_bytes(glb_bytes(doc, binary))
+
+    (out / "two_nodes.gltf").write_text(json.dumps(two_nodes_document(), indent=1) + "\n")
+    (out / "materials.mtl").write_text(MTL)
+    (out / "materials.obj").write_text(OBJ)
+    (out / "pyramid.ply").write_text(PLY)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,98 @@
+"""Test helpers: mesh geometries built from numpy data, and kernels that fire rays at them."""
+import numpy as np
+import taichi as ti
+
+from renderer.geometry.bvh_build import build_bvh
+from renderer.geometry.interface import INF, Ray
+from renderer.geometry.intersect import watertight_setup
+from renderer.geometry.mesh_data import MeshData
+from renderer.geometry.mesh_geometry import MeshGeometry
+
+
+def geometry_from(data: MeshData, strategy="sah", traversal="stack", triangle_test="watertight", leaf=4):
+    lo, hi = data.bounds()
+    bvh = build_bvh(lo, hi, 0.5 * (lo + hi), strategy=strategy, max_leaf_size=leaf)
+    return MeshGeometry(data, bvh, traversal=traversal, triangle_test=triangle_test)
+
+
+def trimesh_data(mesh, material=0) -> MeshData:
+    tris = np.asarray(mesh.vertices, np.float64)[np.asarray(mesh.faces)]
+    return MeshData(tri_vertices=tris.astype(np.float32), tri_material=np.full(len(tris), material, np.int32))
+
+
+@ti.data_oriented
+class RayShooter:
+    """Closest hits (or any-hit flags) of many rays, by the BVH or by brute force."""
+
+    def __init__(self, geometry: MeshGeometry):
+        self.geometry = geometry
+
+    @ti.kernel
+    def _closest(self, o: ti.types.ndarray(), d: ti.types.ndarray(), out_t: ti.types.ndarray(),
+                 out_prim: ti.types.ndarray(), brute: ti.template()):
+        for i in range(o.shape[0]):
+            ray = Ray(o=ti.math.vec3(o[i, 0], o[i, 1], o[i, 2]), d=ti.math.vec3(d[i, 0], d[i, 1], d[i, 2]),
+                      cone_width=0.0, cone_spread=0.0)
+            t = INF
+            prim = -1
+            if ti.static(brute):
+                k, s = watertight_setup(ray.d)
+                for g in range(self.geometry.prim_material.shape[0]):
+                    h, th, b1, b2 = self.geometry._test_prim(g, ray.o, ray.d, k, s, t)
+                    if h == 1:
+                        t = th
+                        prim = g
+            else:
+                hit = self.geometry.intersect(ray, INF)
+                if hit.hit == 1:
+                    t = hit.t
+                    prim = hit.prim
+            out_t[i] = t
+            out_prim[i] = prim
+
+    def closest(self, origins, directions, brute=False):
+        n = len(origins)
+        t = np.zeros(n, np.float32)
+        prim = np.zeros(n, np.int32)
+        self._closest(np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(directions, np.float32),
+                      t, prim, brute)
+        return t, prim
+
+    @ti.kernel
+    def _occluded(self, o: ti.types.ndarray(), d: ti.types.ndarray(), t_max: ti.f32, out: ti.types.ndarray()):
+        for i in range(o.shape[0]):
+            ray = Ray(o=ti.math.vec3(o[i, 0], o[i, 1], o[i, 2]), d=ti.math.vec3(d[i, 0], d[i, 1], d[i, 2]),
+                      cone_width=0.0, cone_spread=0.0)
+            out[i] = 1 if self.geometry.occluded(ray, t_max) else 0
+
+    def occluded(self, origins, directions, t_max=INF):
+        out = np.zeros(len(origins), np.int32)
+        self._occluded(np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(directions, np.float32),
+                       t_max, out)
+        return out
+
+    @ti.kernel
+    def _respawn(self, o: ti.types.ndarray(), d: ti.types.ndarray(), d2: ti.types.ndarray(),
+                 out_prim: ti.types.ndarray(), out_second: ti.types.ndarray(), out_t: ti.types.ndarray()):
+        """Hit, then spawn a ray from the hit point in direction d2 and report what it hits."""
+        for i in range(o.shape[0]):
+            ray = Ray(o=ti.math.vec3(o[i, 0], o[i, 1], o[i, 2]), d=ti.math.vec3(d[i, 0], d[i, 1], d[i, 2]),
+                      cone_width=0.0, cone_spread=0.0)
+            hit = self.geometry.intersect(ray, INF)
+            out_prim[i] = -1
+            out_second[i] = -2
+            if hit.hit == 1:
+                s = self.geometry.surface(ray, hit)
+                out_prim[i] = hit.prim
+                second = self.geometry.intersect(self.geometry.spawn(s, ti.math.vec3(d2[i, 0], d2[i, 1], d2[i, 2])), INF)
+                out_second[i] = second.prim if second.hit == 1 else -1
+                out_t[i] = second.t
+
+    def respawn(self, origins, directions, new_directions):
+        n = len(origins)
+        prim = np.zeros(n, np.int32)
+        second = np.zeros(n, np.int32)
+        t = np.zeros(n, np.float32)
+        self._respawn(np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(directions, np.float32),
+                      np.ascontiguousarray(new_directions, np.float32), prim, second, t)
+        return prim, second, t

@@ -1,0 +1,313 @@
+"""The viewer's state machine without a window: reset rules, adaptive resolution, names."""
+import math
+from datetime import datetime
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from viewer.session import (MIN_SCALE, Controls, Every, RateMeter, ResolutionController, ViewerSession,
+                            fix_max_depth, screenshot_dir, screenshot_paths, screenshot_stem)
+
+FULL = (960, 540)
+PIXELS = FULL[0] * FULL[1]
+
+
+def fake_scene(name="a", position=(0.0, 1.0, 5.0), max_depth=8):
+    camera = SimpleNamespace(position=position, look_at=(0.0, 1.0, 0.0), up=(0.0, 1.0, 0.0), fov=40.0,
+                             aperture=0.0, focus_distance=5.0)
+    return SimpleNamespace(name=name, camera=camera, render=SimpleNamespace(max_depth=max_depth))
+
+
+def make_session(settle=0.1, scenes=("a", "b", "c")):
+    paths = [Path(f"/scenes/{n}.toml") for n in scenes]
+    s = ViewerSession(paths, 0, ["path", "normals"], "path", FULL, target_seconds=0.05, settle_seconds=settle)
+    s.enter_scene(0, fake_scene(scenes[0]))
+    return s
+
+
+# --- resolution controller ----------------------------------------------------------------------
+
+
+def simulate(ctl, seconds_per_pixel, frames, overhead=0.0):
+    """Moving frames whose render time is exactly cost * pixels; returns the sizes chosen."""
+    sizes = []
+    for i in range(frames):
+        size = ctl.moving_size(starting=(i == 0))
+        render = seconds_per_pixel * size[0] * size[1]
+        ctl.record(render, size[0] * size[1], render + overhead)
+        sizes.append(size)
+    return sizes
+
+
+def test_moving_lowers_resolution_to_meet_the_target():
+    ctl = ResolutionController(FULL, target_seconds=0.05)
+    ctl.record(2.0, PIXELS, 2.0)  # a still frame: full resolution took 2 s
+    sizes = simulate(ctl, 2.0 / PIXELS, 20)
+    w, h = sizes[-1]
+    render = 2.0 / PIXELS * w * h
+    assert render == pytest.approx(0.05, rel=0.1)
+    # From the still frame's cost the very first moving frame is already about right.
+    assert 2.0 / PIXELS * sizes[0][0] * sizes[0][1] <= 0.05 * 1.1
+    assert w / h == pytest.approx(FULL[0] / FULL[1], rel=0.05)
+
+
+def test_overhead_outside_rendering_is_taken_from_the_budget():
+    ctl = ResolutionController(FULL, target_seconds=0.05)
+    ctl.record(1.0, PIXELS, 1.0)
+    sizes = simulate(ctl, 1.0 / PIXELS, 40, overhead=0.02)
+    w, h = sizes[-1]
+    assert 1.0 / PIXELS * w * h + 0.02 == pytest.approx(0.05, rel=0.1)
+
+
+def test_cheap_render_goes_back_up_to_full_resolution_smoothly():
+    ctl = ResolutionController(FULL, target_seconds=0.05)
+    ctl.record(50.0, PIXELS)  # expensive: drops to the floor
+    assert ctl.moving_size(starting=True) == ctl.size_for(MIN_SCALE)
+    # Now it is cheap (say a debug view): the scale rises by a fraction per frame, no jump.
+    sizes = simulate(ctl, 1e-9, 30)[1:]
+    widths = [w for w, _ in sizes]
+    assert widths == sorted(widths)
+    assert widths[0] < FULL[0]
+    assert sizes[-1] == FULL
+
+
+def test_scale_is_clamped_to_one_sixteenth():
+    ctl = ResolutionController(FULL, target_seconds=0.05)
+    ctl.record(1000.0, PIXELS)
+    w, h = ctl.moving_size(starting=True)
+    assert (w, h) == (60, 34)  # 960/16, 540/16 rounded
+    tiny = ResolutionController((20, 10), target_seconds=0.05)
+    tiny.record(1000.0, 200)
+    assert tiny.moving_size(starting=True) == (1, 1)
+
+
+def test_costs_are_kept_per_context():
+    ctl = ResolutionController(FULL, target_seconds=0.05)
+    ctl.set_context("path")
+    ctl.record(2.0, PIXELS)
+    ctl.set_context("normals")
+    assert ctl.cost is None
+    ctl.record(0.01, PIXELS)
+    ctl.set_context("path")
+    assert ctl.cost == pytest.approx(2.0 / PIXELS)
+
+
+def test_still_spp_fills_the_budget():
+    ctl = ResolutionController(FULL, target_seconds=0.05)
+    assert ctl.still_spp() == 1  # nothing measured
+    ctl.record(0.005, PIXELS)  # 5 ms per full-resolution sample
+    assert ctl.still_spp() == 10
+    ctl.record(10.0, PIXELS * 1000)  # noise in the measurements never gives 0
+    assert ctl.still_spp() >= 1
+    ctl2 = ResolutionController(FULL, target_seconds=0.05, max_spp=4)
+    ctl2.record(1e-6, PIXELS)
+    assert ctl2.still_spp() == 4
+
+
+def test_bad_measurements_are_ignored():
+    ctl = ResolutionController(FULL)
+    for render, pixels in ((0.0, 100), (1.0, 0), (math.inf, 100), (math.nan, 100)):
+        ctl.record(render, pixels)
+    assert ctl.cost is None
+
+
+# --- reset rules --------------------------------------------------------------------------------
+
+
+def test_idle_frames_do_not_reset():
+    s = make_session()
+    first = s.plan_frame(0.0)
+    assert first.reset and first.size == FULL and not first.interactive
+    for i in range(1, 50):
+        s.update_camera(1 / 30, set(), (100.0, 100.0 + i), False)  # cursor moves, no button
+        plan = s.plan_frame(i / 30)
+        assert not plan.reset
+        assert plan.size == FULL
+    assert s.resets == 1
+
+
+def test_camera_motion_resets_at_reduced_resolution_then_full_once_still():
+    s = make_session(settle=0.1)
+    s.plan_frame(0.0)
+    s.resolution.record(2.0, PIXELS)
+    t = 0.0
+    for _ in range(5):
+        t += 0.05
+        assert s.update_camera(0.05, {"w"}, None, False)
+        plan = s.plan_frame(t)
+        assert plan.reset and plan.interactive
+        assert plan.size[0] < FULL[0]
+    # Still, but within the settle time: keeps accumulating at the reduced size.
+    t += 0.05
+    assert not s.update_camera(0.05, set(), None, False)
+    plan = s.plan_frame(t)
+    assert not plan.reset and plan.interactive
+    # Settled: one reset at full resolution, then accumulation.
+    t += 0.1
+    plan = s.plan_frame(t)
+    assert plan.reset and plan.size == FULL and not plan.interactive
+    t += 0.1
+    assert not s.plan_frame(t).reset
+
+
+def test_drag_rotates_and_resets():
+    s = make_session(settle=0.0)
+    s.plan_frame(0.0)
+    s.update_camera(0.03, set(), (100.0, 100.0), True)  # the first drag frame only records
+    assert not s.plan_frame(0.03).reset
+    assert s.update_camera(0.03, set(), (140.0, 100.0), True)
+    assert s.plan_frame(0.06).reset
+    assert s.plan_frame(0.09).reset  # settle 0: the next still frame returns to full size
+    assert not s.plan_frame(0.12).reset
+
+
+@pytest.mark.parametrize("change", [
+    lambda s: s.set_integrator("normals"),
+    lambda s: s.next_integrator(),
+    lambda s: s.cycle_scene(+1, lambda p: fake_scene(p.stem)),
+    lambda s: s.apply_controls(Controls(0.0, "aces", 3, 40.0, 0.0, 5.0)),  # max depth
+    lambda s: s.apply_controls(Controls(0.0, "aces", 8, 60.0, 0.0, 5.0)),  # field of view
+    lambda s: s.apply_controls(Controls(0.0, "aces", 8, 40.0, 0.1, 5.0)),  # aperture
+    lambda s: s.apply_controls(Controls(0.0, "aces", 8, 40.0, 0.0, 2.0)),  # focus distance
+    lambda s: s.set_focus_distance(1.5),
+    lambda s: s.reset_camera(),
+])
+def test_settings_scene_and_integrator_changes_reset(change):
+    s = make_session(settle=0.0)
+    s.apply_controls(Controls(0.0, "aces", 8, 40.0, 0.0, 5.0))
+    s.plan_frame(0.0)
+    assert not s.plan_frame(0.1).reset
+    change(s)
+    assert s.plan_frame(0.2).reset
+
+
+@pytest.mark.parametrize("controls", [
+    Controls(2.5, "aces", 8, 40.0, 0.0, 5.0),
+    Controls(0.0, "reinhard", 8, 40.0, 0.0, 5.0),
+    Controls(0.0, "aces", 8, 40.0, 0.0, 5.0),
+])
+def test_display_settings_do_not_reset(controls):
+    s = make_session(settle=0.0)
+    s.apply_controls(Controls(0.0, "aces", 8, 40.0, 0.0, 5.0))
+    s.plan_frame(0.0)
+    assert not s.apply_controls(controls)
+    assert not s.plan_frame(0.1).reset
+    assert s.exposure == controls.exposure and s.tonemapper == controls.tonemapper
+
+
+def test_switching_to_the_same_integrator_is_no_change():
+    s = make_session()
+    s.plan_frame(0.0)
+    assert not s.set_integrator("path")
+    assert not s.plan_frame(1.0).reset
+    with pytest.raises(ValueError):
+        s.set_integrator("nonsense")
+
+
+def test_max_depth_slider_steps_over_zero():
+    assert fix_max_depth(0, -1) == 1
+    assert fix_max_depth(0, 1) == -1
+    assert fix_max_depth(5, 4) == 5
+    assert fix_max_depth(-7, 4) == -1
+
+
+def test_debug_integrator_tonemapper_wins():
+    s = make_session()
+    assert s.display_tonemapper(None) == "aces"
+    assert s.display_tonemapper("none") == "none"
+    assert s.cycle_tonemapper(["aces", "reinhard", "none"]) == "reinhard"
+
+
+# --- scenes -------------------------------------------------------------------------------------
+
+
+def test_cycle_scene_wraps_and_goes_back():
+    s = make_session()
+    load = lambda p: fake_scene(p.stem)
+    assert s.cycle_scene(+1, load).name == "b"
+    assert s.cycle_scene(+1, load).name == "c"
+    assert s.cycle_scene(+1, load).name == "a"
+    assert s.cycle_scene(-1, load).name == "c"
+    assert s.error is None
+
+
+def test_unreadable_scene_is_skipped_with_a_one_line_error():
+    s = make_session()
+
+    def load(path):
+        if path.stem == "b":
+            raise ValueError("b.toml: line 3: expected '='\nmore detail")
+        return fake_scene(path.stem)
+
+    assert s.cycle_scene(+1, load).name == "c"
+    assert s.scene_path.stem == "c"
+    assert "skipped b.toml" in s.error and "\n" not in s.error
+    assert s.cycle_scene(+1, load).name == "a"
+    assert s.error is None  # nothing was skipped this time
+
+
+def test_no_loadable_scene_keeps_the_current_one():
+    s = make_session()
+    s.plan_frame(0.0)
+
+    def load(path):
+        raise OSError("unreadable")
+
+    assert s.cycle_scene(+1, load) is None
+    assert s.scene_path.stem == "a"
+    assert s.error.count("skipped") == 3
+
+
+def test_scene_camera_is_remembered():
+    s = make_session()
+    load = lambda p: fake_scene(p.stem)
+    s.update_camera(0.1, {"w"}, None, False)
+    moved = s.controller.state
+    s.cycle_scene(+1, load)
+    assert s.controller.state != moved
+    s.cycle_scene(-1, load)
+    assert s.controller.state == moved
+
+
+def test_move_speed_scales_with_the_scene():
+    s = make_session()
+    near = s.controller.move_speed
+    s.enter_scene(1, fake_scene("b", position=(0.0, 1.0, 50.0)))
+    assert s.controller.move_speed == pytest.approx(10 * near)
+
+
+# --- helpers ------------------------------------------------------------------------------------
+
+
+def test_screenshot_names(tmp_path):
+    when = datetime(2026, 11, 22, 1, 2, 3)
+    assert screenshot_stem("showcase", "path", 128, when) == "showcase_path_0128spp_20261122-010203"
+    png, exr = screenshot_paths(tmp_path, "showcase", "path", 128, when)
+    assert png == tmp_path / "showcase_path_0128spp_20261122-010203.png"
+    assert exr == tmp_path / "showcase_path_0128spp_20261122-010203.exr"
+    png.write_bytes(b"x")  # taken within the same second: no overwrite
+    png2, exr2 = screenshot_paths(tmp_path, "showcase", "path", 128, when)
+    assert png2.name == "showcase_path_0128spp_20261122-010203-2.png" and exr2.suffix == ".exr"
+    assert screenshot_stem("my scene/x", "path", 5, when).startswith("my-scene-x_path_0005spp")
+
+
+def test_screenshot_dir_setting(tmp_path, monkeypatch):
+    monkeypatch.delenv("LANTERN_SCREENSHOT_DIR", raising=False)
+    assert screenshot_dir().name == "screenshots"
+    monkeypatch.setenv("LANTERN_SCREENSHOT_DIR", str(tmp_path))
+    assert screenshot_dir() == tmp_path
+    assert screenshot_dir(tmp_path / "x") == tmp_path / "x"
+
+
+def test_every_limits_the_rate():
+    every = Every(0.25)
+    calls = [t / 100 for t in range(100)]  # 1 s at 100 fps
+    assert sum(every(t) for t in calls) == 4
+
+
+def test_rate_meter():
+    meter = RateMeter(window=1.0)
+    for i in range(61):
+        meter.add(i / 30, 1000)
+    assert meter.rate() == pytest.approx(30_000, rel=0.05)

@@ -1,0 +1,227 @@
+"""The viewer's frame loop on an off-screen GGUI window (show_window=False), with synthetic input.
+
+One ViewerApp serves the whole module: the first render of a scene compiles for seconds, so each
+scene and integrator compiles once here. Frames go through `ViewerApp.step()`, exactly what the
+real loop runs, with `FrameInput`s made up instead of GGUI events.
+"""
+import re
+
+import numpy as np
+import pytest
+
+from renderer.image_io import read_exr
+from renderer.integrators import INTEGRATORS
+from renderer.scene import load_scene
+from renderer.scene.catalog import resolve_scene, scene_files
+from renderer.tonemap import tonemap_array
+from viewer import hud
+from viewer.window import FrameInput, ViewerApp, display_level_for, display_level_sizes, window_buffer_to_image
+
+SIZE = (128, 72)
+# A frame counts as "not blank" above this standard deviation of its 8-bit pixel values. A
+# constant image (black canvas, failed upload, all-sky miss) has 0; the scenes' objects against
+# floor and sky put the deviation in the tens, and Monte Carlo noise alone at a few spp on a
+# uniform surface stays well below 10 after tone mapping.
+MIN_PIXEL_STD = 10.0
+SDF_SCENES = [p for p in scene_files() if load_scene(p).geometry == "sdf"]
+
+
+@pytest.fixture(scope="module")
+def app(tmp_path_factory):
+    viewer = ViewerApp(resolve_scene("showcase"), size=SIZE, show_window=False,
+                       screenshot_folder=tmp_path_factory.mktemp("shots"), settle_seconds=0.0)
+    yield viewer
+
+
+def settle(app, frames=3):
+    """Render until a scene's kernels are compiled and a few still frames accumulated."""
+    for _ in range(frames + 1):  # the first may only show the 'compiling...' notice
+        app.step()
+    while app.compiling:
+        app.step()
+
+
+def expected_display(app):
+    s = app.session
+    mapper = s.display_tonemapper(INTEGRATORS[s.integrator].display_tonemapper)
+    return tonemap_array(app.renderer.image(), s.exposure, mapper)
+
+
+@pytest.mark.parametrize("path", SDF_SCENES, ids=[p.stem for p in SDF_SCENES])
+def test_each_scene_shows_the_film(app, path):
+    app.select_scene(path)
+    app.session.set_integrator("path")
+    app.session.hud_visible = False
+    settle(app)
+    assert app.renderer.scene.path.resolve() == path.resolve()
+    assert (app.renderer.film.width, app.renderer.film.height) == SIZE
+    shown = window_buffer_to_image(app.last_frame)
+    assert shown.shape == (SIZE[1], SIZE[0], 3)
+    assert shown.std() > MIN_PIXEL_STD
+    # The canvas shows exactly the tone-mapped film (8-bit rounding apart), upright.
+    difference = np.abs(shown.astype(int) - expected_display(app).astype(int))
+    assert difference.max() <= 1
+
+
+def test_hud_is_drawn_over_the_image(app):
+    app.select_scene(resolve_scene("showcase"))
+    app.session.hud_visible = True
+    settle(app, 2)
+    shown = window_buffer_to_image(app.last_frame).astype(int)
+    expected = expected_display(app).astype(int)
+    rect = hud.hud_rect(SIZE)
+    x1, y1 = int(rect.x * SIZE[0]) + 1, int(rect.y * SIZE[1]) + 1
+    inside = np.abs(shown[y1:y1 + 10, x1:x1 + 20] - expected[y1:y1 + 10, x1:x1 + 20])
+    assert (inside > 2).mean() > 0.5  # the panel covers its corner of the image
+    assert np.abs(shown[-3:, -3:] - expected[-3:, -3:]).max() <= 1  # and not the opposite one
+    app.step(FrameInput(pressed=("h",)))
+    assert not app.session.hud_visible
+
+
+def test_idle_frames_accumulate_without_reset(app):
+    settle(app, 1)
+    resets, spp = app.session.resets, app.renderer.samples_done
+    for _ in range(3):
+        app.step(FrameInput(cursor=(0.5, 0.5)))  # a cursor without a button is no motion
+    assert app.session.resets == resets
+    assert app.renderer.samples_done > spp
+    assert app.renderer.film.stats()["min_spp"] == app.renderer.samples_done
+
+
+def test_movement_lowers_the_resolution_then_returns_to_full(app):
+    settle(app, 1)
+    resolution = app.session.resolution
+    target = resolution.target_seconds
+    resolution.target_seconds = 1e-4  # nothing renders this fast: forces the smallest size
+    try:
+        position = app.session.controller.state.position
+        for _ in range(3):
+            app.step(FrameInput(held=frozenset({"w"})))
+            assert app.last_plan.interactive and app.last_plan.reset
+        assert app.session.controller.state.position != position
+        film = app.renderer.film
+        assert (film.width, film.height) == resolution.size_for(1 / 16) == (8, 4)
+        # The canvas got the smallest display field that holds the reduced image.
+        assert app.shown.shape == display_level_sizes(SIZE)[display_level_for(display_level_sizes(SIZE), (8, 4))]
+        assert app.shown.shape[0] < SIZE[0]
+        # Dragging with the right button looks around, also at the reduced size.
+        yaw = app.session.controller.state.yaw
+        app.step(FrameInput(cursor=(0.5, 0.5), buttons=frozenset({"RMB"})))
+        app.step(FrameInput(cursor=(0.6, 0.5), buttons=frozenset({"RMB"})))
+        assert app.session.controller.state.yaw < yaw  # dragged right: turned right
+        assert film.width < SIZE[0]
+    finally:
+        resolution.target_seconds = target
+    app.step(FrameInput(cursor=(0.6, 0.5)))  # still (settle time 0 here): full size, reset
+    assert (film.width, film.height) == SIZE and app.last_plan.reset
+    assert app.shown is app.display
+    app.step()
+    assert not app.last_plan.reset and app.renderer.samples_done >= 2
+
+
+def test_left_drag_on_the_hud_does_not_turn_the_camera(app):
+    settle(app, 1)
+    app.session.hud_visible = True
+    rect = hud.hud_rect(SIZE)
+    inside = (rect.x + rect.width / 2, 1.0 - (rect.y + rect.height / 2))  # GGUI y is up
+    state = app.session.controller.state
+    app.step(FrameInput(cursor=inside, buttons=frozenset({"LMB"})))
+    app.step(FrameInput(cursor=(inside[0] + 0.05, inside[1]), buttons=frozenset({"LMB"})))
+    assert app.session.controller.state == state
+    app.step(FrameInput(cursor=(0.9, 0.2)))  # released
+    app.step(FrameInput(cursor=(0.9, 0.2), buttons=frozenset({"LMB"})))
+    app.step(FrameInput(cursor=(0.95, 0.2), buttons=frozenset({"LMB"})))
+    assert app.session.controller.state.yaw != state.yaw
+    app.step(FrameInput(cursor=(0.95, 0.2)))
+
+
+def test_screenshot_writes_png_and_exr(app, tmp_path):
+    app.screenshot_folder = tmp_path
+    app.session.hud_visible = True  # the HUD is not part of the screenshot
+    settle(app, 2)
+    app.step(FrameInput(pressed=("p",)))
+    s = app.session
+    pngs = sorted(tmp_path.glob("*.png"))
+    exrs = sorted(tmp_path.glob("*.exr"))
+    assert len(pngs) == len(exrs) == 1
+    match = re.fullmatch(r"showcase_(\w+)_(\d{4})spp_\d{8}-\d{6}", pngs[0].stem)
+    assert match and match.group(1) == s.integrator and exrs[0].stem == pngs[0].stem
+    import imageio.v3 as iio
+
+    png = iio.imread(pngs[0])
+    linear = read_exr(exrs[0])
+    assert png.shape == (SIZE[1], SIZE[0], 3) and linear.shape == png.shape
+    assert png.std() > MIN_PIXEL_STD
+    # The PNG is the EXR tone-mapped the way the display does it.
+    mapper = s.display_tonemapper(INTEGRATORS[s.integrator].display_tonemapper)
+    assert np.abs(png.astype(int) - tonemap_array(linear, s.exposure, mapper).astype(int)).max() <= 1
+    assert int(match.group(2)) >= 1
+
+
+def test_exposure_changes_display_not_accumulation(app):
+    settle(app, 1)
+    app.session.hud_visible = False
+    resets = app.session.resets
+    app.session.exposure = 2.0
+    try:
+        app.step()
+        assert app.session.resets == resets
+        bright = window_buffer_to_image(app.last_frame)
+        assert np.abs(bright.astype(int) - expected_display(app).astype(int)).max() <= 1
+    finally:
+        app.session.exposure = 0.0
+
+
+def test_integrator_switch_shows_a_notice_then_renders(app):
+    settle(app, 1)
+    app.session.hud_visible = False
+    spp = app.renderer.samples_done
+    app.step(FrameInput(pressed=("i",)))
+    name = app.session.integrator
+    assert name != "path"
+    if app.compiling:  # not compiled yet in this process: this frame only showed the notice
+        assert name in app.compiling
+        assert app.renderer.samples_done == spp  # nothing rendered (or reset) on that frame
+        app.step()
+        assert app.compiling is None
+    assert app.last_plan.reset and app.renderer.samples_done == app.last_plan.spp
+    settle(app, 1)
+    shown = window_buffer_to_image(app.last_frame)
+    assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1
+    assert shown.std() > MIN_PIXEL_STD
+    app.session.set_integrator("path")
+
+
+def test_focus_at_cursor(app):
+    settle(app, 1)
+    before = app.session.controller.state.focus_distance
+    resets = app.session.resets
+    app.step(FrameInput(pressed=("f",), cursor=(0.5, 0.25)))  # the floor, below the centre
+    if (app.session.error or "").startswith("focus failed"):
+        pytest.xfail(f"the renderer's focus probe failed: {app.session.error}")
+    after = app.session.controller.state.focus_distance
+    assert after != before and 0.1 < after < 20.0
+    assert app.session.resets == resets + 1
+
+
+def test_unreadable_scene_is_skipped(app, tmp_path):
+    bad = tmp_path / "broken.toml"
+    bad.write_text("[scene\nname = ")
+    s = app.session
+    saved = list(s.scenes)
+    s.scenes[:] = [s.scene_path, bad]
+    try:
+        app.step(FrameInput(pressed=("n",)))
+        assert s.scene_path == saved[saved.index(s.scene_path)] and s.scene_path != bad
+        assert "skipped broken.toml" in s.error
+        app.step()  # the HUD shows the error line; the loop goes on
+    finally:
+        s.scenes[:] = saved
+        s.error = None
+
+
+def test_quit_key_ends_the_loop(app):
+    assert app.step(FrameInput(pressed=("Escape",))) is False
+    assert not app.running
+    app.running = True
+    assert app.run(max_frames=app.frames + 2) == 0  # headless: bounded by frames
