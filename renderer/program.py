@@ -42,10 +42,11 @@ class RenderProgram:
               forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32,
               out: ti.template()):
         """Distance along `forward` to the surface under (u, v) in [0,1]^2 (y up); -1 on a miss."""
-        aspect = width / height
-        d = ti.math.normalize(forward + (2.0 * u - 1.0) * tan_half_fov * aspect * right
-                              + (2.0 * v - 1.0) * tan_half_fov * up)
-        ray = generate_ray(0, 0, 1, 1, ti.u32(0), origin, forward, right, up, tan_half_fov, 0.0, 1.0, False)
-        ray.d = d
-        hit = self.geometry.intersect(ray, INF)
-        out[None] = hit.t * d.dot(forward) if hit.hit == 1 else -1.0
+        for _ in range(1):  # a parallel loop of one: the march's `break` may not sit in the outermost scope
+            aspect = width / height
+            d = ti.math.normalize(forward + (2.0 * u - 1.0) * tan_half_fov * aspect * right
+                                  + (2.0 * v - 1.0) * tan_half_fov * up)
+            ray = generate_ray(0, 0, 1, 1, ti.u32(0), origin, forward, right, up, tan_half_fov, 0.0, 1.0, False)
+            ray.d = d
+            hit = self.geometry.intersect(ray, INF)
+            out[None] = hit.t * d.dot(forward) if hit.hit == 1 else -1.0

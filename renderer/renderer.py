@@ -4,6 +4,8 @@ It is what the viewer, the command line and the benchmarks drive; it knows nothi
 """
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
+
 import numpy as np
 import taichi as ti
 
@@ -13,27 +15,54 @@ from renderer.image_io import read_environment
 from renderer.integrators import make_integrator
 from renderer.lights.environment import Environment
 from renderer.materials.bsdf import MaterialTable
+from renderer.materials.texture_sampler import TextureTable
 from renderer.program import RenderProgram
-from renderer.scene.features import Features, scene_features
+from renderer.scene.features import Features, features_from, scene_features
 from renderer.scene.model import Scene
 
 
-def make_geometry(scene: Scene):
+@dataclass(frozen=True)
+class MeshOptions:
+    """Compile-time and build-time choices of the mesh world (benchmarked knobs)."""
+
+    strategy: str = "sah"
+    traversal: str = "stack"
+    triangle_test: str = "watertight"
+    max_leaf_size: int = 4
+
+
+def build_world(scene: Scene, mesh_options: MeshOptions):
+    """(geometry, material table, Features with the scene camera's lens) for any scene kind."""
     if scene.geometry == "sdf":
         from shaders_sdf.geometry import SdfGeometry
 
-        return SdfGeometry(scene, scene.material_index)
+        return (SdfGeometry(scene, scene.material_index), MaterialTable.from_specs(scene.materials),
+                scene_features(scene))
+    if scene.geometry == "mesh":
+        from renderer.geometry.bvh_build import build_bvh
+        from renderer.geometry.mesh_geometry import MeshGeometry
+        from renderer.scene.mesh_assembly import assemble
+
+        mesh = assemble(scene)
+        lo, hi = mesh.data.bounds()
+        bvh = build_bvh(lo, hi, 0.5 * (lo + hi), strategy=mesh_options.strategy,
+                        max_leaf_size=mesh_options.max_leaf_size)
+        geometry = MeshGeometry(mesh.data, bvh, mesh_options.traversal, mesh_options.triangle_test)
+        materials = MaterialTable(mesh.rows, TextureTable(mesh.atlas, mesh.texture_slots))
+        features = features_from("mesh", mesh.material_uses(), scene.environment.kind, scene.camera.aperture,
+                                 mesh_kinds=mesh.data.kinds())
+        return geometry, materials, features
     raise ValueError(f"unknown geometry kind '{scene.geometry}'")
 
 
 class Renderer:
-    def __init__(self, scene: Scene, max_size: tuple[int, int] | None = None):
+    def __init__(self, scene: Scene, max_size: tuple[int, int] | None = None,
+                 mesh_options: MeshOptions = MeshOptions()):
         self.scene = scene
         width, height = max_size or (scene.render.width, scene.render.height)
         image = read_environment(scene.environment.file) if scene.environment.kind == "map" else None
         self.environment = Environment(scene.environment, image)
-        self.materials = MaterialTable(scene.materials)
-        self.geometry = make_geometry(scene)
+        self.geometry, self.materials, self._features = build_world(scene, mesh_options)
         self.film = Film(width, height)
         self.work = ti.Vector.field(2, ti.f32, shape=(width, height))
         self._probe_out = ti.field(ti.f32, shape=())
@@ -44,7 +73,10 @@ class Renderer:
 
     # --- programs ------------------------------------------------------------------------------
     def features(self, camera: CameraFrame | None = None) -> Features:
-        return scene_features(self.scene, aperture=None if camera is None else camera.aperture)
+        """The scene's Features, with the lens model of `camera` (the viewer's aperture slider)."""
+        if camera is None:
+            return self._features
+        return replace(self._features, depth_of_field=camera.aperture > 0.0)
 
     def program(self, integrator: str, features: Features) -> RenderProgram:
         key = (integrator, features)

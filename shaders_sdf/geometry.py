@@ -121,7 +121,8 @@ class SdfGeometry:
         if c < MIN_FACING_COSINE:
             n = ti.math.normalize(n + (MIN_FACING_COSINE - c) * along)
         material = ti.cast(self.program.distance_material(p).y, ti.i32)
-        return Surface(p=p, n_geo=n, n_shading=n, uv=ti.math.vec2(0.0), material=material,
+        return Surface(p=p, n_geo=n, n_shading=n, uv=ti.math.vec2(0.0), uv1=ti.math.vec2(0.0),
+                       tangent=ti.math.vec4(0.0), material=material,
                        front_face=1 - hit.inside, eps=eps, cone_width=width, cone_spread=ray.cone_spread)
 
     @ti.func

@@ -13,6 +13,9 @@ class Hotkey:
 
 
 MAX_INTEGRATOR_KEYS = 9  # digit keys '1'..'9'
+# Taichi 1.7's window reports letters, Escape, Tab, Space, Return, BackSpace, arrows and
+# modifiers only: digits and punctuation never arrive. Every action therefore has a key from that
+# set; digits and punctuation stay as aliases for back-ends that do deliver them.
 
 MOVEMENT_KEYS: tuple[Hotkey, ...] = (
     Hotkey("w", None, "move forward (held)"),
@@ -25,24 +28,32 @@ MOVEMENT_KEYS: tuple[Hotkey, ...] = (
 )
 
 
-def build_hotkeys(integrator_names: list[str]) -> list[Hotkey]:
-    """Action hotkeys; digit k selects ``integrator_names[k - 1]`` (first nine only)."""
+def build_hotkeys(integrator_names: list[str], integrator_letters: dict[str, str] | None = None) -> list[Hotkey]:
+    """Action hotkeys. Integrator k is selected by its letter (``integrator_letters[name]``) and by
+    digit k (first nine only)."""
     keys = [
         Hotkey("n", "next_scene", "next scene"),
         Hotkey("b", "prev_scene", "previous scene"),
         Hotkey("i", "next_integrator", "next integrator"),
     ]
-    for digit, name in enumerate(integrator_names[:MAX_INTEGRATOR_KEYS], start=1):
-        keys.append(Hotkey(str(digit), f"integrator:{name}", f"integrator: {name}"))
+    letters = integrator_letters or {}
+    for digit, name in enumerate(integrator_names, start=1):
+        if name in letters:
+            keys.append(Hotkey(letters[name], f"integrator:{name}", f"integrator: {name}"))
+        if digit <= MAX_INTEGRATOR_KEYS:
+            keys.append(Hotkey(str(digit), f"integrator:{name}", f"integrator: {name}"))
     keys += [
-        Hotkey("r", "reset", "reset camera and accumulation"),
+        Hotkey("r", "reset", "reset the accumulation"),
         Hotkey("p", "screenshot", "save screenshot"),
         Hotkey("f", "focus_at_cursor", "focus at the cursor"),
         Hotkey("h", "toggle_hud", "toggle HUD"),
+        Hotkey("tab", "help", "toggle this help"),
         Hotkey("/", "help", "toggle this help"),
         Hotkey("f1", "help", "toggle this help"),
+        Hotkey("up", "speed_up", "faster movement"),
         Hotkey("=", "speed_up", "faster movement"),
         Hotkey("+", "speed_up", "faster movement"),
+        Hotkey("down", "speed_down", "slower movement"),
         Hotkey("-", "speed_down", "slower movement"),
         Hotkey("escape", "quit", "quit"),
     ]
@@ -52,8 +63,8 @@ def build_hotkeys(integrator_names: list[str]) -> list[Hotkey]:
 class KeyMap:
     """Lookup and help text for the key map built from ``integrator_names``."""
 
-    def __init__(self, integrator_names: list[str] = ()):
-        self.hotkeys = build_hotkeys(list(integrator_names))
+    def __init__(self, integrator_names: list[str] = (), integrator_letters: dict[str, str] | None = None):
+        self.hotkeys = build_hotkeys(list(integrator_names), integrator_letters)
         self._actions = {h.key: h.action for h in self.hotkeys}
         if len(self._actions) != len(self.hotkeys):
             raise ValueError("a key is bound to more than one action")

@@ -13,6 +13,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from viewer.controller import MIN_SPEED
 from viewer.session import Controls
 
 HUD_WIDTH_PX = 360
@@ -33,6 +34,7 @@ FOV_RANGE = (5.0, 120.0)  # degrees
 APERTURE_PER_SCALE = 0.1  # largest lens radius, as a fraction of the scene scale
 FOCUS_PER_SCALE = 4.0  # farthest focus, as a multiple of the scene scale
 MIN_FOCUS = 0.01  # metres; CameraState needs a positive focus distance
+SPEED_PER_SCALE = 5.0  # fastest move speed on the slider, scene scales per second
 
 
 @dataclass(frozen=True)
@@ -86,7 +88,6 @@ class HudStats:
     noise: Optional[float] = None  # relative standard error (RMS over pixels), None = not yet
     rejected: int = 0
     work_per_ray: Optional[float] = None
-    speed: float = 0.0  # m/s
 
 
 def format_rate(per_second: float) -> str:
@@ -122,7 +123,6 @@ def hud_lines(s: HudStats) -> list[str]:
         f"noise {format_noise(s.noise)}",
         f"non-finite dropped {s.rejected}",
         f"march steps/ray {work}",
-        f"move speed {s.speed:.2g} m/s",
     ]
 
 
@@ -168,6 +168,9 @@ def draw_hud(gui, window_size: tuple[int, int], stats: HudStats, controls: Contr
         aperture = _slider_float(g, "aperture (m)", controls.aperture, 0.0, APERTURE_PER_SCALE * scale)
         focus = _slider_float(g, "focus (m)", controls.focus_distance, MIN_FOCUS, FOCUS_PER_SCALE * scale)
         focus = max(focus, MIN_FOCUS)
+        speed = controls.move_speed
+        if speed is not None:
+            speed = _slider_float(g, "move speed (m/s)", speed, MIN_SPEED, SPEED_PER_SCALE * scale)
         for label, action in ((f"integrator: {stats.integrator}  [i]", "next_integrator"),
                               ("next scene  [n]", "next_scene"),
                               ("reset view  [r]", "reset"),
@@ -176,7 +179,8 @@ def draw_hud(gui, window_size: tuple[int, int], stats: HudStats, controls: Contr
             if g.button(label):
                 actions.append(action)
         _text(g, "max depth -1: no limit.  h hides this panel")
-    edited = replace(controls, exposure=exposure, max_depth=depth, fov=fov, aperture=aperture, focus_distance=focus)
+    edited = replace(controls, exposure=exposure, max_depth=depth, fov=fov, aperture=aperture, focus_distance=focus,
+                     move_speed=speed)
     return edited, actions
 
 

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Callable, Hashable, Iterable, Optional
 
 from viewer.camera_state import CameraState
-from viewer.controller import FreeLookController
+from viewer.controller import MAX_SPEED, MIN_SPEED, FreeLookController
 
 ROOT = Path(__file__).resolve().parents[1]
 SCREENSHOT_ENV = "LANTERN_SCREENSHOT_DIR"
@@ -150,6 +150,7 @@ class Controls:
     fov: float  # degrees
     aperture: float  # lens radius, metres
     focus_distance: float  # metres
+    move_speed: Optional[float] = None  # m/s; None leaves it alone. Not a change of the image
 
 
 @dataclass(frozen=True)
@@ -280,7 +281,8 @@ class ViewerSession:
     # -- settings ------------------------------------------------------------------------------
     def controls(self) -> Controls:
         s = self.controller.state
-        return Controls(self.exposure, self.tonemapper, self.max_depth, s.fov, s.aperture, s.focus_distance)
+        return Controls(self.exposure, self.tonemapper, self.max_depth, s.fov, s.aperture, s.focus_distance,
+                        self.controller.move_speed)
 
     def apply_controls(self, new: Controls) -> bool:
         """Take the HUD's values; True if the accumulation must restart.
@@ -290,6 +292,8 @@ class ViewerSession:
         """
         self.exposure = float(new.exposure)
         self.tonemapper = new.tonemapper
+        if new.move_speed is not None and new.move_speed != self.controller.move_speed:
+            self.controller.move_speed = min(max(float(new.move_speed), MIN_SPEED), MAX_SPEED)
         changed = False
         depth = fix_max_depth(new.max_depth, self.max_depth)
         if depth != self.max_depth:

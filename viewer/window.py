@@ -126,7 +126,7 @@ class ViewerApp:
         self.show_window = show_window
         self.clock = clock
         self.screenshot_folder = screenshot_dir(screenshot_folder)
-        self.keymap = KeyMap(integrator_names())
+        self.keymap = KeyMap(integrator_names(), {name: cls.hotkey for name, cls in INTEGRATORS.items()})
         self.renderers: dict[Path, Renderer] = {}
 
         path = Path(scene_path).resolve()
@@ -376,7 +376,7 @@ class ViewerApp:
             internal_size=(r.film.width, r.film.height), window_size=self.size,
             interactive=bool(self.last_plan and self.last_plan.interactive),
             noise=self._stats["noise"], rejected=self._stats["rejected"],
-            work_per_ray=self._stats["work_per_ray"], speed=s.controller.move_speed)
+            work_per_ray=self._stats["work_per_ray"])
 
     def _present(self, now: float) -> None:
         s = self.session

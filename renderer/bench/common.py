@@ -302,11 +302,12 @@ def verdict(ok: bool) -> str:
 
 
 def time_interleaved(calls: dict, runs: int = 3, warmup: int = 1,
-                     clock: Callable[[], float] = time.perf_counter) -> dict:
+                     clock: Callable[[], float] = time.perf_counter, after: Callable | None = None) -> dict:
     """Time several calls round-robin (a, b, c, a, b, c, ...) so slow drifts of the machine
     (other processes, clock changes) spread over all of them instead of biasing one.
 
-    Returns {name: Timing}. Each call is warmed up `warmup` times first.
+    Returns {name: Timing}. Each call is warmed up `warmup` times first. `after(name)`, if given,
+    runs untimed after each timed call (e.g. to read back a result).
     """
     if runs < 1:
         raise ValueError("runs must be at least 1")
@@ -322,4 +323,6 @@ def time_interleaved(calls: dict, runs: int = 3, warmup: int = 1,
             t0 = clock()
             fn()
             times[name].append(clock() - t0)
+            if after is not None:
+                after(name)
     return {name: Timing(times[name], warm[name]) for name in calls}

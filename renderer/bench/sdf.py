@@ -65,13 +65,13 @@ GEOMETRY_INTEGRATOR = "normals"
 @dataclass(frozen=True)
 class SdfBenchConfig:
     size: tuple[int, int] = (240, 135)
-    ref_spp: int = 512  # path reference
+    ref_spp: int = 256  # path reference
     ref_chunk: int = 32  # spp per kernel launch while rendering the reference
-    compare_spp: int = 16  # path spp per omega, equal-spp comparison
-    geometry_spp: int = 16  # normals spp (test images and geometric reference)
+    compare_spp: int = 8  # path spp per omega, equal-spp comparison
+    geometry_spp: int = 8  # normals spp (test images and geometric reference)
     runs: int = 3  # timed runs (median), round-robin over the settings, after one warm-up
-    sweep_rate_spp: int = 4  # path spp per timed run when measuring a sweep setting's samples/s
-    sweep_seconds: float = 3.0  # path time budget per sweep setting
+    sweep_rate_spp: int = 2  # path spp per timed run when measuring a sweep setting's samples/s
+    sweep_seconds: float = 1.5  # path time budget per sweep setting
     max_sweep_spp: int = 4096
     omegas: tuple[float, ...] = (1.0, 1.2, 1.4, 1.6, 1.8)
     thresholds: tuple[float, ...] = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
@@ -83,7 +83,7 @@ class SdfBenchConfig:
 
 
 FULL = SdfBenchConfig()
-QUICK = SdfBenchConfig(size=(96, 54), ref_spp=128, compare_spp=8, geometry_spp=4, sweep_seconds=0.5,
+QUICK = SdfBenchConfig(size=(96, 54), ref_spp=128, compare_spp=8, geometry_spp=4, sweep_seconds=0.4,
                        thresholds=(0.25, 1.0, 4.0), step_limits=(32, 128, 512))
 
 
@@ -95,8 +95,11 @@ def sdf_scenes(paths=None):
     return [s for s in scenes if s.geometry == "sdf"]
 
 
+_T0 = time.perf_counter()
+
+
 def log(message: str) -> None:
-    print(message, file=sys.stderr, flush=True)
+    print(f"{time.perf_counter() - _T0:6.1f} s  {message}", file=sys.stderr, flush=True)
 
 
 class SceneBench:
@@ -167,11 +170,14 @@ class SceneBench:
         self.compile(integrator)
         seed = self.config.seed
         calls = {name: (lambda m=m: self.render(integrator, m, spp, seed)) for name, m in settings.items()}
-        timings = time_interleaved(calls, runs=runs or self.config.runs, warmup=1)
-        out = {}
-        for name, march in settings.items():
-            self.render(integrator, march, spp, seed)  # once more to read its image and work
-            out[name] = {"timing": timings[name], "image": self.image(), "steps_per_ray": self.steps_per_ray()}
+        out = {name: {} for name in settings}
+
+        def keep(name):  # untimed: read back what the run just rendered
+            out[name].update(image=self.image(), steps_per_ray=self.steps_per_ray())
+
+        timings = time_interleaved(calls, runs=runs or self.config.runs, warmup=1, after=keep)
+        for name in settings:
+            out[name]["timing"] = timings[name]
         return out
 
     def converge(self, integrator: str, march, spp: int, reference: np.ndarray) -> dict:

@@ -11,6 +11,8 @@ launches the child and passes it along; the child reports wall-clock marks after
   build         Renderer(scene, 960x540): fields, environment map, materials
   first frame   render 1 spp with the scene's integrator and wait for it (compiles the kernels,
                 or loads them from Taichi's offline cache)
+  next frame    after the measurement: one more 1 spp frame, the render cost alone, so that
+                first frame - next 1 spp = kernel compile (cold) or cache load + JIT (warm)
 
 Cold: an empty offline cache (a fresh temporary directory); warm: the same directory again, so
 the kernels load from the cache. (Python's own bytecode cache is warm in both.) The viewer is
@@ -50,6 +52,7 @@ RENDERER_PHASES = {
     "scene": ("initialised", "scene_loaded"),
     "build": ("scene_loaded", "built"),
     "first_frame": ("built", "first_frame"),
+    "next_frame": ("first_frame", "second_frame"),  # after start-up: rendering alone
 }
 VIEWER_PHASES = {
     "interpreter": ("launch", "main"),
@@ -107,7 +110,13 @@ def _child_renderer(args, size, marks, result) -> None:
     renderer.render(camera, 1, integrator)
     ti.sync()
     marks["first_frame"] = time.time()
-    result.update(scene=scene.name, integrator=integrator, spp=renderer.samples_done)
+    spp = renderer.samples_done
+    # one more 1 spp frame, not part of start-up: what rendering alone costs, so that
+    # first_frame - next_frame is the kernels' compile or cache-load time
+    renderer.render(camera, 1, integrator)
+    ti.sync()
+    marks["second_frame"] = time.time()
+    result.update(scene=scene.name, integrator=integrator, spp=spp)
 
 
 def _child_viewer(args, size, marks, result) -> None:
@@ -201,8 +210,8 @@ def summarise(runs: list[dict]) -> dict:
         values = [r[key] for r in ok if key in r]
         if values:
             out[key] = statistics.median(values)
-    out["phases"] = {name: statistics.median(r["phases"][name] for r in ok)
-                     for name in ok[0]["phases"]}
+    names = [name for name in ok[0]["phases"] if all(name in r["phases"] for r in ok)]
+    out["phases"] = {name: statistics.median(r["phases"][name] for r in ok) for name in names}
     return out
 
 
@@ -221,7 +230,8 @@ def print_report(report: dict) -> None:
         columns = [("cold", cold.get("phases", {}), cold), ("warm (median of %d)" % warm.get("ok", 0),
                                                              warm.get("phases", {}), warm)]
         for name in phases:
-            rows.append([name] + [f"{p[name]:.2f}" if name in p else "-" for _, p, _ in columns])
+            if name != "next_frame":
+                rows.append([name] + [f"{p[name]:.2f}" if name in p else "-" for _, p, _ in columns])
         if mode == "viewer":
             rows.append(["= start to window frame"] + [f"{r['start_to_first_window_frame']:.2f}"
                                                        if "start_to_first_window_frame" in r else "-"
@@ -232,6 +242,12 @@ def print_report(report: dict) -> None:
                                                   else "-" for _, _, r in columns])
         rows.append(["process exit"] + [f"{r['process_seconds']:.2f}" if "process_seconds" in r else "-"
                                         for _, _, r in columns])
+        if mode == "renderer":
+            rows.append(["(after) next 1 spp frame"] + [f"{p['next_frame']:.2f}" if "next_frame" in p else "-"
+                                                        for _, p, _ in columns])
+            rows.append(["first - next: kernels"] + [f"{p['first_frame'] - p['next_frame']:.2f}"
+                                                     if "next_frame" in p and "first_frame" in p else "-"
+                                                     for _, p, _ in columns])
         what = ("viewer (ViewerApp off-screen, first step that shows a rendered image)" if mode == "viewer"
                 else "renderer (Renderer + 1 spp render)")
         w, h = report["size"]

@@ -70,6 +70,10 @@ _REDUCEAT_MAX_SEGMENTS_FRACTION = 1.0 / 32.0
 _ARGPARTITION_MAX_NODES = 64
 # Builds over fewer primitives stay on the calling thread.
 _THREADS_MIN_PRIMS = 100_000
+# The active primitives are compacted once fewer than this fraction remain.
+_COMPACT_FRACTION = 0.6
+# SAH levels of one bin count b bin through b**3 cells per node while cells <= ratio * prims.
+_CELLS_MAX_RATIO = 1.0
 
 
 @dataclass
@@ -128,7 +132,8 @@ def _to_f32_down(x: np.ndarray) -> np.ndarray:
     if x.dtype == np.float32:
         return np.ascontiguousarray(x)
     x64 = x.astype(np.float64)
-    y = x64.astype(np.float32)
+    with np.errstate(over="ignore"):
+        y = x64.astype(np.float32)
     bad = y.astype(np.float64) > x64
     if bad.any():
         y[bad] = np.nextafter(y[bad], np.float32(-np.inf))
@@ -140,7 +145,8 @@ def _to_f32_up(x: np.ndarray) -> np.ndarray:
     if x.dtype == np.float32:
         return np.ascontiguousarray(x)
     x64 = x.astype(np.float64)
-    y = x64.astype(np.float32)
+    with np.errstate(over="ignore"):
+        y = x64.astype(np.float32)
     bad = y.astype(np.float64) < x64
     if bad.any():
         y[bad] = np.nextafter(y[bad], np.float32(np.inf))
@@ -174,7 +180,8 @@ def _prepare(lo, hi, centroids) -> np.ndarray:
         raise ValueError("some primitive boxes have lo > hi")
     lo32 = _to_f32_down(lo)
     hi32 = _to_f32_up(hi)
-    c32 = c.astype(np.float32)
+    with np.errstate(over="ignore"):
+        c32 = c.astype(np.float32)
     if not np.isfinite(c32).all() or not np.isfinite(lo32).all() or not np.isfinite(hi32).all():
         raise ValueError("input values overflow float32")
     x = np.empty((9, n), np.float32)
@@ -186,32 +193,39 @@ def _prepare(lo, hi, centroids) -> np.ndarray:
 
 # ------------------------------------------------------------------------------------------------
 # per-level helpers
+#
+# The primitive data never moves: every level works on the same (9, n) array of active
+# primitives, and each primitive carries the index of its node at the current level (`node_of`).
+# Primitives that already reached a leaf point at a dummy node `n` (one past the real nodes),
+# whose per-node values are chosen so that it bins into a dummy slot and never affects a result.
+# Once most primitives are finished the active set is compacted.
 
 
 class _Work:
-    """Per-element buffers reused by every level.
+    """Per-primitive buffers reused by every level.
 
     Fresh multi-megabyte temporaries on every level cost more in page faults than in arithmetic,
-    so the large per-element arrays live here and numpy writes into them with ``out=``.
+    so the large per-primitive arrays live here and numpy writes into them with ``out=``.
     """
 
     def __init__(self, n: int, threads: int):
         self.n = n
         self.ar = np.arange(n, dtype=np.int64)
-        self.x = (np.empty(9 * n, np.float32), np.empty(9 * n, np.float32))
-        self.pid = (np.empty(n, np.int64), np.empty(n, np.int64))
-        self.nodeof = np.empty(n, np.int64)
+        self.node_of = (np.empty(n, np.int64), np.empty(n, np.int64))
+        self.leaf_of = np.empty(n, np.int64)
         self.f = np.empty(n, np.float32)
         self.f6 = np.empty(6 * n, np.float32)
-        self.i = tuple(np.empty(n, np.int64) for _ in range(4))
+        self.i = tuple(np.empty(n, np.int64) for _ in range(3))
         self.keys = np.empty(3 * n, np.int64)
         self.bins = np.empty(3 * n, np.int16)
         self.side = np.empty(n, np.bool_)
         self._box = np.empty(0, np.float32)
         self.pool = None
+        self.threads = 1
         if threads > 1 and n >= _THREADS_MIN_PRIMS:
             from concurrent.futures import ThreadPoolExecutor
-            self.pool = ThreadPoolExecutor(max_workers=threads)
+            self.threads = threads
+            self.pool = ThreadPoolExecutor(max_workers=threads - 1)
 
     def box(self, g: int) -> np.ndarray:
         """(6, g) f32 bin boxes, filled with +inf."""
@@ -221,31 +235,65 @@ class _Work:
         b.fill(np.inf)
         return b
 
+    def run(self, tasks, also=None):
+        """Run callables and return the result of ``also()``. With a pool, the calling thread
+        takes its share of the tasks instead of waiting, so a busy machine loses little."""
+        if self.pool is None:
+            for t in tasks:
+                t()
+            return also() if also is not None else None
+        k = self.threads
+        futures = [self.pool.submit(_run_all, tasks[i::k]) for i in range(1, k)]
+        result = also() if also is not None else None
+        _run_all(tasks[0::k])
+        for f in futures:
+            f.result()
+        return result
+
     def close(self):
         if self.pool is not None:
             self.pool.shutdown()
             self.pool = None
 
 
-def _bcast(w: _Work, per_node: np.ndarray, nodeof: np.ndarray, out: np.ndarray) -> np.ndarray:
-    """Per-node values -> per-element values (rows of a 2-D array at once)."""
-    if per_node.ndim == 1:
-        return np.take(per_node, nodeof, out=out)
-    return np.take(per_node, nodeof, axis=1, out=out)
+def _run_all(tasks):
+    for t in tasks:
+        t()
 
 
-def _centroid_bounds(w: _Work, x, st, nodeof):
-    """Per-node centroid bounds (3, n) of the contiguous, nonempty node segments."""
-    n = st.shape[0]
-    c = x[6:9]
-    if n <= x.shape[1] * _REDUCEAT_MAX_SEGMENTS_FRACTION:
-        return np.minimum.reduceat(c, st, axis=1), np.maximum.reduceat(c, st, axis=1)
-    cmin = np.full((3, n), np.inf, np.float32)
-    cmax = np.full((3, n), -np.inf, np.float32)
-    for a in range(3):
-        np.minimum.at(cmin[a], nodeof, c[a])
-        np.maximum.at(cmax[a], nodeof, c[a])
-    return cmin, cmax
+def _pad(a: np.ndarray, value) -> np.ndarray:
+    """Append the dummy node's value (along the last axis)."""
+    pad = np.full(a.shape[:-1] + (1,), value, a.dtype)
+    return np.concatenate((a, pad), axis=-1)
+
+
+def _node_min_max(w: _Work, vals: np.ndarray, node_of: np.ndarray, n: int):
+    """Per-node minimum and maximum (k, n) of the rows of vals (k, n_act) by node_of.
+
+    With few nodes every update would hit the same few addresses and ufunc.at would serialise
+    on them, so each node gets 16 lanes, reduced afterwards.
+    """
+    k = vals.shape[0]
+    n_act = vals.shape[1]
+    lanes = 16 if n < 1024 else 1
+    if lanes > 1:
+        idx = np.bitwise_and(w.ar[:n_act], lanes - 1, out=w.i[0][:n_act])
+        idx += node_of * lanes
+    else:
+        idx = node_of
+    lo = np.full((k, (n + 1) * lanes), np.inf, np.float32)
+    hi = np.full((k, (n + 1) * lanes), -np.inf, np.float32)
+
+    def rows(rr):
+        def task():
+            for r in rr:
+                np.minimum.at(lo[r], idx, vals[r])
+                np.maximum.at(hi[r], idx, vals[r])
+        return task
+    w.run([rows(range(0, k, 2)), rows(range(1, k, 2))])
+    lo = lo.reshape(k, n + 1, lanes).min(axis=2)[:, :n]
+    hi = hi.reshape(k, n + 1, lanes).max(axis=2)[:, :n]
+    return lo, hi
 
 
 def _half_area(b: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
@@ -263,38 +311,84 @@ def _half_area(b: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     return area
 
 
-def _positional_side(w: _Work, n_act, st, cnt, nodeof, out):
-    """Side for a split by count in the current order: the first floor(n/2) go right... left."""
-    pos = np.subtract(w.ar[:n_act], _bcast(w, st, nodeof, w.i[3][:n_act]), out=w.i[3][:n_act])
-    half = _bcast(w, cnt // 2, nodeof, w.i[2][:n_act])
-    return np.greater_equal(pos, half, out=out)
-
-
 def _bins_for_count(cnt: np.ndarray, bins: int) -> np.ndarray:
     """Bin count per node: half the largest power of two <= count, at least 2, at most ``bins``."""
     p = np.left_shift(1, np.floor(np.log2(np.maximum(cnt, 4))).astype(np.int64) - 1)
     return np.minimum(p, bins)
 
 
-def _run(w: _Work, tasks):
-    """Run callables, on the thread pool when there is one (ufunc.at releases the GIL)."""
-    if w.pool is None:
-        for t in tasks:
-            t()
-    else:
-        for f in [w.pool.submit(t) for t in tasks]:
-            f.result()
+def _select_axis(w: _Work, rows: np.ndarray, axis_e: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """rows (3, n_act) -> rows[axis_e[i], i]."""
+    n_act = rows.shape[1]
+    idx = np.multiply(axis_e, n_act, out=w.i[2][:n_act])
+    idx += w.ar[:n_act]
+    return np.take(rows.reshape(-1), idx, out=out)
 
 
-def _sah_level(w: _Work, x, st, cnt, nodeof, nbins, max_leaf_hard, c_trav, c_isect):
+def _rank_split(w: _Work, side, node_of, cnt, nodes):
+    """Split the given nodes by count: in each, the first floor(count / 2) primitives in index
+    order go left. Used when no plane separates the centroids (all identical)."""
+    n = cnt.shape[0]
+    flag = np.zeros(n + 1, bool)
+    flag[nodes] = True
+    sub = np.flatnonzero(flag[node_of])
+    if sub.shape[0] == 0:
+        return
+    nd = node_of[sub]
+    order = np.argsort(nd, kind="stable")
+    sub = sub[order]
+    nd = nd[order]
+    start = np.zeros(n + 1, np.int64)
+    np.cumsum(np.bincount(nd, minlength=n + 1)[:-1], out=start[1:])
+    rank = np.arange(sub.shape[0]) - start[nd]
+    side[sub] = rank >= (cnt // 2)[nd]
+
+
+def _bin_by_cells(w: _Work, x, node_of, node_bins, n, b):
+    """Bin boxes and counts for a level of n nodes that all use b bins, through a b x b x b
+    grid of cells per node: 6 scatter passes over the primitives instead of 18, then cheap
+    reductions over the cells. Worth it while there are fewer cells than primitives.
+
+    Returns (box, counts) in the layout of _sah_level (bin q of axis a of node i at
+    (3 q + a) n + i) plus one dummy slot at the end.
+    """
+    n_act = x.shape[1]
+    nc = (n + 1) * b ** 3
+    cell = np.multiply(node_of, b ** 3, out=w.i[2][:n_act])
+    cell += node_bins[0] * (b * b)
+    cell += node_bins[1] * b
+    cell += node_bins[2]
+    cbox = np.full((6, nc), np.inf, np.float32)
+
+    def rows(rr):
+        def task():
+            for r in rr:
+                np.minimum.at(cbox[r], cell, x[r])
+        return task
+    ccount = w.run([rows((0, 1, 2)), rows((3, 4, 5))],
+                   also=lambda: np.bincount(cell, minlength=nc))
+    g = 3 * b * n
+    cb = cbox[:, :n * b ** 3].reshape(6, n, b, b, b)
+    cc = ccount[:n * b ** 3].reshape(n, b, b, b)
+    box = np.full((6, g + 1), np.inf, np.float32)
+    counts = np.zeros(g + 1, np.int64)
+    bv = box[:, :g].reshape(6, b, 3, n)
+    cv = counts[:g].reshape(b, 3, n)
+    for a, other in enumerate(((3, 4), (2, 4), (2, 3))):
+        bv[:, :, a, :] = cb.min(axis=other).transpose(0, 2, 1)
+        cv[:, a, :] = cc.sum(axis=(other[0] - 1, other[1] - 1)).T
+    return box, counts
+
+
+def _sah_level(w: _Work, x, node_of, cnt, nbins, max_leaf_hard, c_trav, c_isect):
     """Binned SAH for all nodes of a level.
 
     Nodes must be sorted by descending ``nbins`` (each bin count forms one block).
-    Returns (leaf mask, side per element, split axis per node).
+    Returns (leaf mask, side per primitive, split axis per node, nodes to split by count).
     """
     n = cnt.shape[0]
     n_act = x.shape[1]
-    cmin, cmax = _centroid_bounds(w, x, st, nodeof)
+    cmin, cmax = _node_min_max(w, x[6:9], node_of, n)
     ext = cmax - cmin
     # (c - cmin) * scale < nbins always: each f32 rounding gains at most 2**-24 relative
     nb_f = nbins.astype(np.float32) * np.float32(1.0 - 1e-6)
@@ -302,7 +396,8 @@ def _sah_level(w: _Work, x, st, cnt, nodeof, nbins, max_leaf_hard, c_trav, c_ise
         scale = np.where(ext > np.float32(1e-30), nb_f / ext, np.float32(0.0)).astype(np.float32)
 
     # Bin blocks: nodes with the same bin count b are contiguous; their bins are laid out
-    # (b, 3, n_block) so that the sweeps over bins run along long vector rows.
+    # (b, 3, n_block) so that the sweeps over bins run along long vector rows. Slot g_total is
+    # the dummy node's.
     change = np.flatnonzero(nbins[1:] != nbins[:-1]) + 1
     blk_start = np.concatenate(([0], change)).astype(np.int64)
     blk_end = np.concatenate((change, [n])).astype(np.int64)
@@ -312,44 +407,37 @@ def _sah_level(w: _Work, x, st, cnt, nodeof, nbins, max_leaf_hard, c_trav, c_ise
     np.cumsum(blk_b * 3 * blk_n, out=blk_off[1:])
     g_total = int(blk_off[-1])
     blk_of_node = np.repeat(np.arange(blk_start.shape[0]), blk_n)
-    # bin (a, q) of node i sits at kbase + kaxis * (a + 3 q)
+    # bin q on axis a of node i sits at kbase + kaxis * (a + 3 q)
     kbase = blk_off[blk_of_node] + (np.arange(n) - blk_start[blk_of_node])
     kaxis = blk_n[blk_of_node]
 
-    fe = _bcast(w, np.concatenate((cmin, scale)), nodeof, w.f6[:6 * n_act].reshape(6, n_act))
-    kbase_e = _bcast(w, kbase, nodeof, w.i[0][:n_act])
-    kaxis_e = _bcast(w, kaxis, nodeof, w.i[1][:n_act])
-    keys = w.keys[:3 * n_act].reshape(3, n_act)
+    per_node = np.concatenate((_pad(cmin, 0.0), _pad(scale, 0.0)))
+    fe = np.take(per_node, node_of, axis=1, out=w.f6[:6 * n_act].reshape(6, n_act))
     node_bins = w.bins[:3 * n_act].reshape(3, n_act)
-    f = w.f[:n_act]
-    for a in range(3):
-        np.subtract(x[6 + a], fe[a], out=f)
-        f *= fe[3 + a]
-        b = node_bins[a]
-        np.copyto(b, f, casting="unsafe")  # truncation = floor, f >= 0
-        k = keys[a]
-        np.multiply(b, 3, out=k)
-        k += a
-        k *= kaxis_e
-        k += kbase_e
+    f = np.subtract(x[6:9], fe[0:3], out=fe[0:3])
+    f *= fe[3:6]
+    np.copyto(node_bins, f, casting="unsafe")  # truncation = floor, as f >= 0
 
-    box = w.box(g_total)
-    tasks = []
-    for a in range(3):
-        for rows in ((0, 1, 2), (3, 4, 5)):
-            def task(a=a, rows=rows):
-                for r in rows:
-                    np.minimum.at(box[r], keys[a], x[r])
-            tasks.append(task)
-    if w.pool is not None:
-        futures = [w.pool.submit(t) for t in tasks]
-        counts = np.bincount(keys.reshape(-1), minlength=g_total)
-        for fu in futures:
-            fu.result()
+    b0 = int(blk_b[0])
+    if blk_start.shape[0] == 1 and n * b0 ** 3 <= n_act * _CELLS_MAX_RATIO:
+        box, counts = _bin_by_cells(w, x, node_of, node_bins, n, b0)
     else:
-        counts = np.bincount(keys.reshape(-1), minlength=g_total)
-        for t in tasks:
-            t()
+        kbase_e = np.take(_pad(kbase, g_total), node_of, out=w.i[0][:n_act])
+        kaxis_e = np.take(_pad(kaxis, 0), node_of, out=w.i[1][:n_act])
+        keys = w.keys[:3 * n_act].reshape(3, n_act)
+        np.multiply(node_bins, 3, out=keys)
+        keys += np.arange(3)[:, None]
+        keys *= kaxis_e
+        keys += kbase_e
+        box = w.box(g_total + 1)
+        tasks = []
+        for a in range(3):
+            for rows in ((0, 1, 2), (3, 4, 5)):
+                def task(a=a, rows=rows):
+                    for r in rows:
+                        np.minimum.at(box[r], keys[a], x[r])
+                tasks.append(task)
+        counts = w.run(tasks, also=lambda: np.bincount(keys.reshape(-1), minlength=g_total + 1))
 
     best_cost = np.empty(n, np.float32)
     best_axis = np.empty(n, np.int64)
@@ -404,67 +492,65 @@ def _sah_level(w: _Work, x, st, cnt, nodeof, nbins, max_leaf_hard, c_trav, c_ise
     split_better = valid & (c_trav * node_area + c_isect * best_cost < c_isect * cnt * node_area)
     leaf = ~split_better & (cnt <= max_leaf_hard)
 
-    # side per element: right iff its bin on the split axis is above the split bin
-    idx = _bcast(w, np.where(valid, best_axis, 0) * n_act, nodeof, w.i[0][:n_act])
-    idx += w.ar[:n_act]
-    sel = np.take(w.bins[:3 * n_act], idx, out=w.i[1].view(np.int16)[:n_act])
-    side = np.greater(sel, _bcast(w, best_bin, nodeof, w.i[2][:n_act]), out=w.side[:n_act])
-    if not valid.all():
-        # no plane separates the centroids: split by count
-        need = np.repeat(~valid, cnt)
-        pos = _positional_side(w, n_act, st, cnt, nodeof, np.empty(n_act, np.bool_))
-        np.copyto(side, pos, where=need)
+    # side per primitive: right iff its bin on the split axis is above the split bin
+    axis_e = np.take(_pad(np.where(valid, best_axis, 0), 0), node_of, out=w.i[0][:n_act])
+    sel = _select_axis(w, node_bins, axis_e, w.i[1].view(np.int16)[:n_act])
+    bin_e = np.take(_pad(best_bin, 0).astype(np.int16), node_of,
+                    out=w.i[0].view(np.int16)[:n_act])
+    side = np.greater(sel, bin_e, out=w.side[:n_act])
+    by_count = np.flatnonzero(~valid & ~leaf)
     axis = np.where(valid, best_axis, np.argmax(ext, axis=0))
-    return leaf, side, axis
+    return leaf, side, axis, by_count
 
 
-def _midpoint_level(w: _Work, x, st, cnt, nodeof):
+def _midpoint_level(w: _Work, x, node_of, cnt):
+    n = cnt.shape[0]
     n_act = x.shape[1]
-    cmin, cmax = _centroid_bounds(w, x, st, nodeof)
+    cmin, cmax = _node_min_max(w, x[6:9], node_of, n)
     ext = cmax - cmin
     axis = np.argmax(ext, axis=0)
-    ar = np.arange(cnt.shape[0])
-    idx = _bcast(w, axis * n_act, nodeof, w.i[0][:n_act])
-    idx += w.ar[:n_act]
-    c = np.take(x[6:9].reshape(-1), idx, out=w.f[:n_act])
-    c -= _bcast(w, cmin[axis, ar], nodeof, w.f6[:n_act])
+    ar = np.arange(n)
+    axis_e = np.take(_pad(axis, 0), node_of, out=w.i[0][:n_act])
+    c = _select_axis(w, x[6:9], axis_e, w.f[:n_act])
+    c -= np.take(_pad(cmin[axis, ar], 0.0), node_of, out=w.f6[:n_act])
     half = ext[axis, ar] * np.float32(0.5)
     # right iff (c - cmin) > extent / 2: the extreme centroids always land on different sides
     # when the extent is nonzero, whatever the rounding
-    side = np.greater(c, _bcast(w, half, nodeof, w.f6[n_act:2 * n_act]), out=w.side[:n_act])
-    flat = ext[axis, ar] <= 0
-    if flat.any():  # all centroids identical: split by count
-        pos = _positional_side(w, n_act, st, cnt, nodeof, np.empty(n_act, np.bool_))
-        np.copyto(side, pos, where=np.repeat(flat, cnt))
-    return side, axis
+    side = np.greater(c, np.take(_pad(half, 0.0), node_of, out=w.f6[n_act:2 * n_act]),
+                      out=w.side[:n_act])
+    return side, axis, np.flatnonzero(ext[axis, ar] <= 0)
 
 
-def _equal_count_order(w: _Work, x, st, cnt, nodeof):
-    """Median split: the element order that puts each node's lower half (on the largest
-    centroid axis) first, and the split axes."""
+def _equal_count_level(w: _Work, x, node_of, cnt):
+    """Median split along the largest axis of the centroid bounds."""
     n = cnt.shape[0]
     n_act = x.shape[1]
-    cmin, cmax = _centroid_bounds(w, x, st, nodeof)
+    cmin, cmax = _node_min_max(w, x[6:9], node_of, n)
     ext = cmax - cmin
     axis = np.argmax(ext, axis=0)
+    ar = np.arange(n)
+    axis_e = np.take(_pad(axis, 0), node_of, out=w.i[0][:n_act])
+    c = _select_axis(w, x[6:9], axis_e, w.f[:n_act]).astype(np.float64)
+    e = ext[axis, ar].astype(np.float64)
+    inv = np.where(e > 0, 0.5 / np.where(e > 0, e, 1.0), 0.0)
+    # The keys of node i lie in [i, i + 0.5] (finished primitives: n), so ordering the keys
+    # groups the nodes in index order and sorts each by centroid.
+    c -= _pad(cmin[axis, ar], 0.0)[node_of]
+    c *= _pad(inv, 0.0)[node_of]
+    c += node_of
+    start = np.zeros(n + 1, np.int64)
+    np.cumsum(cnt, out=start[1:])
+    mid = start[:-1] + cnt // 2
     if n <= _ARGPARTITION_MAX_NODES:
-        order = np.arange(n_act)
-        for i in range(n):
-            s, c = int(st[i]), int(cnt[i])
-            order[s:s + c] = s + np.argpartition(x[6 + axis[i], s:s + c], c // 2)
+        # partitioning at the node boundaries and the medians is enough
+        kth = np.unique(np.concatenate((start[1:], mid)))
+        order = np.argpartition(c, kth[kth < n_act])
     else:
-        ar = np.arange(n)
-        idx = np.repeat(axis * n_act, cnt)
-        idx += w.ar[:n_act]
-        c = x[6:9].reshape(-1)[idx].astype(np.float64)
-        e = ext[axis, ar].astype(np.float64)
-        inv = np.where(e > 0, 0.5 / np.where(e > 0, e, 1.0), 0.0)
-        # the keys of node i lie in [i, i + 0.5]: one sort orders the nodes and their centroids
-        c -= np.repeat(cmin[axis, ar], cnt)
-        c *= np.repeat(inv, cnt)
-        c += nodeof
         order = np.argsort(c)
-    return order, axis
+    pos = np.empty(n_act, np.int64)
+    pos[order] = w.ar[:n_act]
+    side = np.greater_equal(pos, _pad(mid, n_act)[node_of], out=w.side[:n_act])
+    return side, axis
 
 
 # ------------------------------------------------------------------------------------------------
@@ -483,8 +569,8 @@ def build_bvh(lo, hi, centroids, strategy: str = "sah", max_leaf_size: int = 4, 
     max_leaf_hard: SAH may keep up to this many primitives (or max_leaf_size if larger) in a
         leaf when no split is cheaper or no plane separates the centroids.
     c_trav, c_isect: SAH traversal and intersection costs.
-    threads: worker threads for the binning of large builds (numpy releases the GIL there);
-        default min(2, cpu count). The result does not depend on it.
+    threads: worker threads for the big reductions of large builds (numpy releases the GIL
+        there); default min(2, cpu count). The result does not depend on it.
     """
     if strategy not in STRATEGIES:
         raise ValueError(f"unknown strategy {strategy!r}; expected one of {STRATEGIES}")
@@ -514,64 +600,50 @@ def _build(w: _Work, x_all, strategy, max_leaf_size, bins, max_leaf_hard, c_trav
     # node table in breadth-first creation order (gid)
     t_left = np.full(cap, -1, np.int64)  # gid of the left child (right = left + 1), -1: leaf
     t_count = np.zeros(cap, np.int64)  # leaf primitive count
-    t_first = np.zeros(cap, np.int64)  # leaf start in out_pid
     t_axis = np.full(cap, -1, np.int8)
     level_ranges = [(0, 1)]  # gid range of each depth
-
-    out_pid = np.empty(n_prims, np.int64)
-    out_cursor = 0
     next_gid = 1
-    buf = 0  # which of the double buffers holds the current level
+    leaf_of_prim = np.zeros(n_prims, np.int64)  # gid of each primitive's leaf
 
     if n_prims <= max_leaf_size:
         t_count[0] = n_prims
-        out_pid[:] = np.arange(n_prims)
-        out_cursor = n_prims
-        gids = np.zeros(0, np.int64)
-        cnt = np.zeros(0, np.int64)
-    else:
-        gids = np.zeros(1, np.int64)
-        cnt = np.array([n_prims], np.int64)
-        x = w.x[0][:9 * n_prims].reshape(9, n_prims)
-        x[:] = x_all
-        pid = w.pid[0][:n_prims]
-        pid[:] = w.ar
+        return _flatten(x_all, t_left[:1], t_count[:1], t_axis[:1], level_ranges, leaf_of_prim)
+    cnt = np.array([n_prims], np.int64)
+    gids = np.zeros(1, np.int64)
+    x = x_all
+    pid = None  # global index of each active primitive (None: all, in order)
+    buf = 0
+    node_of = w.node_of[buf][:n_prims]
+    node_of.fill(0)
+    leaf_of = w.leaf_of[:n_prims]
+    leaf_of.fill(-1)
 
     while cnt.shape[0] > 0:
         n = cnt.shape[0]
         n_act = x.shape[1]
-        st = np.zeros(n, np.int64)
-        np.cumsum(cnt[:-1], out=st[1:])
-        nodeof = w.nodeof[:n_act]
-        nodeof.fill(0)
-        nodeof[st[1:]] = 1
-        np.cumsum(nodeof, out=nodeof)
-
         if strategy == "sah":
             nbins = _bins_for_count(cnt, bins)
-            leaf, side, axis = _sah_level(w, x, st, cnt, nodeof, nbins, max_leaf_hard, c_trav,
-                                          c_isect)
-            if leaf.any():  # leaves made here keep all their elements on the left
-                np.copyto(side, False, where=np.repeat(leaf, cnt))
-        else:
-            if strategy == "midpoint":
-                side, axis = _midpoint_level(w, x, st, cnt, nodeof)
-            else:
-                order, axis = _equal_count_order(w, x, st, cnt, nodeof)
-                other = 1 - buf
-                x = np.take(x, order, axis=1, out=w.x[other][:9 * n_act].reshape(9, n_act))
-                pid = np.take(pid, order, out=w.pid[other][:n_act])
-                buf = other
-                side = _positional_side(w, n_act, st, cnt, nodeof, w.side[:n_act])
+            leaf, side, axis, by_count = _sah_level(w, x, node_of, cnt, nbins, max_leaf_hard,
+                                                    c_trav, c_isect)
+        elif strategy == "midpoint":
+            side, axis, by_count = _midpoint_level(w, x, node_of, cnt)
             leaf = np.zeros(n, bool)
-        split = ~leaf
+        else:
+            side, axis = _equal_count_level(w, x, node_of, cnt)
+            by_count = np.zeros(0, np.int64)
+            leaf = np.zeros(n, bool)
+        if by_count.shape[0]:
+            _rank_split(w, side, node_of, cnt, by_count)
 
-        # children counts
-        side_i = side.view(np.int8)
-        cs = np.cumsum(side_i, dtype=np.int64, out=w.i[0][:n_act])
-        r_before = cs[st] - side_i[st]
-        n_r = cs[st + cnt - 1] - r_before
-        n_l = cnt - n_r
+        # slot = 2 * node + side; child counts per slot
+        slot = np.multiply(node_of, 2, out=w.i[0][:n_act])
+        slot += side
+        n_slot = np.bincount(slot, minlength=2 * n + 2)
+        n_l = n_slot[0:2 * n:2]
+        n_r = n_slot[1:2 * n:2]
+        split = ~leaf
+        if not ((n_l > 0) & (n_r > 0) | leaf).all():
+            raise AssertionError("BVH builder produced an empty child")
 
         sp = np.flatnonzero(split)
         ns = sp.shape[0]
@@ -590,103 +662,87 @@ def _build(w: _Work, x_all, strategy, max_leaf_size, bins, max_leaf_hard, c_trav
         if strategy == "sah" and act.shape[0] > 0:
             # the next level in descending bin count (one block per bin count)
             act = act[np.argsort(-_bins_for_count(child_cnt[act], bins), kind="stable")]
-        act_cnt = child_cnt[act]
-        n_next = int(act_cnt.sum())
-
-        # destinations: [0, n_next) the next level (in `act` order), then the leaves made at
-        # this level (leaf nodes first, then leaf children), which go on to out_pid
-        dest_child = np.empty(2 * ns, np.int64)
-        act_start = np.zeros(act.shape[0], np.int64)
-        np.cumsum(act_cnt[:-1], out=act_start[1:])
-        dest_child[act] = act_start
+        n_next = act.shape[0]
         lf_nodes = np.flatnonzero(leaf)
-        lf_child = np.flatnonzero(child_leaf)
-        lf_cnt = np.concatenate((cnt[lf_nodes], child_cnt[lf_child]))
-        lf_start = np.zeros(lf_cnt.shape[0], np.int64)
-        np.cumsum(lf_cnt[:-1], out=lf_start[1:])
-        n_lf_nodes = lf_nodes.shape[0]
-        dest_child[lf_child] = n_next + lf_start[n_lf_nodes:]
-        dest_l = np.empty(n, np.int64)
-        dest_r = np.zeros(n, np.int64)
-        dest_l[lf_nodes] = n_next + lf_start[:n_lf_nodes]
-        dest_l[sp] = dest_child[0::2]
-        dest_r[sp] = dest_child[1::2]
+        t_count[gids[lf_nodes]] = cnt[lf_nodes]
+        t_count[child_gid[child_leaf]] = child_cnt[child_leaf]
 
-        lf_gid = np.concatenate((gids[lf_nodes], child_gid[lf_child]))
-        t_count[lf_gid] = lf_cnt
-        t_first[lf_gid] = out_cursor + lf_start
+        # slot -> next-level node (n_next: finished) and slot -> leaf gid (-1: not a leaf)
+        child_new = np.full(2 * ns, n_next, np.int64)
+        child_new[act] = np.arange(n_next)
+        child_leafgid = np.where(child_leaf, child_gid, -1)
+        slot_new = np.full(2 * n + 2, n_next, np.int64)
+        slot_leaf = np.full(2 * n + 2, -1, np.int64)
+        slot_new[2 * sp] = child_new[0::2]
+        slot_new[2 * sp + 1] = child_new[1::2]
+        slot_leaf[2 * sp] = child_leafgid[0::2]
+        slot_leaf[2 * sp + 1] = child_leafgid[1::2]
+        slot_leaf[2 * lf_nodes] = gids[lf_nodes]
+        slot_leaf[2 * lf_nodes + 1] = gids[lf_nodes]
 
-        # stable partition of every node by side. With e the element index and E the number of
-        # right elements before e: right -> dest_r + E - r_before, left -> dest_l + (e - st) -
-        # (E - r_before)
-        e_r = np.subtract(cs, side_i, out=cs)
-        d_r = _bcast(w, dest_r - r_before, nodeof, w.i[1][:n_act])
-        d_r += e_r
-        d_l = np.subtract(w.ar[:n_act], e_r, out=w.i[2][:n_act])
-        d_l += _bcast(w, dest_l - st + r_before, nodeof, w.i[3][:n_act])
-        np.copyto(d_l, d_r, where=side)
-        inv = w.i[0][:n_act]  # cs is no longer needed
-        inv[d_l] = w.ar[:n_act]
+        buf = 1 - buf
+        node_of = np.take(slot_new, slot, out=w.node_of[buf][:n_act])
+        np.maximum(leaf_of, np.take(slot_leaf, slot, out=w.i[1][:n_act]), out=leaf_of)
 
-        n_out = n_act - n_next
-        np.take(pid, inv[n_next:], out=out_pid[out_cursor:out_cursor + n_out])
-        out_cursor += n_out
-        if n_next:
-            keep = inv[:n_next]
-            other = 1 - buf
-            x_next = w.x[other][:9 * n_next].reshape(9, n_next)
-            if w.pool is not None and n_next >= _THREADS_MIN_PRIMS:
-                _run(w, [lambda: np.take(x[0:5], keep, axis=1, out=x_next[0:5]),
-                         lambda: np.take(x[5:9], keep, axis=1, out=x_next[5:9])])
-            else:
-                np.take(x, keep, axis=1, out=x_next)
-            x = x_next
-            pid = np.take(pid, keep, out=w.pid[other][:n_next])
-            buf = other
         gids = child_gid[act]
-        cnt = act_cnt
+        cnt = child_cnt[act]
+        n_keep = int(cnt.sum())
+        if n_keep < _COMPACT_FRACTION * n_act:
+            # compact the active set
+            keep = np.flatnonzero(node_of < n_next)
+            done = np.flatnonzero(node_of == n_next)
+            if pid is None:
+                leaf_of_prim[done] = leaf_of[done]
+                pid = keep
+            else:
+                leaf_of_prim[pid[done]] = leaf_of[done]
+                pid = pid[keep]
+            x = np.take(x, keep, axis=1)
+            buf = 1 - buf
+            node_of = np.take(node_of, keep, out=w.node_of[buf][:n_keep])
+            leaf_of = w.leaf_of[:n_keep]
+            leaf_of.fill(-1)
 
-    assert out_cursor == n_prims
-    return _flatten(x_all, t_left[:next_gid], t_count[:next_gid], t_first[:next_gid],
-                    t_axis[:next_gid], level_ranges, out_pid)
+    if pid is None:
+        leaf_of_prim[:] = leaf_of
+    else:
+        leaf_of_prim[pid] = leaf_of
+    return _flatten(x_all, t_left[:next_gid], t_count[:next_gid], t_axis[:next_gid],
+                    level_ranges, leaf_of_prim)
 
 
-def _flatten(x_all, t_left, t_count, t_first, t_axis, level_ranges, out_pid) -> FlatBVH:
+def _flatten(x_all, t_left, t_count, t_axis, level_ranges, leaf_of_prim) -> FlatBVH:
     """Breadth-first node table -> depth-first FlatBVH with boxes and skip links."""
     m = t_left.shape[0]
-    n_prims = out_pid.shape[0]
     interior = t_left >= 0
+    ranges = [(g0, g0 + np.flatnonzero(interior[g0:g1])) for g0, g1 in level_ranges]
 
     # subtree sizes bottom-up, depth-first indices top-down, one vector step per level
     size = np.ones(m, np.int64)
-    for g0, g1 in reversed(level_ranges):
-        it = g0 + np.flatnonzero(interior[g0:g1])
+    for g0, it in reversed(ranges):
         if it.shape[0]:
             left = t_left[it]
             size[it] = 1 + size[left] + size[left + 1]
     dfs = np.zeros(m, np.int64)
-    for g0, g1 in level_ranges:
-        it = g0 + np.flatnonzero(interior[g0:g1])
+    for g0, it in ranges:
         if it.shape[0]:
             left = t_left[it]
             dfs[left] = dfs[it] + 1
             dfs[left + 1] = dfs[it] + 1 + size[left]
 
-    # primitives in depth-first leaf order
+    # primitives sorted by the depth-first index of their leaf
     leaves = np.flatnonzero(~interior)
     leaves = leaves[np.argsort(dfs[leaves])]
     lcnt = t_count[leaves]
     lstart = np.zeros(leaves.shape[0], np.int64)
     np.cumsum(lcnt[:-1], out=lstart[1:])
-    src = np.repeat(t_first[leaves] - lstart, lcnt)
-    src += np.arange(n_prims)
-    prim_order = out_pid[src]
+    prim_order = np.argsort(dfs[leaf_of_prim])
 
     # boxes: leaves from their primitives, interior nodes as the union of their children
-    box = np.empty((6, m), np.float32)
-    box[:, leaves] = np.minimum.reduceat(np.take(x_all[0:6], prim_order, axis=1), lstart, axis=1)
-    for g0, g1 in reversed(level_ranges):
-        it = g0 + np.flatnonzero(interior[g0:g1])
+    box = np.full((6, m), np.inf, np.float32)
+    for r in range(6):
+        np.minimum.at(box[r], leaf_of_prim, x_all[r])
+    for g0, it in reversed(ranges):
         if it.shape[0]:
             left = t_left[it]
             box[:, it] = np.minimum(box[:, left], box[:, left + 1])

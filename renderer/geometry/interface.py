@@ -25,7 +25,9 @@ Hit = ti.types.struct(hit=ti.i32, t=ti.f32, work=ti.i32, tests=ti.i32, inside=ti
 
 # n_geo: outward geometric normal; n_shading: outward shading normal; eps: the distance within
 # which a spawned ray must not find this surface again.
-Surface = ti.types.struct(p=vec3, n_geo=vec3, n_shading=vec3, uv=ti.math.vec2, material=ti.i32,
-                          front_face=ti.i32, eps=ti.f32, cone_width=ti.f32, cone_spread=ti.f32)
+# uv / uv1: texture coordinate sets 0 and 1; tangent: xyz along +u and handedness w (0 when none).
+Surface = ti.types.struct(p=vec3, n_geo=vec3, n_shading=vec3, uv=ti.math.vec2, uv1=ti.math.vec2,
+                          tangent=ti.math.vec4, material=ti.i32, front_face=ti.i32, eps=ti.f32,
+                          cone_width=ti.f32, cone_spread=ti.f32)
 
 INF = 1e30  # "no hit yet"; far beyond any scene extent and still finite in f32

@@ -162,9 +162,14 @@ def disc(o, d, center, normal, radius, t_max):
     return hit, t
 
 
+# Returned by box_entry on a miss: above every t_max the renderer uses (INF = 1e30), so a missed
+# box can never compare as nearer than the closest hit (t_max + 1 would round to t_max at 1e30).
+BOX_MISS = 3.0e38
+
+
 @ti.func
 def box_entry(o, inv_d, lo, hi, t_max):
-    """Slab test. Returns the entry distance, or t_max + 1 (a value no hit can beat) on a miss.
+    """Slab test. Returns the entry distance, or BOX_MISS on a miss.
     The far bound is widened by 2 ulp-scale factors so rounding never drops a box a ray grazes
     (Ize 2013, 'Robust BVH ray traversal')."""
     t0 = (lo - o) * inv_d
@@ -173,7 +178,7 @@ def box_entry(o, inv_d, lo, hi, t_max):
     tmax = ti.max(t0, t1)
     enter = ti.max(ti.max(tmin.x, tmin.y), ti.max(tmin.z, 0.0))
     leave = ti.min(ti.min(tmax.x, tmax.y), ti.min(tmax.z, t_max)) * 1.00000024
-    return enter if enter <= leave else t_max + 1.0
+    return enter if enter <= leave else BOX_MISS
 
 
 @ti.func

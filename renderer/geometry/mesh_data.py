@@ -23,7 +23,9 @@ def _i32(n=0):
 class MeshData:
     tri_vertices: np.ndarray = field(default_factory=lambda: _f32((0, 3, 3)))  # (T, 3 corners, xyz)
     tri_normals: np.ndarray | None = None  # (T, 3, 3) per-corner shading normals, or None
-    tri_uvs: np.ndarray | None = None  # (T, 3, 2) per-corner texture coordinates, or None
+    tri_uvs: np.ndarray | None = None  # (T, 3, 2) per-corner texture coordinates (set 0), or None
+    tri_uvs1: np.ndarray | None = None  # (T, 3, 2) texture coordinate set 1, or None
+    tri_tangents: np.ndarray | None = None  # (T, 3, 4) per-corner tangent xyz + handedness, or None
     tri_material: np.ndarray = field(default_factory=_i32)
     spheres: np.ndarray = field(default_factory=lambda: _f32((0, 4)))  # centre xyz, radius
     sphere_material: np.ndarray = field(default_factory=_i32)

@@ -14,6 +14,7 @@ import taichi as ti
 from renderer.geometry import intersect as isect
 from renderer.geometry.interface import Hit, Ray, Surface
 from renderer.geometry.mesh_data import MeshData
+from renderer.geometry.shading import consistent_shading_normal
 from renderer.sampling.warps import PI
 
 vec3 = ti.math.vec3
@@ -36,6 +37,8 @@ class MeshGeometry:
         self.kinds = data.kinds()
         self.has_normals = data.tri_normals is not None and len(data.tri_vertices) > 0
         self.has_uvs = data.tri_uvs is not None and len(data.tri_vertices) > 0
+        self.has_uv1 = data.tri_uvs1 is not None and len(data.tri_vertices) > 0
+        self.has_tangents = data.tri_tangents is not None and len(data.tri_vertices) > 0
         self.node_total = len(bvh.node_count)
         self._upload_bvh(bvh)
         self._upload_primitives(data, bvh)
@@ -74,6 +77,12 @@ class MeshGeometry:
         if self.has_uvs:
             self.tri_uv = ti.Vector.field(2, ti.f32, shape=(t, 3))
             self.tri_uv.from_numpy(np.ascontiguousarray(data.tri_uvs, np.float32))
+        if self.has_uv1:
+            self.tri_uv1 = ti.Vector.field(2, ti.f32, shape=(t, 3))
+            self.tri_uv1.from_numpy(np.ascontiguousarray(data.tri_uvs1, np.float32))
+        if self.has_tangents:
+            self.tri_tangent = ti.Vector.field(4, ti.f32, shape=(t, 3))
+            self.tri_tangent.from_numpy(np.ascontiguousarray(data.tri_tangents, np.float32))
         self.spheres = vec_field(len(data.spheres), data.spheres, 4)
         q = len(data.quads)
         self.quads = ti.Vector.field(3, ti.f32, shape=(max(1, q), 3))
@@ -218,6 +227,8 @@ class MeshGeometry:
         n = vec3(0.0, 1.0, 0.0)
         ns = n
         uv = ti.math.vec2(0.0)
+        uv1 = ti.math.vec2(0.0)
+        tangent = ti.math.vec4(0.0)
         if ti.static("triangle" in self.kinds):
             if g < self.range_end[0]:
                 v0, v1, v2 = self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2]
@@ -232,6 +243,14 @@ class MeshGeometry:
                         ns = ti.math.normalize(interp)
                 if ti.static(self.has_uvs):
                     uv = b0 * self.tri_uv[g, 0] + hit.bary.x * self.tri_uv[g, 1] + hit.bary.y * self.tri_uv[g, 2]
+                if ti.static(self.has_uv1):
+                    uv1 = b0 * self.tri_uv1[g, 0] + hit.bary.x * self.tri_uv1[g, 1] + hit.bary.y * self.tri_uv1[g, 2]
+                if ti.static(self.has_tangents):
+                    tg = b0 * self.tri_tangent[g, 0] + hit.bary.x * self.tri_tangent[g, 1] + hit.bary.y * self.tri_tangent[g, 2]
+                    # Gram-Schmidt against the shading normal; w keeps the handedness sign.
+                    txyz = tg.xyz - ns.dot(tg.xyz) * ns
+                    if txyz.dot(txyz) > 1e-12:
+                        tangent = ti.math.vec4(ti.math.normalize(txyz), 1.0 if tg.w >= 0.0 else -1.0)
         if ti.static("sphere" in self.kinds):
             if g >= self.range_end[0] and g < self.range_end[1]:
                 sp = self.spheres[g - self.range_end[0]]
@@ -256,33 +275,13 @@ class MeshGeometry:
                 r = (p - c).norm() / self.discs_a[i].w
                 uv = ti.math.vec2(r, 0.0)
         front = 1 if ray.d.dot(n) < 0.0 else 0
-        ns = _consistent_shading_normal(ns, n, -ray.d)
-        return Surface(p=p, n_geo=n, n_shading=ns, uv=uv, material=self.prim_material[g], front_face=front,
-                       eps=0.0, cone_width=ray.cone_width + ray.cone_spread * hit.t, cone_spread=ray.cone_spread)
+        ns = consistent_shading_normal(ns, n, -ray.d)
+        return Surface(p=p, n_geo=n, n_shading=ns, uv=uv, uv1=uv1, tangent=tangent, material=self.prim_material[g],
+                       front_face=front, eps=0.0, cone_width=ray.cone_width + ray.cone_spread * hit.t,
+                       cone_spread=ray.cone_spread)
 
     @ti.func
     def spawn(self, surface, direction):
         side = surface.n_geo if direction.dot(surface.n_geo) > 0.0 else -surface.n_geo
         return Ray(o=isect.offset_ray_origin(surface.p, side), d=direction,
                    cone_width=surface.cone_width, cone_spread=surface.cone_spread)
-
-
-# Least cosine between the viewing direction and the shading normal on the viewer's side. Small
-# enough to leave real shading detail alone, large enough to keep BSDF frames non-degenerate.
-MIN_SHADING_COSINE = 1e-2
-
-
-@ti.func
-def _consistent_shading_normal(ns, ng, wo):
-    """Keep the interpolated normal on the geometric normal's side, and keep the viewer in front of
-    it: where interpolation tilts ns away from wo (silhouettes of smooth low-poly meshes), bend it
-    towards wo just enough. Without this, such hits shade black (seams) or sample directions
-    below the true surface (light leaking through it)."""
-    result = ns
-    if result.dot(ng) < 0.0:
-        result = -result
-    side = 1.0 if wo.dot(ng) >= 0.0 else -1.0
-    c = side * result.dot(wo)
-    if c < MIN_SHADING_COSINE:
-        result = ti.math.normalize(result + side * (MIN_SHADING_COSINE - c) * wo)
-    return result

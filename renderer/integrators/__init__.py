@@ -2,6 +2,7 @@
 
 An integrator is a data-oriented class with
   name, description                 for the command line, HUD and help
+  hotkey                            the viewer's letter for it (Taichi's window reports letters only)
   display_tonemapper                None (the user's choice) or a tone mapper name its output wants
   li(ctx, ray, key, max_depth)      a Taichi func returning (value vec3, geometry work, rays traced)
 `ctx` is the RenderProgram: ctx.geometry, ctx.bsdf, ctx.environment, ctx.features.

@@ -30,6 +30,7 @@ def heat(x):
 @ti.data_oriented
 class NormalsView:
     name = "normals"
+    hotkey = "o"  # "orientation"
     description = "shading normal at the first hit, mapped to [0, 1]"
     display_tonemapper = "none"
 
@@ -38,13 +39,15 @@ class NormalsView:
         hit = ctx.geometry.intersect(ray, INF)
         value = vec3(0.0)
         if hit.hit == 1:
-            value = ctx.geometry.surface(ray, hit).n_shading * 0.5 + 0.5
+            _, n = ctx.bsdf.shade(ctx.geometry.surface(ray, hit), -ray.d)  # normal maps included
+            value = n * 0.5 + 0.5
         return value, hit.work, 1
 
 
 @ti.data_oriented
 class AlbedoView:
     name = "albedo"
+    hotkey = "c"  # "colour"
     description = "base colour at the first hit"
     display_tonemapper = "none"
 
@@ -53,13 +56,15 @@ class AlbedoView:
         hit = ctx.geometry.intersect(ray, INF)
         value = vec3(0.0)
         if hit.hit == 1:
-            value = ctx.bsdf.albedo(ctx.bsdf.get(ctx.geometry.surface(ray, hit).material))
+            mat, _ = ctx.bsdf.shade(ctx.geometry.surface(ray, hit), -ray.d)
+            value = ctx.bsdf.albedo(mat)
         return value, hit.work, 1
 
 
 @ti.data_oriented
 class DepthView:
     name = "depth"
+    hotkey = "z"  # "z-buffer"
     description = "distance to the first hit in metres (0 for misses); shown as d / (1 + d)"
     display_tonemapper = "reinhard"
 
@@ -75,6 +80,7 @@ class DepthView:
 @ti.data_oriented
 class StepsView:
     name = "steps"
+    hotkey = "g"  # "geometry work"
     description = "geometry work per camera ray (march steps) as a heat map of work / 256"
     display_tonemapper = "none"
 

@@ -17,6 +17,7 @@ FIRST_BOUNCE_DIM = 4
 @ti.data_oriented
 class PathTracer:
     name = "path"
+    hotkey = "t"  # "trace"
     description = "path tracing, BSDF sampling only"
     display_tonemapper = None
 
@@ -35,7 +36,7 @@ class PathTracer:
                 radiance += throughput * ctx.environment.radiance(ray.d)
                 break
             s = ctx.geometry.surface(ray, hit)
-            mat = ctx.bsdf.get(s.material)
+            mat, n_shading = ctx.bsdf.shade(s, -ray.d)
             if ti.static(ctx.features.has_emission):
                 if s.front_face == 1:
                     radiance += throughput * mat.emission
@@ -44,7 +45,7 @@ class PathTracer:
                 break
             dim = FIRST_BOUNCE_DIM + DIMS_PER_BOUNCE * depth
             u = ti.math.vec3(uniform(key, dim), uniform(key, dim + 1), uniform(key, dim + 2))
-            bs = ctx.bsdf.sample(mat, s.n_shading, -ray.d, u)
+            bs = ctx.bsdf.sample(mat, n_shading, -ray.d, u)
             if bs.valid == 0:
                 break
             throughput *= bs.weight

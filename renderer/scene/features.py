@@ -1,13 +1,15 @@
 """What a scene calls for. Kernels are compiled per Features, so nothing unused is simulated.
 
-Features names *kinds* (BSDF kinds, SDF primitive and operator kinds, environment kind, lens model),
-never instances: adding a tenth sphere to a scene with spheres compiles nothing new.
+Features names *kinds* (BSDF kinds, texture use, primitive and operator kinds, environment kind,
+lens model), never instances: adding a tenth sphere to a scene with spheres compiles nothing new.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 
 from renderer.scene.model import MATERIAL_KINDS, SDF_OPERATORS, SDF_PRIMITIVES, Scene
+
+MESH_PRIMITIVES = ("triangle", "sphere", "quad", "disc")
 
 
 @dataclass(frozen=True)
@@ -16,17 +18,23 @@ class Features:
     has_diffuse: bool = False
     has_conductor: bool = False
     has_dielectric: bool = False
+    has_principled: bool = False
     has_emission: bool = False
+    has_textures: bool = False
+    has_normal_maps: bool = False
     environment: str = "sky"  # "map" | "sky" | "constant"
     depth_of_field: bool = False
     sdf_primitives: frozenset = frozenset()
     sdf_operators: frozenset = frozenset()
+    mesh_primitives: frozenset = frozenset()
 
     def active_effects(self) -> list[str]:
         """Short names for the HUD and `app.py info`."""
-        names = [k for k, on in (("diffuse", self.has_diffuse), ("conductor", self.has_conductor),
-                                  ("glass", self.has_dielectric), ("emission", self.has_emission),
-                                  ("depth of field", self.depth_of_field)) if on]
+        flags = (("diffuse", self.has_diffuse), ("conductor", self.has_conductor), ("glass", self.has_dielectric),
+                 ("principled", self.has_principled), ("emission", self.has_emission),
+                 ("textures", self.has_textures), ("normal maps", self.has_normal_maps),
+                 ("depth of field", self.depth_of_field))
+        names = [name for name, on in flags if on]
         names.append(f"env:{self.environment}")
         return names
 
@@ -39,29 +47,45 @@ class Features:
 
     def with_everything(self) -> "Features":
         """Every optional effect of this geometry kind switched on (for the cost benchmark)."""
-        return replace(self, has_diffuse=True, has_conductor=True, has_dielectric=True, has_emission=True,
-                       depth_of_field=True, sdf_primitives=frozenset(SDF_PRIMITIVES),
-                       sdf_operators=frozenset(SDF_OPERATORS) if self.geometry == "sdf" else frozenset())
+        sdf = self.geometry == "sdf"
+        return replace(self, has_diffuse=True, has_conductor=True, has_dielectric=True, has_principled=True,
+                       has_emission=True, has_textures=not sdf, has_normal_maps=not sdf, depth_of_field=True,
+                       sdf_primitives=frozenset(SDF_PRIMITIVES) if sdf else frozenset(),
+                       sdf_operators=frozenset(SDF_OPERATORS) if sdf else frozenset(),
+                       mesh_primitives=frozenset() if sdf else frozenset(MESH_PRIMITIVES))
+
+
+def features_from(geometry: str, material_uses: dict, environment: str, aperture: float,
+                  sdf_nodes=(), mesh_kinds=frozenset()) -> Features:
+    """material_uses: {"kinds": set of kind names, "textures", "normal_maps", "emission": bool}."""
+    kinds = material_uses["kinds"]
+    unknown = set(kinds) - set(MATERIAL_KINDS)
+    if unknown:
+        raise ValueError(f"unknown material kinds {sorted(unknown)}")
+    return Features(
+        geometry=geometry,
+        has_diffuse="diffuse" in kinds,
+        has_conductor="conductor" in kinds,
+        has_dielectric="dielectric" in kinds,
+        has_principled="principled" in kinds,
+        has_emission=material_uses["emission"],
+        has_textures=material_uses["textures"],
+        has_normal_maps=material_uses["normal_maps"],
+        environment=environment,
+        depth_of_field=aperture > 0.0,
+        sdf_primitives=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_PRIMITIVES),
+        sdf_operators=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_OPERATORS),
+        mesh_primitives=frozenset(mesh_kinds),
+    )
 
 
 def scene_features(scene: Scene, aperture: float | None = None) -> Features:
-    """Features of a scene; `aperture` overrides the scene camera's (the viewer's lens slider)."""
-    kinds = {m.kind for m in scene.materials}
-    unknown = kinds - set(MATERIAL_KINDS)
-    if unknown:
-        raise ValueError(f"unknown material kinds {sorted(unknown)}")
+    """Features of an SDF scene from its description alone (mesh scenes need their files loaded:
+    the Renderer computes theirs from the assembled data)."""
     used_materials = {n.material for n in scene.sdf_objects}
     used = [m for m in scene.materials if m.name in used_materials] or list(scene.materials)
     nodes = [node for top in scene.sdf_objects for node in top.walk()]
+    uses = {"kinds": {m.kind for m in used}, "textures": False, "normal_maps": False,
+            "emission": any(m.is_emissive for m in used)}
     lens = scene.camera.aperture if aperture is None else aperture
-    return Features(
-        geometry=scene.geometry,
-        has_diffuse=any(m.kind == "diffuse" for m in used),
-        has_conductor=any(m.kind == "conductor" for m in used),
-        has_dielectric=any(m.kind == "dielectric" for m in used),
-        has_emission=any(m.is_emissive for m in used),
-        environment=scene.environment.kind,
-        depth_of_field=lens > 0.0,
-        sdf_primitives=frozenset(n.kind for n in nodes if n.kind in SDF_PRIMITIVES),
-        sdf_operators=frozenset(n.kind for n in nodes if n.kind in SDF_OPERATORS),
-    )
+    return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes)

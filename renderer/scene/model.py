@@ -15,11 +15,13 @@ import numpy as np
 Vec3 = tuple[float, float, float]
 
 # Kinds known to the renderer. The loader refuses anything else with a one-line error.
-MATERIAL_KINDS = ("diffuse", "conductor", "dielectric")
+MATERIAL_KINDS = ("diffuse", "conductor", "dielectric", "principled")
 SDF_PRIMITIVES = ("sphere", "box", "rounded_box", "torus", "capsule", "cylinder", "cone", "plane")
 SDF_OPERATORS = ("union", "intersection", "subtraction", "smooth_union", "repeat")
 ENVIRONMENT_KINDS = ("map", "sky", "constant")
-GEOMETRY_KINDS = ("sdf",)
+GEOMETRY_KINDS = ("sdf", "mesh")
+MESH_OBJECT_KINDS = ("mesh", "sphere", "quad", "disc", "generated")
+MESH_GENERATORS = ("terrain", "icosphere")
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,8 @@ class MaterialSpec:
     roughness: float = 0.5  # perceptual roughness in [0, 1]; alpha = roughness^2; 0 is a perfect mirror
     ior: float = 1.5  # dielectric index of refraction
     emission: Vec3 = (0.0, 0.0, 0.0)  # emitted radiance, linear RGB (colour times strength)
+    metallic: float = 0.0  # principled only: 0 dielectric base, 1 metal (glTF metallic)
+    transmission: float = 0.0  # principled only: fraction of the dielectric base that transmits
 
     @property
     def is_emissive(self) -> bool:
@@ -128,6 +132,38 @@ class SdfNode:
 
 
 @dataclass(frozen=True)
+class MeshObject:
+    """One object of a mesh scene.
+
+    kind "mesh": a model file (glTF/GLB, OBJ, PLY); its own materials unless `material` overrides.
+    kind "sphere": radius; "disc": radius, in the local xz plane facing +y; "quad": size (x, z),
+    centred in the local xz plane facing +y; "generated": a procedural mesh (`generator` and its
+    `params`, e.g. terrain {"resolution", "size", "height", "seed"}, icosphere {"subdivisions",
+    "radius"}). Analytic and generated objects need `material`.
+    The transform applies scale, then rotation (Euler degrees, x then y then z), then translation.
+    Spheres and discs need a uniform scale (an ellipse is not a disc).
+    """
+
+    kind: str
+    file: Optional[Path] = None
+    material: Optional[str] = None
+    radius: float = 0.5
+    size: tuple[float, float] = (1.0, 1.0)
+    generator: Optional[str] = None
+    params: tuple[tuple[str, object], ...] = ()
+    translate: Vec3 = (0.0, 0.0, 0.0)
+    rotate: Vec3 = (0.0, 0.0, 0.0)
+    scale: Vec3 = (1.0, 1.0, 1.0)
+
+    def matrix(self) -> np.ndarray:
+        """The 4x4 object-to-world matrix."""
+        m = np.eye(4)
+        m[:3, :3] = Transform(rotate=self.rotate).rotation_matrix() @ np.diag(self.scale)
+        m[:3, 3] = self.translate
+        return m
+
+
+@dataclass(frozen=True)
 class Scene:
     name: str
     path: Optional[Path]  # the file it came from, for error messages
@@ -138,6 +174,7 @@ class Scene:
     materials: tuple[MaterialSpec, ...]
     sdf_objects: tuple[SdfNode, ...] = ()
     description: str = ""
+    mesh_objects: tuple[MeshObject, ...] = ()
 
     def material_index(self, name: str) -> int:
         for i, m in enumerate(self.materials):

@@ -15,7 +15,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Optional
 
-from .model import ENVIRONMENT_KINDS, GEOMETRY_KINDS, MATERIAL_KINDS
+from .model import (
+    ENVIRONMENT_KINDS,
+    GEOMETRY_KINDS,
+    MATERIAL_KINDS,
+    MESH_GENERATORS,
+    MESH_OBJECT_KINDS,
+)
 
 
 class _Required:
@@ -35,7 +41,9 @@ VALUE_KINDS = {
     "vec3": "array of 3 floats",
     "dir3": "array of 3 floats",  # a direction: non-zero, normalised by the loader
     "int3": "array of 3 integers",
+    "vec2": "array of 2 floats",
     "scale": "float, or array of 3 equal floats",
+    "scale3": "float, or array of 3 floats",
     "table": "table",
     "tables": "array of tables",
 }
@@ -101,6 +109,7 @@ class Field:
     in_model: bool = True  # False: no model attribute of its own (e.g. emission_strength)
     default_doc: Optional[str] = None  # shown instead of the default when it is computed
     allowed_doc: Optional[str] = None  # shown instead of the range when another check applies
+    geometries: Optional[tuple[str, ...]] = None  # the scene geometry kinds it belongs to (None: all)
 
     @property
     def model_attr(self) -> str:
@@ -112,6 +121,9 @@ class Field:
 
     def applies_to(self, kind: Optional[str]) -> bool:
         return self.only_for is None or kind in self.only_for
+
+    def in_geometry(self, geometry: str) -> bool:
+        return self.geometries is None or geometry in self.geometries
 
 
 @dataclass(frozen=True)
@@ -129,6 +141,7 @@ class Section:
     description: str
     fields: tuple[Field, ...]
     rules: tuple[Rule, ...] = ()
+    heading: Optional[str] = None  # markdown heading, when the name alone is ambiguous
 
     def field(self, name: str) -> Field:
         return next(f for f in self.fields if f.name == name)
@@ -157,6 +170,26 @@ class NodeKind:
         if self.max_children == self.min_children:
             return f"exactly {self.min_children} child" + ("" if self.min_children == 1 else "ren")
         return f"at least {self.min_children} children"
+
+
+@dataclass(frozen=True)
+class MeshKind:
+    """A `type` of object in a `mesh` scene: a model file, an analytic shape or a generated mesh."""
+
+    name: str
+    description: str
+    params: tuple[Field, ...] = ()
+    needs_material: bool = True  # False: the object may bring its own materials (model files)
+    uniform_scale_reason: Optional[str] = None  # set when only a uniform scale keeps the shape
+
+
+@dataclass(frozen=True)
+class Generator:
+    """A procedural mesh of a `generated` object; its parameters are fields of that object."""
+
+    name: str
+    description: str
+    params: tuple[Field, ...] = ()
 
 
 # --- rules -----------------------------------------------------------------------------------
@@ -206,7 +239,8 @@ SCENE = Section(
               default_doc="the file name without extension"),
         Field("description", "string", "", "Free text, shown in tools and reports."),
         Field("geometry", "string", REQUIRED, "How objects are described. `sdf`: signed distance "
-              "fields in `[[objects]]`.", choices=GEOMETRY_KINDS),
+              "fields in `[[objects]]`. `mesh`: triangle meshes (model files and generated meshes) "
+              "and analytic spheres, discs and quads in `[[objects]]`.", choices=GEOMETRY_KINDS),
     ),
 )
 
@@ -241,13 +275,15 @@ RENDER = Section(
               "the renderer provides."),
         Field("seed", "int", 0, "Random seed; the same seed gives the same image.", NON_NEGATIVE),
         Field("march", "table", None, "Sphere-tracing settings, see `[render.march]`.",
-              in_model=False, default_doc="see below", allowed_doc="see below"),
+              in_model=False, default_doc="see below", allowed_doc="see below",
+              geometries=("sdf",)),
     ),
 )
 
 MARCH = Section(
     "render.march",
-    "Sphere-tracing settings, used by `sdf` scenes. Every field is optional.",
+    "Sphere-tracing settings of `sdf` scenes (an error in `mesh` scenes, which do not sphere "
+    "trace). Every field is optional.",
     (
         Field("hit_threshold", "float", 1.0, "A ray hits when the distance is below this many "
               "pixel footprints at that range.", POSITIVE),
@@ -285,17 +321,27 @@ ENVIRONMENT = Section(
     ),
 )
 
+_PRINCIPLED = ("principled",)
+
 MATERIAL = Section(
     "materials.<name>",
     "One table per material; the key is the material's name, which objects refer to. Materials "
-    "that no object uses are allowed.",
+    "that no object uses are allowed. `principled` follows glTF's metallic-roughness model: a "
+    "dielectric base (diffuse plus a specular layer with the given `ior`) blended with a metal of "
+    "colour `base_color` by `metallic`, and a `transmission` fraction of the dielectric base that "
+    "refracts instead of scattering diffusely.",
     (
         Field("type", "string", "diffuse", "Kind of material.", choices=MATERIAL_KINDS, attr="kind"),
         Field("base_color", "vec3", (0.8, 0.8, 0.8), "Albedo (diffuse), reflectance at normal "
-              "incidence (conductor) or transmission tint (dielectric), linear RGB.", UNIT),
+              "incidence (conductor), transmission tint (dielectric) or glTF base colour "
+              "(principled), linear RGB.", UNIT),
+        Field("metallic", "float", 0.0, "0 is a dielectric base, 1 a metal (glTF "
+              "`metallicFactor`).", UNIT, only_for=_PRINCIPLED),
         Field("roughness", "float", 0.5, "Perceptual roughness; 0 is a perfect mirror.", UNIT),
+        Field("transmission", "float", 0.0, "Fraction of the dielectric base that is transmitted "
+              "(glTF `KHR_materials_transmission`).", UNIT, only_for=_PRINCIPLED),
         Field("ior", "float", 1.5, "Index of refraction.", Range(1.0, 4.0, lo_open=True),
-              only_for=("dielectric",)),
+              only_for=("dielectric", "principled")),
         Field("emission", "vec3", (0.0, 0.0, 0.0), "Emitted radiance, linear RGB.", NON_NEGATIVE),
         Field("emission_strength", "float", 1.0, "Multiplier folded into `emission`.",
               NON_NEGATIVE, in_model=False),
@@ -306,6 +352,7 @@ MATERIAL = Section(
 NODE = Section(
     "objects",
     "The SDF objects of an `sdf` scene, one `[[objects]]` table each; a scene needs at least one. "
+    "The object types of `mesh` scenes (other than `sphere`) are errors here. "
     "An object is a primitive or an operator whose operands are written as "
     "`[[objects.children]]` tables (nested to any depth: `[[objects.children.children]]`). "
     "Every node may carry a transform, applied as scale, then rotation, then translation. "
@@ -326,6 +373,7 @@ NODE = Section(
         Field("children", "tables", None, "Operands of an operator (operators only).",
               default_doc="none", allowed_doc="see the operator"),
     ),
+    heading="`[[objects]]` in `sdf` scenes",
 )
 
 
@@ -380,6 +428,80 @@ OPERATORS = (
 
 NODE_KINDS = {k.name: k for k in PRIMITIVES + OPERATORS}
 
+# --- mesh scenes -----------------------------------------------------------------------------
+
+# Model file formats `load_mesh_asset` reads (renderer.scene.mesh_loader.MESH_EXTENSIONS; a test
+# keeps the two equal). The scene loader checks the extension and that the file exists; the file
+# itself is read when the scene is prepared for rendering.
+MESH_FILE_EXTENSIONS = (".gltf", ".glb", ".obj", ".ply", ".stl")
+
+MESH_OBJECT = Section(
+    "objects",
+    "The objects of a `mesh` scene, one `[[objects]]` table each; a scene needs at least one. "
+    "`type` says what the object is (see below); SDF primitives and operators are errors here. "
+    "Every object may carry a transform, applied as scale, then rotation, then translation. "
+    "In error messages objects are named by 0-based position, e.g. `objects[1]`.",
+    (
+        Field("type", "string", REQUIRED, "An object type, see below.", choices=MESH_OBJECT_KINDS),
+        Field("material", "string", None, "Name of a material defined under `[materials]`. "
+              "Required, except for `mesh` objects, where it replaces every material of the model "
+              "file (without it the file's own materials are used).",
+              default_doc="required (optional for `mesh`)", allowed_doc="a defined material"),
+        Field("translate", "vec3", (0.0, 0.0, 0.0), "Translation, metres."),
+        Field("rotate", "vec3", (0.0, 0.0, 0.0), "Euler angles, degrees, applied about x, then "
+              "y, then z."),
+        Field("scale", "scale3", 1.0, "Scale factor: one number (uniform) or one per axis. "
+              "`sphere` and `disc` need a uniform scale.", POSITIVE),
+    ),
+    heading="`[[objects]]` in `mesh` scenes",
+)
+
+MESH_KINDS = (
+    MeshKind("mesh", "Triangle meshes from a model file, with the file's materials and textures "
+             "unless `material` overrides them. The file is placed as its node hierarchy "
+             "places it, then transformed by the object's transform.",
+             (Field("file", "string", REQUIRED, "Model file, `.gltf`, `.glb`, `.obj`, `.ply` or "
+                    "`.stl`. A relative path is relative to the scene file's folder.",
+                    default_doc="required", allowed_doc="an existing model file"),),
+             needs_material=False),
+    MeshKind("sphere", "An analytic sphere centred at the origin.",
+             (Field("radius", "float", 0.5, "Radius.", POSITIVE),),
+             uniform_scale_reason="an ellipsoid is not a sphere"),
+    MeshKind("quad", "A rectangle in the local xz plane, centred at the origin, facing +y "
+             "(its front side, which matters for emitters, is the +y side).",
+             (Field("size", "vec2", (1.0, 1.0), "Full edge lengths along local x and z.",
+                    POSITIVE),)),
+    MeshKind("disc", "A disc in the local xz plane, centred at the origin, facing +y.",
+             (Field("radius", "float", 0.5, "Radius.", POSITIVE),),
+             uniform_scale_reason="an ellipse is not a disc"),
+    MeshKind("generated", "A triangle mesh made by a procedural generator (see Generators "
+             "below) when the scene is loaded for rendering; the generator's parameters are "
+             "fields of the object.",
+             (Field("generator", "string", REQUIRED, "Which generator.",
+                    choices=MESH_GENERATORS, default_doc="required"),)),
+)
+
+MESH_KINDS_BY_NAME = {k.name: k for k in MESH_KINDS}
+
+GENERATORS = (
+    Generator("terrain", "A height field over a square grid in the local xz plane, centred at "
+              "the origin: `resolution` x `resolution` quads (2 triangles each, so 708 gives "
+              "1,002,528 triangles) with heights from seeded fractal value noise, in "
+              "[-`height`, +`height`].",
+              (Field("resolution", "int", 708, "Quads along each side.", Range(2, 4096)),
+               Field("size", "float", 10.0, "Edge length of the square, metres.", POSITIVE),
+               Field("height", "float", 1.0, "Largest height above or below y = 0, metres.",
+                     NON_NEGATIVE),
+               Field("seed", "int", 0, "Noise seed; the same seed gives the same terrain.",
+                     NON_NEGATIVE))),
+    Generator("icosphere", "A sphere made of triangles: an icosahedron subdivided "
+              "`subdivisions` times (20 * 4^subdivisions triangles), centred at the origin.",
+              (Field("subdivisions", "int", 3, "Subdivision steps.", Range(0, 8)),
+               Field("radius", "float", 1.0, "Radius, metres.", POSITIVE))),
+)
+
+GENERATORS_BY_NAME = {g.name: g for g in GENERATORS}
+
 # Top-level sections, in the order the documentation presents them.
 TOP_LEVEL = ("scene", "camera", "render", "environment", "materials", "objects")
 SECTIONS = (SCENE, CAMERA, RENDER, MARCH, ENVIRONMENT, MATERIAL)
@@ -396,6 +518,11 @@ INTRO = """\
 A scene is a [TOML](https://toml.io) file with the extension `.toml`. Units are metres and
 angles are degrees. Colours are linear RGB. Relative file paths (such as an environment map)
 are relative to the folder of the scene file.
+
+A scene holds one kind of geometry, named by `[scene] geometry`: `sdf` (signed distance
+fields, sphere traced) or `mesh` (triangle meshes with a BVH, plus analytic spheres, discs and
+quads). The two kinds share `[camera]`, `[render]`, `[environment]` and `[materials]`; they differ
+in what `[[objects]]` may hold, and `[render.march]` belongs to `sdf` scenes only.
 
 Only `[scene]` (for its `geometry` field) and at least one object are required; every other
 field has the default listed below. The loader is strict: an unknown section or field, a value
@@ -502,6 +629,86 @@ offset = 0
 """
 
 
+MESH_EXAMPLE = """\
+[scene]
+name = "bunny on a table"
+description = "A model file, analytic shapes and a generated mesh."
+geometry = "mesh"
+
+[camera]
+position = [0, 1.5, 4]
+look_at = [0, 0.5, 0]
+fov = 35
+
+[render]
+width = 640
+height = 360
+spp = 64
+max_depth = 8
+
+[environment]
+type = "map"
+file = "../envmaps/sky.exr"
+
+[materials.copper]
+type = "conductor"
+base_color = [0.955, 0.638, 0.538]
+roughness = 0.25
+
+[materials.plastic]
+type = "principled"
+base_color = [0.1, 0.3, 0.8]
+metallic = 0.0
+roughness = 0.3
+ior = 1.45
+
+[materials.floor]
+base_color = [0.5, 0.5, 0.5]
+
+[materials.lamp]
+base_color = [0, 0, 0]
+emission = [1, 0.9, 0.8]
+emission_strength = 10
+
+[[objects]]
+type = "mesh"
+file = "../models/bunny.glb"
+material = "copper"
+translate = [0, 0.45, 0]
+rotate = [0, 30, 0]
+scale = 0.5
+
+[[objects]]
+type = "sphere"
+material = "plastic"
+radius = 0.3
+translate = [1, 0.3, 0]
+
+[[objects]]
+type = "quad"
+material = "floor"
+size = [20, 20]
+
+[[objects]]
+type = "disc"
+material = "lamp"
+radius = 0.5
+translate = [0, 3, 0]
+rotate = [180, 0, 0]
+
+[[objects]]
+type = "generated"
+generator = "terrain"
+material = "floor"
+resolution = 64
+size = 20
+height = 0.3
+seed = 1
+translate = [0, -0.35, -15]
+scale = [1, 1, 0.5]
+"""
+
+
 def _format_value(value: object) -> str:
     if isinstance(value, str):
         return f'"{value}"'
@@ -535,10 +742,14 @@ def _allowed_text(f: Field) -> str:
 
 
 def _description_text(f: Field) -> str:
+    text = f.description
     if f.only_for:
         kinds = " or ".join(f'`type = "{k}"`' for k in f.only_for)
-        return f"{f.description} Only with {kinds}."
-    return f.description
+        text += f" Only with {kinds}."
+    if f.geometries:
+        kinds = " or ".join(f"`{g}`" for g in f.geometries)
+        text += f" Only in {kinds} scenes."
+    return text
 
 
 def _field_table(fields: tuple[Field, ...]) -> list[str]:
@@ -554,9 +765,12 @@ def _rules_list(rules: tuple[Rule, ...]) -> list[str]:
     return ["", *(f"- {r.text}" for r in rules)] if rules else []
 
 
+def _section_heading(section: Section) -> str:
+    return section.heading if section.heading is not None else f"`[{section.name}]`"
+
+
 def _section_markdown(section: Section) -> list[str]:
-    brackets = "[[{}]]" if section is NODE else "[{}]"
-    return ["", f"## `{brackets.format(section.name)}`", "", section.description, "",
+    return ["", f"## {_section_heading(section)}", "", section.description, "",
             *_field_table(section.fields), *_rules_list(section.rules)]
 
 
@@ -569,6 +783,23 @@ def _node_kind_markdown(kind: NodeKind) -> list[str]:
     else:
         lines += ["", "No parameters."]
     return lines + _rules_list(kind.rules)
+
+
+def _mesh_kind_markdown(kind: MeshKind) -> list[str]:
+    lines = ["", f"#### `{kind.name}`", "", kind.description]
+    notes = []
+    if kind.needs_material:
+        notes.append("Needs `material`.")
+    if kind.uniform_scale_reason:
+        notes.append(f"Needs a uniform `scale` ({kind.uniform_scale_reason}).")
+    if notes:
+        lines[-1] += " " + " ".join(notes)
+    return lines + ["", *_field_table(kind.params)]
+
+
+def _generator_markdown(generator: Generator) -> list[str]:
+    return ["", f"#### `{generator.name}`", "", generator.description, "",
+            *_field_table(generator.params)]
 
 
 def render_markdown() -> str:
@@ -585,9 +816,24 @@ def render_markdown() -> str:
     lines += ["", "### Operators"]
     for kind in OPERATORS:
         lines += _node_kind_markdown(kind)
-    lines += ["", "## Complete example", "",
-              "With the scene in `assets/scenes/` and the map in `assets/envmaps/`:", "",
-              "```toml", EXAMPLE.rstrip("\n"), "```"]
+    lines += _section_markdown(MESH_OBJECT)
+    lines += ["", "### Object types", "",
+              "Analytic shapes and generated meshes sit in their own frame, centred at the "
+              "origin. Lengths must be greater than 0. A field of another type is an error."]
+    for kind in MESH_KINDS:
+        lines += _mesh_kind_markdown(kind)
+    lines += ["", "### Generators", "",
+              "The parameters of the chosen `generator` are written as fields of its "
+              "`generated` object; a parameter of another generator is an error. Generators "
+              "are deterministic: the same parameters give the same mesh."]
+    for generator in GENERATORS:
+        lines += _generator_markdown(generator)
+    lines += ["", "## Complete examples", "",
+              "With the scenes in `assets/scenes/`, the maps in `assets/envmaps/` and the models "
+              "in `assets/models/`. An `sdf` scene:", "",
+              "```toml", EXAMPLE.rstrip("\n"), "```", "",
+              "A `mesh` scene:", "",
+              "```toml", MESH_EXAMPLE.rstrip("\n"), "```"]
     return "\n".join(lines) + "\n"
 
 

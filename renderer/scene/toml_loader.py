@@ -5,6 +5,7 @@ the section, field or object (e.g. "objects[1].children[0].radius").
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import tomllib
@@ -14,16 +15,18 @@ from typing import Optional
 from . import schema
 from .errors import SceneError
 from .model import (
+    MESH_OBJECT_KINDS,
     CameraSpec,
     EnvironmentSpec,
     MarchSettings,
     MaterialSpec,
+    MeshObject,
     RenderSettings,
     Scene,
     SdfNode,
     Transform,
 )
-from .schema import Field, NodeKind, Section, format_number
+from .schema import Field, MeshKind, NodeKind, Section, format_number
 
 
 class _Invalid(Exception):
@@ -136,12 +139,16 @@ def _tables(raw: object, where: str) -> list[dict]:
     return raw
 
 
-def _triple(raw: object, where: str, item) -> tuple:
+def _vector(raw: object, where: str, item, n: int) -> tuple:
     if not isinstance(raw, list):
-        raise _Invalid(where, f"expected an array of 3 numbers, got {_describe(raw)}")
-    if len(raw) != 3:
-        raise _Invalid(where, f"expected 3 numbers, got {len(raw)}")
+        raise _Invalid(where, f"expected an array of {n} numbers, got {_describe(raw)}")
+    if len(raw) != n:
+        raise _Invalid(where, f"expected {n} numbers, got {len(raw)}")
     return tuple(item(x, f"{where}[{i}]") for i, x in enumerate(raw))
+
+
+def _triple(raw: object, where: str, item) -> tuple:
+    return _vector(raw, where, item, 3)
 
 
 def _direction(raw: object, where: str) -> tuple[float, float, float]:
@@ -162,14 +169,22 @@ def _scale(raw: object, where: str) -> float:
     return v[0]
 
 
+def _scale3(raw: object, where: str):
+    """A number or 3 numbers, kept as written so that range errors name the right place;
+    `_expand_scale` makes the 3-vector."""
+    return _triple(raw, where, _number) if isinstance(raw, list) else _number(raw, where)
+
+
 _CONVERTERS = {
     "string": _string,
     "int": _integer,
     "float": _number,
     "vec3": lambda raw, where: _triple(raw, where, _number),
+    "vec2": lambda raw, where: _vector(raw, where, _number, 2),
     "dir3": _direction,
     "int3": lambda raw, where: _triple(raw, where, _integer),
     "scale": _scale,
+    "scale3": _scale3,
     "table": _table,
     "tables": _tables,
 }
@@ -196,7 +211,8 @@ def _convert(field: Field, raw: object, where: str):
 # --- tables ----------------------------------------------------------------------------------
 
 
-def _check_keys(table: dict, fields: tuple[Field, ...], where: str, kind: Optional[str]) -> None:
+def _check_keys(table: dict, fields: tuple[Field, ...], where: str, kind: Optional[str],
+                selector: str = "type") -> None:
     by_name = {f.name: f for f in fields}
     for key in table:
         field = by_name.get(key)
@@ -205,13 +221,22 @@ def _check_keys(table: dict, fields: tuple[Field, ...], where: str, kind: Option
             raise _Invalid(where, f"unknown field '{key}' (allowed: {allowed})")
         if not field.applies_to(kind):
             owners = " or ".join(f"'{k}'" for k in field.only_for)
-            raise _Invalid(f"{where}.{key}", f"only allowed with type {owners}, not '{kind}'")
+            raise _Invalid(f"{where}.{key}", f"only allowed with {selector} {owners}, not '{kind}'")
+
+
+def _check_geometry(table: dict, section: Section, where: str, geometry: str) -> None:
+    """Fields that belong to other geometry kinds (e.g. [render.march] in a mesh scene)."""
+    for field in section.fields:
+        if field.name in table and not field.in_geometry(geometry):
+            owners = " or ".join(f"'{g}'" for g in field.geometries)
+            raise _Invalid(f"{where}.{field.name}",
+                           f"only allowed in scenes with geometry {owners}, not '{geometry}'")
 
 
 def _read_fields(table: dict, fields: tuple[Field, ...], where: str,
-                 kind: Optional[str] = None) -> dict:
+                 kind: Optional[str] = None, selector: str = "type") -> dict:
     """Check the keys, convert the values present and fill in defaults for the rest."""
-    _check_keys(table, fields, where, kind)
+    _check_keys(table, fields, where, kind, selector)
     values = {}
     for field in fields:
         if field.name in table:
@@ -260,31 +285,40 @@ def _check_top_level(data: dict) -> None:
         raise _Invalid("", "missing [scene] section (it must set 'geometry')")
 
 
-def _read_render(raw: object) -> RenderSettings:
+def _read_render(raw: object, geometry: str) -> RenderSettings:
     values = _read_section(raw, schema.RENDER, "render")
+    _check_geometry(raw or {}, schema.RENDER, "render", geometry)
     march = _read_section(values["march"], schema.MARCH, "render.march")
     return RenderSettings(**_model_kwargs(schema.RENDER, values),
                           march=MarchSettings(**_model_kwargs(schema.MARCH, march)))
 
 
-def _resolve_map(file: str, scene_path: Path) -> Path:
+def _or_list(items) -> str:
+    items = list(items)
+    return ", ".join(items[:-1]) + " or " + items[-1] if len(items) > 1 else "".join(items)
+
+
+def _resolve_file(file: str, scene_path: Path, where: str, what: str,
+                  extensions: tuple[str, ...]) -> Path:
+    """A file named in the scene, relative to the scene's folder: checked, not read."""
     suffix = PurePath(file).suffix
-    if suffix.lower() not in schema.ENV_MAP_EXTENSIONS:
-        expected = " or ".join(schema.ENV_MAP_EXTENSIONS)
-        raise _Invalid("environment.file",
-                       f"unsupported environment map {_extension_text(suffix)} (expected {expected})")
+    if suffix.lower() not in extensions:
+        raise _Invalid(f"{where}.file", f"unsupported {what} {_extension_text(suffix)} "
+                                        f"(expected {_or_list(extensions)})")
     resolved = (scene_path.parent / file).resolve()
+    noun = what.split()[-1]  # "environment map" -> "map", "model" -> "model"
     if not resolved.exists():
-        raise _Invalid("environment", f"missing map file {file} (looked for {resolved})")
+        raise _Invalid(where, f"missing {noun} file {file} (looked for {resolved})")
     if not resolved.is_file():
-        raise _Invalid("environment", f"map file {file} is not a file")
+        raise _Invalid(where, f"{noun} file {file} is not a file")
     return resolved
 
 
 def _read_environment(raw: object, scene_path: Path) -> EnvironmentSpec:
     values = _read_section(raw, schema.ENVIRONMENT, "environment")
     if values["type"] == "map":
-        values["file"] = _resolve_map(values["file"], scene_path)
+        values["file"] = _resolve_file(values["file"], scene_path, "environment",
+                                       "environment map", schema.ENV_MAP_EXTENSIONS)
     return EnvironmentSpec(**_model_kwargs(schema.ENVIRONMENT, values))
 
 
@@ -314,6 +348,9 @@ def _node_kind(table: dict, where: str) -> NodeKind:
     if kind is None:
         primitives = ", ".join(k.name for k in schema.PRIMITIVES)
         operators = ", ".join(k.name for k in schema.OPERATORS)
+        if name in MESH_OBJECT_KINDS:
+            raise _Invalid(where, f"type '{name}' is only allowed in scenes with geometry 'mesh', "
+                                  f"not 'sdf' (sdf primitives: {primitives}; operators: {operators})")
         raise _Invalid(where, f"unknown primitive '{name}' (known: {primitives}; operators: {operators})")
     return kind
 
@@ -359,23 +396,114 @@ def _read_node(raw: object, where: str, top_level: bool) -> SdfNode:
     )
 
 
-def _read_sdf_objects(raw: object, materials: tuple[MaterialSpec, ...]) -> dict:
+def _object_tables(raw: object) -> list[dict]:
     objects = [] if raw is None else _tables(raw, "objects")
     if not objects:
         raise _Invalid("objects", "the scene has no objects (add at least one [[objects]] table)")
+    return objects
+
+
+def _check_material(name: Optional[str], materials: tuple[MaterialSpec, ...], i: int) -> None:
     known = [m.name for m in materials]
+    if name is not None and name not in known:
+        listed = f"known: {', '.join(known)}" if known else "no materials are defined"
+        raise _Invalid("", f"unknown material '{name}' in objects[{i}] ({listed})")
+
+
+def _read_sdf_objects(raw: object, materials: tuple[MaterialSpec, ...], scene_path: Path) -> dict:
     nodes = []
-    for i, body in enumerate(objects):
+    for i, body in enumerate(_object_tables(raw)):
         node = _read_node(body, f"objects[{i}]", top_level=True)
-        if node.material not in known:
-            listed = f"known: {', '.join(known)}" if known else "no materials are defined"
-            raise _Invalid("", f"unknown material '{node.material}' in objects[{i}] ({listed})")
+        _check_material(node.material, materials, i)
         nodes.append(node)
     return {"sdf_objects": tuple(nodes)}
 
 
+# --- mesh objects ----------------------------------------------------------------------------
+
+
+def _mesh_kind(table: dict, where: str) -> MeshKind:
+    if "type" not in table:
+        raise _Invalid(where, "missing required field 'type'")
+    name = _string(table["type"], f"{where}.type")
+    kind = schema.MESH_KINDS_BY_NAME.get(name)
+    if kind is None:
+        known = ", ".join(MESH_OBJECT_KINDS)
+        node = schema.NODE_KINDS.get(name)
+        if node is not None:
+            what = "an sdf operator" if node.is_operator else "an sdf primitive"
+            raise _Invalid(where, f"type '{name}' is {what}, only allowed in scenes with geometry "
+                                  f"'sdf', not 'mesh' (mesh scenes allow: {known})")
+        raise _Invalid(where, f"unknown object type '{name}' (known: {known})")
+    return kind
+
+
+def _generator(table: dict, where: str) -> schema.Generator:
+    if "generator" not in table:
+        raise _Invalid(where, "missing required field 'generator'")
+    field = schema.MESH_KINDS_BY_NAME["generated"].params[0]
+    return schema.GENERATORS_BY_NAME[_convert(field, table["generator"], f"{where}.generator")]
+
+
+def _generator_fields() -> tuple[Field, ...]:
+    """Every generator's parameters, each marked as belonging to its generator."""
+    return tuple(dataclasses.replace(f, only_for=(g.name,))
+                 for g in schema.GENERATORS for f in g.params)
+
+
+def _expand_scale(kind: MeshKind, scale, raw: object, where: str) -> tuple[float, float, float]:
+    if not isinstance(scale, tuple):
+        return (scale, scale, scale)
+    if kind.uniform_scale_reason and not scale[0] == scale[1] == scale[2]:
+        raise _Invalid(f"{where}.scale", f"non-uniform scale {_toml_list(raw)} is not allowed for "
+                                         f"type '{kind.name}' ({kind.uniform_scale_reason}); "
+                                         "use a uniform scale")
+    return scale
+
+
+def _read_mesh_object(raw: object, where: str, scene_path: Path) -> MeshObject:
+    table = _table(raw, where)
+    kind = _mesh_kind(table, where)
+    fields = schema.MESH_OBJECT.fields + kind.params
+    generator = None
+    if kind.name == "generated":
+        generator = _generator(table, where)
+        values = _read_fields(table, fields + _generator_fields(), where, generator.name,
+                              selector="generator")
+    else:
+        values = _read_fields(table, fields, where)
+    if kind.needs_material and values["material"] is None:
+        raise _Invalid(where, "missing required field 'material'")
+    # The kind's own parameters (radius, size, file) have MeshObject attributes; a generator's
+    # parameters (which may share those names) go to `params`.
+    shape = {f.name: values[f.name] for f in kind.params}
+    model = MeshObject(kind=kind.name)
+    return MeshObject(
+        kind=kind.name,
+        file=(_resolve_file(shape["file"], scene_path, where, "model",
+                            schema.MESH_FILE_EXTENSIONS) if "file" in shape else None),
+        material=values["material"],
+        radius=shape.get("radius", model.radius),
+        size=shape.get("size", model.size),
+        generator=generator.name if generator else None,
+        params=tuple(sorted((f.name, values[f.name]) for f in generator.params)) if generator else (),
+        translate=values["translate"],
+        rotate=values["rotate"],
+        scale=_expand_scale(kind, values["scale"], table.get("scale"), where),
+    )
+
+
+def _read_mesh_objects(raw: object, materials: tuple[MaterialSpec, ...], scene_path: Path) -> dict:
+    objects = []
+    for i, body in enumerate(_object_tables(raw)):
+        obj = _read_mesh_object(body, f"objects[{i}]", scene_path)
+        _check_material(obj.material, materials, i)
+        objects.append(obj)
+    return {"mesh_objects": tuple(objects)}
+
+
 # One reader per geometry kind; each returns the Scene fields holding its objects.
-_GEOMETRY_READERS = {"sdf": _read_sdf_objects}
+_GEOMETRY_READERS = {"sdf": _read_sdf_objects, "mesh": _read_mesh_objects}
 
 
 # --- the scene -------------------------------------------------------------------------------
@@ -385,10 +513,10 @@ def _build_scene(data: dict, path: Path) -> Scene:
     _check_top_level(data)
     header = _read_section(data["scene"], schema.SCENE, "scene")
     camera = _read_section(data.get("camera"), schema.CAMERA, "camera")
-    render = _read_render(data.get("render"))
+    render = _read_render(data.get("render"), header["geometry"])
     environment = _read_environment(data.get("environment"), path)
     materials = _read_materials(data.get("materials"))
-    geometry = _GEOMETRY_READERS[header["geometry"]](data.get("objects"), materials)
+    geometry = _GEOMETRY_READERS[header["geometry"]](data.get("objects"), materials, path)
     return Scene(
         name=header["name"] if header["name"] is not None else path.stem,
         path=path,

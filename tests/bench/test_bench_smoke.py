@@ -119,8 +119,8 @@ def test_time_call_takes_the_median_after_warmup():
 def test_time_interleaved_runs_round_robin():
     order = []
     calls = {"a": lambda: order.append("a"), "b": lambda: order.append("b")}
-    timings = time_interleaved(calls, runs=2, warmup=1)
-    assert order == ["a", "b", "a", "b", "a", "b"]
+    timings = time_interleaved(calls, runs=2, warmup=1, after=lambda name: order.append(name.upper()))
+    assert order == ["a", "b", "a", "A", "b", "B", "a", "A", "b", "B"]
     assert len(timings["a"].times) == 2 and len(timings["b"].warmup_times) == 1
 
 
@@ -200,4 +200,4 @@ def test_startup_child_process_once(tiny_scene, tmp_path):
     assert "error" not in result, result.get("error")
     assert result["spp"] == 1 and result["scene"] == "tiny"
     assert 0 < result["import_and_init"] < result["start_to_first_frame"] <= result["process_seconds"]
-    assert set(result["phases"]) == {"interpreter", "import", "init", "scene", "build", "first_frame"}
+    assert set(result["phases"]) == {"interpreter", "import", "init", "scene", "build", "first_frame", "next_frame"}

@@ -1,7 +1,7 @@
 """Shared pieces of the SDF tests: scenes built in code, numpy reference distances, test kernels.
 
 The kernels take the geometry as a template argument, so each SdfGeometry compiles its own copy:
-tests share geometries through module-scoped fixtures and batch thousands of rays per launch.
+tests share geometries through module-scoped fixtures or caches and batch thousands of rays per launch.
 """
 
 import numpy as np
@@ -19,7 +19,7 @@ from renderer.scene.model import (
     SdfNode,
     Transform,
 )
-from shaders_sdf.geometry import SPAWN_OFFSET, SdfGeometry
+from shaders_sdf.geometry import SdfGeometry
 
 vec3 = ti.math.vec3
 MATERIAL = "m"
@@ -36,7 +36,6 @@ PRIMITIVE_PARAMS = {
     "plane": {"normal": (0.0, 1.0, 0.0), "offset": 0.0},
 }
 PRIMITIVES = tuple(PRIMITIVE_PARAMS)
-BOUNDED_PRIMITIVES = tuple(k for k in PRIMITIVES if k != "plane")
 
 
 # --- scenes built in code ----------------------------------------------------------------------
@@ -57,17 +56,19 @@ def node(kind: str, *children: SdfNode, translate=(0.0, 0.0, 0.0), rotate=(0.0, 
                    material=material)
 
 
-def make_scene(*objects: SdfNode, **march) -> Scene:
-    """A scene with one diffuse material 'm' on every top-level object."""
-    objects = tuple(o if o.material is not None else SdfNode(o.kind, o.params, o.children, o.transform, MATERIAL)
+def make_scene(*objects: SdfNode, materials=(MaterialSpec(MATERIAL),), **march) -> Scene:
+    """A scene of `objects`; those without a material get the first of `materials` (by default
+    one diffuse material named 'm')."""
+    objects = tuple(o if o.material is not None else SdfNode(o.kind, o.params, o.children, o.transform,
+                                                             materials[0].name)
                     for o in objects)
     return Scene(name="test", path=None, geometry="sdf", camera=CameraSpec(),
                  render=RenderSettings(march=MarchSettings(**march)), environment=EnvironmentSpec(),
-                 materials=(MaterialSpec(MATERIAL),), sdf_objects=objects)
+                 materials=tuple(materials), sdf_objects=objects)
 
 
-def make_geometry(*objects: SdfNode, **march) -> SdfGeometry:
-    scene = make_scene(*objects, **march)
+def make_geometry(*objects: SdfNode, materials=(MaterialSpec(MATERIAL),), **march) -> SdfGeometry:
+    scene = make_scene(*objects, materials=materials, **march)
     return SdfGeometry(scene, scene.material_index)
 
 
@@ -217,25 +218,6 @@ def ref_scene(objects, p: np.ndarray) -> np.ndarray:
     return np.min([ref_node(o, p) for o in objects], axis=0)
 
 
-def reference_distance(kind: str, p: np.ndarray, **params) -> np.ndarray:
-    return REFERENCE[kind](np.asarray(p, np.float64), **{**PRIMITIVE_PARAMS[kind], **params})
-
-
-def bounding_half_extent(kind: str) -> float:
-    """Half the side of a centred cube that contains the primitive (plane: a 2 m region)."""
-    p = PRIMITIVE_PARAMS[kind]
-    return {
-        "sphere": lambda: p["radius"],
-        "box": lambda: 0.5 * max(p["size"]),
-        "rounded_box": lambda: 0.5 * max(p["size"]),
-        "torus": lambda: p["major_radius"] + p["minor_radius"],
-        "capsule": lambda: 0.5 * p["height"] + p["radius"],
-        "cylinder": lambda: max(0.5 * p["height"], p["radius"]),
-        "cone": lambda: max(0.5 * p["height"], p["radius"]),
-        "plane": lambda: 1.0,
-    }[kind]()
-
-
 # --- random directions -------------------------------------------------------------------------
 
 
@@ -260,6 +242,21 @@ def sdf(geo: SdfGeometry, pts: np.ndarray) -> np.ndarray:
     out = np.zeros(len(pts), np.float32)
     _distance_kernel(geo, pts, out)
     return out
+
+
+@ti.kernel
+def _distance_material_kernel(geo: ti.template(), pts: ti.types.ndarray(dtype=vec3, ndim=1),
+                              out: ti.types.ndarray(dtype=ti.math.vec2, ndim=1)):
+    for i in range(pts.shape[0]):
+        out[i] = geo.program.distance_material(pts[i])
+
+
+def sdf_material(geo: SdfGeometry, pts: np.ndarray):
+    """The scene's Taichi distance and the material id of the nearest object, at points (N, 3)."""
+    pts = np.ascontiguousarray(pts, np.float32).reshape(-1, 3)
+    out = np.zeros((len(pts), 2), np.float32)
+    _distance_material_kernel(geo, pts, out)
+    return out[:, 0], np.rint(out[:, 1]).astype(np.int64)
 
 
 # Columns of the trace kernel's outputs.
@@ -456,6 +453,6 @@ def intersect(geo: SdfGeometry, o, d, t_max: float, cone_width: float = 0.0, con
     return out_i[:, 0], out_i[:, 1], out_t.astype(np.float64)
 
 
-__all__ = ["SPAWN_OFFSET", "intersect", "node", "make_scene", "make_geometry", "set_march", "sdf", "trace", "first_crossing",
-           "normals", "reference_distance", "PRIMITIVES", "BOUNDED_PRIMITIVES", "PRIMITIVE_PARAMS",
-           "bounding_half_extent", "random_directions", "ref_node", "ref_scene"]
+__all__ = ["PRIMITIVES", "PRIMITIVE_PARAMS", "node", "make_scene", "make_geometry", "set_march", "ref_node",
+           "ref_scene", "random_directions", "sdf", "sdf_material", "trace", "TraceResult", "first_crossing",
+           "normals", "intersect"]

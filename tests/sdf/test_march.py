@@ -24,7 +24,6 @@ from renderer.camera import CameraFrame
 from renderer.scene.model import MarchSettings
 from renderer.scene.toml_loader import load_scene
 from sdf_helpers import (
-    SPAWN_OFFSET,
     first_crossing,
     intersect,
     make_geometry,
@@ -33,7 +32,6 @@ from sdf_helpers import (
     random_directions,
     ref_scene,
     sdf,
-    set_march,
     trace,
 )
 from shaders_sdf.geometry import SdfGeometry
@@ -195,7 +193,6 @@ def test_primary_rays_hit_the_first_surface(name, omega):
     assert (~result.inside).sum() >= N_OUTSIDE and result.inside.sum() >= N_INSIDE * 0.9
     hit = r.hit == 1
     assert hit[~result.inside].mean() > 0.2 and hit[result.inside].mean() > 0.2, "too few hits to test"
-    geometry(name).set_march(_march(result.spec, omega))
     _check_no_crossing(name, r, "primary rays")
 
 
@@ -215,10 +212,12 @@ def test_hit_point_and_normal(name, omega):
         assert np.abs(np.linalg.norm(n, axis=1) - 1.0).max() < 1e-5
     front = r.front_face[hit] == 1
     from_inside = result.inside[hit]
-    # Where the ray is nearly tangent at its hit the side is decided by noise: only count clear cases.
-    clear = np.abs(np.einsum("ij,ij->i", r.d[hit], r.n[hit])) > 0.05
-    assert np.all(front[clear & ~from_inside]), "an outside ray hit a back face"
-    assert not np.any(front[clear & from_inside]), "an inside ray hit a front face"
+    assert np.all(front[~from_inside]), "an outside ray hit a back face"
+    assert not np.any(front[from_inside]), "an inside ray hit a front face"
+    # The normal faces the side the ray came from, even at silhouettes where the march stops just
+    # past the tangent point (surface() tilts it by at most what that takes).
+    facing = np.einsum("ij,ij->i", r.d[hit], r.n[hit])
+    assert np.all(facing[~from_inside] < 0.0) and np.all(facing[from_inside] > 0.0)
 
 
 @pytest.mark.parametrize("name,omega", CASES)
@@ -227,7 +226,6 @@ def test_spawned_rays_hit_the_first_surface(name, omega):
     without crossing a surface, like primary rays (from whichever side they actually start)."""
     result = run(name, omega)
     geo = geometry(name)
-    geo.set_march(_march(result.spec, omega))
     p = result.primary
     for what, spawned, src in (("reflected", result.refl, result.refl_from),
                                ("transmitted", result.trans, result.trans_from)):
@@ -271,7 +269,6 @@ def test_spawn_does_not_rehit_its_own_surface(name, omega):
                                          f"the surface at {p.p[src[worst]]}")
         immediate = (spawned.hit == 1) & (spawned.work == 1)
         assert not immediate.any(), f"{immediate.sum()} {what} rays re-hit their own surface at t = 0"
-        assert SPAWN_OFFSET * eps.min() > 2.0 * THRESHOLD
 
 
 def _convex_edge_hits(rng, kind, n):
@@ -413,13 +410,14 @@ def test_relaxed_step_onto_a_flat_face_is_taken_back(name):
 
 @pytest.mark.parametrize("cone_spread", [0.0, 2e-3])
 def test_grazing_rays_over_a_plane(cone_spread):
-    """Rays at 1e-3 to 0.9 rad over the floor either hit it where the analytic ray meets it or miss
-    (out of steps), never elsewhere and never NaN.
+    """Rays at 1e-3 to 0.9 rad over the floor, from 0.5 mm to 5 cm above it, either hit it where the
+    analytic ray meets it or miss (out of steps), never elsewhere and never NaN.
 
     A hit means |sdf| < threshold at a point on the ray, and the ray's height above the plane is
-    t sin(theta) away from the crossing, so the hit lies at most threshold / sin(theta) before the
-    analytic t = h / sin(theta): a relative error of threshold / h at most (here <= 2e-3 for
-    cone 0; with a pixel cone the threshold grows to cone_spread * t at distance t).
+    (t_exact - t) sin(theta), so the hit lies between the analytic t = h / sin(theta) and
+    threshold / sin(theta) before it: a relative error of at most threshold / h (2e-3 at 5 cm,
+    0.2 at 0.5 mm). With a pixel cone the threshold grows to cone_spread * t at distance t.
+    A miss can only come from the step budget: at 1e-3 rad each step gains ~1e-3 of the height.
     """
     geo = make_geometry(node("plane"))
     geo.set_march(MarchSettings(min_threshold=THRESHOLD, max_steps=MAX_STEPS, max_distance=1e4, over_relaxation=1.6))
@@ -427,14 +425,13 @@ def test_grazing_rays_over_a_plane(cone_spread):
     n = 3000
     theta = 10.0 ** rng.uniform(-3.0, math.log10(0.9), n)
     phi = rng.uniform(0.0, 2 * np.pi, n)
-    height = 10.0 ** rng.uniform(-2, 0, n) * 0.05 / 0.05 * 0.05  # 0.5 mm .. 5 cm above the floor
+    height = 0.05 * 10.0 ** rng.uniform(-2, 0, n)  # 0.5 mm .. 5 cm above the floor
     o = np.stack([rng.uniform(-1, 1, n), height, rng.uniform(-1, 1, n)], 1)
     d = np.stack([np.cos(theta) * np.cos(phi), -np.sin(theta), np.cos(theta) * np.sin(phi)], 1)
     r = trace(geo, o, d, 200.0, cone_spread=cone_spread)
     assert np.all(np.isfinite(r.t)) and np.all(np.isfinite(r.p[r.hit == 1]))
     hit = r.hit == 1
-    t_exact = r.o[:, 1] / np.sin(theta)  # the f32 origin and direction the kernel saw
-    t_exact = r.o[:, 1] / -r.d[:, 1]
+    t_exact = r.o[:, 1] / -r.d[:, 1]  # with the f32 origin and direction the kernel saw
     thr = np.maximum(THRESHOLD, cone_spread * r.t)
     f32 = 1e-6 * (1.0 + t_exact)
     assert np.all(r.p[hit, 1] > -f32[hit]), "hit below the floor"
@@ -443,8 +440,9 @@ def test_grazing_rays_over_a_plane(cone_spread):
     assert np.all(early[hit] >= -f32[hit] / np.sin(theta[hit]))
     assert np.all(early[hit] <= (thr[hit] + f32[hit]) / np.sin(theta[hit]))
     if cone_spread == 0.0:
+        # Relative error of the hit distance: at most THRESHOLD / h (h = the origin's height).
         rel = np.abs(early[hit]) / t_exact[hit]
-        assert rel.max() <= THRESHOLD / height[hit].min() + 1e-4
+        assert np.all(rel <= THRESHOLD / r.o[hit, 1] + 1e-6)
     # A miss is a miss for lack of steps (the analytic hit is within reach), and only at low angles.
     miss = ~hit
     assert np.all(r.work[miss] >= MAX_STEPS)

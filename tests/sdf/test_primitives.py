@@ -13,16 +13,17 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+from renderer.scene.model import MaterialSpec
 from sdf_helpers import (
     PRIMITIVE_PARAMS,
     PRIMITIVES,
-    bounding_half_extent,
     make_geometry,
     node,
     random_directions,
     ref_node,
     ref_scene,
     sdf,
+    sdf_material,
 )
 
 TOL = 2e-6  # absolute f32 error of one distance evaluation at |p| <= 3 (see the module docstring)
@@ -145,7 +146,7 @@ def _cylinder_surface(height, radius, n_angle, n_along):
 
 
 SURFACES = {
-    "cone": [({"height": 1.0, "radius": 0.5}, lambda p: _cone_surface(p["height"], p["radius"], 1024, 400)),
+    "cone": [({"height": 1.0, "radius": 0.5}, lambda p: _cone_surface(p["height"], p["radius"], 720, 300)),
              ({"height": 0.2, "radius": 1.0}, lambda p: _cone_surface(p["height"], p["radius"], 1024, 300))],
     "torus": [({"major_radius": 0.5, "minor_radius": 0.15},
                lambda p: _torus_surface(p["major_radius"], p["minor_radius"], 1024, 256))],
@@ -290,3 +291,33 @@ def test_smooth_union_bounds():
     far = np.abs(da - db) >= k
     assert np.allclose(got[far], hard[far], atol=TOL)
     assert (~far).sum() > 1000 and (got[~far] < hard[~far] - 1e-3).any()  # the blend is really there
+
+
+def test_top_level_objects_batched_by_kind():
+    """Top-level primitives are evaluated in per-kind loops over table ranges, in an order that
+    differs from the file's; with kinds interleaved the scene distance is still the minimum over
+    all objects and the material is that of the nearest one."""
+    mats = tuple(MaterialSpec(name) for name in ("a", "b", "c"))
+    objects = (
+        node("sphere", translate=(-2, 0, 0), material="a"),
+        node("box", translate=(0, 0, 0), rotate=(10, 20, 30), material="b"),
+        node("sphere", radius=0.3, translate=(2, 0, 0), material="c"),
+        node("union", node("torus"), node("capsule", translate=(0, 0.5, 0)), translate=(0, 2, 0), material="a"),
+        node("cone", translate=(0, 0, 2), scale=1.5, material="b"),
+        node("sphere", radius=0.4, translate=(0, 0, -2), material="b"),
+        node("plane", offset=-1.5, material="c"),
+    )
+    geo = make_geometry(*objects, materials=mats)
+    rng = np.random.default_rng(6)
+    p = rng.uniform(-3, 3, (20000, 3)).astype(np.float32).astype(np.float64)
+    d, material = sdf_material(geo, p)
+    each = np.stack([ref_node(o, p) for o in objects])
+    want = each.min(axis=0)
+    assert np.allclose(d, want, atol=TOL * 4)
+    assert np.allclose(sdf(geo, p), d)
+    second = np.sort(each, axis=0)[1]
+    clear = second - want > 1e-4  # no near-tie between two objects
+    nearest = np.argmin(each, axis=0)
+    want_material = np.array([[m.name for m in mats].index(o.material) for o in objects])[nearest]
+    assert np.all(material[clear] == want_material[clear])
+    assert len(np.unique(nearest[clear])) == len(objects)

@@ -1,11 +1,13 @@
 """The viewer's state machine without a window: reset rules, adaptive resolution, names."""
 import math
+from dataclasses import replace
 from datetime import datetime
 from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
 
+from viewer.controller import MAX_SPEED
 from viewer.session import (MIN_SCALE, Controls, Every, RateMeter, ResolutionController, ViewerSession,
                             fix_max_depth, screenshot_dir, screenshot_paths, screenshot_stem)
 
@@ -311,3 +313,14 @@ def test_rate_meter():
     for i in range(61):
         meter.add(i / 30, 1000)
     assert meter.rate() == pytest.approx(30_000, rel=0.05)
+
+
+def test_move_speed_control_is_not_a_change():
+    s = make_session(settle=0.0)
+    s.plan_frame(0.0)
+    assert s.controls().move_speed == s.controller.move_speed
+    assert not s.apply_controls(replace(s.controls(), move_speed=3.0))
+    assert s.controller.move_speed == 3.0
+    assert not s.plan_frame(0.1).reset
+    s.apply_controls(replace(s.controls(), move_speed=1e9))
+    assert s.controller.move_speed == MAX_SPEED

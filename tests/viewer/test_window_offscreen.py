@@ -79,6 +79,8 @@ def test_hud_is_drawn_over_the_image(app):
 
 
 def test_idle_frames_accumulate_without_reset(app):
+    app.session.hud_visible = True  # untouched sliders must not count as changes
+    app.session.set_focus_distance(3.1234567)  # not representable in float32, like the slider's
     settle(app, 1)
     resets, spp = app.session.resets, app.renderer.samples_done
     for _ in range(3):

@@ -1,0 +1,166 @@
+"""A mesh scene's objects, loaded and placed in world space: the flat primitive arrays, the
+material rows and the texture atlas the device needs. Numpy only; the Renderer uploads the result.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from renderer.geometry.mesh_data import MeshData
+from renderer.materials.bsdf import KIND_IDS, MaterialRows
+from renderer.scene.errors import SceneError
+from renderer.scene.mesh_loader import load_mesh_asset
+from renderer.scene.model import Scene
+from renderer.scene.textures import WRAP_CODES, pack_atlas
+
+KIND_NAMES = {v: k for k, v in KIND_IDS.items()}
+
+
+@dataclass
+class MeshScene:
+    data: MeshData
+    rows: MaterialRows
+    atlas: np.ndarray | None
+    texture_slots: list  # (rect, wrap_s, wrap_t, uv_set, matrix) per texture slot
+
+    def material_uses(self) -> dict:
+        uses = self.rows.uses()
+        uses["kinds"] = {KIND_NAMES[k] for k in uses["kinds"]}
+        return uses
+
+
+class _Builder:
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.rows = MaterialRows()
+        self.material_ids = {m.name: self.rows.add_spec(m) for m in scene.materials}
+        self.images: list[np.ndarray] = []
+        self.slots: list = []  # (image index, wrap_s, wrap_t, uv_set, matrix)
+        self.parts: dict[str, list] = {"tris": [], "normals": [], "uvs": [], "uvs1": [], "tangents": [],
+                                       "tri_mat": [], "spheres": [], "sphere_mat": [], "quads": [],
+                                       "quad_mat": [], "discs": [], "disc_mat": []}
+
+    def material(self, name, where):
+        if name not in self.material_ids:
+            raise SceneError(self.scene.path, f"{where}: unknown material '{name}'")
+        return self.material_ids[name]
+
+    def add_triangles(self, positions, indices, normals, uv0, uv1, tangents, matrix, material):
+        """Local-frame vertex data placed with `matrix`; per-corner arrays appended."""
+        m3 = matrix[:3, :3]
+        det = np.linalg.det(m3)
+        p = positions.astype(np.float64) @ m3.T + matrix[:3, 3]
+        idx = indices
+        if det < 0:  # a mirroring transform reverses the winding; keep front faces counter-clockwise
+            idx = indices[:, [0, 2, 1]]
+        self.parts["tris"].append(p[idx].astype(np.float32))
+        if normals is not None:
+            # Normals transform with the inverse transpose (which also turns them correctly under
+            # a mirroring transform).
+            inv_t = np.linalg.inv(m3).T if abs(det) > 1e-30 else m3
+            n = normals.astype(np.float64) @ inv_t.T
+            n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+            self.parts["normals"].append(n[idx].astype(np.float32))
+        else:
+            self.parts["normals"].append(None)
+        self.parts["uvs"].append(None if uv0 is None else uv0[idx].astype(np.float32))
+        self.parts["uvs1"].append(None if uv1 is None else uv1[idx].astype(np.float32))
+        if tangents is not None:
+            t = tangents[:, :3].astype(np.float64) @ m3.T
+            t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-30)
+            w = tangents[:, 3:4] * np.sign(det if det != 0 else 1.0)
+            self.parts["tangents"].append(np.concatenate([t, w], axis=1)[idx].astype(np.float32))
+        else:
+            self.parts["tangents"].append(None)
+        self.parts["tri_mat"].append(np.full(len(idx), material, np.int32))
+
+    def add_asset(self, obj, index):
+        asset = load_mesh_asset(obj.file)
+        if obj.material is not None:
+            mats = [self.material(obj.material, f"objects[{index}]")] * max(1, len(asset.materials))
+        else:
+            first_image = len(self.images)
+            self.images.extend(asset.images)
+
+            def texture_id(ref):
+                self.slots.append((first_image + ref.texture, WRAP_CODES[ref.wrap_s], WRAP_CODES[ref.wrap_t],
+                                   ref.uv_set, ref.matrix))
+                return len(self.slots) - 1
+
+            mats = [self.rows.add_pbr(m, texture_id) for m in asset.materials]
+        matrix = obj.matrix()
+        for mesh in asset.meshes:
+            self.add_triangles(mesh.positions, mesh.indices, mesh.normals, mesh.uv0, mesh.uv1, mesh.tangents,
+                               matrix, mats[mesh.material])
+
+    def add_object(self, obj, index):
+        where = f"objects[{index}]"
+        matrix = obj.matrix()
+        if obj.kind == "mesh":
+            self.add_asset(obj, index)
+        elif obj.kind == "generated":
+            from renderer.scene.generators import generate
+
+            positions, indices, normals = generate(obj.generator, dict(obj.params))
+            self.add_triangles(positions, indices, normals, None, None, None, matrix, self.material(obj.material, where))
+        elif obj.kind == "sphere":
+            self.parts["spheres"].append([*obj.translate, obj.radius * obj.scale[0]])
+            self.parts["sphere_mat"].append(self.material(obj.material, where))
+        elif obj.kind == "disc":
+            normal = matrix[:3, :3] @ np.array([0.0, 1.0, 0.0])
+            normal /= np.linalg.norm(normal)
+            self.parts["discs"].append([*obj.translate, *normal, obj.radius * obj.scale[0]])
+            self.parts["disc_mat"].append(self.material(obj.material, where))
+        elif obj.kind == "quad":
+            sx, sz = obj.size
+            # Edges chosen so that edge_u x edge_v = +y: the quad faces up before the transform.
+            corner = matrix @ np.array([-sx / 2, 0.0, -sz / 2, 1.0])
+            edge_u = matrix[:3, :3] @ np.array([0.0, 0.0, sz])
+            edge_v = matrix[:3, :3] @ np.array([sx, 0.0, 0.0])
+            self.parts["quads"].append([corner[:3], edge_u, edge_v])
+            self.parts["quad_mat"].append(self.material(obj.material, where))
+        else:
+            raise SceneError(self.scene.path, f"{where}: unknown mesh object type '{obj.kind}'")
+
+    def per_corner(self, key, width):
+        """Concatenate a per-corner attribute, or None when no mesh has it (missing ones get zeros)."""
+        arrays = self.parts[key]
+        if not any(a is not None for a in arrays):
+            return None
+        filled = [a if a is not None else np.zeros((len(t), 3, width), np.float32)
+                  for a, t in zip(arrays, self.parts["tris"])]
+        return np.concatenate(filled) if filled else None
+
+    def result(self) -> MeshScene:
+        p = self.parts
+        tris = np.concatenate(p["tris"]) if p["tris"] else np.zeros((0, 3, 3), np.float32)
+        # Meshes without normals get zero normals, which the device reads as "use the geometric one".
+        normals = self.per_corner("normals", 3)
+        data = MeshData(
+            tri_vertices=tris, tri_normals=normals, tri_uvs=self.per_corner("uvs", 2),
+            tri_uvs1=self.per_corner("uvs1", 2), tri_tangents=self.per_corner("tangents", 4),
+            tri_material=np.concatenate(p["tri_mat"]) if p["tri_mat"] else np.zeros(0, np.int32),
+            spheres=np.array(p["spheres"], np.float32).reshape(-1, 4),
+            sphere_material=np.array(p["sphere_mat"], np.int32),
+            quads=np.array(p["quads"], np.float32).reshape(-1, 3, 3),
+            quad_material=np.array(p["quad_mat"], np.int32),
+            discs=np.array(p["discs"], np.float32).reshape(-1, 7),
+            disc_material=np.array(p["disc_mat"], np.int32))
+        atlas, slots = None, []
+        if self.slots:
+            packed = pack_atlas(self.images)
+            atlas = packed.atlas
+            slots = [(packed.rects[img], ws, wt, uv_set, matrix) for img, ws, wt, uv_set, matrix in self.slots]
+        return MeshScene(data, self.rows, atlas, slots)
+
+
+def assemble(scene: Scene) -> MeshScene:
+    builder = _Builder(scene)
+    for i, obj in enumerate(scene.mesh_objects):
+        builder.add_object(obj, i)
+    result = builder.result()
+    if result.data.primitive_count == 0:
+        raise SceneError(scene.path, "the scene has no primitives")
+    return result
