@@ -52,14 +52,14 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command")
 
     view = sub.add_parser("view", help="open the interactive viewer")
-    view.add_argument("scene", nargs="?", default=None, help="scene name or file (default: showcase)")
+    view.add_argument("scene", nargs="?", default=None, help="scene name, scene file or model file (default: showcase)")
     view.add_argument("--size", type=_size, default=(960, 540), help="window size WxH (default 960x540)")
     view.add_argument("--arch", choices=ARCHES, default="auto")
     view.add_argument("--integrator", default=None)
     view.add_argument("--frames", type=int, default=None, help="quit after this many frames")
 
     render = sub.add_parser("render", help="render headless to a file")
-    render.add_argument("scene", help="scene name or file")
+    render.add_argument("scene", help="scene name, scene file (.toml) or model file (.glb .gltf .obj .ply .stl)")
     budget = render.add_mutually_exclusive_group()
     budget.add_argument("--spp", type=_positive_int, help="samples per pixel (default: the scene's)")
     budget.add_argument("--time", type=float, dest="seconds", help="render for this many seconds")
@@ -90,10 +90,9 @@ def has_display() -> bool:
 def cmd_render(args) -> int:
     from renderer.arch import init_taichi
     from renderer.headless import RenderJob, check_output_path, display_tonemapper, progress_bar, render, save
-    from renderer.scene import load_scene
-    from renderer.scene.catalog import resolve_scene
+    from renderer.scene.catalog import load_any, resolve_scene
 
-    scene = load_scene(resolve_scene(args.scene))
+    scene = load_any(resolve_scene(args.scene))
     integrator = args.integrator or scene.render.integrator
     out = args.out or ROOT / "out" / f"{scene.name}_{integrator}.png"
     check_output_path(out)
@@ -127,22 +126,34 @@ def cmd_list(_args) -> int:
 
 
 def cmd_info(args) -> int:
-    from renderer.scene import load_scene
-    from renderer.scene.catalog import resolve_scene
-    from renderer.scene.features import scene_features
+    from renderer.scene.catalog import load_any, resolve_scene
 
-    scene = load_scene(resolve_scene(args.scene))
+    scene = load_any(resolve_scene(args.scene))
     r = scene.render
     print(f"scene:       {scene.name}  ({scene.path})")
     print(f"description: {scene.description}")
-    print(f"geometry:    {scene.geometry}, {len(scene.sdf_objects)} top-level objects, "
-          f"{sum(1 for o in scene.sdf_objects for _ in o.walk())} nodes")
-    print(f"materials:   {', '.join(f'{m.name} ({m.kind})' for m in scene.materials)}")
+    if scene.geometry == "sdf":
+        from renderer.scene.features import scene_features
+
+        features = scene_features(scene)
+        print(f"geometry:    sdf, {len(scene.sdf_objects)} top-level objects, "
+              f"{sum(1 for o in scene.sdf_objects for _ in o.walk())} nodes")
+    else:
+        from renderer.scene.features import features_from
+        from renderer.scene.mesh_assembly import assemble
+
+        mesh = assemble(scene)
+        features = features_from("mesh", mesh.material_uses(), scene.environment.kind, scene.camera.aperture,
+                                 mesh_kinds=mesh.data.kinds())
+        counts = ", ".join(f"{n} {k}s" for k, n in mesh.data.counts.items() if n)
+        print(f"geometry:    mesh, {len(scene.mesh_objects)} objects: {counts}")
+    own = ", ".join(f"{m.name} ({m.kind})" for m in scene.materials)
+    print(f"materials:   {own or '-'}" + ("" if scene.geometry == "sdf" else "  (plus those of the model files)"))
     env = scene.environment
     print(f"environment: {env.kind}" + (f" {env.file.name}" if env.file else "") + f", intensity {env.intensity}")
     print(f"render:      {r.width}x{r.height}, {r.spp} spp, max depth {r.max_depth}, {r.integrator}")
     print("features:")
-    for key, value in scene_features(scene).describe().items():
+    for key, value in features.describe().items():
         print(f"  {key:<16} {value}")
     return 0
 

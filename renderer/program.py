@@ -20,7 +20,7 @@ class RenderProgram:
         self.environment = environment
         self.integrator = integrator
         self.film = film
-        self.work = work  # per-pixel [geometry work, rays traced] summed over samples
+        self.work = work  # per-pixel [geometry work, primitive tests, rays traced] summed over samples
         self.features = features
 
     @ti.kernel
@@ -33,9 +33,9 @@ class RenderProgram:
                 key = sample_key(pixel, first_sample + s, seed)
                 ray = generate_ray(x, y, width, height, key, origin, forward, right, up, tan_half_fov,
                                    aperture, focus, self.features.depth_of_field)
-                value, work, rays = self.integrator.li(self, ray, key, max_depth)
+                value, stats = self.integrator.li(self, ray, key, max_depth)
                 self.film.add_sample(x, y, value)
-                self.work[x, y] += ti.math.vec2(work, rays)
+                self.work[x, y] += stats
 
     @ti.kernel
     def probe(self, u: ti.f32, v: ti.f32, width: ti.i32, height: ti.i32, origin: ti.math.vec3,

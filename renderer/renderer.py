@@ -64,7 +64,7 @@ class Renderer:
         self.environment = Environment(scene.environment, image)
         self.geometry, self.materials, self._features = build_world(scene, mesh_options)
         self.film = Film(width, height)
-        self.work = ti.Vector.field(2, ti.f32, shape=(width, height))
+        self.work = ti.Vector.field(3, ti.f32, shape=(width, height))
         self._probe_out = ti.field(ti.f32, shape=())
         self._programs: dict[tuple[str, Features], RenderProgram] = {}
         self._launched: set[tuple[str, Features]] = set()
@@ -117,10 +117,13 @@ class Renderer:
         return distance if distance > 0 else None
 
     def work_stats(self) -> dict:
-        """Mean geometry work (march steps / node visits) per ray, and rays per sample."""
-        totals = self.work.to_numpy()[: self.film.width, : self.film.height].reshape(-1, 2).sum(axis=0, dtype=np.float64)
+        """Mean geometry work per ray (march steps on SDF scenes, BVH node visits on mesh scenes),
+        primitive tests per ray (mesh scenes), and rays per sample."""
+        totals = self.work.to_numpy()[: self.film.width, : self.film.height].reshape(-1, 3).sum(axis=0, dtype=np.float64)
         samples = max(1, self.samples_done * self.film.width * self.film.height)
-        return {"work_per_ray": totals[0] / max(totals[1], 1.0), "rays_per_sample": totals[1] / samples}
+        rays = max(totals[2], 1.0)
+        return {"work_per_ray": totals[0] / rays, "tests_per_ray": totals[1] / rays,
+                "rays_per_sample": totals[2] / samples}
 
     def image(self) -> np.ndarray:
         """The linear mean image (H, W, 3), row 0 at the top."""

@@ -88,6 +88,8 @@ class HudStats:
     noise: Optional[float] = None  # relative standard error (RMS over pixels), None = not yet
     rejected: int = 0
     work_per_ray: Optional[float] = None
+    tests_per_ray: Optional[float] = None
+    work_label: str = "march steps/ray"  # or "node visits/ray" on BVH scenes
 
 
 def format_rate(per_second: float) -> str:
@@ -122,7 +124,7 @@ def hud_lines(s: HudStats) -> list[str]:
         f"resolution {w}x{h} ({percent:.0f}%, {state})",
         f"noise {format_noise(s.noise)}",
         f"non-finite dropped {s.rejected}",
-        f"march steps/ray {work}",
+        f"{s.work_label} {work}" + ("" if not s.tests_per_ray else f"   prim tests/ray {s.tests_per_ray:.1f}"),
     ]
 
 

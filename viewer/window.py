@@ -34,8 +34,7 @@ from renderer.camera import CameraFrame
 from renderer.image_io import write_exr, write_png
 from renderer.integrators import INTEGRATORS, integrator_names
 from renderer.renderer import Renderer
-from renderer.scene import load_scene
-from renderer.scene.catalog import scene_files
+from renderer.scene.catalog import load_any, scene_files
 from renderer.tonemap import TONEMAPPERS, quantize, tonemap_into
 from viewer import hud
 from viewer.camera_state import CameraState
@@ -165,7 +164,7 @@ class ViewerApp:
         self._fps = RateMeter()
         self._samples = RateMeter()
         self._stats_due = Every()
-        self._stats = {"noise": None, "rejected": 0, "work_per_ray": None}
+        self._stats = {"noise": None, "rejected": 0, "work_per_ray": None, "tests_per_ray": None}
         self._drag_blocked = False
         self._buttons_before: frozenset = frozenset()
 
@@ -178,7 +177,7 @@ class ViewerApp:
         """The cached Renderer of a scene file, built (loaded and uploaded) on first use."""
         path = Path(path).resolve()
         if path not in self.renderers:
-            self.renderers[path] = Renderer(load_scene(path), max_size=self.size)
+            self.renderers[path] = Renderer(load_any(path), max_size=self.size)
         return self.renderers[path]
 
     def select_scene(self, path) -> None:
@@ -354,8 +353,9 @@ class ViewerApp:
         tonemap_into(renderer.film, self.shown, s.exposure, self._display_tonemapper())
         if self._stats_due(now):
             stats = renderer.film.stats()
+            work = renderer.work_stats()
             self._stats = {"noise": stats["noise"], "rejected": stats["rejected"],
-                           "work_per_ray": renderer.work_stats()["work_per_ray"]}
+                           "work_per_ray": work["work_per_ray"], "tests_per_ray": work["tests_per_ray"]}
         self._present(now)
         frame_seconds = time.perf_counter() - start
         self._frame_ms = 1000.0 * frame_seconds
@@ -376,7 +376,8 @@ class ViewerApp:
             internal_size=(r.film.width, r.film.height), window_size=self.size,
             interactive=bool(self.last_plan and self.last_plan.interactive),
             noise=self._stats["noise"], rejected=self._stats["rejected"],
-            work_per_ray=self._stats["work_per_ray"])
+            work_per_ray=self._stats["work_per_ray"], tests_per_ray=self._stats["tests_per_ray"],
+            work_label="march steps/ray" if renderer.scene.geometry == "sdf" else "node visits/ray")
 
     def _present(self, now: float) -> None:
         s = self.session

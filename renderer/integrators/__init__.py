@@ -4,13 +4,14 @@ An integrator is a data-oriented class with
   name, description                 for the command line, HUD and help
   hotkey                            the viewer's letter for it (Taichi's window reports letters only)
   display_tonemapper                None (the user's choice) or a tone mapper name its output wants
-  li(ctx, ray, key, max_depth)      a Taichi func returning (value vec3, geometry work, rays traced)
+  li(ctx, ray, key, max_depth)      a Taichi func returning (value vec3, stats vec3), stats being
+                                    (geometry work, primitive tests, rays traced) for this sample
 `ctx` is the RenderProgram: ctx.geometry, ctx.bsdf, ctx.environment, ctx.features.
 """
-from renderer.integrators.debug import AlbedoView, DepthView, NormalsView, StepsView
+from renderer.integrators.debug import AlbedoView, BvhView, DepthView, NormalsView, StepsView
 from renderer.integrators.path import PathTracer
 
-_ALL = (PathTracer, NormalsView, AlbedoView, DepthView, StepsView)
+_ALL = (PathTracer, NormalsView, AlbedoView, DepthView, StepsView, BvhView)
 INTEGRATORS = {cls.name: cls for cls in _ALL}
 
 

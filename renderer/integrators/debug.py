@@ -41,7 +41,7 @@ class NormalsView:
         if hit.hit == 1:
             _, n = ctx.bsdf.shade(ctx.geometry.surface(ray, hit), -ray.d)  # normal maps included
             value = n * 0.5 + 0.5
-        return value, hit.work, 1
+        return value, ti.math.vec3(hit.work, hit.tests, 1.0)
 
 
 @ti.data_oriented
@@ -58,7 +58,7 @@ class AlbedoView:
         if hit.hit == 1:
             mat, _ = ctx.bsdf.shade(ctx.geometry.surface(ray, hit), -ray.d)
             value = ctx.bsdf.albedo(mat)
-        return value, hit.work, 1
+        return value, ti.math.vec3(hit.work, hit.tests, 1.0)
 
 
 @ti.data_oriented
@@ -74,7 +74,7 @@ class DepthView:
         value = vec3(0.0)
         if hit.hit == 1:
             value = vec3(hit.t)
-        return value, hit.work, 1
+        return value, ti.math.vec3(hit.work, hit.tests, 1.0)
 
 
 @ti.data_oriented
@@ -88,4 +88,21 @@ class StepsView:
     def li(self, ctx, ray, key, max_depth):
         hit = ctx.geometry.intersect(ray, INF)
         # 256 is the default step limit: the ramp saturates where rays give up.
-        return heat(hit.work / 256.0), hit.work, 1
+        return heat(hit.work / 256.0), ti.math.vec3(hit.work, hit.tests, 1.0)
+
+
+@ti.data_oriented
+class BvhView:
+    name = "bvh"
+    hotkey = "v"  # "visits"
+    description = "BVH node visits (red) and primitive tests (green) per camera ray, as fractions of 128"
+    display_tonemapper = "none"
+
+    @ti.func
+    def li(self, ctx, ray, key, max_depth):
+        hit = ctx.geometry.intersect(ray, INF)
+        # 128 visits or tests is a deep, costly ray for a tree with leaves of 4: the scale saturates there.
+        value = vec3(ti.min(hit.work / 128.0, 1.0), ti.min(hit.tests / 128.0, 1.0), 0.0)
+        if hit.hit == 1:
+            value.z = 0.25  # a hint of blue shows where the ray found a surface
+        return value, ti.math.vec3(hit.work, hit.tests, 1.0)

@@ -26,12 +26,10 @@ class PathTracer:
         radiance = ti.math.vec3(0.0)
         throughput = ti.math.vec3(1.0)
         ray = ray_in
-        work = 0
-        rays = 0
+        stats = ti.math.vec3(0.0)
         for depth in range(MAX_VERTICES):
             hit = ctx.geometry.intersect(ray, INF)
-            rays += 1
-            work += hit.work
+            stats += ti.math.vec3(hit.work, hit.tests, 1.0)
             if hit.hit == 0:
                 radiance += throughput * ctx.environment.radiance(ray.d)
                 break
@@ -55,4 +53,4 @@ class PathTracer:
                     break
                 throughput /= q
             ray = ctx.geometry.spawn(s, bs.wi)
-        return radiance, work, rays
+        return radiance, stats

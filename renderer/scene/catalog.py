@@ -20,6 +20,19 @@ def scene_names() -> list[str]:
     return [p.stem for p in scene_files()]
 
 
+def load_any(path):
+    """A scene file (.toml) or a model file (glTF/GLB, OBJ, PLY, STL) as a Scene."""
+    from renderer.scene.mesh_loader import MESH_EXTENSIONS
+
+    if Path(path).suffix.lower() in MESH_EXTENSIONS:
+        from renderer.scene.model_scene import scene_for_model
+
+        return scene_for_model(path)
+    from renderer.scene.toml_loader import load_scene
+
+    return load_scene(path)
+
+
 def resolve_scene(argument: str) -> Path:
     """A scene name from assets/scenes, or a path to a scene file."""
     path = Path(argument)
