@@ -21,6 +21,10 @@ vec3 = ti.math.vec3
 # Spawned rays start this many hit thresholds off the surface: the hit point lies within one
 # threshold of it, so 2.5 leaves a margin of 1.5 thresholds before the marcher could stop again.
 SPAWN_OFFSET = 2.5
+# The spawned origin must clear every surface by this many thresholds (the march stops below one),
+# found in at most this many pushes along the normal (each corrects by the measured shortfall).
+SPAWN_CLEARANCE = 1.5
+SPAWN_PUSHES = 3
 # The least cosine between a hit's normal and the incoming ray, on the side the ray came from.
 # Small enough to leave true grazing hits alone, large enough to survive f32 rounding of the dot.
 MIN_FACING_COSINE = 1e-3
@@ -127,9 +131,21 @@ class SdfGeometry:
 
     @ti.func
     def spawn(self, surface, direction):
-        side = surface.n_geo if direction.dot(surface.n_geo) > 0.0 else -surface.n_geo
+        outward = direction.dot(surface.n_geo) > 0.0
+        side = surface.n_geo if outward else -surface.n_geo
+        wanted = 1.0 if outward else -1.0  # the sign of the SDF where the new ray must start
+        o = surface.p + side * (SPAWN_OFFSET * surface.eps)
+        # Near an edge the difference normal blends two faces, and the offset point can land on
+        # the wrong side of the other face (a refracted ray starting outside the solid). Push on
+        # along the side until the origin clears every surface by the margin the march needs.
+        # (Where the ray runs nearly parallel to that other face no push can give it clearance:
+        # it then starts within the threshold of that face, which it is about to cross anyway.)
+        for _ in range(SPAWN_PUSHES):
+            clearance = wanted * self.program.distance(o)
+            if clearance >= SPAWN_CLEARANCE * surface.eps:
+                break
+            o += side * (SPAWN_CLEARANCE * surface.eps - clearance)
         # The spawned ray keeps the footprint it arrived with but does not grow it further: a
         # threshold that grew along a grazing ray faster than the ray leaves a convex surface
         # would let the ray find its own surface again.
-        return Ray(o=surface.p + side * (SPAWN_OFFSET * surface.eps), d=direction,
-                   cone_width=surface.cone_width, cone_spread=0.0)
+        return Ray(o=o, d=direction, cone_width=surface.cone_width, cone_spread=0.0)

@@ -42,7 +42,7 @@ class SdfProgram:
         self.batched_kinds = []
         ranges = []
         i = 0
-        tops = [n for n in objects if n.is_primitive]
+        tops = sorted((n for n in objects if n.is_primitive), key=lambda n: n.kind)  # as in the table
         while i < len(tops):
             kind = tops[i].kind
             j = i

@@ -48,6 +48,7 @@ Per node (37 bytes in separate arrays): ``node_lo``/``node_hi`` (3 x f32 each), 
 """
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 
@@ -114,13 +115,13 @@ class FlatBVH:
 
     def depth(self) -> int:
         """Number of levels (1 for a single leaf)."""
-        m = self.num_nodes
-        d = np.zeros(m, np.int32)
-        interior = np.flatnonzero(self.node_count == 0)
-        for i in interior:  # parents precede children in depth-first order
-            d[i + 1] = d[i] + 1
-            d[self.node_a[i]] = d[i] + 1
-        return int(d.max()) + 1
+        level = np.zeros(1, np.int64)
+        depth = 0
+        while level.shape[0]:
+            depth += 1
+            inner = level[self.node_count[level] == 0]
+            level = np.concatenate((inner + 1, self.node_a[inner]))
+        return depth
 
 
 # ------------------------------------------------------------------------------------------------
@@ -557,6 +558,18 @@ def _equal_count_level(w: _Work, x, node_of, cnt):
 # the builder
 
 
+def _default_threads() -> int:
+    """Two threads when the machine has a core to spare (by its load average), else one.
+
+    On a busy machine a second thread only waits for a core and slows the build down."""
+    cpus = os.cpu_count() or 1
+    try:
+        load = os.getloadavg()[0]
+    except (AttributeError, OSError):
+        return 1
+    return 2 if cpus >= 2 and load <= cpus - 1 else 1
+
+
 def build_bvh(lo, hi, centroids, strategy: str = "sah", max_leaf_size: int = 4, bins: int = 16,
               *, max_leaf_hard: int = 16, c_trav: float = C_TRAV, c_isect: float = C_ISECT,
               threads: int | None = None) -> FlatBVH:
@@ -569,8 +582,8 @@ def build_bvh(lo, hi, centroids, strategy: str = "sah", max_leaf_size: int = 4, 
     max_leaf_hard: SAH may keep up to this many primitives (or max_leaf_size if larger) in a
         leaf when no split is cheaper or no plane separates the centroids.
     c_trav, c_isect: SAH traversal and intersection costs.
-    threads: worker threads for the big reductions of large builds (numpy releases the GIL
-        there); default min(2, cpu count). The result does not depend on it.
+    threads: threads for the scatter reductions of large builds (numpy releases the GIL there);
+        default 2 when a core looks idle, else 1. The result does not depend on it.
     """
     if strategy not in STRATEGIES:
         raise ValueError(f"unknown strategy {strategy!r}; expected one of {STRATEGIES}")
@@ -582,7 +595,7 @@ def build_bvh(lo, hi, centroids, strategy: str = "sah", max_leaf_size: int = 4, 
         raise ValueError("bins must be in [2, 256]")
     max_leaf_hard = max(int(max_leaf_hard), max_leaf_size)
     if threads is None:
-        threads = min(2, os.cpu_count() or 1)
+        threads = _default_threads()
 
     x_all = _prepare(lo, hi, centroids)
     n_prims = x_all.shape[1]
@@ -591,6 +604,15 @@ def build_bvh(lo, hi, centroids, strategy: str = "sah", max_leaf_size: int = 4, 
         return _build(w, x_all, strategy, max_leaf_size, bins, max_leaf_hard, c_trav, c_isect)
     finally:
         w.close()
+
+
+def _scattered_order(n: int) -> np.ndarray:
+    """A fixed permutation of range(n) that sends neighbours far apart: i -> i * s mod n with a
+    stride s near n / golden ratio, coprime to n."""
+    s = max(1, int(n * 0.6180339887498949))
+    while math.gcd(s, n) != 1:
+        s += 1
+    return (np.arange(n, dtype=np.int64) * s) % n
 
 
 def _build(w: _Work, x_all, strategy, max_leaf_size, bins, max_leaf_hard, c_trav, c_isect):
@@ -607,11 +629,16 @@ def _build(w: _Work, x_all, strategy, max_leaf_size, bins, max_leaf_hard, c_trav
 
     if n_prims <= max_leaf_size:
         t_count[0] = n_prims
-        return _flatten(x_all, t_left[:1], t_count[:1], t_axis[:1], level_ranges, leaf_of_prim)
+        return _flatten(x_all, leaf_of_prim, t_left[:1], t_count[:1], t_axis[:1], level_ranges,
+                        leaf_of_prim)
     cnt = np.array([n_prims], np.int64)
     gids = np.zeros(1, np.int64)
-    x = x_all
-    pid = None  # global index of each active primitive (None: all, in order)
+    # Work on the primitives in a scattered order: in mesh order, neighbouring primitives share
+    # nodes and bins, and ufunc.at serialises on repeated updates of the same address.
+    scattered = _scattered_order(n_prims)
+    x_scattered = np.take(x_all, scattered, axis=1)
+    pid = scattered  # global index of each active primitive
+    x = x_scattered
     buf = 0
     node_of = w.node_of[buf][:n_prims]
     node_of.fill(0)
@@ -691,28 +718,26 @@ def _build(w: _Work, x_all, strategy, max_leaf_size, bins, max_leaf_hard, c_trav
             # compact the active set
             keep = np.flatnonzero(node_of < n_next)
             done = np.flatnonzero(node_of == n_next)
-            if pid is None:
-                leaf_of_prim[done] = leaf_of[done]
-                pid = keep
-            else:
-                leaf_of_prim[pid[done]] = leaf_of[done]
-                pid = pid[keep]
+            leaf_of_prim[pid[done]] = leaf_of[done]
+            pid = pid[keep]
             x = np.take(x, keep, axis=1)
             buf = 1 - buf
             node_of = np.take(node_of, keep, out=w.node_of[buf][:n_keep])
             leaf_of = w.leaf_of[:n_keep]
             leaf_of.fill(-1)
 
-    if pid is None:
-        leaf_of_prim[:] = leaf_of
-    else:
-        leaf_of_prim[pid] = leaf_of
-    return _flatten(x_all, t_left[:next_gid], t_count[:next_gid], t_axis[:next_gid],
-                    level_ranges, leaf_of_prim)
+    leaf_of_prim[pid] = leaf_of
+    return _flatten(x_scattered, leaf_of_prim[scattered], t_left[:next_gid], t_count[:next_gid],
+                    t_axis[:next_gid], level_ranges, leaf_of_prim)
 
 
-def _flatten(x_all, t_left, t_count, t_axis, level_ranges, leaf_of_prim) -> FlatBVH:
-    """Breadth-first node table -> depth-first FlatBVH with boxes and skip links."""
+def _flatten(x_box, leaf_of_box, t_left, t_count, t_axis, level_ranges,
+             leaf_of_prim) -> FlatBVH:
+    """Breadth-first node table -> depth-first FlatBVH with boxes and skip links.
+
+    x_box (rows 0..5: lo, -hi) and leaf_of_box give the primitive boxes and their leaves in any
+    order (a scattered one is faster); leaf_of_prim gives the leaf of each primitive index.
+    """
     m = t_left.shape[0]
     interior = t_left >= 0
     ranges = [(g0, g0 + np.flatnonzero(interior[g0:g1])) for g0, g1 in level_ranges]
@@ -741,7 +766,7 @@ def _flatten(x_all, t_left, t_count, t_axis, level_ranges, leaf_of_prim) -> Flat
     # boxes: leaves from their primitives, interior nodes as the union of their children
     box = np.full((6, m), np.inf, np.float32)
     for r in range(6):
-        np.minimum.at(box[r], leaf_of_prim, x_all[r])
+        np.minimum.at(box[r], leaf_of_box, x_box[r])
     for g0, it in reversed(ranges):
         if it.shape[0]:
             left = t_left[it]

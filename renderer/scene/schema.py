@@ -736,7 +736,7 @@ def _allowed_text(f: Field) -> str:
     if f.kind == "dir3":
         parts.append("non-zero")
     if f.range is not None:
-        each = "each component " if f.kind in ("vec3", "int3", "dir3") else ""
+        each = "each component " if f.kind in ("vec3", "vec2", "int3", "dir3", "scale3") else ""
         parts.append(f"{each}{f.range}")
     return "; ".join(parts) or "any"
 

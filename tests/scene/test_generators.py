@@ -352,10 +352,10 @@ def test_textured_glb_textures_say_what_the_docs_say(textured):
     assert normal[cell // 2, cell * 2 + 2, 0] < -0.1
     # Top edge of a tile: the surface rises downwards in the image, so the normal leans up (+y).
     assert normal[cell * 2 + 2, cell // 2, 1] > 0.1
-    assert floor_uses_scene(script)
+    assert textured_scene_uses_the_file(script)
 
 
-def floor_uses_scene(script) -> bool:
+def textured_scene_uses_the_file(script) -> bool:
     scene = load_scene(REPO / "assets" / "scenes" / "textured.toml")
     (obj,) = scene.mesh_objects
     return obj.kind == "mesh" and obj.file == script.OUT.resolve() and obj.material is None
