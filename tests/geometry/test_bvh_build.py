@@ -282,6 +282,19 @@ def test_deterministic_and_thread_independent():
         assert np.array_equal(getattr(one, f), getattr(two, f)), f
 
 
+@pytest.mark.parametrize("knob, value", [("_CELLS_MAX_RATIO", 0.0), ("_COMPACT_FRACTION", 0.0),
+                                         ("_COMPACT_FRACTION", 1.01)])
+def test_fast_paths_are_exact(monkeypatch, knob, value):
+    """Binning through cells (top levels) and compacting the active set change nothing."""
+    import renderer.geometry.bvh_build as bb
+    lo, hi, c = random_triangles(30_000, seed=15)
+    ref = build_bvh(lo, hi, c)
+    monkeypatch.setattr(bb, knob, value)
+    other = build_bvh(lo, hi, c)
+    for f in ("node_lo", "node_a", "node_count", "prim_order"):
+        assert np.array_equal(getattr(ref, f), getattr(other, f)), f
+
+
 def test_large_build_runs():
     lo, hi, c = random_triangles(100_000, seed=13)
     lo, hi, c = (x.astype(np.float32) for x in (lo, hi, c))
