@@ -7,7 +7,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.geometry.interface import Ray
-from renderer.sampling.rng import uniform2
+from renderer.sampling import dims
 from renderer.sampling.warps import concentric_disk
 
 
@@ -47,10 +47,10 @@ class CameraFrame:
 
 
 @ti.func
-def generate_ray(x, y, width, height, key, origin, forward, right, up, tan_half_fov, aperture, focus,
-                 depth_of_field: ti.template()):
-    """A camera ray through pixel (x, y) (y up), jittered with sample dims 0-1, lens dims 2-3."""
-    jitter = uniform2(key, 0)
+def generate_ray(x, y, width, height, sampler: ti.template(), state, origin, forward, right, up, tan_half_fov,
+                 aperture, focus, depth_of_field: ti.template()):
+    """A camera ray through pixel (x, y) (y up), jittered within the pixel, through the lens."""
+    jitter = sampler.get2d(state, dims.PIXEL)
     aspect = width / height
     sx = (2.0 * (x + jitter.x) / width - 1.0) * tan_half_fov * aspect
     sy = (2.0 * (y + jitter.y) / height - 1.0) * tan_half_fov
@@ -58,7 +58,7 @@ def generate_ray(x, y, width, height, key, origin, forward, right, up, tan_half_
     o = origin
     if ti.static(depth_of_field):
         focus_point = o + d * (focus / d.dot(forward))
-        lens = concentric_disk(uniform2(key, 2)) * aperture
+        lens = concentric_disk(sampler.get2d(state, dims.LENS)) * aperture
         o = origin + lens.x * right + lens.y * up
         d = ti.math.normalize(focus_point - o)
     # A pixel subtends about 2 tan(fov/2) / height radians: the cone the SDF marcher scales with.

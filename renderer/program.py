@@ -9,13 +9,14 @@ import taichi as ti
 from renderer.camera import generate_ray
 from renderer.geometry.interface import INF
 from renderer.materials.bsdf import Bsdf
-from renderer.sampling.rng import sample_key
+from renderer.sampling.sampler import SampleState
 
 
 @ti.data_oriented
 class RenderProgram:
-    def __init__(self, geometry, materials, environment, integrator, film, work, features):
+    def __init__(self, geometry, materials, environment, integrator, film, work, features, sampler):
         self.geometry = geometry
+        self.sampler = sampler
         self.bsdf = Bsdf(materials, features)
         self.environment = environment
         self.integrator = integrator
@@ -30,10 +31,10 @@ class RenderProgram:
         for x, y in ti.ndrange(width, height):
             pixel = y * width + x
             for s in range(spp):
-                key = sample_key(pixel, first_sample + s, seed)
-                ray = generate_ray(x, y, width, height, key, origin, forward, right, up, tan_half_fov,
-                                   aperture, focus, self.features.depth_of_field)
-                value, stats = self.integrator.li(self, ray, key, max_depth)
+                state = self.sampler.start(pixel, first_sample + s, seed)
+                ray = generate_ray(x, y, width, height, self.sampler, state, origin, forward, right, up,
+                                   tan_half_fov, aperture, focus, self.features.depth_of_field)
+                value, stats = self.integrator.li(self, ray, state, max_depth)
                 self.film.add_sample(x, y, value)
                 self.work[x, y] += stats
 
@@ -46,7 +47,9 @@ class RenderProgram:
             aspect = width / height
             d = ti.math.normalize(forward + (2.0 * u - 1.0) * tan_half_fov * aspect * right
                                   + (2.0 * v - 1.0) * tan_half_fov * up)
-            ray = generate_ray(0, 0, 1, 1, ti.u32(0), origin, forward, right, up, tan_half_fov, 0.0, 1.0, False)
+            state = SampleState(pixel=ti.u32(0), index=ti.u32(0), seed=ti.u32(0), key=ti.u32(0))
+            ray = generate_ray(0, 0, 1, 1, self.sampler, state, origin, forward, right, up, tan_half_fov, 0.0, 1.0,
+                               False)
             ray.d = d
             hit = self.geometry.intersect(ray, INF)
             out[None] = hit.t * d.dot(forward) if hit.hit == 1 else -1.0

@@ -17,6 +17,7 @@ from renderer.lights.environment import Environment
 from renderer.materials.bsdf import MaterialTable
 from renderer.materials.texture_sampler import TextureTable
 from renderer.program import RenderProgram
+from renderer.sampling.sampler import make_sampler
 from renderer.scene.features import Features, features_from, scene_features
 from renderer.scene.model import Scene
 
@@ -78,16 +79,17 @@ class Renderer:
             return self._features
         return replace(self._features, depth_of_field=camera.aperture > 0.0)
 
-    def program(self, integrator: str, features: Features) -> RenderProgram:
-        key = (integrator, features)
+    def program(self, integrator: str, features: Features, sampler: str = "independent") -> RenderProgram:
+        key = (integrator, features, sampler)
         if key not in self._programs:
             self._programs[key] = RenderProgram(self.geometry, self.materials, self.environment,
-                                                make_integrator(integrator), self.film, self.work, features)
+                                                make_integrator(integrator), self.film, self.work, features,
+                                                make_sampler(sampler))
         return self._programs[key]
 
-    def is_compiled(self, integrator: str, features: Features) -> bool:
+    def is_compiled(self, integrator: str, features: Features, sampler: str = "independent") -> bool:
         """False until the combination has run once in this process (its first call compiles)."""
-        return (integrator, features) in self._launched
+        return (integrator, features, sampler) in self._launched
 
     # --- rendering -----------------------------------------------------------------------------
     def reset(self, width: int | None = None, height: int | None = None) -> None:
@@ -96,16 +98,17 @@ class Renderer:
         self.samples_done = 0
 
     def render(self, camera: CameraFrame, spp: int, integrator: str | None = None, max_depth: int | None = None,
-               seed: int | None = None, features: Features | None = None) -> None:
+               seed: int | None = None, features: Features | None = None, sampler: str | None = None) -> None:
         """Add `spp` samples per pixel to the film's active region."""
         settings = self.scene.render
         integrator = integrator or settings.integrator
+        sampler = sampler or settings.sampler
         features = features or self.features(camera)
-        program = self.program(integrator, features)
+        program = self.program(integrator, features, sampler)
         program.render(self.film.width, self.film.height, spp, self.samples_done,
                        (settings.seed if seed is None else seed) & 0xFFFFFFFF,
                        settings.max_depth if max_depth is None else max_depth, *camera.kernel_args())
-        self._launched.add((integrator, features))
+        self._launched.add((integrator, features, sampler))
         self.samples_done += spp
 
     def focus_distance_at(self, camera: CameraFrame, u: float, v: float, integrator: str | None = None) -> float | None:

@@ -377,7 +377,7 @@ class ViewerApp:
             interactive=bool(self.last_plan and self.last_plan.interactive),
             noise=self._stats["noise"], rejected=self._stats["rejected"],
             work_per_ray=self._stats["work_per_ray"], tests_per_ray=self._stats["tests_per_ray"],
-            work_label="march steps/ray" if renderer.scene.geometry == "sdf" else "node visits/ray")
+            work_label="march steps/ray" if r.scene.geometry == "sdf" else "node visits/ray")
 
     def _present(self, now: float) -> None:
         s = self.session

@@ -13,4 +13,10 @@ def _startup(**kw):
     return run(**kw)
 
 
-BENCHMARKS = {"sdf": _sdf, "startup": _startup}
+def _bvh(**kw):
+    from renderer.bench.bvh import run
+
+    return run(**kw)
+
+
+BENCHMARKS = {"sdf": _sdf, "startup": _startup, "bvh": _bvh}

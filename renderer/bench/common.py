@@ -38,12 +38,17 @@ class Timing:
         return statistics.median(self.times)
 
     @property
+    def min(self) -> float:
+        """The fastest run: on a busy machine, the least disturbed one."""
+        return min(self.times)
+
+    @property
     def spread(self) -> float:
         """(max - min) / median of the timed runs: a rough stability indicator."""
         return (max(self.times) - min(self.times)) / self.median if self.median > 0 else 0.0
 
     def as_dict(self) -> dict:
-        return {"median_s": self.median, "times_s": list(self.times), "warmup_s": list(self.warmup_times),
+        return {"median_s": self.median, "min_s": self.min, "times_s": list(self.times), "warmup_s": list(self.warmup_times),
                 "spread": self.spread}
 
 

@@ -69,7 +69,8 @@ class SdfBenchConfig:
     ref_chunk: int = 32  # spp per kernel launch while rendering the reference
     compare_spp: int = 8  # path spp per omega, equal-spp comparison
     geometry_spp: int = 8  # normals spp (test images and geometric reference)
-    runs: int = 3  # timed runs (median), round-robin over the settings, after one warm-up
+    runs: int = 5  # timed runs (median), round-robin over the settings, after one warm-up
+    sweep_runs: int = 3  # the same for the samples/s of each sweep setting
     sweep_rate_spp: int = 2  # path spp per timed run when measuring a sweep setting's samples/s
     sweep_seconds: float = 1.5  # path time budget per sweep setting
     max_sweep_spp: int = 4096
@@ -83,7 +84,7 @@ class SdfBenchConfig:
 
 
 FULL = SdfBenchConfig()
-QUICK = SdfBenchConfig(size=(96, 54), ref_spp=128, compare_spp=8, geometry_spp=4, sweep_seconds=0.4,
+QUICK = SdfBenchConfig(size=(96, 54), ref_spp=128, compare_spp=8, geometry_spp=4, runs=3, sweep_seconds=0.4,
                        thresholds=(0.25, 1.0, 4.0), step_limits=(32, 128, 512))
 
 
@@ -243,6 +244,7 @@ def bench_scene(scene, config: SdfBenchConfig) -> dict:
             "path_timing": p["timing"].as_dict(),
             "samples_per_s": config.compare_spp * pixels / seconds,
             "speedup": base["timing"].median / seconds,
+            "speedup_min": base["timing"].min / p["timing"].min,
             "steps_per_ray": p["steps_per_ray"],
             "step_reduction": 1.0 - p["steps_per_ray"] / base["steps_per_ray"],
             "primary_steps_per_ray": g["steps_per_ray"],
@@ -272,8 +274,8 @@ def bench_scene(scene, config: SdfBenchConfig) -> dict:
     for key, values in (("hit_threshold", config.thresholds), ("max_steps", config.step_limits)):
         log(f"[{scene.name}] sweep {key}: {', '.join(map(str, values))} ...")
         marches = {v: bench.march(**{key: v}) for v in values}
-        geo = bench.timed_settings(GEOMETRY_INTEGRATOR, marches, config.geometry_spp)
-        rates = bench.timed_settings("path", marches, config.sweep_rate_spp)
+        geo = bench.timed_settings(GEOMETRY_INTEGRATOR, marches, config.geometry_spp, runs=config.sweep_runs)
+        rates = bench.timed_settings("path", marches, config.sweep_rate_spp, runs=config.sweep_runs)
         rows = []
         for v in values:
             rate = config.sweep_rate_spp / rates[v]["timing"].median  # spp per second
@@ -330,11 +332,13 @@ def print_report(results: list[dict], config: SdfBenchConfig) -> None:
             pd, gd = r["path_vs_plain"], r["geometry_vs_plain"]
             rows.append([f"{r['omega']:.1f}", r["steps_per_ray"], f"{0.0 - 100 * r['step_reduction'] + 0.0:+.1f}%",
                          r["primary_steps_per_ray"], r["samples_per_s"] / 1e6, f"{r['speedup']:.2f}x",
+                         f"{r['speedup_min']:.2f}x",
                          r["rmse"], r["rel_mse"], r["rel_mse_trimmed"], f"{100 * pd['relative_difference']:+.2f}%",
                          f"{pd['z']:+.2f}", r["geometry_rmse"], f"{100 * gd['relative_difference']:+.2f}%", f"{gd['z']:+.2f}"])
-        print_table(["omega", "steps/ray", "vs 1.0", "primary", "Msamples/s", "speed", "RMSE", "relMSE", "relMSE*",
+        print_table(["omega", "steps/ray", "vs 1.0", "primary", "Msamples/s", "speed", "(min)", "RMSE", "relMSE", "relMSE*",
                      "d relMSE*", "z path", "geom RMSE", "d geom MSE", "z geom"], rows,
-                    title=f"   over-relaxation at equal spp: path {config.compare_spp} spp (one seed for all), "
+                    title=f"   over-relaxation at equal spp: path {config.compare_spp} spp (one seed for all; speed from "
+                          f"the median of {config.runs} runs, (min) from the fastest), "
                           f"geometry = {GEOMETRY_INTEGRATOR} view {config.geometry_spp} spp vs plain reference; "
                           f"* = top {FIREFLY_TRIM:.1%} pixels left out; d = paired difference vs omega 1.0, z = d / its SE")
         t = res["target"]

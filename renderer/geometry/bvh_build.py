@@ -328,14 +328,20 @@ def _node_min_max(w: _Work, vals: np.ndarray, node_of: np.ndarray, n: int):
     return lo, hi
 
 
-def _half_area(b: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-    """Half surface area of boxes stored as (6, ...) = lo xyz, -hi xyz (empty boxes -> inf).
+def _half_area(b: np.ndarray, k: float, out: np.ndarray | None = None) -> np.ndarray:
+    """Half surface area of boxes stored as (6, ...) = lo xyz, -hi xyz (empty boxes -> inf),
+    with the extents scaled by k (a power of two that brings the scene to unit size, so that
+    areas times counts neither overflow nor underflow f32).
 
     With s = lo - hi = -extent the signs cancel: ex*ey + ey*ez + ez*ex = sx*(sy + sz) + sy*sz.
     """
+    k = np.float32(k)
     sx = b[3] + b[0]
+    sx *= k
     sy = b[4] + b[1]
+    sy *= k
     sz = b[5] + b[2]
+    sz *= k
     area = np.add(sy, sz, out=out)
     area *= sx
     sy *= sz
@@ -358,8 +364,8 @@ def _select_axis(w: _Work, rows: np.ndarray, axis_e: np.ndarray, out: np.ndarray
 
 
 def _rank_split(w: _Work, side, node_of, cnt, nodes):
-    """Split the given nodes by count: in each, the first floor(count / 2) primitives in index
-    order go left. Used when no plane separates the centroids (all identical)."""
+    """Split the given nodes by count: in each, the first floor(count / 2) primitives in the
+    builder's working order go left. Used when no plane separates the centroids."""
     n = cnt.shape[0]
     flag = np.zeros(n + 1, bool)
     flag[nodes] = True
@@ -412,7 +418,7 @@ def _bin_by_cells(w: _Work, x, node_of, node_bins, n, b):
     return box, counts
 
 
-def _sah_level(w: _Work, x, node_of, cnt, nbins, max_leaf_hard, c_trav, c_isect):
+def _sah_level(w: _Work, x, node_of, cnt, nbins, max_leaf_hard, c_trav, c_isect, k_area):
     """Binned SAH for all nodes of a level.
 
     Nodes must be sorted by descending ``nbins`` (each bin count forms one block).
@@ -425,7 +431,9 @@ def _sah_level(w: _Work, x, node_of, cnt, nbins, max_leaf_hard, c_trav, c_isect)
     # (c - cmin) * scale < nbins always: each f32 rounding gains at most 2**-24 relative
     nb_f = nbins.astype(np.float32) * np.float32(1.0 - 1e-6)
     with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
-        scale = np.where(ext > np.float32(1e-30), nb_f / ext, np.float32(0.0)).astype(np.float32)
+        scale = (nb_f / ext).astype(np.float32)
+    # zero (or so tiny that the scale overflows) extent: everything in bin 0, no split
+    scale[~np.isfinite(scale) | (ext <= 0)] = 0.0
 
     # Bin blocks: nodes with the same bin count b are contiguous; their bins are laid out
     # (b, 3, n_block) so that the sweeps over bins run along long vector rows. Slot g_total is
@@ -493,9 +501,9 @@ def _sah_level(w: _Work, x, node_of, cnt, nbins, max_leaf_hard, c_trav, c_isect)
             a_r = np.empty((b - 1, m), np.float32)
             acc = t[:, b - 1].copy()
             for q in range(b - 2, -1, -1):
-                _half_area(acc, out=a_r[q])
+                _half_area(acc, k_area, out=a_r[q])
                 np.minimum(acc, t[:, q], out=acc)
-            node_area[blk_start[i]:blk_end[i]] = _half_area(acc[:, :nn])
+            node_area[blk_start[i]:blk_end[i]] = _half_area(acc[:, :nn], k_area)
             n_tot = k.sum(axis=0)
             # prefix sweep; an empty side has an infinite area, so its cost is 0 * inf = NaN,
             # which never compares below the running best
@@ -509,7 +517,7 @@ def _sah_level(w: _Work, x, node_of, cnt, nbins, max_leaf_hard, c_trav, c_isect)
                 if q > 0:
                     np.minimum(acc, t[:, q], out=acc)
                     n_l += k[q]
-                _half_area(acc, out=cost)
+                _half_area(acc, k_area, out=cost)
                 cost *= n_l
                 np.subtract(n_tot, n_l, out=tmp)
                 tmp *= a_r[q]
@@ -663,6 +671,9 @@ def _build(w: _Work, x, order, strategy, max_leaf_size, bins, max_leaf_hard, c_t
     gids = np.zeros(1, np.int64)
     x_all = x
     pid = order  # primitive index of each active primitive
+    # SAH areas are computed for the scene scaled to unit size by a power of two
+    extent = float(np.max(-x[3:6].min(axis=1).astype(np.float64) - x[0:3].min(axis=1)))
+    k_area = 2.0 ** -math.ceil(math.log2(extent)) if extent > 0 else 1.0
     buf = 0
     node_of = w.node_of[buf][:n_prims]
     node_of.fill(0)
@@ -675,7 +686,7 @@ def _build(w: _Work, x, order, strategy, max_leaf_size, bins, max_leaf_hard, c_t
         if strategy == "sah":
             nbins = _bins_for_count(cnt, bins)
             leaf, side, axis, by_count = _sah_level(w, x, node_of, cnt, nbins, max_leaf_hard,
-                                                    c_trav, c_isect)
+                                                    c_trav, c_isect, k_area)
         elif strategy == "midpoint":
             side, axis, by_count = _midpoint_level(w, x, node_of, cnt)
             leaf = np.zeros(n, bool)

@@ -4,9 +4,10 @@ An integrator is a data-oriented class with
   name, description                 for the command line, HUD and help
   hotkey                            the viewer's letter for it (Taichi's window reports letters only)
   display_tonemapper                None (the user's choice) or a tone mapper name its output wants
-  li(ctx, ray, key, max_depth)      a Taichi func returning (value vec3, stats vec3), stats being
+  li(ctx, ray, state, max_depth)    a Taichi func returning (value vec3, stats vec3), stats being
                                     (geometry work, primitive tests, rays traced) for this sample
-`ctx` is the RenderProgram: ctx.geometry, ctx.bsdf, ctx.environment, ctx.features.
+`ctx` is the RenderProgram: ctx.geometry, ctx.bsdf, ctx.environment, ctx.sampler, ctx.features;
+`state` is the camera sample's sampler state (renderer.sampling.sampler).
 """
 from renderer.integrators.debug import AlbedoView, BvhView, DepthView, NormalsView, StepsView
 from renderer.integrators.path import PathTracer

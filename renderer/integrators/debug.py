@@ -35,7 +35,7 @@ class NormalsView:
     display_tonemapper = "none"
 
     @ti.func
-    def li(self, ctx, ray, key, max_depth):
+    def li(self, ctx, ray, state, max_depth):
         hit = ctx.geometry.intersect(ray, INF)
         value = vec3(0.0)
         if hit.hit == 1:
@@ -52,7 +52,7 @@ class AlbedoView:
     display_tonemapper = "none"
 
     @ti.func
-    def li(self, ctx, ray, key, max_depth):
+    def li(self, ctx, ray, state, max_depth):
         hit = ctx.geometry.intersect(ray, INF)
         value = vec3(0.0)
         if hit.hit == 1:
@@ -69,7 +69,7 @@ class DepthView:
     display_tonemapper = "reinhard"
 
     @ti.func
-    def li(self, ctx, ray, key, max_depth):
+    def li(self, ctx, ray, state, max_depth):
         hit = ctx.geometry.intersect(ray, INF)
         value = vec3(0.0)
         if hit.hit == 1:
@@ -85,7 +85,7 @@ class StepsView:
     display_tonemapper = "none"
 
     @ti.func
-    def li(self, ctx, ray, key, max_depth):
+    def li(self, ctx, ray, state, max_depth):
         hit = ctx.geometry.intersect(ray, INF)
         # 256 is the default step limit: the ramp saturates where rays give up.
         return heat(hit.work / 256.0), ti.math.vec3(hit.work, hit.tests, 1.0)
@@ -99,7 +99,7 @@ class BvhView:
     display_tonemapper = "none"
 
     @ti.func
-    def li(self, ctx, ray, key, max_depth):
+    def li(self, ctx, ray, state, max_depth):
         hit = ctx.geometry.intersect(ray, INF)
         # 128 visits or tests is a deep, costly ray for a tree with leaves of 4: the scale saturates there.
         value = vec3(ti.min(hit.work / 128.0, 1.0), ti.min(hit.tests / 128.0, 1.0), 0.0)

@@ -2,16 +2,13 @@
 import taichi as ti
 
 from renderer.geometry.interface import INF
-from renderer.sampling.rng import uniform
+from renderer.sampling import dims
 
 # Hard cap on path vertices when max_depth is -1 (unlimited): Russian roulette ends paths long
 # before this; the cap only bounds the loop (GPU back-ends need a bounded loop to be safe).
 MAX_VERTICES = 1024
 # Russian roulette starts after this many bounces (Mitsuba's default rr_depth is 5).
 RR_DEPTH = 5
-# Dimensions per bounce: lobe choice, 2D direction, roulette. Dims 0-3 are the camera's.
-DIMS_PER_BOUNCE = 4
-FIRST_BOUNCE_DIM = 4
 
 
 @ti.data_oriented
@@ -22,7 +19,7 @@ class PathTracer:
     display_tonemapper = None
 
     @ti.func
-    def li(self, ctx, ray_in, key, max_depth):
+    def li(self, ctx, ray_in, state, max_depth):
         radiance = ti.math.vec3(0.0)
         throughput = ti.math.vec3(1.0)
         ray = ray_in
@@ -41,15 +38,16 @@ class PathTracer:
             # Mitsuba's convention: max_depth counts path vertices, 1 = emitters seen directly.
             if max_depth >= 0 and depth + 1 >= max_depth:
                 break
-            dim = FIRST_BOUNCE_DIM + DIMS_PER_BOUNCE * depth
-            u = ti.math.vec3(uniform(key, dim), uniform(key, dim + 1), uniform(key, dim + 2))
+            dim = dims.BOUNCE_BASE + dims.PER_BOUNCE * depth
+            u = ti.math.vec3(ctx.sampler.get1d(state, dim + dims.BSDF_LOBE),
+                             ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
             bs = ctx.bsdf.sample(mat, n_shading, -ray.d, u)
             if bs.valid == 0:
                 break
             throughput *= bs.weight
             if depth >= RR_DEPTH:
                 q = ti.min(throughput.max(), 0.95)
-                if uniform(key, dim + 3) >= q:
+                if ctx.sampler.get1d(state, dim + dims.ROULETTE) >= q:
                     break
                 throughput /= q
             ray = ctx.geometry.spawn(s, bs.wi)

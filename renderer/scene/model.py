@@ -54,6 +54,7 @@ class RenderSettings:
     integrator: str = "path"
     seed: int = 0
     march: MarchSettings = field(default_factory=MarchSettings)
+    sampler: str = "independent"  # "independent" | "sobol"
 
 
 @dataclass(frozen=True)

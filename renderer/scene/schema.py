@@ -274,6 +274,9 @@ RENDER = Section(
         Field("integrator", "string", "path", "Integrator name, checked against the integrators "
               "the renderer provides."),
         Field("seed", "int", 0, "Random seed; the same seed gives the same image.", NON_NEGATIVE),
+        Field("sampler", "string", "independent", "Where random numbers come from: `independent` "
+              "(hashed uniform numbers) or `sobol` (Owen-scrambled Sobol points, lower error at equal spp).",
+              choices=("independent", "sobol")),
         Field("march", "table", None, "Sphere-tracing settings, see `[render.march]`.",
               in_model=False, default_doc="see below", allowed_doc="see below",
               geometries=("sdf",)),

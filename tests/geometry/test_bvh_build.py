@@ -295,6 +295,19 @@ def test_fast_paths_are_exact(monkeypatch, knob, value):
         assert np.array_equal(getattr(ref, f), getattr(other, f)), f
 
 
+@pytest.mark.parametrize("strategy", STRATEGIES)
+@pytest.mark.parametrize("scale", [2.0 ** -100, 2.0 ** 60])
+def test_scale_invariant(strategy, scale):
+    """Power-of-two scaling is exact in floating point, so it must not change the tree (SAH
+    areas would underflow or overflow f32 if computed in scene units)."""
+    lo, hi, c = random_triangles(5000, seed=16)
+    ref = build_bvh(lo, hi, c, strategy=strategy)
+    other = build_bvh(lo * scale, hi * scale, c * scale, strategy=strategy)
+    for f in ("node_a", "node_count", "node_axis", "prim_order"):
+        assert np.array_equal(getattr(ref, f), getattr(other, f)), f
+    assert np.array_equal(ref.node_lo * np.float32(scale), other.node_lo)
+
+
 def test_large_build_runs():
     lo, hi, c = random_triangles(100_000, seed=13)
     lo, hi, c = (x.astype(np.float32) for x in (lo, hi, c))

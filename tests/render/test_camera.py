@@ -5,7 +5,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.camera import CameraFrame, generate_ray
-from renderer.sampling.rng import sample_key
+from renderer.sampling.sampler import IndependentSampler
 
 
 def trace_camera(frame: CameraFrame, width, height, pixels, samples, dof):
@@ -14,14 +14,16 @@ def trace_camera(frame: CameraFrame, width, height, pixels, samples, dof):
     dirs = np.zeros((n, 3), np.float32)
     px = np.array(pixels, np.int32)
 
+    sampler = IndependentSampler()
+
     @ti.kernel
     def kernel(px: ti.types.ndarray(), o: ti.types.ndarray(), d: ti.types.ndarray(),
                origin: ti.math.vec3, forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3,
                tan_half: ti.f32, aperture: ti.f32, focus: ti.f32):
         for i in range(n):
             p = i // samples
-            key = sample_key(p, i % samples, 3)
-            ray = generate_ray(px[p, 0], px[p, 1], width, height, key, origin, forward, right, up,
+            state = sampler.start(p, i % samples, 3)
+            ray = generate_ray(px[p, 0], px[p, 1], width, height, sampler, state, origin, forward, right, up,
                                tan_half, aperture, focus, dof)
             for c in ti.static(range(3)):
                 o[i, c] = ray.o[c]

@@ -11,7 +11,6 @@ import pytest
 
 from renderer.image_io import read_exr
 from renderer.integrators import INTEGRATORS
-from renderer.scene import load_scene
 from renderer.scene.catalog import resolve_scene, scene_files
 from renderer.tonemap import tonemap_array
 from viewer import hud
@@ -23,7 +22,7 @@ SIZE = (128, 72)
 # floor and sky put the deviation in the tens, and Monte Carlo noise alone at a few spp on a
 # uniform surface stays well below 10 after tone mapping.
 MIN_PIXEL_STD = 10.0
-SDF_SCENES = [p for p in scene_files() if load_scene(p).geometry == "sdf"]
+SCENES = scene_files()  # SDF and mesh scenes alike: one viewer shows both worlds
 
 
 @pytest.fixture(scope="module")
@@ -47,7 +46,7 @@ def expected_display(app):
     return tonemap_array(app.renderer.image(), s.exposure, mapper)
 
 
-@pytest.mark.parametrize("path", SDF_SCENES, ids=[p.stem for p in SDF_SCENES])
+@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
 def test_each_scene_shows_the_film(app, path):
     app.select_scene(path)
     app.session.set_integrator("path")

@@ -1,0 +1,100 @@
+"""Smoke tests of `bench bvh`: its measurement of one tiny mesh, its helpers, and a whole run on a
+tiny configuration (the real run takes minutes)."""
+import json
+
+import numpy as np
+import pytest
+
+from renderer.bench import BENCHMARKS
+from renderer.bench import bvh
+from renderer.bench.common import write_json
+
+TINY = bvh.MeshSpec("ico-320", "icosphere", (("subdivisions", 2), ("radius", 1.0)))
+
+
+def tiny_config(**kw):
+    base = dict(meshes=(TINY,), build_runs=1, build_runs_large=1, camera=(24, 16), incoherent_rays=2000,
+                trace_runs=1, strategies=("sah", "midpoint"), traversals=("stack", "stackless"),
+                triangle_tests=("watertight",), leaf_mesh=TINY.name, leaf_sizes=(2, 4))
+    base.update(kw)
+    return bvh.BvhBenchConfig(**base)
+
+
+def test_registered():
+    assert "bvh" in BENCHMARKS
+
+
+def test_rays():
+    lo, hi = np.array([-1.0, -0.5, -2.0]), np.array([1.0, 0.5, 2.0])
+    cam = bvh.camera_rays(lo, hi, 8, 4)
+    assert cam.origins.shape == (32, 3) and cam.directions.dtype == np.float32
+    assert np.allclose(np.linalg.norm(cam.directions, axis=1), 1.0, atol=1e-6)
+    closest, shadow = bvh.random_rays(lo, hi, 500, seed=3)
+    assert np.all(closest.t_max == np.float32(bvh.FAR))
+    ends = shadow.origins + shadow.directions * shadow.t_max[:, None]
+    assert np.all(ends >= lo - 1e-4) and np.all(ends <= hi + 1e-4)  # segments end at the targets
+
+
+def test_agreement_counts():
+    lantern = np.array([1.0, -1.0, 2.0, 3.0, -1.0], np.float32)
+    embree = np.array([1.00001, 1e30, 2.1, 1e30, 4.0], np.float32)
+    hit = np.array([True, False, True, False, True])
+    a = bvh.agreement(lantern, embree, hit)
+    assert a["rays"] == 5 and a["disagreeing"] == 3 and a["fraction"] == pytest.approx(0.4)
+    assert (a["lantern_only_hits"], a["embree_only_hits"], a["distance_mismatches"]) == (1, 1, 1)
+
+
+def test_measure_tiny_mesh(tmp_path):
+    tris = TINY.load()
+    assert tris.shape == (320, 3, 3)
+    embree = bvh.load_embree()
+    pool = None
+    if embree[0] is not None:
+        from concurrent.futures import ThreadPoolExecutor
+        pool = ThreadPoolExecutor(2)
+    try:
+        res = bvh.measure_mesh(TINY.name, tris, tiny_config(), embree if embree[0] is not None else None, pool,
+                               log=lambda *a: None)
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    assert res["triangles"] == 320
+    assert [b["strategy"] for b in res["builds"]] == ["sah", "midpoint"]
+    for b in res["builds"]:
+        assert b["seconds"] > 0 and b["triangles_per_s"] > 0 and b["sah_cost"] > 0 and b["nodes"] >= 1
+        db = b["device_bytes"]
+        assert db["total"] == db["bvh"] + db["triangles"] and db["per_triangle"] == pytest.approx(db["total"] / 320)
+        assert db["triangles"] == 320 * 36
+    assert len(res["configs"]) == 4
+    for c in res["configs"]:
+        for kind in ("coherent", "incoherent"):
+            s = c[kind]
+            assert s["mrays_per_s"] > 0 and s["nodes_per_ray"] >= 1 and 0 < s["hit_fraction"] <= 1
+    # rays from outside aimed into the box of a closed sphere: every one that enters it far enough hits
+    assert res["configs"][0]["incoherent"]["tests_per_ray"] > 0
+    sh = res["shadow"]
+    assert 0 < sh["occluded_fraction"] < 1 and sh["consistent_with_closest"] == 1.0
+    if embree[0] is not None:
+        assert res["embree"]["available"] and res["embree"]["incoherent"]["mrays_per_s"] > 0
+        assert res["agreement_all_configs"]["incoherent"] >= 0.99
+        assert res["ratio_to_embree"]["incoherent"]["default"] > 0
+        assert sh["agreement_with_embree"] >= 0.99
+    else:
+        assert res["embree"] == {"available": False}
+    path = write_json(tmp_path / "mesh.json", res)
+    assert json.loads(path.read_text())["configs"][0]["strategy"] == "sah"
+
+
+def test_run_without_embree(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(bvh, "load_embree", lambda: (None, None, "ImportError: not here"))
+    assert bvh.run(out_dir=tmp_path, config=tiny_config(strategies=("sah",), traversals=("stack",))) == 0
+    out = capsys.readouterr().out
+    assert "Embree columns are skipped" in out and "Targets:" in out
+    report = json.loads((tmp_path / "bench_bvh.json").read_text())
+    assert report["embree"]["available"] is False
+    assert report["meshes"][0]["name"] == TINY.name
+    assert [r["max_leaf_size"] for r in report["leaf_size"]["rows"]] == [2, 4]
+    assert report["leaf_size"]["best_max_leaf_size"] in (2, 4)
+    assert report["threads"]["taichi"] >= 1
+    for name in report["plots"]:
+        assert (tmp_path / name).stat().st_size > 0
