@@ -14,7 +14,7 @@ from renderer.film import Film
 from renderer.image_io import read_environment
 from renderer.integrators import make_integrator
 from renderer.lights.environment import Environment
-from renderer.materials.bsdf import MaterialTable
+from renderer.materials.table import MaterialTable
 from renderer.materials.texture_sampler import TextureTable
 from renderer.program import RenderProgram
 from renderer.sampling.sampler import make_sampler

@@ -39,9 +39,8 @@ class PathTracer:
             if max_depth >= 0 and depth + 1 >= max_depth:
                 break
             dim = dims.BOUNCE_BASE + dims.PER_BOUNCE * depth
-            u = ti.math.vec3(ctx.sampler.get1d(state, dim + dims.BSDF_LOBE),
-                             ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
-            bs = ctx.bsdf.sample(mat, n_shading, -ray.d, u)
+            bs = ctx.bsdf.sample(mat, n_shading, -ray.d, ctx.sampler.get1d(state, dim + dims.BSDF_LOBE),
+                                 ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
             if bs.valid == 0:
                 break
             throughput *= bs.weight

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from renderer.geometry.mesh_data import MeshData
-from renderer.materials.bsdf import KIND_IDS, MaterialRows
+from renderer.materials.table import KIND_IDS, MaterialRows
 from renderer.scene.errors import SceneError
 from renderer.scene.mesh_loader import load_mesh_asset
 from renderer.scene.model import Scene

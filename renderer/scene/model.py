@@ -77,6 +77,7 @@ class MaterialSpec:
     roughness: float = 0.5  # perceptual roughness in [0, 1]; alpha = roughness^2; 0 is a perfect mirror
     ior: float = 1.5  # dielectric index of refraction
     emission: Vec3 = (0.0, 0.0, 0.0)  # emitted radiance, linear RGB (colour times strength)
+    edge_tint: Vec3 = (1.0, 1.0, 1.0)  # conductor only: tint at grazing angles (Hoffman's F82 model)
     metallic: float = 0.0  # principled only: 0 dielectric base, 1 metal (glTF metallic)
     transmission: float = 0.0  # principled only: fraction of the dielectric base that transmits
 

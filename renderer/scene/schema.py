@@ -338,6 +338,10 @@ MATERIAL = Section(
         Field("base_color", "vec3", (0.8, 0.8, 0.8), "Albedo (diffuse), reflectance at normal "
               "incidence (conductor), transmission tint (dielectric) or glTF base colour "
               "(principled), linear RGB.", UNIT),
+        Field("edge_tint", "vec3", (1.0, 1.0, 1.0), "A conductor's tint near grazing angles: the "
+              "Fresnel curve from `base_color` (reflectance at normal incidence) is scaled to "
+              "`edge_tint` times Schlick's value at 82 degrees (Hoffman's F82 model). 1 is plain "
+              "Schlick.", UNIT, only_for=("conductor",)),
         Field("metallic", "float", 0.0, "0 is a dielectric base, 1 a metal (glTF "
               "`metallicFactor`).", UNIT, only_for=_PRINCIPLED),
         Field("roughness", "float", 0.5, "Perceptual roughness; 0 is a perfect mirror.", UNIT),

@@ -1,0 +1,143 @@
+"""Mitsuba 3 as an independent renderer: its Cornell box, rendered for reference images and timing.
+
+Mitsuba is optional (`pip install -e .[reference]`). Nothing here imports it at module import time;
+the first call that needs it does, and fails with `MitsubaUnavailable` and a message saying what
+to install when it cannot.
+
+Its LLVM variants (`llvm_ad_rgb`, `llvm_rgb`) JIT-compile through a system libLLVM found via the
+environment variable DRJIT_LIBLLVM_PATH; on Debian 12 that is the `libllvm19` package, at
+/usr/lib/x86_64-linux-gnu/libLLVM-19.so. The variable is set before `import mitsuba` when it is
+unset and that file exists. Without LLVM, the `scalar_rgb` variant (no JIT, much slower) is used,
+and `availability()` says so in its note.
+
+The scene is `mi.cornell_box()` (the one assets/scenes/cornell_box.toml reproduces), with two
+changes made by `cornell_box_dict`: the film size, and a `box` reconstruction filter instead of
+Mitsuba's default Gaussian, so that each pixel is the plain average of the radiance over its own
+area, as Lantern's film computes it.
+"""
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+DEFAULT_LIBLLVM = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
+PREFERRED_VARIANTS = ("llvm_ad_rgb", "llvm_rgb")
+FALLBACK_VARIANT = "scalar_rgb"
+INSTALL_HINT = ("install it with `pip install mitsuba` (or `pip install -e .[reference]`); its LLVM "
+                "variants also need Debian's libllvm19 (`apt-get install libllvm19`)")
+
+
+class MitsubaUnavailable(RuntimeError):
+    """Mitsuba 3 cannot be imported, or has no RGB variant this module can use."""
+
+
+class MitsubaRender(NamedTuple):
+    image: np.ndarray  # linear RGB, float32 (height, width, 3), row 0 = top
+    seconds: float  # wall clock of the timed render (JIT compilation excluded when warmed up)
+    samples_per_second: float  # width * height * spp / seconds (camera samples, not rays)
+
+
+_state: dict = {}
+
+
+def _import_mitsuba():
+    """Import mitsuba once, set its variant, and return (mi, variant, note)."""
+    if "mi" in _state:
+        return _state["mi"], _state["variant"], _state["note"]
+    if "DRJIT_LIBLLVM_PATH" not in os.environ and Path(DEFAULT_LIBLLVM).is_file():
+        os.environ["DRJIT_LIBLLVM_PATH"] = DEFAULT_LIBLLVM
+    try:
+        import mitsuba as mi
+    except ImportError as error:
+        raise MitsubaUnavailable(f"Mitsuba 3 is not installed ({error}); {INSTALL_HINT}") from None
+    available = set(mi.variants())
+    note = ""
+    for variant in PREFERRED_VARIANTS:
+        if variant not in available:
+            continue
+        try:
+            mi.set_variant(variant)
+            break
+        except Exception as error:  # the LLVM backend failed to start (libLLVM missing or wrong)
+            note = f"{variant} unavailable ({str(error).strip().splitlines()[0]})"
+    else:
+        if FALLBACK_VARIANT not in available:
+            raise MitsubaUnavailable(f"Mitsuba {mi.__version__} has none of the variants "
+                                     f"{', '.join(PREFERRED_VARIANTS + (FALLBACK_VARIANT,))}")
+        mi.set_variant(FALLBACK_VARIANT)
+        variant = FALLBACK_VARIANT
+        note = (note or "no LLVM variant") + (f"; using {FALLBACK_VARIANT} (no JIT, much slower); set "
+                                              f"DRJIT_LIBLLVM_PATH to a libLLVM (e.g. {DEFAULT_LIBLLVM})")
+    _state.update(mi=mi, variant=variant, note=note)
+    return mi, variant, note
+
+
+def availability() -> dict:
+    """{'available': bool, 'version', 'variant', 'libllvm', 'note'}: never raises."""
+    try:
+        mi, variant, note = _import_mitsuba()
+    except MitsubaUnavailable as error:
+        return {"available": False, "version": None, "variant": None,
+                "libllvm": os.environ.get("DRJIT_LIBLLVM_PATH"), "note": str(error)}
+    return {"available": True, "version": mi.__version__, "variant": variant,
+            "libllvm": os.environ.get("DRJIT_LIBLLVM_PATH") if variant.startswith("llvm") else None,
+            "note": note}
+
+
+def is_available() -> bool:
+    return availability()["available"]
+
+
+def set_threads(threads: int | None) -> None:
+    """Limit Mitsuba's worker threads (None leaves its default: all hardware threads)."""
+    if threads is None:
+        return
+    _import_mitsuba()
+    import drjit as dr
+
+    # Dr.Jit's thread pool runs the LLVM kernels and Mitsuba's scalar render blocks alike.
+    dr.set_thread_count(int(threads))
+
+
+def cornell_box_dict(width: int = 256, height: int = 256, max_depth: int = 8, rfilter: str = "box") -> dict:
+    """`mi.cornell_box()` with the film resized and the reconstruction filter replaced."""
+    mi, _, _ = _import_mitsuba()
+    scene = mi.cornell_box()
+    film = scene["sensor"]["film"]
+    film["width"], film["height"] = int(width), int(height)
+    film["rfilter"] = {"type": rfilter}
+    scene["integrator"] = {"type": "path", "max_depth": int(max_depth)}
+    return scene
+
+
+def load_cornell_box(width: int = 256, height: int = 256, max_depth: int = 8, rfilter: str = "box"):
+    mi, _, _ = _import_mitsuba()
+    return mi.load_dict(cornell_box_dict(width, height, max_depth, rfilter))
+
+
+def render_scene(scene, spp: int, seed: int = 0) -> np.ndarray:
+    """One render of a loaded Mitsuba scene: linear RGB float32 (height, width, 3), row 0 = top."""
+    mi, _, _ = _import_mitsuba()
+    image = np.array(mi.render(scene, spp=int(spp), seed=int(seed)), dtype=np.float32)
+    return np.ascontiguousarray(image[..., :3])
+
+
+def render_cornell_box(width: int = 256, height: int = 256, spp: int = 64, seed: int = 0,
+                       threads: int | None = None, warmup: bool = True, max_depth: int = 8) -> MitsubaRender:
+    """Render Mitsuba's Cornell box (box filter) and time it.
+
+    With `warmup`, a 1-spp render first compiles the JIT kernels (LLVM variants), so `seconds`
+    measures rendering only, as Lantern's benchmarks time their kernels after compilation.
+    """
+    set_threads(threads)
+    scene = load_cornell_box(width, height, max_depth)
+    if warmup:
+        render_scene(scene, 1, seed + 1)
+    start = time.perf_counter()
+    image = render_scene(scene, spp, seed)  # np.array() waits for the JIT's asynchronous work
+    seconds = time.perf_counter() - start
+    return MitsubaRender(image, seconds, width * height * spp / seconds if seconds > 0 else float("inf"))

@@ -1,0 +1,195 @@
+"""BSDF lobes in the local shading frame (z = the normal on wo's side, so wo.z > 0).
+
+Each lobe has `eval(...) -> (f * |cos wi|, pdf)` and a sampler returning a `BsdfSample` whose
+`weight = f * |cos| / pdf` and `pdf` agree with `eval` for non-delta directions. Delta lobes
+(roughness 0) are sampled only; their `pdf` is the discrete probability of the choice.
+
+Dielectric conventions: `eta` = n on the far side / n on wo's side. Transmitted radiance is scaled
+by 1 / eta^2 (radiance is not invariant across a change of index; Veach 1997, 5.2), so a path in
+and out of a solid multiplies to 1.
+"""
+import taichi as ti
+
+from renderer.materials import microfacet as mf
+from renderer.sampling.warps import INV_PI, cosine_hemisphere
+
+vec3 = ti.math.vec3
+BsdfSample = ti.types.struct(wi=vec3, weight=vec3, pdf=ti.f32, delta=ti.i32, valid=ti.i32)
+
+
+@ti.func
+def invalid_sample():
+    return BsdfSample(wi=vec3(0.0, 0.0, 1.0), weight=vec3(0.0), pdf=0.0, delta=0, valid=0)
+
+
+# --- Lambert ---------------------------------------------------------------------------------------
+@ti.func
+def diffuse_eval(albedo, wo, wi):
+    value = vec3(0.0)
+    pdf = 0.0
+    if wi.z > 0.0:
+        value = albedo * (wi.z * INV_PI)
+        pdf = wi.z * INV_PI
+    return value, pdf
+
+
+@ti.func
+def diffuse_sample(albedo, wo, u2):
+    wi = cosine_hemisphere(u2)
+    return BsdfSample(wi=wi, weight=albedo, pdf=wi.z * INV_PI, delta=0, valid=1 if wi.z > 0.0 else 0)
+
+
+# --- Fresnel of conductors ---------------------------------------------------------------------------
+# cos(82 degrees) and the normaliser of the F82 correction term: cos (1 - cos)^6 at 82 degrees.
+_COS_82 = 0.13917310096
+_F82_NORM = 0.13917310096 * (1.0 - 0.13917310096) ** 6
+
+
+@ti.func
+def conductor_fresnel(cos_i, reflectivity, edge_tint):
+    """A conductor's Fresnel from its colour at normal incidence and an edge tint: Schlick's curve
+    with Hoffman's F82 correction (Hoffman 2019, 'Fresnel equations considered harmful'; as in
+    OpenPBR): F = Schlick(F0) - a cos (1 - cos)^6, with `a` chosen so that F(82 degrees) =
+    edge_tint * Schlick(F0, 82 degrees). Tint 1 is plain Schlick; below 1 it darkens the
+    grazing dip that real metals show. Stable for F0 = 1 (a perfect mirror stays exactly 1)."""
+    c = ti.math.clamp(cos_i, 0.0, 1.0)
+    schlick_82 = mf.fresnel_schlick(reflectivity, _COS_82)
+    a = schlick_82 * (1.0 - ti.math.clamp(edge_tint, 0.0, 1.0)) / _F82_NORM
+    m = 1.0 - c
+    m2 = m * m
+    return ti.math.clamp(mf.fresnel_schlick(reflectivity, c) - a * c * m2 * m2 * m2, 0.0, 1.0)
+
+
+# --- GGX reflection (conductor, metal, dielectric coat) ------------------------------------------------
+@ti.func
+def ggx_reflection_eval(fresnel, alpha, wo, wi):
+    """fresnel: the Fresnel factor at wo.h (vec3); the caller computes it for h = normalize(wo + wi)."""
+    value = vec3(0.0)
+    pdf = 0.0
+    if wi.z > 0.0 and alpha > 0.0:
+        h = ti.math.normalize(wo + wi)
+        cos_oh = wo.dot(h)
+        if cos_oh > 0.0:
+            value = fresnel * (mf.ggx_d(h, alpha) * mf.smith_g2(wo, wi, alpha) / (4.0 * wo.z))
+            pdf = mf.visible_normal_pdf(wo, h, alpha) / (4.0 * cos_oh)
+    return value, pdf
+
+
+@ti.func
+def ggx_reflection_direction(alpha, wo, u2):
+    return mf.reflect(wo, mf.sample_visible_normal(wo, alpha, u2))
+
+
+@ti.func
+def conductor_eval(reflectivity, edge_tint, alpha, wo, wi):
+    h = ti.math.normalize(wo + wi)
+    return ggx_reflection_eval(conductor_fresnel(wo.dot(h), reflectivity, edge_tint), alpha, wo, wi)
+
+
+@ti.func
+def conductor_sample(reflectivity, edge_tint, alpha, wo, u2):
+    s = invalid_sample()
+    if alpha == 0.0:
+        s = BsdfSample(wi=vec3(-wo.x, -wo.y, wo.z), weight=conductor_fresnel(wo.z, reflectivity, edge_tint),
+                       pdf=1.0, delta=1, valid=1)
+    else:
+        h = mf.sample_visible_normal(wo, alpha, u2)
+        wi = mf.reflect(wo, h)
+        if wi.z > 0.0:
+            cos_oh = wo.dot(h)
+            # f cos / pdf with pdf = G1 D (wo.h) / (4 wo.z wo.h): D and the Jacobian cancel.
+            s = BsdfSample(wi=wi, weight=conductor_fresnel(cos_oh, reflectivity, edge_tint)
+                           * (mf.smith_g2(wo, wi, alpha) / mf.smith_g1(wo, alpha)),
+                           pdf=mf.visible_normal_pdf(wo, h, alpha) / (4.0 * cos_oh), delta=0, valid=1)
+    return s
+
+
+# --- Dielectric interface (rough: Walter et al. 2007; smooth: delta) -------------------------------------
+@ti.func
+def dielectric_eval(tint, alpha, eta, wo, wi):
+    value = vec3(0.0)
+    pdf = 0.0
+    if alpha > 0.0 and wi.z != 0.0:
+        if wi.z > 0.0:
+            h = ti.math.normalize(wo + wi)
+            cos_oh = wo.dot(h)
+            if cos_oh > 0.0:
+                f, _ = mf.fresnel_dielectric(cos_oh, eta)
+                value = vec3(f * mf.ggx_d(h, alpha) * mf.smith_g2(wo, wi, alpha) / (4.0 * wo.z))
+                pdf = f * mf.visible_normal_pdf(wo, h, alpha) / (4.0 * cos_oh)
+        else:
+            # Generalised half vector of a refraction, on wo's side.
+            h = ti.math.normalize(wo + eta * wi)
+            if h.z < 0.0:
+                h = -h
+            cos_oh = wo.dot(h)
+            cos_ih = wi.dot(h)
+            if cos_oh > 0.0 and cos_ih < 0.0:
+                f, _ = mf.fresnel_dielectric(cos_oh, eta)
+                denom = cos_oh + eta * cos_ih
+                denom2 = denom * denom
+                d = mf.ggx_d(h, alpha)
+                value = tint * ((1.0 - f) * d * mf.smith_g2(wo, wi, alpha) * cos_oh * ti.abs(cos_ih) / (wo.z * denom2))
+                # Walter et al. 2007, eq. 17: d(h)/d(wi) = eta^2 |wi.h| / (wo.h + eta wi.h)^2
+                pdf = (1.0 - f) * mf.visible_normal_pdf(wo, h, alpha) * eta * eta * ti.abs(cos_ih) / denom2
+    return value, pdf
+
+
+@ti.func
+def dielectric_sample(tint, alpha, eta, wo, u1, u2):
+    """Lobe choice by Fresnel, so F cancels in the weight."""
+    s = BsdfSample(wi=vec3(0.0, 0.0, 1.0), weight=vec3(0.0), pdf=0.0, delta=1, valid=1)
+    h = vec3(0.0, 0.0, 1.0)
+    g_ratio = 1.0
+    if alpha > 0.0:
+        h = mf.sample_visible_normal(wo, alpha, u2)
+        s.delta = 0
+    cos_oh = wo.dot(h)
+    f, cos_t = mf.fresnel_dielectric(cos_oh, eta)
+    reflect = u1 < f
+    if reflect:
+        s.wi = mf.reflect(wo, h)
+    else:
+        s.wi = mf.refract(wo, h, eta, cos_t)
+    # A rough microfacet can send wi to the wrong side of the macro surface: no contribution.
+    if (reflect and s.wi.z <= 0.0) or ((not reflect) and s.wi.z >= 0.0):
+        s.valid = 0
+    else:
+        if alpha > 0.0:
+            g_ratio = mf.smith_g2(wo, s.wi, alpha) / mf.smith_g1(wo, alpha)
+            d_vis = mf.visible_normal_pdf(wo, h, alpha)
+            if reflect:
+                s.pdf = f * d_vis / (4.0 * cos_oh)
+            else:
+                cos_ih = s.wi.dot(h)
+                denom = cos_oh + eta * cos_ih
+                s.pdf = (1.0 - f) * d_vis * eta * eta * ti.abs(cos_ih) / (denom * denom)
+        else:
+            s.pdf = f if reflect else 1.0 - f
+        if reflect:
+            s.weight = vec3(g_ratio)
+        else:
+            s.weight = tint * (g_ratio / (eta * eta))
+    return s
+
+
+# --- Dielectric coat over a Lambertian base (the principled model's opaque part) ------------------------
+@ti.func
+def coat_diffuse_eval(base, ior, wo, wi):
+    """The light the coat transmits on the way in and out, diffused by the base:
+    base / pi (1 - F(wo.z)) (1 - F(wi.z)): reciprocal, and never more than the coat lets through."""
+    value = vec3(0.0)
+    pdf = 0.0
+    if wi.z > 0.0:
+        f_o, _ = mf.fresnel_dielectric(wo.z, ior)
+        f_i, _ = mf.fresnel_dielectric(wi.z, ior)
+        value = base * ((1.0 - f_o) * (1.0 - f_i) * wi.z * INV_PI)
+        pdf = wi.z * INV_PI
+    return value, pdf
+
+
+@ti.func
+def coat_specular_eval(ior, alpha, wo, wi):
+    h = ti.math.normalize(wo + wi)
+    f, _ = mf.fresnel_dielectric(ti.max(wo.dot(h), 1e-6), ior)
+    return ggx_reflection_eval(vec3(f), alpha, wo, wi)

@@ -1,0 +1,108 @@
+"""The material table on the device: one struct row per material, and texture slots.
+
+Rows come from scene-file materials (`MaterialSpec`) and from model files (glTF metallic-roughness
+`PbrMaterial`, with textures). `Bsdf.shade` turns a row into the `Material` at a surface point.
+"""
+import numpy as np
+import taichi as ti
+
+from renderer.materials.texture_sampler import TextureTable
+
+vec3 = ti.math.vec3
+
+DIFFUSE, CONDUCTOR, DIELECTRIC, PRINCIPLED = 0, 1, 2, 3
+KIND_IDS = {"diffuse": DIFFUSE, "conductor": CONDUCTOR, "dielectric": DIELECTRIC, "principled": PRINCIPLED}
+NO_TEXTURE = -1
+
+# Only roughness == 0 is a delta lobe. Any other roughness is clamped to at least this GGX width so
+# that D(h) <= 1/(pi a^2) ~ 3e7 stays finite in f32.
+MIN_ALPHA = 1e-4
+
+# As stored: one row per material. Texture slots hold a texture-table index or NO_TEXTURE:
+# textures = (base colour, metallic-roughness, normal, emissive), transmission_texture separately.
+# edge_tint: a conductor's grazing-angle tint (Hoffman's F82 model); unused by other kinds.
+MaterialRecord = ti.types.struct(kind=ti.i32, base_color=vec3, roughness=ti.f32, metallic=ti.f32,
+                                 transmission=ti.f32, ior=ti.f32, emission=vec3, edge_tint=vec3,
+                                 normal_scale=ti.f32, textures=ti.math.ivec4, transmission_texture=ti.i32)
+# As shaded: a record with its textures applied at one surface point.
+Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=ti.f32, transmission=ti.f32,
+                           ior=ti.f32, emission=vec3, edge_tint=vec3)
+
+
+def alpha_from_roughness(roughness):
+    return 0.0 if roughness == 0.0 else max(roughness * roughness, MIN_ALPHA)
+
+
+@ti.func
+def alpha_of(roughness):
+    return 0.0 if roughness <= 0.0 else ti.max(roughness * roughness, MIN_ALPHA)
+
+
+class MaterialRows:
+    """Numpy rows for the device table, from scene materials and model-file materials."""
+
+    def __init__(self):
+        self.rows = []
+
+    def add_spec(self, spec) -> int:
+        self.rows.append(dict(kind=KIND_IDS[spec.kind], base_color=spec.base_color, roughness=spec.roughness,
+                              metallic=spec.metallic, transmission=spec.transmission, ior=spec.ior,
+                              emission=spec.emission, edge_tint=spec.edge_tint, normal_scale=1.0,
+                              textures=(NO_TEXTURE,) * 4, transmission_texture=NO_TEXTURE))
+        return len(self.rows) - 1
+
+    def add_pbr(self, pbr, texture_id) -> int:
+        """A glTF material; texture_id maps its TextureRef to a texture-table index."""
+        def tex(ref):
+            return NO_TEXTURE if ref is None else texture_id(ref)
+
+        self.rows.append(dict(kind=PRINCIPLED, base_color=tuple(pbr.base_color_factor[:3]),
+                              roughness=pbr.roughness_factor, metallic=pbr.metallic_factor,
+                              transmission=pbr.transmission_factor, ior=pbr.ior,
+                              emission=tuple(pbr.emissive_factor), edge_tint=(1.0, 1.0, 1.0),
+                              normal_scale=pbr.normal_scale,
+                              textures=(tex(pbr.base_color_texture), tex(pbr.metallic_roughness_texture),
+                                        tex(pbr.normal_texture), tex(pbr.emissive_texture)),
+                              transmission_texture=tex(pbr.transmission_texture)))
+        return len(self.rows) - 1
+
+    def arrays(self) -> dict:
+        def col(name, dtype, width=None):
+            values = [r[name] for r in self.rows]
+            a = np.array(values, dtype)
+            return a.reshape(len(values), width) if width else a
+
+        return {"kind": col("kind", np.int32), "base_color": col("base_color", np.float32, 3),
+                "roughness": col("roughness", np.float32), "metallic": col("metallic", np.float32),
+                "transmission": col("transmission", np.float32), "ior": col("ior", np.float32),
+                "emission": col("emission", np.float32, 3), "edge_tint": col("edge_tint", np.float32, 3),
+                "normal_scale": col("normal_scale", np.float32),
+                "textures": col("textures", np.int32, 4),
+                "transmission_texture": col("transmission_texture", np.int32)}
+
+    def uses(self) -> dict:
+        """Which kinds and texture slots occur (for Features)."""
+        kinds = {r["kind"] for r in self.rows}
+        slots = [any(r["textures"][i] != NO_TEXTURE for r in self.rows) for i in range(4)]
+        return {"kinds": kinds, "textures": any(slots) or any(r["transmission_texture"] != NO_TEXTURE for r in self.rows),
+                "normal_maps": slots[2], "emission": any(max(r["emission"]) > 0 for r in self.rows)}
+
+
+@ti.data_oriented
+class MaterialTable:
+    """All of a scene's materials in one struct field, indexed by material id, and its textures."""
+
+    def __init__(self, rows: MaterialRows, textures: TextureTable | None = None):
+        arrays = rows.arrays()
+        self.count = len(arrays["kind"])
+        self.table = MaterialRecord.field(shape=max(1, self.count))
+        if self.count:
+            self.table.from_numpy(arrays)
+        self.textures = textures or TextureTable(None, [])
+
+    @classmethod
+    def from_specs(cls, specs):
+        rows = MaterialRows()
+        for spec in specs:
+            rows.add_spec(spec)
+        return cls(rows)

@@ -1,0 +1,155 @@
+"""Lantern's Cornell box against Mitsuba 3's, pixel by pixel, with Mitsuba's own render-test rule.
+
+The reference (tests/data/cornell_mitsuba_mean.exr and cornell_mitsuba_var.exr, made by
+scripts/mitsuba_reference.py) is `mi.cornell_box()` rendered by Mitsuba 3 at 64x64 with a box
+filter: the per-pixel mean and the per-pixel variance of that mean. Lantern renders
+assets/scenes/cornell_box.toml, the same scene value for value, at the same size; Mitsuba is not
+needed to run these tests.
+
+The rule, as in Mitsuba's src/render/tests/test_renders.py:
+  - for every pixel and channel, z = (lantern_mean - ref_mean) / sqrt(lantern_var_of_mean +
+    ref_var_of_mean) and its two-sided p-value 2 (1 - Phi(|z|));
+  - significance alpha = 0.01, Sidak-corrected over the N pixels: a channel passes when
+    p > 1 - (1 - alpha)^(1/N);
+  - the image passes when (passing channels) / 3 >= 99.75 % of N.
+Two deliberate differences from Mitsuba's version, which compares a test render against a
+32k-spp reference: the variance is that of the difference of two estimates (both renders' noise,
+Lantern's measured by its film, the reference's by the spread of its independent passes) instead
+of the reference's per-sample variance over the test's spp, floored at 1e-4; and there is no floor:
+a channel whose two variances are both 0 (pixels that see only the black outside of the box) must
+be exactly equal instead.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from renderer.integrators import INTEGRATORS
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENE_FILE = ROOT / "assets" / "scenes" / "cornell_box.toml"
+REF_MEAN = ROOT / "tests" / "data" / "cornell_mitsuba_mean.exr"
+REF_VAR = ROOT / "tests" / "data" / "cornell_mitsuba_var.exr"
+
+ALPHA = 0.01  # significance level of the whole image, before the Sidak correction
+PASS_FRACTION = 0.9975  # Mitsuba's: at least 99.75 % of the pixels must pass
+SPP = 1024  # Lantern's samples per pixel: about 4 s for `path` at 64x64 on one CPU core pair
+SEED = 1
+# Integrators that estimate the same radiance as Mitsuba's `path` (the debug views do not).
+UNBIASED = [name for name in ("path", "nee", "mis") if name in INTEGRATORS]
+
+
+def mitsuba_z_test(mean, var_of_mean, ref_mean, ref_var_of_mean, alpha=ALPHA):
+    """(passed, fraction of pixels passing, per-channel pass mask, p-values, Sidak level)."""
+    mean, var, ref, ref_var = (np.asarray(a, np.float64) for a in (mean, var_of_mean, ref_mean, ref_var_of_mean))
+    pixel_count = mean.shape[0] * mean.shape[1]
+    difference = np.abs(mean - ref)
+    combined = var + ref_var
+    exact = combined == 0.0  # no noise on either side: nothing but equality passes
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.where(exact, 0.0, difference / np.sqrt(combined))
+    p_value = np.where(exact, np.where(difference == 0.0, 1.0, 0.0), 2.0 * stats.norm.sf(z))
+    level = -np.expm1(np.log1p(-alpha) / pixel_count)  # 1 - (1 - alpha)^(1/N), without cancellation
+    success = p_value > level
+    fraction = np.count_nonzero(success) / 3 / pixel_count
+    return fraction >= PASS_FRACTION, fraction, success, p_value, level
+
+
+def describe_failure(mean, ref, success, p_value, blocks=4) -> str:
+    """Where it fails: the worst pixels and, per image block, Lantern / Mitsuba and failures."""
+    h, w, _ = mean.shape
+    lines = ["worst pixels (row, col from the top left): lantern vs mitsuba RGB, p"]
+    worst = np.argsort(p_value.min(axis=2), axis=None)[:8]
+    for index in worst:
+        r, c = divmod(int(index), w)
+        lines.append(f"  ({r:2d}, {c:2d}) {np.round(mean[r, c], 4)} vs {np.round(ref[r, c], 4)}, "
+                     f"p = {p_value[r, c].min():.1e}")
+    lines.append(f"per {h // blocks}x{w // blocks} block: mean ratio lantern / mitsuba (RGB), failing channels")
+    for br in range(blocks):
+        cells = []
+        for bc in range(blocks):
+            rows = slice(br * h // blocks, (br + 1) * h // blocks)
+            cols = slice(bc * w // blocks, (bc + 1) * w // blocks)
+            lm, rm = mean[rows, cols].mean(axis=(0, 1)), ref[rows, cols].mean(axis=(0, 1))
+            ratio = np.where(rm > 0, lm / np.where(rm > 0, rm, 1), np.nan)
+            cells.append(f"{'/'.join(f'{v:.3f}' for v in ratio)} {np.count_nonzero(~success[rows, cols]):3d}")
+        lines.append("  " + " | ".join(cells))
+    return "\n".join(lines)
+
+
+@pytest.fixture(scope="module")
+def reference():
+    if not (REF_MEAN.is_file() and REF_VAR.is_file()):
+        pytest.skip(f"Mitsuba reference images missing ({REF_MEAN.name}, {REF_VAR.name} in tests/data); "
+                    "make them with scripts/mitsuba_reference.py")
+    from renderer.image_io import read_exr
+
+    return read_exr(REF_MEAN), read_exr(REF_VAR)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    from renderer.scene import load_scene
+
+    return load_scene(SCENE_FILE)
+
+
+@pytest.fixture(scope="module")
+def lantern(scene, reference):
+    """render(integrator) -> (mean, variance of the mean) at the reference's size, rendered once."""
+    from renderer.camera import CameraFrame
+    from renderer.renderer import Renderer
+
+    ref, _ = reference
+    size = (ref.shape[1], ref.shape[0])
+    done = {}
+
+    def render(integrator):
+        if integrator not in done:
+            renderer = Renderer(scene, size)
+            renderer.render(CameraFrame.from_spec(scene.camera), SPP, integrator=integrator, max_depth=8, seed=SEED)
+            assert renderer.film.stats()["rejected"] == 0
+            done[integrator] = renderer.film.mean_image(), renderer.film.variance_of_mean_image()
+        return done[integrator]
+
+    return render
+
+
+def test_reference_images_are_sound(reference):
+    ref, ref_var = reference
+    assert ref.shape == ref_var.shape and ref.shape[2] == 3 and ref.shape[0] == ref.shape[1]
+    assert np.all(np.isfinite(ref)) and np.all(np.isfinite(ref_var))
+    assert ref.min() >= 0 and ref_var.min() >= 0
+    # Orientation as Mitsuba renders it: the red wall (x = -1) on the left, the green one on the right.
+    quarter = ref.shape[1] // 4
+    left, right = ref[:, :quarter].mean(axis=(0, 1)), ref[:, -quarter:].mean(axis=(0, 1))
+    assert left[0] > left[1] and right[1] > right[0]
+
+
+@pytest.mark.parametrize("integrator", UNBIASED)
+def test_cornell_box_matches_mitsuba(reference, lantern, integrator):
+    ref, ref_var = reference
+    mean, var = lantern(integrator)
+    passed, fraction, success, p_value, level = mitsuba_z_test(mean, var, ref, ref_var)
+    assert passed, (f"{integrator}: {fraction:.2%} of pixels pass the z-test at the Sidak level {level:.2e} "
+                    f"(need {PASS_FRACTION:.2%})\n" + describe_failure(mean, ref, success, p_value))
+
+
+@pytest.mark.parametrize("integrator", UNBIASED)
+def test_cornell_box_image_mean_matches_mitsuba(reference, lantern, integrator):
+    """The mean over all pixels: far more sensitive to a small bias spread over the whole image
+    than the per-pixel rule (pixels are independent, so variances add). Two-sided z-test per
+    channel at ALPHA, Sidak-corrected over the 3 channels."""
+    ref, ref_var = reference
+    mean, var = lantern(integrator)
+    n = ref.shape[0] * ref.shape[1]
+    difference = mean.astype(np.float64).mean(axis=(0, 1)) - ref.astype(np.float64).mean(axis=(0, 1))
+    sigma = np.sqrt((var.astype(np.float64).sum(axis=(0, 1)) + ref_var.astype(np.float64).sum(axis=(0, 1))) / n**2)
+    z = difference / sigma
+    critical = stats.norm.isf(-np.expm1(np.log1p(-ALPHA) / 3) / 2)
+    assert np.all(np.abs(z) < critical), (f"{integrator}: image mean differs from Mitsuba's by {difference} "
+                                          f"(relative {difference / ref.mean(axis=(0, 1))}, z = {z}, "
+                                          f"critical {critical:.2f})")
