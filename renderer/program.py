@@ -14,8 +14,9 @@ from renderer.sampling.sampler import SampleState
 
 @ti.data_oriented
 class RenderProgram:
-    def __init__(self, geometry, materials, environment, integrator, film, work, features, sampler):
+    def __init__(self, geometry, materials, environment, integrator, film, work, features, sampler, lights=None):
         self.geometry = geometry
+        self.lights = lights  # None for integrators that do not sample lights
         self.sampler = sampler
         self.bsdf = Bsdf(materials, features)
         self.environment = environment

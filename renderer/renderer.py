@@ -64,6 +64,8 @@ class Renderer:
         image = read_environment(scene.environment.file) if scene.environment.kind == "map" else None
         self.environment = Environment(scene.environment, image)
         self.geometry, self.materials, self._features = build_world(scene, mesh_options)
+        self._env_image = image
+        self._lights = None
         self.film = Film(width, height)
         self.work = ti.Vector.field(3, ti.f32, shape=(width, height))
         self._probe_out = ti.field(ti.f32, shape=())
@@ -82,10 +84,21 @@ class Renderer:
     def program(self, integrator: str, features: Features, sampler: str = "independent") -> RenderProgram:
         key = (integrator, features, sampler)
         if key not in self._programs:
-            self._programs[key] = RenderProgram(self.geometry, self.materials, self.environment,
-                                                make_integrator(integrator), self.film, self.work, features,
-                                                make_sampler(sampler))
+            chosen = make_integrator(integrator)
+            lights = self.lights() if getattr(chosen, "uses_lights", False) else None
+            self._programs[key] = RenderProgram(self.geometry, self.materials, self.environment, chosen, self.film,
+                                                self.work, features, make_sampler(sampler), lights)
         return self._programs[key]
+
+    def lights(self):
+        """The scene's emitters for direct lighting, built on first use (light selection structures
+        cost nothing to integrators that do not sample lights)."""
+        if self._lights is None:
+            from renderer.lights.lights import Lights, emitter_table
+
+            emitters = emitter_table(self.geometry, self.materials.arrays)
+            self._lights = Lights(self.geometry, emitters, self.environment, self.scene.environment, self._env_image)
+        return self._lights
 
     def is_compiled(self, integrator: str, features: Features, sampler: str = "independent") -> bool:
         """False until the combination has run once in this process (its first call compiles)."""

@@ -13,6 +13,7 @@ through SDF glass and out again, and a camera inside a solid sees its inner face
 import numpy as np
 import taichi as ti
 
+from renderer.geometry import emitter_shapes
 from renderer.geometry.interface import Hit, Ray, Surface
 from shaders_sdf.scene_sdf import SdfProgram
 
@@ -124,9 +125,9 @@ class SdfGeometry:
         c = n.dot(along)
         if c < MIN_FACING_COSINE:
             n = ti.math.normalize(n + (MIN_FACING_COSINE - c) * along)
-        material = ti.cast(self.program.distance_material(p).y, ti.i32)
+        dmn = self.program.distance_material(p)
         return Surface(p=p, n_geo=n, n_shading=n, uv=ti.math.vec2(0.0), uv1=ti.math.vec2(0.0),
-                       tangent=ti.math.vec4(0.0), material=material,
+                       tangent=ti.math.vec4(0.0), material=ti.cast(dmn.y, ti.i32), prim=ti.cast(dmn.z, ti.i32),
                        front_face=1 - hit.inside, eps=eps, cone_width=width, cone_spread=ray.cone_spread)
 
     @ti.func
@@ -149,3 +150,55 @@ class SdfGeometry:
         # threshold that grew along a grazing ray faster than the ray leaves a convex surface
         # would let the ray find its own surface again.
         return Ray(o=o, d=direction, cone_width=surface.cone_width, cone_spread=0.0)
+
+    # --- direct lighting ---------------------------------------------------------------------------
+    def primitive_count(self) -> int:
+        return self.program.node_count
+
+    def emitter_info(self) -> dict:
+        """The nodes `sample_emitter` can sample: top-level spheres (a sphere's solid angle can be
+        sampled exactly; other emissive SDF shapes are found by BSDF sampling alone)."""
+        materials = self.program.material.to_numpy()  # >= 0 only on top-level objects
+        ids = [i for i, node in enumerate(self.program.order) if node.kind == "sphere" and materials[i] >= 0]
+        nodes = [self.program.order[i] for i in ids]
+        centre = np.array([n.transform.translate for n in nodes], np.float64).reshape(-1, 3)
+        radius = np.array([n.param("radius") * n.transform.scale for n in nodes], np.float64)
+        count = len(ids)
+        return {"prim": np.array(ids, np.int32), "material": materials[ids] if count else np.zeros(0, np.int32),
+                "area": 4 * np.pi * radius ** 2, "lo": centre - radius[:, None], "hi": centre + radius[:, None],
+                "axis": np.tile([0.0, 1.0, 0.0], (count, 1)), "theta_o": np.full(count, np.pi),
+                "theta_e": np.full(count, np.pi / 2)}
+
+    @ti.func
+    def material_of(self, node):
+        return self.program.material[node]
+
+    @ti.func
+    def _sphere(self, node):
+        prog = self.program
+        return prog.translation[node], prog.params[node].x * prog.scale[node]
+
+    @ti.func
+    def sample_emitter(self, node, ref, u):
+        centre, radius = self._sphere(node)
+        return emitter_shapes.sphere_sample(centre, radius, ref, u)
+
+    @ti.func
+    def emitter_pdf(self, node, ref, p, n):
+        centre, radius = self._sphere(node)
+        return emitter_shapes.sphere_pdf(centre, radius, ref, p, n)
+
+    @ti.func
+    def visible(self, surface, target, target_n):
+        """No surface between `surface` and `target`: march towards it and stop short of the
+        target's own surface by the offset a spawned ray would keep from it."""
+        to = target - surface.p
+        dist = to.norm()
+        d = to / dist
+        ray = self.spawn(surface, d)
+        remaining = (target - ray.o).dot(d) - SPAWN_OFFSET * surface.eps
+        blocked = False
+        if remaining > 0.0:
+            blocked = self.intersect(ray, remaining).hit == 1
+        return not blocked
+

@@ -58,7 +58,8 @@ class SdfProgram:
         self.compound_funcs = [self._node_func(n, index_of) for n in compounds]
         self.compound_index = [index_of[id(n)] for n in compounds]
         self.distance = self._scene_func(with_material=False)  # p -> d
-        self.distance_material = self._scene_func(with_material=True)  # p -> (d, material id)
+        self.distance_material = self._scene_func(with_material=True)  # p -> (d, material id, node id)
+        self.order = order  # node table order: node id -> SdfNode
 
     @staticmethod
     def _table_order(objects):
@@ -156,6 +157,7 @@ class SdfProgram:
         def scene_distance(p):
             best = INF
             mat = -1
+            node = -1
             for r in ti.static(range(len(kinds))):
                 lo_hi = table.ranges[r]
                 for i in range(lo_hi[0], lo_hi[1]):
@@ -165,13 +167,15 @@ class SdfProgram:
                         best = d
                         if ti.static(with_material):
                             mat = table.material[i]
+                            node = i
             for c in ti.static(range(len(compounds))):
                 d = compounds[c](p)
                 if d < best:
                     best = d
                     if ti.static(with_material):
                         mat = table.material[compound_index[c]]
-            return ti.math.vec2(best, ti.cast(mat, ti.f32))
+                        node = compound_index[c]
+            return ti.math.vec3(best, ti.cast(mat, ti.f32), ti.cast(node, ti.f32))
 
         if with_material:
             return scene_distance

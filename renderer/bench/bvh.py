@@ -664,6 +664,9 @@ def print_report(report: dict) -> None:
           f"Embree rays {th['embree_trace']} (Python threads over chunks), Embree build: its own pool over "
           f"{th['embree_build']} cores.  Embree: "
           f"{report['embree']['version'] if report['embree']['available'] else 'n/a'}")
+    la = report["load_average"]
+    print(f"Load average (1, 5, 15 min) before {la['before']}, after {la['after']}, on {os.cpu_count()} cores: "
+          f"timings are only as quiet as the machine.")
     print()
     rows = []
     for m in meshes:

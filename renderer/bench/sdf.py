@@ -370,7 +370,7 @@ def print_report(results: list[dict], config: SdfBenchConfig) -> None:
 
 def write_plots(results: list[dict], out_dir: Path) -> list[Path]:
     plt = pyplot()
-    from matplotlib.ticker import NullFormatter
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
     written = []
     for res in results:
         fig, axes = plt.subplots(2, 2, figsize=(11, 8))
@@ -399,8 +399,10 @@ def write_plots(results: list[dict], out_dir: Path) -> list[Path]:
             ax.set_title(f"{res['scene']}: {key} sweep, path-traced")
             ax.grid(True, which="both", alpha=0.3)
             ax.legend(fontsize=7)
-        for ax in axes.ravel():
-            ax.xaxis.set_minor_formatter(NullFormatter())  # crowded on short log ranges
+        for ax in axes.ravel():  # label 1-2-5 steps: readable on short and long log ranges alike
+            ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+            ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
+            ax.xaxis.set_minor_formatter(NullFormatter())
         written.append(save_figure(fig, out_dir / f"bench_sdf_{res['scene']}_sweeps.png"))
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))

@@ -5,6 +5,10 @@ A geometry object provides these Taichi funcs:
   occluded(ray, t_max) -> bool          any hit in (0, t_max): shadow rays stop at the first
   surface(ray, hit) -> Surface          what the integrator shades
   spawn(surface, direction) -> Ray      a ray leaving the surface, offset so it cannot hit itself
+  visible(surface, p, n) -> bool        nothing blocks the segment from the surface to point p
+                                        (itself on a surface with normal n)
+  sample_emitter(prim, ref, u2) -> EmitterPoint        a point on emissive primitive `prim`
+  emitter_pdf(prim, ref, p, n) -> f32   the solid-angle density sample_emitter gives point p
 Integrators, materials, lights, camera and film never know which kind they run on.
 
 Rays carry a cone (width at the origin, spread per metre) so that the SDF marcher can grow its
@@ -26,8 +30,13 @@ Hit = ti.types.struct(hit=ti.i32, t=ti.f32, work=ti.i32, tests=ti.i32, inside=ti
 # n_geo: outward geometric normal; n_shading: outward shading normal; eps: the distance within
 # which a spawned ray must not find this surface again.
 # uv / uv1: texture coordinate sets 0 and 1; tangent: xyz along +u and handedness w (0 when none).
+# prim: what was hit (global primitive id on meshes, node id on SDF scenes): the key of emitters.
 Surface = ti.types.struct(p=vec3, n_geo=vec3, n_shading=vec3, uv=ti.math.vec2, uv1=ti.math.vec2,
-                          tangent=ti.math.vec4, material=ti.i32, front_face=ti.i32, eps=ti.f32,
+                          tangent=ti.math.vec4, material=ti.i32, prim=ti.i32, front_face=ti.i32, eps=ti.f32,
                           cone_width=ti.f32, cone_spread=ti.f32)
+
+# A point chosen on an emitter for direct lighting: position, outward normal, texture coordinates,
+# and the solid-angle density of choosing it as seen from the reference point (0 if impossible).
+EmitterPoint = ti.types.struct(p=vec3, n=vec3, uv=ti.math.vec2, pdf=ti.f32)
 
 INF = 1e30  # "no hit yet"; far beyond any scene extent and still finite in f32

@@ -11,8 +11,9 @@ Only the primitive kinds the scene has are compiled in.
 import numpy as np
 import taichi as ti
 
+from renderer.geometry import emitter_shapes as shapes
 from renderer.geometry import intersect as isect
-from renderer.geometry.interface import Hit, Ray, Surface
+from renderer.geometry.interface import EmitterPoint, Hit, Ray, Surface
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.shading import consistent_shading_normal
 from renderer.sampling.warps import PI
@@ -40,6 +41,7 @@ class MeshGeometry:
         self.has_uv1 = data.tri_uvs1 is not None and len(data.tri_vertices) > 0
         self.has_tangents = data.tri_tangents is not None and len(data.tri_vertices) > 0
         self.node_total = len(bvh.node_count)
+        self.data = data  # kept for emitter_info (the device has its own copy)
         self._upload_bvh(bvh)
         self._upload_primitives(data, bvh)
 
@@ -277,7 +279,7 @@ class MeshGeometry:
         front = 1 if ray.d.dot(n) < 0.0 else 0
         ns = consistent_shading_normal(ns, n, -ray.d)
         return Surface(p=p, n_geo=n, n_shading=ns, uv=uv, uv1=uv1, tangent=tangent, material=self.prim_material[g],
-                       front_face=front, eps=0.0, cone_width=ray.cone_width + ray.cone_spread * hit.t,
+                       prim=g, front_face=front, eps=0.0, cone_width=ray.cone_width + ray.cone_spread * hit.t,
                        cone_spread=ray.cone_spread)
 
     @ti.func
@@ -285,3 +287,92 @@ class MeshGeometry:
         side = surface.n_geo if direction.dot(surface.n_geo) > 0.0 else -surface.n_geo
         return Ray(o=isect.offset_ray_origin(surface.p, side), d=direction,
                    cone_width=surface.cone_width, cone_spread=surface.cone_spread)
+
+    # --- direct lighting ---------------------------------------------------------------------------
+    def primitive_count(self) -> int:
+        return self.data.primitive_count
+
+    def emitter_info(self) -> dict:
+        """Every primitive with its material, area, bounds and emission cone (for light selection):
+        flat shapes emit into the hemisphere of their normal (theta_o 0), spheres all around."""
+        d = self.data
+        lo, hi = d.bounds()
+        tri = d.tri_vertices.astype(np.float64)
+        tri_cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        quad_cross = np.cross(d.quads[:, 1], d.quads[:, 2]).astype(np.float64) if len(d.quads) else np.zeros((0, 3))
+        cross = np.concatenate([tri_cross, np.zeros((len(d.spheres), 3)), quad_cross, d.discs[:, 3:6]])
+        area = np.concatenate([0.5 * np.linalg.norm(tri_cross, axis=1), 4 * np.pi * d.spheres[:, 3] ** 2,
+                               np.linalg.norm(quad_cross, axis=1), np.pi * d.discs[:, 6] ** 2])
+        length = np.linalg.norm(cross, axis=1, keepdims=True)
+        axis = np.where(length > 0, cross / np.maximum(length, 1e-30), [0.0, 1.0, 0.0])
+        theta_o = np.zeros(len(area))
+        theta_o[d.counts["triangle"]:d.counts["triangle"] + d.counts["sphere"]] = np.pi
+        return {"prim": np.arange(len(area), dtype=np.int32), "material": d.materials(), "area": area,
+                "lo": lo, "hi": hi, "axis": axis, "theta_o": theta_o, "theta_e": np.full(len(area), np.pi / 2)}
+
+    @ti.func
+    def material_of(self, g):
+        return self.prim_material[g]
+
+    @ti.func
+    def sample_emitter(self, g, ref, u):
+        result = EmitterPoint(p=ref, n=vec3(0.0, 1.0, 0.0), uv=ti.math.vec2(0.0), pdf=0.0)
+        if ti.static("triangle" in self.kinds):
+            if g < self.range_end[0]:
+                result = shapes.triangle_sample(self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2], ref, u)
+                if ti.static(self.has_uvs):
+                    b = result.uv
+                    result.uv = (1.0 - b.x - b.y) * self.tri_uv[g, 0] + b.x * self.tri_uv[g, 1] + b.y * self.tri_uv[g, 2]
+        if ti.static("sphere" in self.kinds):
+            if g >= self.range_end[0] and g < self.range_end[1]:
+                sp = self.spheres[g - self.range_end[0]]
+                result = shapes.sphere_sample(sp.xyz, sp.w, ref, u)
+        if ti.static("quad" in self.kinds):
+            if g >= self.range_end[1] and g < self.range_end[2]:
+                i = g - self.range_end[1]
+                result = shapes.quad_sample(self.quads[i, 0], self.quads[i, 1], self.quads[i, 2], ref, u)
+        if ti.static("disc" in self.kinds):
+            if g >= self.range_end[2]:
+                i = g - self.range_end[2]
+                result = shapes.disc_sample(self.discs_a[i].xyz, self.discs_n[i], self.discs_a[i].w, ref, u)
+        return result
+
+    @ti.func
+    def emitter_pdf(self, g, ref, p, n):
+        pdf = 0.0
+        if ti.static("triangle" in self.kinds):
+            if g < self.range_end[0]:
+                pdf = shapes.triangle_pdf(self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2], ref, p, n)
+        if ti.static("sphere" in self.kinds):
+            if g >= self.range_end[0] and g < self.range_end[1]:
+                sp = self.spheres[g - self.range_end[0]]
+                pdf = shapes.sphere_pdf(sp.xyz, sp.w, ref, p, n)
+        if ti.static("quad" in self.kinds):
+            if g >= self.range_end[1] and g < self.range_end[2]:
+                i = g - self.range_end[1]
+                pdf = shapes.quad_pdf(self.quads[i, 1], self.quads[i, 2], ref, p, n)
+        if ti.static("disc" in self.kinds):
+            if g >= self.range_end[2]:
+                i = g - self.range_end[2]
+                pdf = shapes.disc_pdf(self.discs_n[i], self.discs_a[i].w, ref, p, n)
+        return pdf
+
+    @ti.func
+    def visible(self, surface, target, target_n):
+        """Shadow ray between two surface points, both ends offset off their surfaces (pbrt's
+        SpawnRayTo): stops at the first hit, short of the target's own surface."""
+        to = target - surface.p
+        side = surface.n_geo if to.dot(surface.n_geo) > 0.0 else -surface.n_geo
+        o = isect.offset_ray_origin(surface.p, side)
+        far_side = target_n if (o - target).dot(target_n) > 0.0 else -target_n
+        end = isect.offset_ray_origin(target, far_side)
+        seg = end - o
+        length = seg.norm()
+        blocked = False
+        if length > 0.0:
+            ray = Ray(o=o, d=seg / length, cone_width=0.0, cone_spread=0.0)
+            # 1 - 1e-4: the offset end point is already off the target's surface; this margin only
+            # absorbs the rounding of `length`.
+            blocked = self.occluded(ray, length * (1.0 - 1e-4))
+        return not blocked
+

@@ -10,9 +10,11 @@ An integrator is a data-oriented class with
 `state` is the camera sample's sampler state (renderer.sampling.sampler).
 """
 from renderer.integrators.debug import AlbedoView, BvhView, DepthView, NormalsView, StepsView
+from renderer.integrators.direct import MultipleImportanceSampling, NextEventEstimation
 from renderer.integrators.path import PathTracer
 
-_ALL = (PathTracer, NormalsView, AlbedoView, DepthView, StepsView, BvhView)
+_ALL = (MultipleImportanceSampling, NextEventEstimation, PathTracer, NormalsView, AlbedoView, DepthView, StepsView,
+        BvhView)
 INTEGRATORS = {cls.name: cls for cls in _ALL}
 
 

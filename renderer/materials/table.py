@@ -94,6 +94,7 @@ class MaterialTable:
 
     def __init__(self, rows: MaterialRows, textures: TextureTable | None = None):
         arrays = rows.arrays()
+        self.arrays = arrays  # kept: direct lighting reads emission per material
         self.count = len(arrays["kind"])
         self.table = MaterialRecord.field(shape=max(1, self.count))
         if self.count:

@@ -24,7 +24,12 @@ How one decision (dimension id `dim`) of camera sample `i` of a pixel is drawn:
 
 All kernel arithmetic is 32-bit unsigned; results are the top 24 bits times 2^-24, in [0, 1) and
 never rounded up to 1.0. The generator matrices of Sobol dimensions 0..3 (Joe and Kuo's direction
-numbers) are computed here in Python and baked into the kernels as compile-time constants.
+numbers) are computed here in Python and baked into the kernels as compile-time constants; the two
+dimensions the sampler uses have closed forms (bit reversal; the Pascal matrix mod 2), so a get2d
+costs a few dozen integer operations and three hashes.
+
+get1d(state, dim) equals get2d(state, dim).x: as everywhere in the renderer, one dimension id
+serves one decision (see `renderer.sampling.dims`).
 
 `reference_*` functions are a numpy model of the same arithmetic that the tests check the
 kernels against bit for bit.
@@ -109,13 +114,32 @@ def owen_scramble(v, seed):
 
 
 @ti.func
+def pascal_superset_xor(v):
+    """Bit j of the result = XOR of the bits k of v whose positions are supersets of j (k & j == j).
+
+    Sobol dimension 1's generator matrix is the Pascal matrix mod 2 (binomial(k, j) is odd iff
+    k & j == j, by Lucas' theorem), so sobol_1(i) = reverse_bits(pascal_superset_xor(i)): five
+    butterfly steps instead of 32 matrix columns."""
+    x = ti.cast(v, ti.u32)
+    x ^= (x >> ti.u32(1)) & ti.u32(0x55555555)
+    x ^= (x >> ti.u32(2)) & ti.u32(0x33333333)
+    x ^= (x >> ti.u32(4)) & ti.u32(0x0F0F0F0F)
+    x ^= (x >> ti.u32(8)) & ti.u32(0x00FF00FF)
+    x ^= (x >> ti.u32(16)) & ti.u32(0x0000FFFF)
+    return x
+
+
+@ti.func
 def sobol_u32(index, d: ti.template()):
     """Sobol dimension d (0..3) of an index, as a 32-bit fraction: XOR of the generator matrix
-    columns of the set index bits, unrolled over the 32 bits (branch-free)."""
+    columns of the set index bits (unrolled over the 32 bits, branch-free); dimensions 0 and 1
+    have closed forms."""
     i = ti.cast(index, ti.u32)
     x = ti.u32(0)
     if ti.static(d == 0):
         x = reverse_bits(i)
+    elif ti.static(d == 1):
+        x = reverse_bits(pascal_superset_xor(i))
     else:
         for bit in ti.static(range(BITS)):
             mask = ti.u32(0) - ((i >> ti.u32(bit)) & ti.u32(1))
@@ -159,7 +183,8 @@ class SobolSampler:
         ds = self._dim_seed(state, dim)
         j = owen_scramble(state.index, ds)
         x = reverse_bits(lk_permutation(j, pcg_hash(ds ^ ti.u32(_X_SALT))))
-        y = owen_scramble(sobol_u32(j, 1), pcg_hash(ds ^ ti.u32(_Y_SALT)))
+        # owen(sobol_1(j)) = reverse(LK(reverse(reverse(pascal(j))))) = reverse(LK(pascal(j))).
+        y = reverse_bits(lk_permutation(pascal_superset_xor(j), pcg_hash(ds ^ ti.u32(_Y_SALT))))
         return ti.math.vec2(to_unit(x), to_unit(y))
 
 

@@ -20,6 +20,16 @@ terrain
 icosphere
     `trimesh.creation.icosphere(subdivisions, radius)`: 20 * 4^subdivisions triangles, vertices
     exactly on the sphere; normals = positions / radius.
+light_panels
+    `count_x` x `count_z` small square panels (`panel_size` on a side, 2 triangles and 4 vertices
+    each, none shared) in the plane y = `height`, facing down (-y: their front side, which is the
+    emitting side of a one-sided emitter). Panel (i, j) sits at the centre of cell (i, j) of a
+    `size` x `size` square centred on the y axis (cells `size / count` wide), moved by a seeded
+    jitter, uniform within +-1/4 of the gap between panel and cell on each axis, so panels never
+    leave their cells and never overlap unless `panel_size` exceeds the cell. Panels are listed
+    row by row (z, then x); panel k holds triangles 2k and 2k + 1. Meant as many small emitters
+    (with an emissive material) for many-light sampling: the defaults give 10,000 panels,
+    20,000 triangles.
 """
 from __future__ import annotations
 
@@ -53,6 +63,8 @@ def triangle_count(generator: str, params: Params = ()) -> int:
     p = _params(generator, params)
     if generator == "terrain":
         return 2 * int(p["resolution"]) ** 2
+    if generator == "light_panels":
+        return 2 * int(p["count_x"]) * int(p["count_z"])
     return 20 * 4 ** int(p["subdivisions"])
 
 
@@ -61,6 +73,9 @@ def generate(generator: str, params: Params = ()) -> tuple[np.ndarray, np.ndarra
     p = _params(generator, params)
     if generator == "terrain":
         return terrain(int(p["resolution"]), float(p["size"]), float(p["height"]), int(p["seed"]))
+    if generator == "light_panels":
+        return light_panels(int(p["count_x"]), int(p["count_z"]), float(p["size"]),
+                            float(p["panel_size"]), float(p["height"]), int(p["seed"]))
     return icosphere(int(p["subdivisions"]), float(p["radius"]))
 
 
@@ -146,3 +161,37 @@ def icosphere(subdivisions: int = 3, radius: float = 1.0) -> tuple[np.ndarray, n
     return (np.ascontiguousarray(vertices, dtype=np.float32),
             np.ascontiguousarray(mesh.faces, dtype=np.int32),
             np.ascontiguousarray(normals, dtype=np.float32))
+
+
+# --- light_panels ----------------------------------------------------------------------------
+
+
+def light_panels(count_x: int = 100, count_z: int = 100, size: float = 20.0,
+                 panel_size: float = 0.05, height: float = 3.0,
+                 seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    if count_x < 1 or count_z < 1:
+        raise ValueError("light_panels counts must be at least 1")
+    if not (size > 0 and panel_size > 0):
+        raise ValueError("light_panels size and panel_size must be positive")
+    cell_x, cell_z = size / count_x, size / count_z
+    rng = np.random.default_rng(seed)
+    jitter = rng.uniform(-1.0, 1.0, size=(count_z, count_x, 2))
+    jitter[..., 0] *= 0.25 * max(cell_x - panel_size, 0.0)
+    jitter[..., 1] *= 0.25 * max(cell_z - panel_size, 0.0)
+    x = -0.5 * size + (np.arange(count_x) + 0.5) * cell_x  # cell centres
+    z = -0.5 * size + (np.arange(count_z) + 0.5) * cell_z
+    cx = (x[None, :] + jitter[..., 0]).ravel()  # panel k = j * count_x + i
+    cz = (z[:, None] + jitter[..., 1]).ravel()
+    half = 0.5 * panel_size
+    n = cx.shape[0]
+    positions = np.empty((n, 4, 3), dtype=np.float64)
+    # corners 0: (-x, -z), 1: (+x, -z), 2: (-x, +z), 3: (+x, +z)
+    positions[:, :, 0] = cx[:, None] + np.array([-half, half, -half, half])
+    positions[:, :, 1] = height
+    positions[:, :, 2] = cz[:, None] + np.array([-half, -half, half, half])
+    # (c0, c1, c2): (c1 - c0) x (c2 - c0) = (s, 0, 0) x (0, 0, s) = (0, -s^2, 0): facing -y;
+    # (c1, c3, c2) likewise.
+    corners = np.array([[0, 1, 2], [1, 3, 2]], dtype=np.int32)
+    indices = (np.arange(n, dtype=np.int32)[:, None, None] * 4 + corners[None]).reshape(-1, 3)
+    normals = np.tile(np.float32([0.0, -1.0, 0.0]), (4 * n, 1))
+    return (positions.astype(np.float32).reshape(-1, 3), np.ascontiguousarray(indices), normals)

@@ -21,7 +21,7 @@ SDF_OPERATORS = ("union", "intersection", "subtraction", "smooth_union", "repeat
 ENVIRONMENT_KINDS = ("map", "sky", "constant")
 GEOMETRY_KINDS = ("sdf", "mesh")
 MESH_OBJECT_KINDS = ("mesh", "sphere", "quad", "disc", "generated")
-MESH_GENERATORS = ("terrain", "icosphere")
+MESH_GENERATORS = ("terrain", "icosphere", "light_panels")
 
 
 @dataclass(frozen=True)

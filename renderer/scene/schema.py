@@ -505,6 +505,20 @@ GENERATORS = (
               "`subdivisions` times (20 * 4^subdivisions triangles), centred at the origin.",
               (Field("subdivisions", "int", 3, "Subdivision steps.", Range(0, 8)),
                Field("radius", "float", 1.0, "Radius, metres.", POSITIVE))),
+    Generator("light_panels", "Many small emitters: `count_x` x `count_z` square panels (2 "
+              "triangles each, so the defaults give 20,000 triangles) in the plane y = `height`, "
+              "facing down (-y), one at the centre of each cell of a `size` x `size` grid "
+              "centred on the y axis, moved by a small seeded jitter (at most a quarter of the "
+              "gap between panel and cell, so panels stay apart). Give the object an emissive "
+              "material; panels larger than their cell overlap.",
+              (Field("count_x", "int", 100, "Panels along x.", Range(1, 1000)),
+               Field("count_z", "int", 100, "Panels along z.", Range(1, 1000)),
+               Field("size", "float", 20.0, "Edge length of the square the panels cover, metres.",
+                     POSITIVE),
+               Field("panel_size", "float", 0.05, "Edge length of one panel, metres.", POSITIVE),
+               Field("height", "float", 3.0, "Height of the panels' plane (local y), metres."),
+               Field("seed", "int", 0, "Jitter seed; the same seed gives the same panels.",
+                     NON_NEGATIVE))),
 )
 
 GENERATORS_BY_NAME = {g.name: g for g in GENERATORS}

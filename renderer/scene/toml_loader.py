@@ -213,14 +213,19 @@ def _convert(field: Field, raw: object, where: str):
 
 def _check_keys(table: dict, fields: tuple[Field, ...], where: str, kind: Optional[str],
                 selector: str = "type") -> None:
-    by_name = {f.name: f for f in fields}
+    # Several kinds may have a field of the same name (e.g. generators' `size`): the one that
+    # applies to `kind` is the field.
+    by_name = {}
+    for f in fields:
+        if f.name not in by_name or (f.applies_to(kind) and not by_name[f.name].applies_to(kind)):
+            by_name[f.name] = f
     for key in table:
         field = by_name.get(key)
         if field is None:
-            allowed = ", ".join(f.name for f in fields if f.applies_to(kind))
+            allowed = ", ".join(dict.fromkeys(f.name for f in fields if f.applies_to(kind)))
             raise _Invalid(where, f"unknown field '{key}' (allowed: {allowed})")
         if not field.applies_to(kind):
-            owners = " or ".join(f"'{k}'" for k in field.only_for)
+            owners = " or ".join(f"'{k}'" for f in fields if f.name == key for k in f.only_for)
             raise _Invalid(f"{where}.{key}", f"only allowed with {selector} {owners}, not '{kind}'")
 
 
@@ -239,6 +244,11 @@ def _read_fields(table: dict, fields: tuple[Field, ...], where: str,
     _check_keys(table, fields, where, kind, selector)
     values = {}
     for field in fields:
+        if not field.applies_to(kind):
+            # not this kind's field (_check_keys refused it in the table); its default stands
+            # unless a field of the same name belongs to this kind
+            values.setdefault(field.name, None if field.required else field.default)
+            continue
         if field.name in table:
             values[field.name] = _convert(field, table[field.name], f"{where}.{field.name}")
         elif field.required and field.applies_to(kind):

@@ -190,7 +190,8 @@ def chi2_test(
         hard_fail = True
     expected = cell_integrals * n
     expected_delta = n * delta_probability
-    expected_failed = n * max(0.0, 1.0 - pdf_integral - delta_probability)
+    # A lossless sampler must never fail; a lossy one fails with the probability its pdf leaves out.
+    expected_failed = n * max(0.0, 1.0 - pdf_integral - delta_probability) if lossy else 0.0
 
     # --- statistic ----------------------------------------------------------------------------
     obs = [observed.ravel()]
@@ -205,7 +206,8 @@ def chi2_test(
         exp.append(np.array([expected_failed]))
         names.append("failed")
     obs_all, exp_all = np.concatenate(obs), np.concatenate(exp)
-    zero = (exp_all <= 0.0) & (obs_all > 0)
+    # "zero": below 1e-9 samples (quadrature rounding of a pdf that is 0 there)
+    zero = (exp_all < 1e-9) & (obs_all > 0)
     if zero.any():
         cells_hit = int(np.count_nonzero(zero[: observed.size]))
         extra = [name for name, hit in zip(names[1:], zero[observed.size:]) if hit]
@@ -231,12 +233,25 @@ def chi2_test(
     )
 
 
+def integrate_pdf(pdf, *, domain="sphere", res=32, frame=None, quad_points=4, subdivisions=2,
+                  phi_breaks=None, theta_breaks=None, batch=1 << 20) -> np.ndarray:
+    """The integral of `pdf` over each cell of `chi2_test`'s grid, (res, 2 * res); its sum is the
+    integral over the domain. Raises ValueError if the pdf is negative or not finite somewhere."""
+    frame = Z_UP if frame is None else np.asarray(frame, np.float64)
+    cos_range = 2.0 if domain == "sphere" else 1.0
+    integrals, problem = _integrate_cells(pdf, frame, 2 * res, res, cos_range, quad_points, subdivisions,
+                                          phi_breaks, theta_breaks, batch)
+    if problem:
+        raise ValueError(problem)
+    return integrals
+
+
 def _pearson(observed: np.ndarray, expected: np.ndarray, min_expected: float) -> tuple[float, int, int]:
     """Pearson's statistic with Mitsuba's pooling: categories with expectation below
     `min_expected` join one pool; while the pool is still below, it absorbs the next smallest
     category. Categories with zero expectation and no samples carry no information and are skipped.
     Returns (statistic, dof, number of categories pooled)."""
-    keep = (expected > 0.0) | (observed > 0)
+    keep = (expected >= 1e-9) | (observed > 0)
     order = np.argsort(expected[keep], kind="stable")
     e_sorted, o_sorted = expected[keep][order], observed[keep][order]
     small = e_sorted < min_expected

@@ -1,0 +1,163 @@
+"""Every emitter of a scene for direct lighting: emissive primitives (chosen by a light selector,
+then a point on the chosen one) and the environment (importance-sampled map, or uniform directions
+for a sky or constant colour).
+
+  sample(ctx, ref, ref_n, u_select, u_point) -> LightSample    one light, one point, its radiance
+  pdf_hit(ref, ref_n, prim, p, n) -> f32    density of `sample` giving point p on primitive prim
+  pdf_env(direction) -> f32                 density of `sample` giving that environment direction
+All densities are per unit solid angle at `ref` and include the choice of the light, so MIS
+weights can compare them with BSDF densities directly. Emitters are one-sided (Lambertian, like
+Mitsuba's area lights): they emit from the side their normal faces.
+"""
+import math
+
+import numpy as np
+import taichi as ti
+
+from renderer.geometry.interface import INF, Surface
+from renderer.sampling.warps import PI
+
+vec3 = ti.math.vec3
+LightSample = ti.types.struct(wi=vec3, dist=ti.f32, radiance=vec3, pdf=ti.f32, p=vec3, n=vec3, is_env=ti.i32)
+
+# The share of light samples given to the environment when the scene also has emissive
+# primitives: half, since neither's contribution is known before rendering.
+ENVIRONMENT_SHARE = 0.5
+
+
+def environment_emits(spec) -> bool:
+    if spec.intensity <= 0.0:
+        return False
+    if spec.kind == "constant":
+        return max(spec.color) > 0.0
+    return True
+
+
+@ti.data_oriented
+class Lights:
+    def __init__(self, geometry, emitters: dict, environment, env_spec, env_image, selector_kind="auto"):
+        """emitters: {"prim": ids, "power": flux, "lo"/"hi": bounds, "axis", "theta_o", "theta_e"}
+        (numpy, one row per emissive primitive); env_image: the map for kind "map", else None."""
+        self.geometry = geometry
+        self.environment = environment
+        self.count = len(emitters["prim"])
+        self.has_area = self.count > 0
+        self.has_env = environment_emits(env_spec)
+        self.env_is_map = env_spec.kind == "map"
+        share = ENVIRONMENT_SHARE if (self.has_area and self.has_env) else (1.0 if self.has_env else 0.0)
+        self.env_share = ti.field(ti.f32, shape=())
+        self.env_share[None] = share
+        prim_total = max(1, geometry.primitive_count())
+        self.prim_emitter = ti.field(ti.i32, shape=prim_total)
+        self.emitter_prim = ti.field(ti.i32, shape=max(1, self.count))
+        lookup = np.full(prim_total, -1, np.int32)
+        if self.has_area:
+            lookup[emitters["prim"]] = np.arange(self.count, dtype=np.int32)
+            self.emitter_prim.from_numpy(np.asarray(emitters["prim"], np.int32))
+            from renderer.lights.light_select import make_light_selector
+            from renderer.lights.light_tree import EmitterBounds
+
+            bounds = EmitterBounds(lo=emitters["lo"], hi=emitters["hi"], power=emitters["power"], axis=emitters["axis"],
+                                   theta_o=emitters["theta_o"], theta_e=emitters["theta_e"])
+            self.selector = make_light_selector(selector_kind, bounds)
+        self.prim_emitter.from_numpy(lookup)
+        if self.has_env and self.env_is_map:
+            from renderer.lights.env_sampling import EnvironmentSampler
+
+            self.env_sampler = EnvironmentSampler(env_image, environment)
+
+    @ti.func
+    def _emission(self, ctx, g, p, n, uv, wo):
+        surface = Surface(p=p, n_geo=n, n_shading=n, uv=uv, uv1=uv, tangent=ti.math.vec4(0.0),
+                          material=self.geometry.material_of(g), prim=g, front_face=1, eps=0.0,
+                          cone_width=0.0, cone_spread=0.0)
+        mat, _ = ctx.bsdf.shade(surface, wo)
+        return mat.emission
+
+    @ti.func
+    def _sample_env(self, u):
+        d = vec3(0.0, 1.0, 0.0)
+        pdf = 0.0
+        radiance = vec3(0.0)
+        if ti.static(self.env_is_map):
+            d, pdf, radiance = self.env_sampler.sample(u)
+        else:
+            z = 1.0 - 2.0 * u.x
+            r = ti.sqrt(ti.max(0.0, 1.0 - z * z))
+            phi = 2.0 * PI * u.y
+            d = vec3(r * ti.cos(phi), z, r * ti.sin(phi))
+            pdf = 1.0 / (4.0 * PI)
+            radiance = self.environment.radiance(d)
+        return d, pdf, radiance
+
+    @ti.func
+    def sample(self, ctx, ref, ref_n, u_select, u_point):
+        result = LightSample(wi=vec3(0.0, 0.0, 1.0), dist=INF, radiance=vec3(0.0), pdf=0.0, p=ref, n=vec3(0.0, 0.0, 1.0),
+                             is_env=0)
+        share = self.env_share[None]
+        use_env = False
+        u = u_select
+        if ti.static(self.has_env):
+            if u < share:
+                use_env = True
+                u = u / share
+            else:
+                u = (u - share) / (1.0 - share)
+        if use_env:
+            if ti.static(self.has_env):
+                d, pdf, radiance = self._sample_env(u_point)
+                result = LightSample(wi=d, dist=INF, radiance=radiance, pdf=pdf * share, p=ref + d, n=-d, is_env=1)
+        else:
+            if ti.static(self.has_area):
+                e, pmf = self.selector.select(ref, ref_n, ti.min(u, 0.99999994))
+                g = self.emitter_prim[e]
+                pt = self.geometry.sample_emitter(g, ref, u_point)
+                to = pt.p - ref
+                dist = to.norm()
+                if pt.pdf > 0.0 and dist > 0.0:
+                    wi = to / dist
+                    radiance = vec3(0.0)
+                    if pt.n.dot(wi) < 0.0:  # the emitting (front) side faces ref
+                        radiance = self._emission(ctx, g, pt.p, pt.n, pt.uv, -wi)
+                    result = LightSample(wi=wi, dist=dist, radiance=radiance, pdf=pt.pdf * pmf * (1.0 - share),
+                                         p=pt.p, n=pt.n, is_env=0)
+        return result
+
+    @ti.func
+    def pdf_hit(self, ref, ref_n, g, p, n):
+        pdf = 0.0
+        if ti.static(self.has_area):
+            e = self.prim_emitter[g]
+            if e >= 0:
+                pdf = self.selector.pmf(ref, ref_n, e) * (1.0 - self.env_share[None]) * self.geometry.emitter_pdf(g, ref, p, n)
+        return pdf
+
+    @ti.func
+    def is_sampled(self, g):
+        sampled = False
+        if ti.static(self.has_area):
+            sampled = self.prim_emitter[g] >= 0
+        return sampled
+
+    @ti.func
+    def pdf_env(self, d):
+        pdf = 0.0
+        if ti.static(self.has_env):
+            if ti.static(self.env_is_map):
+                pdf = self.env_sampler.pdf(d)
+            else:
+                pdf = 1.0 / (4.0 * PI)
+            pdf *= self.env_share[None]
+        return pdf
+
+
+def emitter_table(geometry, rows_arrays: dict) -> dict:
+    """The emissive primitives the geometry can sample, with the data light selection needs."""
+    info = geometry.emitter_info()
+    emission = rows_arrays["emission"][info["material"]] if len(info["prim"]) else np.zeros((0, 3))
+    luminance = emission @ np.array([0.2126, 0.7152, 0.0722])
+    keep = luminance > 0.0
+    # Flux of a one-sided Lambertian emitter: radiance x area x pi.
+    power = luminance[keep] * info["area"][keep] * math.pi
+    return {"prim": info["prim"][keep], "power": power, "lo": info["lo"][keep], "hi": info["hi"][keep],
+            "axis": info["axis"][keep], "theta_o": info["theta_o"][keep], "theta_e": info["theta_e"][keep]}
