@@ -111,7 +111,7 @@ def scene_text(seed: int = SEED) -> str:
         "height = 400",
         "spp = 64",
         "max_depth = 50",
-        'integrator = "path"',
+        'integrator = "mis"',
         "",
         "[environment]",
         'type = "sky"',

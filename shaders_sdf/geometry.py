@@ -22,6 +22,9 @@ vec3 = ti.math.vec3
 # Spawned rays start this many hit thresholds off the surface: the hit point lies within one
 # threshold of it, so 2.5 leaves a margin of 1.5 thresholds before the marcher could stop again.
 SPAWN_OFFSET = 2.5
+# Adaptive relaxation: weight of the newest slope measurement in the running estimate (Bán and
+# Valasek use a similar exponential average; 0.3 follows a change of surface within ~3 steps).
+ADAPTIVE_SMOOTHING = 0.3
 # The spawned origin must clear every surface by this many thresholds (the march stops below one),
 # found in at most this many pushes along the normal (each corrects by the measured shortfall).
 SPAWN_CLEARANCE = 1.5
@@ -39,13 +42,13 @@ class SdfGeometry:
         self.program = SdfProgram(scene.sdf_objects, material_index)
         # march settings are data, so benchmarks sweep them without recompiling
         self.march_f = ti.field(ti.f32, shape=4)  # hit_threshold, min_threshold, max_distance, omega
-        self.march_i = ti.field(ti.i32, shape=1)  # max_steps
+        self.march_i = ti.field(ti.i32, shape=2)  # max_steps, adaptive (1) or fixed (0) relaxation
         self.set_march(scene.render.march)
 
     def set_march(self, march):
         self.march_f.from_numpy(np.array([march.hit_threshold, march.min_threshold, march.max_distance,
                                           march.over_relaxation], np.float32))
-        self.march_i.from_numpy(np.array([march.max_steps], np.int32))
+        self.march_i.from_numpy(np.array([march.max_steps, 1 if march.adaptive else 0], np.int32))
 
     @ti.func
     def threshold(self, cone_width):
@@ -54,13 +57,17 @@ class SdfGeometry:
     @ti.func
     def intersect(self, ray, t_max):
         t_limit = ti.min(t_max, self.march_f[2])
-        omega = self.march_f[3]
+        omega_max = self.march_f[3]
         max_steps = self.march_i[0]
+        adaptive = self.march_i[1] == 1
         hit = Hit(hit=0, t=t_limit, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0))
         side = 1.0
         t = 0.0
         step = 0.0
         prev_radius = 0.0
+        relaxed = False  # the last step was longer than the distance bound: check it
+        slope = -1.0  # running estimate of d(distance)/dt along the ray (adaptive mode)
+        omega = omega_max
         for i in range(max_steps):
             signed = self.program.distance(ray.o + t * ray.d)
             if i == 0:
@@ -69,22 +76,33 @@ class SdfGeometry:
             signed *= side
             radius = ti.abs(signed)
             hit.work = i + 1
-            if omega > 1.0 and (radius + prev_radius < step or signed < 0.0):
-                # Unbounding spheres do not overlap, or the step landed on the far side of a surface
-                # (they only touch, at the surface: head-on at a flat face, radius + prev_radius ==
-                # step exactly, and f32 rounding decides the comparison): go back to where plain
-                # sphere tracing would have stepped (t_prev + prev_radius = t - step + step / omega)
-                # and stop relaxing.
-                step = step / omega - step
-                omega = 1.0
-            else:
-                if radius < self.threshold(ray.cone_width + ray.cone_spread * t):
-                    hit.hit = 1
-                    hit.t = t
-                    break
-                if t > t_limit:
-                    break
-                step = signed * omega
+            if relaxed and (radius + prev_radius < step or signed < 0.0):
+                # The unbounding spheres do not overlap, or the step landed on the far side of a
+                # surface (head-on at a flat face they only touch and f32 rounding decides): go
+                # back to where plain sphere tracing would have stepped, t_prev + prev_radius.
+                t += prev_radius - step
+                step = prev_radius
+                relaxed = False
+                slope = -1.0
+                if not adaptive:
+                    omega = 1.0  # Keinert et al.: no more relaxation on this ray
+                continue
+            if radius < self.threshold(ray.cone_width + ray.cone_spread * t):
+                hit.hit = 1
+                hit.t = t
+                break
+            if t > t_limit:
+                break
+            factor = omega
+            if adaptive:
+                if i > 0 and step > 0.0:
+                    # Bán and Valasek 2023: fit the distance along the ray as linear with slope m;
+                    # the longest step whose end sphere still overlaps is 2 r / (1 - m).
+                    measured = ti.math.clamp((radius - prev_radius) / step, -1.0, 1.0)
+                    slope += ADAPTIVE_SMOOTHING * (measured - slope)
+                factor = ti.min(omega_max, 2.0 / ti.max(1.0 - slope, 1e-3))
+            step = signed * factor
+            relaxed = factor > 1.0
             prev_radius = radius
             t += step
         return hit

@@ -42,7 +42,8 @@ class MarchSettings:
     min_threshold: float = 1e-4  # absolute floor on the hit distance, metres
     max_steps: int = 256
     max_distance: float = 100.0  # metres
-    over_relaxation: float = 1.6  # 1.0 is plain sphere tracing
+    over_relaxation: float = 1.9  # the longest step in distance bounds; 1.0 is plain sphere tracing
+    adaptive: bool = True  # step length from the distance's slope along the ray, up to over_relaxation
 
 
 @dataclass(frozen=True)
@@ -51,7 +52,7 @@ class RenderSettings:
     height: int = 360
     spp: int = 64
     max_depth: int = 8  # Mitsuba convention: 1 = emitters seen directly, 2 = direct light, ...
-    integrator: str = "path"
+    integrator: str = "mis"
     seed: int = 0
     march: MarchSettings = field(default_factory=MarchSettings)
     sampler: str = "independent"  # "independent" | "sobol"

@@ -35,6 +35,7 @@ REQUIRED = _Required()
 
 # Value kinds a field can have. The loader converts raw TOML values according to these.
 VALUE_KINDS = {
+    "bool": "true or false",
     "string": "string",
     "int": "integer",
     "float": "float",
@@ -271,7 +272,7 @@ RENDER = Section(
         Field("max_depth", "int", 8, "Longest path, in segments: 1 shows emitters seen directly, "
               "2 adds direct light, and so on. -1 means unlimited (Russian roulette ends paths).",
               Range(1, also=(-1,))),
-        Field("integrator", "string", "path", "Integrator name, checked against the integrators "
+        Field("integrator", "string", "mis", "Integrator name, checked against the integrators "
               "the renderer provides."),
         Field("seed", "int", 0, "Random seed; the same seed gives the same image.", NON_NEGATIVE),
         Field("sampler", "string", "independent", "Where random numbers come from: `independent` "
@@ -295,8 +296,12 @@ MARCH = Section(
         Field("max_steps", "int", 256, "Most steps along one ray before it counts as a miss.",
               AT_LEAST_ONE),
         Field("max_distance", "float", 100.0, "Rays stop after this distance, metres.", POSITIVE),
-        Field("over_relaxation", "float", 1.6, "Step scale; 1 is plain sphere tracing, larger "
-              "values take longer steps with a fallback.", Range(1.0, 2.0, hi_open=True)),
+        Field("over_relaxation", "float", 1.9, "The longest step, in distance bounds; 1 is plain "
+              "sphere tracing. A longer step is kept only if the unbounding spheres of its ends overlap "
+              "(else the marcher steps back), so no step crosses a surface.", Range(1.0, 2.0, hi_open=True)),
+        Field("adaptive", "bool", True, "Choose each step from the distance's slope along the ray "
+              "(Bán and Valasek 2023), up to `over_relaxation`; false uses `over_relaxation` as a "
+              "fixed factor (Keinert et al. 2014)."),
     ),
 )
 
@@ -578,7 +583,7 @@ width = 960
 height = 540
 spp = 128
 max_depth = -1
-integrator = "path"
+integrator = "mis"
 seed = 7
 
 [render.march]

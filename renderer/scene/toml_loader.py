@@ -119,6 +119,12 @@ def _integer(raw: object, where: str) -> int:
     return raw
 
 
+def _boolean(raw: object, where: str) -> bool:
+    if not isinstance(raw, bool):
+        raise _Invalid(where, f"expected true or false, got {_describe(raw)}")
+    return raw
+
+
 def _string(raw: object, where: str) -> str:
     if not isinstance(raw, str):
         raise _Invalid(where, f"expected a string, got {_describe(raw)}")
@@ -176,6 +182,7 @@ def _scale3(raw: object, where: str):
 
 
 _CONVERTERS = {
+    "bool": _boolean,
     "string": _string,
     "int": _integer,
     "float": _number,

@@ -164,10 +164,14 @@ def check_tree(data, e: EmitterBounds, max_leaf_size: int):
 
 
 @pytest.mark.parametrize("case, max_leaf_size", [
-    ("triangles", 1), ("triangles", 4), ("mixed", 1), ("mixed", 3), ("panels", 1),
-    ("coincident", 1), ("one", 1), ("two", 1), ("line", 2)])
+    ("triangles", 1), ("triangles", 4), ("saoh only", 1), ("mixed", 1), ("mixed", 3),
+    ("panels", 1), ("coincident", 1), ("one", 1), ("two", 1), ("line", 2)])
 def test_tree_structure_and_bounds(case, max_leaf_size):
-    if case == "triangles":
+    options = {}
+    if case == "saoh only":  # no Morton-order finish of small nodes
+        e = random_triangles(1, 1000)[0]
+        options = {"small_node": 1}
+    elif case == "triangles":
         e = random_triangles(1, 3000)[0]
     elif case == "mixed":
         e = mixed_emitters(2, 2000)
@@ -184,7 +188,7 @@ def test_tree_structure_and_bounds(case, max_leaf_size):
     else:
         k = 1 if case == "one" else 2
         e = random_triangles(3, k)[0]
-    data = build_light_tree(e, max_leaf_size=max_leaf_size)
+    data = build_light_tree(e, max_leaf_size=max_leaf_size, **options)
     check_tree(data, e, max_leaf_size)
     for emitter in range(0, len(e), max(1, len(e) // 50)):
         assert len(data.trail(emitter)) <= data.depth() - 1

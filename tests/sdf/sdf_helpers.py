@@ -248,7 +248,7 @@ def sdf(geo: SdfGeometry, pts: np.ndarray) -> np.ndarray:
 def _distance_material_kernel(geo: ti.template(), pts: ti.types.ndarray(dtype=vec3, ndim=1),
                               out: ti.types.ndarray(dtype=ti.math.vec2, ndim=1)):
     for i in range(pts.shape[0]):
-        out[i] = geo.program.distance_material(pts[i])
+        out[i] = geo.program.distance_material(pts[i]).xy  # (distance, material); .z is the node id
 
 
 def sdf_material(geo: SdfGeometry, pts: np.ndarray):

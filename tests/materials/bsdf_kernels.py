@@ -1,0 +1,158 @@
+"""Batched calls of the BSDF on the device, for the material tests.
+
+`BsdfBench` owns a small material table (every kind compiled in) and two kernels that run
+`Bsdf.shade` + `Bsdf.sample` (with `Bsdf.eval` at the sampled direction) and `Bsdf.eval` over
+arrays of samples in parallel. Materials are rows added on demand (`bench.material(spec)`);
+adding a row re-uploads the table's data and compiles nothing, so a test module builds one bench
+(in a module-scoped fixture) and every kernel compiles once for it.
+
+Everything is in world space, as the integrators call it: `n` is the outward shading normal and
+`wo` points back along the path. Arrays may be given per sample or broadcast from one value.
+"""
+
+import dataclasses
+
+import numpy as np
+import taichi as ti
+
+from renderer.geometry.interface import Surface
+from renderer.materials.bsdf import Bsdf
+from renderer.materials.table import MaterialRows, MaterialTable
+from renderer.scene.features import Features
+from renderer.scene.model import MaterialSpec
+
+vec3 = ti.math.vec3
+ALL_KINDS = Features(has_diffuse=True, has_conductor=True, has_dielectric=True, has_principled=True)
+
+
+@ti.func
+def _surface(material, n):
+    return Surface(p=vec3(0.0), n_geo=n, n_shading=n, uv=ti.math.vec2(0.0), uv1=ti.math.vec2(0.0),
+                   tangent=ti.math.vec4(0.0), material=material, prim=0, front_face=1, eps=0.0,
+                   cone_width=0.0, cone_spread=0.0)
+
+
+@ti.kernel
+def _sample_kernel(bsdf: ti.template(), mat_id: ti.types.ndarray(dtype=ti.i32, ndim=1),
+                   normal: ti.types.ndarray(dtype=vec3, ndim=1), wo: ti.types.ndarray(dtype=vec3, ndim=1),
+                   u: ti.types.ndarray(dtype=vec3, ndim=1),
+                   wi: ti.types.ndarray(dtype=vec3, ndim=1), weight: ti.types.ndarray(dtype=vec3, ndim=1),
+                   pdf: ti.types.ndarray(dtype=ti.f32, ndim=1), delta: ti.types.ndarray(dtype=ti.i32, ndim=1),
+                   valid: ti.types.ndarray(dtype=ti.i32, ndim=1),
+                   eval_value: ti.types.ndarray(dtype=vec3, ndim=1),
+                   eval_pdf: ti.types.ndarray(dtype=ti.f32, ndim=1)):
+    for i in range(mat_id.shape[0]):
+        mat, n = bsdf.shade(_surface(mat_id[i], normal[i]), wo[i])
+        s = bsdf.sample(mat, n, wo[i], u[i].x, ti.math.vec2(u[i].y, u[i].z))
+        wi[i] = s.wi
+        weight[i] = s.weight
+        pdf[i] = s.pdf
+        delta[i] = s.delta
+        valid[i] = s.valid
+        value, p = bsdf.eval(mat, n, wo[i], s.wi)
+        eval_value[i] = value
+        eval_pdf[i] = p
+
+
+@ti.kernel
+def _eval_kernel(bsdf: ti.template(), mat_id: ti.types.ndarray(dtype=ti.i32, ndim=1),
+                 normal: ti.types.ndarray(dtype=vec3, ndim=1), wo: ti.types.ndarray(dtype=vec3, ndim=1),
+                 wi: ti.types.ndarray(dtype=vec3, ndim=1),
+                 value: ti.types.ndarray(dtype=vec3, ndim=1), pdf: ti.types.ndarray(dtype=ti.f32, ndim=1)):
+    for i in range(mat_id.shape[0]):
+        mat, n = bsdf.shade(_surface(mat_id[i], normal[i]), wo[i])
+        v, p = bsdf.eval(mat, n, wo[i], wi[i])
+        value[i] = v
+        pdf[i] = p
+
+
+@dataclasses.dataclass
+class Samples:
+    wi: np.ndarray  # (N, 3) float32, world space
+    weight: np.ndarray  # (N, 3) f |cos| / pdf
+    pdf: np.ndarray  # (N,)
+    delta: np.ndarray  # (N,) bool
+    valid: np.ndarray  # (N,) bool
+    eval_value: np.ndarray  # (N, 3) eval(wo, wi) at the sampled wi
+    eval_pdf: np.ndarray  # (N,)
+
+
+def _vec_rows(x, n) -> np.ndarray:
+    a = np.asarray(x, np.float32)
+    return np.ascontiguousarray(np.broadcast_to(a, (n, 3)) if a.ndim == 1 else a.reshape(n, 3))
+
+
+class BsdfBench:
+    """A material table with room for `capacity` materials and the BSDF over it."""
+
+    def __init__(self, capacity: int = 128):
+        self.capacity = capacity
+        self.rows = MaterialRows()
+        self.ids: dict[MaterialSpec, int] = {}
+        filler = MaterialRows()
+        for _ in range(capacity):
+            filler.add_spec(MaterialSpec(name="unused"))
+        self.table = MaterialTable(filler)
+        self.bsdf = Bsdf(self.table, ALL_KINDS)
+
+    def material(self, spec: MaterialSpec) -> int:
+        """The table index of `spec`, adding it (a data upload, no compilation) if it is new."""
+        if spec not in self.ids:
+            if len(self.ids) >= self.capacity:
+                raise ValueError("material table full")
+            self.ids[spec] = self.rows.add_spec(spec)
+            arrays = self.rows.arrays()
+            padded = {k: np.concatenate([v, np.repeat(v[-1:], self.capacity - len(v), axis=0)])
+                      for k, v in arrays.items()}
+            self.table.table.from_numpy(padded)
+        return self.ids[spec]
+
+    def sample(self, mat, normal, wo, u) -> Samples:
+        """mat: a table index (int) or (N,) indices; normal, wo: (3,) or (N, 3); u: (N, 3) in [0, 1)
+        (u[:, 0] picks the lobe, u[:, 1:] the direction)."""
+        u = np.ascontiguousarray(u, np.float32).reshape(-1, 3)
+        n = len(u)
+        ids = np.ascontiguousarray(np.broadcast_to(np.asarray(mat, np.int32), (n,)))
+        out = Samples(wi=np.zeros((n, 3), np.float32), weight=np.zeros((n, 3), np.float32),
+                      pdf=np.zeros(n, np.float32), delta=np.zeros(n, np.int32), valid=np.zeros(n, np.int32),
+                      eval_value=np.zeros((n, 3), np.float32), eval_pdf=np.zeros(n, np.float32))
+        _sample_kernel(self.bsdf, ids, _vec_rows(normal, n), _vec_rows(wo, n), u, out.wi, out.weight, out.pdf,
+                       out.delta, out.valid, out.eval_value, out.eval_pdf)
+        out.delta = out.delta.astype(bool)
+        out.valid = out.valid.astype(bool)
+        return out
+
+    def eval(self, mat, normal, wo, wi) -> tuple[np.ndarray, np.ndarray]:
+        """(f |cos wi| (N, 3), pdf (N,)) at world directions wi (N, 3)."""
+        wi = np.ascontiguousarray(wi, np.float32).reshape(-1, 3)
+        n = len(wi)
+        ids = np.ascontiguousarray(np.broadcast_to(np.asarray(mat, np.int32), (n,)))
+        value = np.zeros((n, 3), np.float32)
+        pdf = np.zeros(n, np.float32)
+        _eval_kernel(self.bsdf, ids, _vec_rows(normal, n), _vec_rows(wo, n), wi, value, pdf)
+        return value, pdf
+
+    def pdf_callable(self, mat, normal, wo):
+        """`pdf(directions (M, 3)) -> (M,)` in float64 for the chi-square harness."""
+        return lambda d: self.eval(mat, normal, wo, d)[1].astype(np.float64)
+
+
+def uniforms(n: int, seed: int) -> np.ndarray:
+    """(n, 3) float32 uniforms in [0, 1) from a fixed seed."""
+    return np.random.default_rng(seed).random((n, 3), dtype=np.float32)
+
+
+def direction(cos_theta: float, phi: float = 0.3) -> np.ndarray:
+    """A unit vector (float64) at polar angle acos(cos_theta) from +z."""
+    s = np.sqrt(max(0.0, 1.0 - cos_theta * cos_theta))
+    return np.array([s * np.cos(phi), s * np.sin(phi), cos_theta])
+
+
+def frame_about(pole) -> np.ndarray:
+    """An orthonormal frame (rows: x, y, pole) for the chi-square harness."""
+    z = np.asarray(pole, np.float64)
+    z = z / np.linalg.norm(z)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    return np.stack([x, np.cross(z, x), z])
