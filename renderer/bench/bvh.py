@@ -111,7 +111,7 @@ class BvhBenchConfig:
     build_runs_large: int = 3  # for meshes of at least SAH_BUILD_TARGET_MIN_TRIANGLES
     camera: tuple = (512, 512)
     incoherent_rays: int = 1 << 18
-    trace_runs: int = 9
+    trace_runs: int = 7
     strategies: tuple = STRATEGIES
     traversals: tuple = TRAVERSALS
     triangle_tests: tuple = TRIANGLE_TESTS

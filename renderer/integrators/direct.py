@@ -73,7 +73,7 @@ class DirectLightingPathTracer:
                 ls = lights.sample(ctx, s.p, n, ctx.sampler.get1d(state, dim + dims.LIGHT_SELECT),
                                    ctx.sampler.get2d(state, dim + dims.LIGHT_POINT))
                 if ls.pdf > 0.0 and ls.radiance.max() > 0.0:
-                    f, pdf_bsdf = ctx.bsdf.eval(mat, n, wo, ls.wi)
+                    f, pdf_bsdf = ctx.bsdf.eval_at(mat, n, s.n_geo, wo, ls.wi)
                     if f.max() > 0.0:
                         visible = False
                         if ls.is_env == 1:
@@ -86,7 +86,7 @@ class DirectLightingPathTracer:
                             if ti.static(self.mis):
                                 weight = power_heuristic(ls.pdf, pdf_bsdf)
                             radiance += throughput * f * ls.radiance * (weight / ls.pdf)
-            bs = ctx.bsdf.sample(mat, n, wo, ctx.sampler.get1d(state, dim + dims.BSDF_LOBE),
+            bs = ctx.bsdf.sample_at(mat, n, s.n_geo, wo, ctx.sampler.get1d(state, dim + dims.BSDF_LOBE),
                                  ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
             if bs.valid == 0:
                 break

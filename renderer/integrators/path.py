@@ -39,7 +39,7 @@ class PathTracer:
             if max_depth >= 0 and depth + 1 >= max_depth:
                 break
             dim = dims.BOUNCE_BASE + dims.PER_BOUNCE * depth
-            bs = ctx.bsdf.sample(mat, n_shading, -ray.d, ctx.sampler.get1d(state, dim + dims.BSDF_LOBE),
+            bs = ctx.bsdf.sample_at(mat, n_shading, s.n_geo, -ray.d, ctx.sampler.get1d(state, dim + dims.BSDF_LOBE),
                                  ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
             if bs.valid == 0:
                 break

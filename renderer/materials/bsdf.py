@@ -126,6 +126,25 @@ class Bsdf:
         return value, pdf
 
     @ti.func
+    def sample_at(self, mat, n, ng, wo, u1, u2):
+        """`sample` at a surface with geometric normal ng: a direction that the shading normal
+        calls reflection but the true surface calls transmission (or the reverse) would cross the
+        surface the wrong way, so it ends the path (pbrt's rule; without it light leaks through
+        smooth-shaded meshes)."""
+        s = self.sample(mat, n, wo, u1, u2)
+        if s.valid == 1 and not _sides_agree(n, ng, wo, s.wi):
+            s.valid = 0
+        return s
+
+    @ti.func
+    def eval_at(self, mat, n, ng, wo, wi):
+        """`eval` at a surface with geometric normal ng (see sample_at)."""
+        value, pdf = self.eval(mat, n, wo, wi)
+        if not _sides_agree(n, ng, wo, wi):
+            value = vec3(0.0)
+        return value, pdf
+
+    @ti.func
     def has_smooth_part(self, mat):
         """Whether eval can be non-zero (light sampling is pointless on a purely delta BSDF)."""
         smooth = mat.alpha > 0.0
@@ -139,6 +158,13 @@ class Bsdf:
     def albedo(self, mat):
         """A display albedo for the debug view (not an integral of the BSDF)."""
         return mat.base_color
+
+
+@ti.func
+def _sides_agree(n, ng, wo, wi):
+    shading_reflects = wi.dot(n) * wo.dot(n) > 0.0
+    geometry_reflects = wi.dot(ng) * wo.dot(ng) > 0.0
+    return shading_reflects == geometry_reflects
 
 
 @ti.func

@@ -156,3 +156,88 @@ def frame_about(pole) -> np.ndarray:
     x = np.cross(helper, z)
     x /= np.linalg.norm(x)
     return np.stack([x, np.cross(z, x), z])
+
+
+# --- expected cell probabilities for pdfs with jumps -----------------------------------------------
+# The chi-square harness integrates the pdf over each cell with a fixed Gauss rule, which converges
+# only as O(1/n) across a jump that does not follow a cell edge: the edge of a rough dielectric's
+# transmission support (the image of horizontal microfacets, where GGX's D is still alpha^2 / pi),
+# the outline of an emitter seen from a point. `cell_probabilities` integrates each cell adaptively
+# instead (a quadtree in (phi, theta), refined where two Gauss rules disagree), and `binned_pdf`
+# hands the result to the harness as a pdf that is constant on each of its cells, which its own rule
+# integrates exactly: the expected counts are then the adaptive integrals.
+
+def _rect_integrals(pdf, frame, p0, p1, t0, t1, k, order):
+    """Integral of pdf * sin(theta) over rectangles [p0, p1] x [t0, t1], each split k x k with an
+    order x order Gauss-Legendre rule per piece. Returns (R,) and the number of bad values."""
+    x, w = np.polynomial.legendre.leggauss(order)
+    s = (np.arange(k)[:, None] + 0.5 * (x[None, :] + 1.0)).ravel() / k  # (k * order,) in (0, 1)
+    ws = np.tile(w, k) * (0.5 / k)
+    phi = p0[:, None] + (p1 - p0)[:, None] * s[None, :]
+    th = t0[:, None] + (t1 - t0)[:, None] * s[None, :]
+    wp = (p1 - p0)[:, None] * ws[None, :]
+    wt = (t1 - t0)[:, None] * ws[None, :] * np.sin(th)
+    st, ct = np.sin(th), np.cos(th)
+    m = len(s)
+    local = np.empty((len(p0), m, m, 3))
+    local[..., 0] = st[:, :, None] * np.cos(phi)[:, None, :]
+    local[..., 1] = st[:, :, None] * np.sin(phi)[:, None, :]
+    local[..., 2] = ct[:, :, None]
+    world = np.einsum("...i,ij->...j", local.reshape(-1, 3), frame)
+    values = np.asarray(pdf(world), np.float64).reshape(len(p0), m, m)
+    bad = ~np.isfinite(values) | (values < 0.0)
+    values = np.where(bad, 0.0, values)
+    return np.einsum("rt,rp,rtp->r", wt, wp, values), int(bad.sum())
+
+
+def cell_probabilities(pdf, *, domain="sphere", res=32, frame=None, abs_tol=1e-7, max_depth=8, order=4):
+    """(res, 2 res) integrals of `pdf` over the harness's cells (rows from the pole down in cos
+    theta, columns in phi), each to about `abs_tol`: a (sub)cell is accepted when its k = 1 and
+    k = 2 rules agree to abs_tol / 2^depth, else it is split in four, down to `max_depth`."""
+    frame = np.eye(3) if frame is None else np.asarray(frame, np.float64)
+    n_phi, n_cos = 2 * res, res
+    cos_range = 2.0 if domain == "sphere" else 1.0
+    phi_edges = np.linspace(0.0, 2.0 * np.pi, n_phi + 1)
+    theta_edges = np.arccos(np.clip(1.0 - np.arange(n_cos + 1) * (cos_range / n_cos), -1.0, 1.0))
+    iy, ix = np.meshgrid(np.arange(n_cos), np.arange(n_phi), indexing="ij")
+    cell = (iy * n_phi + ix).ravel()
+    p0, p1 = phi_edges[ix].ravel(), phi_edges[ix + 1].ravel()
+    t0, t1 = theta_edges[iy].ravel(), theta_edges[iy + 1].ravel()
+    out = np.zeros(n_cos * n_phi)
+    bad_total = 0
+    for depth in range(max_depth + 1):
+        coarse, bad_c = _rect_integrals(pdf, frame, p0, p1, t0, t1, 1, order)
+        fine, bad_f = _rect_integrals(pdf, frame, p0, p1, t0, t1, 2, order)
+        bad_total += bad_c + bad_f
+        done = np.abs(fine - coarse) <= abs_tol / 2.0 ** depth
+        if depth == max_depth:
+            done[:] = True
+        np.add.at(out, cell[done], fine[done])
+        if done.all():
+            break
+        keep = ~done
+        pm, tm = 0.5 * (p0 + p1), 0.5 * (t0 + t1)
+        p0, p1, t0, t1, cell = (np.concatenate(parts) for parts in (
+            (p0[keep], pm[keep], p0[keep], pm[keep]), (pm[keep], p1[keep], pm[keep], p1[keep]),
+            (t0[keep], t0[keep], tm[keep], tm[keep]), (tm[keep], tm[keep], t1[keep], t1[keep]),
+            (cell[keep],) * 4))
+    if bad_total:
+        raise ValueError(f"the pdf is negative or not finite at {bad_total} quadrature points")
+    return out.reshape(n_cos, n_phi)
+
+
+def binned_pdf(probabilities, *, domain="sphere", frame=None):
+    """A pdf constant on each harness cell, with the given cell probabilities (res, 2 res)."""
+    frame = np.eye(3) if frame is None else np.asarray(frame, np.float64)
+    n_cos, n_phi = probabilities.shape
+    cos_range = 2.0 if domain == "sphere" else 1.0
+    density = probabilities / ((2.0 * np.pi / n_phi) * (cos_range / n_cos))
+
+    def pdf(d):
+        local = np.einsum("ij,kj->ik", np.asarray(d, np.float64), frame)
+        phi = np.mod(np.arctan2(local[:, 1], local[:, 0]), 2.0 * np.pi)
+        ix = np.minimum((phi * (n_phi / (2.0 * np.pi))).astype(np.int64), n_phi - 1)
+        iy = np.clip(((1.0 - local[:, 2]) * (n_cos / cos_range)).astype(np.int64), 0, n_cos - 1)
+        return density[iy, ix]
+
+    return pdf

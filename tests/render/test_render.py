@@ -15,7 +15,10 @@ from tests.scene_builder import furnace_toml, scene_from_toml
 ALPHA = 0.01  # two-sided significance level of every z-test here
 
 
-def render(scene, spp, **kw):
+def render(scene, spp, integrator="path", **kw):
+    """These tests check the path tracer's exact behaviour (integrator agreement lives in
+    test_integrator_agreement.py)."""
+    kw["integrator"] = integrator
     r = Renderer(scene)
     r.render(CameraFrame.from_spec(scene.camera), spp, **kw)
     return r
@@ -40,14 +43,14 @@ def test_same_seed_same_image_and_split_passes_equal_one_pass(tmp_path):
     scene = scene_from_toml(tmp_path, furnace_toml(albedo=0.5))
     camera = CameraFrame.from_spec(scene.camera)
     r = Renderer(scene)
-    r.render(camera, 8, seed=7)
+    r.render(camera, 8, integrator="path", seed=7)
     one = r.image().copy()
     r.reset()
-    r.render(camera, 3, seed=7)
-    r.render(camera, 5, seed=7)
+    r.render(camera, 3, integrator="path", seed=7)
+    r.render(camera, 5, integrator="path", seed=7)
     assert np.array_equal(one, r.image()), "counter-based sampling: 3+5 spp must equal 8 spp bit for bit"
     r.reset()
-    r.render(camera, 8, seed=8)
+    r.render(camera, 8, integrator="path", seed=8)
     assert not np.array_equal(one, r.image())
 
 
