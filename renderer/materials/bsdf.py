@@ -234,7 +234,8 @@ def _principled_sample(mat, entering, wo, u1, u2):
             s = BsdfSample(wi=vec3(-wo.x, -wo.y, wo.z), weight=f * (mat.metallic / p.x), pdf=p.x, delta=1, valid=1)
         else:
             s.wi = lobes.ggx_reflection_direction(mat.alpha, wo, u2)
-            mixture = 1
+            if s.wi.z > 0.0:  # a reflection below the surface is a failed sample, as in conductor_sample
+                mixture = 1
     elif u1 < p.x + p.y:
         g = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, (u1 - p.x) / p.y, u2)
         if mat.alpha == 0.0:
@@ -250,7 +251,8 @@ def _principled_sample(mat, entering, wo, u1, u2):
             s = BsdfSample(wi=vec3(-wo.x, -wo.y, wo.z), weight=vec3(opaque * f_view / p.z), pdf=p.z, delta=1, valid=1)
         else:
             s.wi = lobes.ggx_reflection_direction(mat.alpha, wo, u2)
-            mixture = 1
+            if s.wi.z > 0.0:  # a reflection below the surface is a failed sample, as in conductor_sample
+                mixture = 1
     else:
         s.wi = lobes.diffuse_sample(mat.base_color, wo, u2).wi
         mixture = 1

@@ -21,10 +21,15 @@ def fake_scene(name="a", position=(0.0, 1.0, 5.0), max_depth=8):
     return SimpleNamespace(name=name, camera=camera, render=SimpleNamespace(max_depth=max_depth))
 
 
-def make_session(settle=0.1, scenes=("a", "b", "c")):
+def make_session(settle=0.1, scenes=("a", "b", "c"), skip_preview=True):
+    """A session on scene "a". With skip_preview, the scene's first (reduced-resolution preview)
+    frame has been planned already, at t = -1 s, so tests start from the full-resolution state."""
     paths = [Path(f"/scenes/{n}.toml") for n in scenes]
     s = ViewerSession(paths, 0, ["path", "normals"], "path", FULL, target_seconds=0.05, settle_seconds=settle)
     s.enter_scene(0, fake_scene(scenes[0]))
+    if skip_preview:
+        s.plan_frame(-1.0)
+        s.resets = 0
     return s
 
 
@@ -117,16 +122,18 @@ def test_bad_measurements_are_ignored():
 # --- reset rules --------------------------------------------------------------------------------
 
 
-def test_idle_frames_do_not_reset():
-    s = make_session()
-    first = s.plan_frame(0.0)
-    assert first.reset and first.size == FULL and not first.interactive
+def test_first_frame_is_a_preview_then_idle_frames_do_not_reset():
+    s = make_session(skip_preview=False)
+    first = s.plan_frame(0.0)  # a scene's first frame: a reduced preview, so a picture comes at once
+    assert first.reset and first.interactive and first.size[0] < FULL[0]
+    still = s.plan_frame(1.0)  # then full resolution from a clean film
+    assert still.reset and still.size == FULL and not still.interactive
     for i in range(1, 50):
         s.update_camera(1 / 30, set(), (100.0, 100.0 + i), False)  # cursor moves, no button
-        plan = s.plan_frame(i / 30)
+        plan = s.plan_frame(1.0 + i / 30)
         assert not plan.reset
         assert plan.size == FULL
-    assert s.resets == 1
+    assert s.resets == 2
 
 
 def test_camera_motion_resets_at_reduced_resolution_then_full_once_still():
