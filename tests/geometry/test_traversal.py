@@ -94,8 +94,9 @@ def test_watertight_no_ray_passes_through_shared_edges_or_vertices(transform):
     shooter = RayShooter(geometry_from(trimesh_data(mesh)))
     o, d = edge_and_vertex_rays(mesh, rng)
     assert len(o) > 50000
-    o = np.tile(o, (8, 1))  # about half a million rays per case
-    d = np.tile(d, (8, 1)) + rng.normal(0, 1e-7, (len(o), 3)).astype(np.float32)
+    o = np.tile(o, (17, 1))  # over a million rays per case (jittered copies of the aimed rays)
+    d = np.tile(d, (17, 1)) + rng.normal(0, 1e-7, (len(o), 3)).astype(np.float32)
+    assert len(o) >= 1_000_000
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     t, prim = shooter.closest(o, d)
     misses = int((prim < 0).sum())

@@ -165,7 +165,10 @@ def frame_about(pole) -> np.ndarray:
 # the outline of an emitter seen from a point. `cell_probabilities` integrates each cell adaptively
 # instead (a quadtree in (phi, theta), refined where two Gauss rules disagree), and `binned_pdf`
 # hands the result to the harness as a pdf that is constant on each of its cells, which its own rule
-# integrates exactly: the expected counts are then the adaptive integrals.
+# integrates exactly: the expected counts are then the adaptive integrals. A feature smaller than the
+# rule's node spacing (a narrow lobe at grazing incidence) can hide between all nodes; cells that
+# hold samples but came out (nearly) empty are integrated again from a finer start (`cells`,
+# `start_depth`): the target, the pdf's integral over the cell, is the same, only better resolved.
 
 def _rect_integrals(pdf, frame, p0, p1, t0, t1, k, order):
     """Integral of pdf * sin(theta) over rectangles [p0, p1] x [t0, t1], each split k x k with an
@@ -190,22 +193,34 @@ def _rect_integrals(pdf, frame, p0, p1, t0, t1, k, order):
     return np.einsum("rt,rp,rtp->r", wt, wp, values), int(bad.sum())
 
 
-def cell_probabilities(pdf, *, domain="sphere", res=32, frame=None, abs_tol=1e-7, max_depth=8, order=4):
+def cell_probabilities(pdf, *, domain="sphere", res=32, frame=None, abs_tol=1e-7, max_depth=8, order=4,
+                       cells=None, start_depth=0):
     """(res, 2 res) integrals of `pdf` over the harness's cells (rows from the pole down in cos
     theta, columns in phi), each to about `abs_tol`: a (sub)cell is accepted when its k = 1 and
-    k = 2 rules agree to abs_tol / 2^depth, else it is split in four, down to `max_depth`."""
+    k = 2 rules agree to abs_tol / 2^depth, else it is split in four, down to `max_depth`.
+    cells: optional (res, 2 res) bool mask of the cells to integrate (others are 0); start_depth:
+    split every cell into 4^start_depth pieces first (to find features smaller than the rule)."""
     frame = np.eye(3) if frame is None else np.asarray(frame, np.float64)
     n_phi, n_cos = 2 * res, res
     cos_range = 2.0 if domain == "sphere" else 1.0
     phi_edges = np.linspace(0.0, 2.0 * np.pi, n_phi + 1)
     theta_edges = np.arccos(np.clip(1.0 - np.arange(n_cos + 1) * (cos_range / n_cos), -1.0, 1.0))
     iy, ix = np.meshgrid(np.arange(n_cos), np.arange(n_phi), indexing="ij")
-    cell = (iy * n_phi + ix).ravel()
-    p0, p1 = phi_edges[ix].ravel(), phi_edges[ix + 1].ravel()
-    t0, t1 = theta_edges[iy].ravel(), theta_edges[iy + 1].ravel()
+    chosen = np.ones(n_cos * n_phi, bool) if cells is None else np.asarray(cells, bool).ravel()
+    iy, ix = iy.ravel()[chosen], ix.ravel()[chosen]
+    m = 2 ** start_depth
+    a, b = np.meshgrid(np.arange(m), np.arange(m), indexing="ij")
+    a, b = a.ravel()[None, :], b.ravel()[None, :]
+    cell = np.repeat(iy * n_phi + ix, m * m)
+    dp = ((phi_edges[ix + 1] - phi_edges[ix]) / m)[:, None]
+    dt = ((theta_edges[iy + 1] - theta_edges[iy]) / m)[:, None]
+    p0 = (phi_edges[ix][:, None] + a * dp).ravel()
+    p1 = (phi_edges[ix][:, None] + (a + 1) * dp).ravel()
+    t0 = (theta_edges[iy][:, None] + b * dt).ravel()
+    t1 = (theta_edges[iy][:, None] + (b + 1) * dt).ravel()
     out = np.zeros(n_cos * n_phi)
     bad_total = 0
-    for depth in range(max_depth + 1):
+    for depth in range(start_depth, max_depth + 1):
         coarse, bad_c = _rect_integrals(pdf, frame, p0, p1, t0, t1, 1, order)
         fine, bad_f = _rect_integrals(pdf, frame, p0, p1, t0, t1, 2, order)
         bad_total += bad_c + bad_f
@@ -224,6 +239,23 @@ def cell_probabilities(pdf, *, domain="sphere", res=32, frame=None, abs_tol=1e-7
     if bad_total:
         raise ValueError(f"the pdf is negative or not finite at {bad_total} quadrature points")
     return out.reshape(n_cos, n_phi)
+
+
+def occupied_cells(directions, *, valid=None, domain="sphere", res=32, frame=None):
+    """(res, 2 res) bool: the harness's cells that hold at least one valid direction."""
+    frame = np.eye(3) if frame is None else np.asarray(frame, np.float64)
+    d = np.asarray(directions, np.float64).reshape(-1, 3)
+    if valid is not None:
+        d = d[np.asarray(valid, bool)]
+    local = np.einsum("ij,kj->ik", d, frame)
+    local /= np.linalg.norm(local, axis=1, keepdims=True)
+    n_phi, n_cos = 2 * res, res
+    cos_range = 2.0 if domain == "sphere" else 1.0
+    local = local[local[:, 2] >= 1.0 - cos_range]
+    phi = np.mod(np.arctan2(local[:, 1], local[:, 0]), 2.0 * np.pi)
+    ix = np.minimum((phi * (n_phi / (2.0 * np.pi))).astype(np.int64), n_phi - 1)
+    iy = np.minimum(((1.0 - np.clip(local[:, 2], -1.0, 1.0)) * (n_cos / cos_range)).astype(np.int64), n_cos - 1)
+    return np.bincount(iy * n_phi + ix, minlength=n_phi * n_cos).reshape(n_cos, n_phi) > 0
 
 
 def binned_pdf(probabilities, *, domain="sphere", frame=None):
