@@ -19,4 +19,10 @@ def _bvh(**kw):
     return run(**kw)
 
 
-BENCHMARKS = {"sdf": _sdf, "startup": _startup, "bvh": _bvh}
+def _integrators(**kw):
+    from renderer.bench.integrators import run
+
+    return run(**kw)
+
+
+BENCHMARKS = {"sdf": _sdf, "startup": _startup, "bvh": _bvh, "integrators": _integrators}

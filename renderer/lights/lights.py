@@ -20,6 +20,9 @@ from renderer.sampling.warps import PI
 vec3 = ti.math.vec3
 LightSample = ti.types.struct(wi=vec3, dist=ti.f32, radiance=vec3, pdf=ti.f32, p=vec3, n=vec3, is_env=ti.i32)
 
+# Where an environment sample's "point" is placed, so that one shadow-ray routine serves every
+# light: far beyond any scene this renderer is meant for (1e4 km), near enough for f32 directions.
+ENV_DISTANCE = 1e7
 # The share of light samples given to the environment when the scene also has emissive
 # primitives: half, since neither's contribution is known before rendering.
 ENVIRONMENT_SHARE = 0.5
@@ -106,7 +109,8 @@ class Lights:
         if use_env:
             if ti.static(self.has_env):
                 d, pdf, radiance = self._sample_env(u_point)
-                result = LightSample(wi=d, dist=INF, radiance=radiance, pdf=pdf * share, p=ref + d, n=-d, is_env=1)
+                result = LightSample(wi=d, dist=INF, radiance=radiance, pdf=pdf * share, p=ref + ENV_DISTANCE * d,
+                                     n=-d, is_env=1)
         else:
             if ti.static(self.has_area):
                 e, pmf = self.selector.select(ref, ref_n, ti.min(u, 0.99999994))

@@ -15,6 +15,8 @@ import dataclasses
 import numpy as np
 import taichi as ti
 
+from tests.stats.chi2 import chi2_test
+
 from renderer.geometry.interface import Surface
 from renderer.materials.bsdf import Bsdf
 from renderer.materials.table import MaterialRows, MaterialTable
@@ -194,30 +196,41 @@ def _rect_integrals(pdf, frame, p0, p1, t0, t1, k, order):
 
 
 def cell_probabilities(pdf, *, domain="sphere", res=32, frame=None, abs_tol=1e-7, max_depth=8, order=4,
-                       cells=None, start_depth=0):
+                       cells=None, start_depth=0, theta_breaks=None):
     """(res, 2 res) integrals of `pdf` over the harness's cells (rows from the pole down in cos
-    theta, columns in phi), each to about `abs_tol`: a (sub)cell is accepted when its k = 1 and
-    k = 2 rules agree to abs_tol / 2^depth, else it is split in four, down to `max_depth`.
+    theta, columns in phi): a (sub)cell is accepted when its k = 1 and k = 2 rules agree to
+    abs_tol / 2^depth, else it is split in four, down to `max_depth`. Smooth cells come out to about
+    abs_tol; a cell crossed by a jump stops refining at max_depth along it, with an error of about
+    jump x cell probability x 2^-max_depth (~1e-4 of the cell at depth 8).
     cells: optional (res, 2 res) bool mask of the cells to integrate (others are 0); start_depth:
-    split every cell into 4^start_depth pieces first (to find features smaller than the rule)."""
+    split every cell into 4^start_depth pieces first (to find features smaller than the rule);
+    theta_breaks: known jumps along circles of constant theta (radians in the frame), made edges."""
     frame = np.eye(3) if frame is None else np.asarray(frame, np.float64)
     n_phi, n_cos = 2 * res, res
     cos_range = 2.0 if domain == "sphere" else 1.0
     phi_edges = np.linspace(0.0, 2.0 * np.pi, n_phi + 1)
     theta_edges = np.arccos(np.clip(1.0 - np.arange(n_cos + 1) * (cos_range / n_cos), -1.0, 1.0))
-    iy, ix = np.meshgrid(np.arange(n_cos), np.arange(n_phi), indexing="ij")
+    theta_grid = theta_edges
+    if theta_breaks is not None:
+        extra = np.asarray(theta_breaks, np.float64).ravel()
+        theta_grid = np.unique(np.concatenate([theta_edges, extra[(extra > 0.0) & (extra < theta_edges[-1])]]))
+    row = np.clip(np.searchsorted(theta_edges, 0.5 * (theta_grid[:-1] + theta_grid[1:])) - 1, 0, n_cos - 1)
+    piece, ix = np.meshgrid(np.arange(len(row)), np.arange(n_phi), indexing="ij")
+    piece, ix = piece.ravel(), ix.ravel()
+    iy = row[piece]
     chosen = np.ones(n_cos * n_phi, bool) if cells is None else np.asarray(cells, bool).ravel()
-    iy, ix = iy.ravel()[chosen], ix.ravel()[chosen]
+    keep = chosen[iy * n_phi + ix]
+    piece, ix, iy = piece[keep], ix[keep], iy[keep]
     m = 2 ** start_depth
     a, b = np.meshgrid(np.arange(m), np.arange(m), indexing="ij")
     a, b = a.ravel()[None, :], b.ravel()[None, :]
     cell = np.repeat(iy * n_phi + ix, m * m)
     dp = ((phi_edges[ix + 1] - phi_edges[ix]) / m)[:, None]
-    dt = ((theta_edges[iy + 1] - theta_edges[iy]) / m)[:, None]
+    dt = ((theta_grid[piece + 1] - theta_grid[piece]) / m)[:, None]
     p0 = (phi_edges[ix][:, None] + a * dp).ravel()
     p1 = (phi_edges[ix][:, None] + (a + 1) * dp).ravel()
-    t0 = (theta_edges[iy][:, None] + b * dt).ravel()
-    t1 = (theta_edges[iy][:, None] + (b + 1) * dt).ravel()
+    t0 = (theta_grid[piece][:, None] + b * dt).ravel()
+    t1 = (theta_grid[piece][:, None] + (b + 1) * dt).ravel()
     out = np.zeros(n_cos * n_phi)
     bad_total = 0
     for depth in range(start_depth, max_depth + 1):
@@ -241,23 +254,6 @@ def cell_probabilities(pdf, *, domain="sphere", res=32, frame=None, abs_tol=1e-7
     return out.reshape(n_cos, n_phi)
 
 
-def occupied_cells(directions, *, valid=None, domain="sphere", res=32, frame=None):
-    """(res, 2 res) bool: the harness's cells that hold at least one valid direction."""
-    frame = np.eye(3) if frame is None else np.asarray(frame, np.float64)
-    d = np.asarray(directions, np.float64).reshape(-1, 3)
-    if valid is not None:
-        d = d[np.asarray(valid, bool)]
-    local = np.einsum("ij,kj->ik", d, frame)
-    local /= np.linalg.norm(local, axis=1, keepdims=True)
-    n_phi, n_cos = 2 * res, res
-    cos_range = 2.0 if domain == "sphere" else 1.0
-    local = local[local[:, 2] >= 1.0 - cos_range]
-    phi = np.mod(np.arctan2(local[:, 1], local[:, 0]), 2.0 * np.pi)
-    ix = np.minimum((phi * (n_phi / (2.0 * np.pi))).astype(np.int64), n_phi - 1)
-    iy = np.minimum(((1.0 - np.clip(local[:, 2], -1.0, 1.0)) * (n_cos / cos_range)).astype(np.int64), n_cos - 1)
-    return np.bincount(iy * n_phi + ix, minlength=n_phi * n_cos).reshape(n_cos, n_phi) > 0
-
-
 def binned_pdf(probabilities, *, domain="sphere", frame=None):
     """A pdf constant on each harness cell, with the given cell probabilities (res, 2 res)."""
     frame = np.eye(3) if frame is None else np.asarray(frame, np.float64)
@@ -273,3 +269,31 @@ def binned_pdf(probabilities, *, domain="sphere", frame=None):
         return density[iy, ix]
 
     return pdf
+
+
+def chi2_adaptive(directions, pdf, *, frame=None, domain="sphere", res=32, max_recheck=256, theta_breaks=None,
+                  **kwargs):
+    """`chi2_test` with expected counts from adaptive cell integrals of `pdf` (to 0.1 / N in smooth
+    cells; see `cell_probabilities` for cells crossed by a jump).
+
+    A feature thinner than a cell rule's node spacing (a narrow lobe, an outline clipping a cell's
+    corner) can hide between all of its nodes. So after a first test, the cells that look wrong (they
+    hold samples but expect fewer than 1e-3, or |O - E| > 4 sqrt(E + 1)) are integrated again from
+    16 x 16 pieces, and the test is run on the better integrals. This cannot hide a real error: the
+    target of the integration, the pdf's integral over each cell, is the same, only better resolved.
+    At most `max_recheck` cells are integrated again (a real mismatch shows in many more)."""
+    n = len(directions)
+    probabilities = cell_probabilities(pdf, domain=domain, res=res, frame=frame, abs_tol=0.1 / n, start_depth=1,
+                                       theta_breaks=theta_breaks)
+    result = chi2_test(directions, binned_pdf(probabilities, domain=domain, frame=frame), frame=frame,
+                       domain=domain, res=res, **kwargs)
+    expected = probabilities * n
+    suspect = (result.observed > 0) & (expected < 1e-3)
+    suspect |= np.abs(result.observed - expected) > 4.0 * np.sqrt(expected + 1.0)
+    if suspect.any() and suspect.sum() <= max_recheck:
+        finer = cell_probabilities(pdf, domain=domain, res=res, frame=frame, abs_tol=0.1 / n, cells=suspect,
+                                   start_depth=4, theta_breaks=theta_breaks)
+        probabilities[suspect] = finer[suspect]
+        result = chi2_test(directions, binned_pdf(probabilities, domain=domain, frame=frame), frame=frame,
+                           domain=domain, res=res, **kwargs)
+    return result

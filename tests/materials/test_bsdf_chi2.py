@@ -11,8 +11,8 @@ Expected counts: the pdfs have jumps along curves that are not cell edges (a rou
 transmission support ends where the microfacets turn horizontal, and GGX's D(h) is still
 alpha^2 / pi there: at roughness 1 the harness's fixed Gauss rule overestimated the first row of
 transmitted cells by ~10 %, i.e. 8,000 samples). So each cell's probability is integrated
-adaptively to 0.1 / N (`cell_probabilities`) and passed to the harness as a pdf constant on each
-cell (`binned_pdf`), which its quadrature integrates exactly.
+adaptively to 0.1 / N and passed to the harness as a pdf constant on each cell, which its
+quadrature integrates exactly (`chi2_adaptive` in bsdf_kernels.py).
 
 Narrow GGX lobes (alpha <= 0.01, i.e. roughness <= 0.1) are far thinner than the harness's cells
 in direction space, so those cases are tested after an exact change of variables: every sampled
@@ -51,8 +51,7 @@ import pytest
 from scipy import stats
 
 from renderer.scene.model import MaterialSpec
-from tests.materials.bsdf_kernels import (BsdfBench, binned_pdf, cell_probabilities, direction, frame_about,
-                                          occupied_cells, uniforms)
+from tests.materials.bsdf_kernels import BsdfBench, chi2_adaptive, direction, frame_about, uniforms
 from tests.stats.chi2 import chi2_test, sidak_alpha
 
 ALPHA = 0.01
@@ -226,18 +225,6 @@ def slope_space_pdf(pdf_wi, wo, alpha, eta):
 # --- continuous lobes ------------------------------------------------------------------------------
 
 
-def expected_pdf(pdf, frame, directions, valid):
-    """The pdf as the harness should see it: constant on each cell, with the cell's probability
-    integrated adaptively to 0.1 / N (see `cell_probabilities`); cells that hold samples but expect
-    fewer than 5 are integrated again from 32 x 32 pieces, in case a narrow lobe hid between nodes."""
-    probabilities = cell_probabilities(pdf, frame=frame, abs_tol=0.1 / N)
-    again = occupied_cells(directions, valid=valid, frame=frame) & (probabilities * N < 5.0)
-    if again.any():
-        finer = cell_probabilities(pdf, frame=frame, abs_tol=0.1 / N, cells=again, start_depth=5)
-        probabilities[again] = finer[again]
-    return binned_pdf(probabilities, frame=frame)
-
-
 @pytest.mark.parametrize("case", CASES, ids=str)
 def test_chi2(bench, case, tmp_path):
     frame, wo, normal, eta = setup(case)
@@ -247,14 +234,14 @@ def test_chi2(bench, case, tmp_path):
     pdf_world = bench.pdf_callable(mat, normal, wo)
     common = dict(valid=s.valid, lossy=True, domain="sphere", alpha=ALPHA, num_tests=NUM_TESTS)
     if case.space == "direction":
-        result = chi2_test(s.wi, expected_pdf(pdf_world, frame, s.wi, s.valid), frame=frame, **common)
+        result = chi2_adaptive(s.wi, pdf_world, frame=frame, **common)
     else:
         alpha = alpha_of(case.spec.roughness)
         slope_eta = None if case.spec.kind == "conductor" else eta
         wo_local = frame @ wo
         hp = to_slope_space(s.wi.astype(np.float64) @ frame.T, wo_local, alpha, slope_eta)
         pdf = slope_space_pdf(lambda wi_local: pdf_world(wi_local @ frame), wo_local, alpha, slope_eta)
-        result = chi2_test(hp, expected_pdf(pdf, None, hp, s.valid), **common)
+        result = chi2_adaptive(hp, pdf, **common)
     if not result.passed:
         result.write_png(tmp_path / f"{case.name}.png")
     assert result.passed, f"{case.name}\n{result.report}"
@@ -348,9 +335,8 @@ def test_smooth_principled(bench, metallic, transmission, cos, leaving, tmp_path
     mat = bench.material(case.spec)
     s = bench.sample(mat, normal, wo, uniforms(N, 9000 + int(100 * cos) + int(10 * metallic)))
     p = principled_lobe_probabilities(metallic, transmission, BASE, case.spec.ior, cos)
-    pdf = expected_pdf(bench.pdf_callable(mat, normal, wo), frame, s.wi, s.valid & ~s.delta)
-    result = chi2_test(s.wi, pdf, valid=s.valid, delta=s.delta,
-                       delta_probability=1.0 - p[3], frame=frame, domain="sphere", alpha=ALPHA, num_tests=NUM_TESTS)
+    result = chi2_adaptive(s.wi, bench.pdf_callable(mat, normal, wo), frame=frame, valid=s.valid, delta=s.delta,
+                           delta_probability=1.0 - p[3], domain="sphere", alpha=ALPHA, num_tests=NUM_TESTS)
     if not result.passed:
         result.write_png(tmp_path / "smooth-principled.png")
     assert result.passed, result.report

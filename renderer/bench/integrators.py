@@ -1,0 +1,661 @@
+"""`python app.py bench integrators`: error against time for `path`, `nee` and `mis`, each with the
+`independent` and the `sobol` sampler, and Lantern against Mitsuba 3 on the Cornell box.
+
+For every scene (the Cornell box, the bunnies under sky.exr, the studio scene under studio.exr and
+the many-lights scene; a scene whose file is missing, or that fails to build, is skipped with a
+note), in one process so that ratios are meaningful:
+
+1. Compile: every (integrator, sampler) program is launched once for 1 spp before anything is
+   timed; that first launch (compilation, or a load from Taichi's offline cache) is reported
+   separately as compile time.
+2. Reference: a long `mis` render with the independent sampler, on its own seed (so its noise does
+   not correlate with the test images'), for a fixed wall-clock time at a modest size (128x128 for
+   the square Cornell box, 160x90 otherwise; smaller with --quick). Its own noise level is reported
+   from the film's per-pixel variance of the mean: mean(var) is the MSE that the reference's noise
+   adds to any image compared with it (and mean(var / (ref^2 + eps)) the relMSE), so error curves
+   flatten towards that floor, and the table also gives the floor-corrected errors (error - floor,
+   an unbiased estimate of the error against the true image, since the reference and the test
+   image are independent). Under a sun-like map this floor is itself an estimate from a
+   heavy-tailed distribution: read it as an order of magnitude there.
+3. Error against time: each (integrator, sampler) renders progressively from an empty film on one
+   seed (the same seed for all, common random numbers), in launches of 1, 1, 2, 4, ... spp (so the
+   totals are powers of two, where Sobol nets are complete), the last launch sized from the
+   measured speed to land on the time budget (10 s; 2 s with --quick). After each launch (untimed)
+   RMSE, relMSE and relMSE without the 0.1 % worst pixels are computed against the reference.
+   Seconds are wall-clock render time (kernel launches up to `ti.sync()`), compile excluded.
+   The equal-time table reads every curve at the budget T (log-log interpolation between the two
+   launches around T).
+4. Mitsuba 3 side by side, on the Cornell box only (the scene file reproduces `mi.cornell_box()`
+   value for value; renderer.bench.mitsuba_side renders Mitsuba's with a box filter, as Lantern's
+   film does), at the same size and max depth (8): Mitsuba's `path` integrator (which, like
+   Lantern's `mis`, combines light and BSDF sampling) on its LLVM variant limited to 2 threads,
+   against a Mitsuba reference (its spp and noise floor, estimated from the spread of its
+   independent passes, are reported). The target error is Mitsuba's RMSE at `mitsuba_target_spp`
+   (the root of the mean squared error of a few renders on different seeds: the few pixels on the
+   light's edges, where the pixel footprint straddles an emitter 20 times brighter than the
+   ceiling, weigh a lot in one image's RMSE); the same is done for relMSE, which weighs those
+   pixels down, as a second view. Samples/s of Mitsuba, and of Lantern's `mis` and `path` at the same spp,
+   are timed round-robin (median of `rate_runs` runs, JIT and kernel compilation warmed up first).
+   Lantern's spp needed to reach the target RMSE (against the same Mitsuba reference) comes from
+   its error curve of step 3 (log-log interpolation in spp; beyond the curve, extrapolated with
+   RMSE ~ spp^-1/2, and marked so); its time to the target is that spp times its measured seconds
+   per spp. Target: Lantern's `mis` reaches the target RMSE no later than Mitsuba (PASS/FAIL).
+   Without Mitsuba (not installed, or no usable variant) the column is skipped with a note.
+
+Writes <out_dir>/bench_integrators.json and PNG plots (error against seconds, log-log, one line per
+integrator x sampler, per scene; and Lantern against Mitsuba), and prints tables.
+"""
+from __future__ import annotations
+
+import math
+import sys
+import time
+import traceback
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from renderer.bench.common import (
+    REL_MSE_EPS,
+    image_errors,
+    load_average,
+    machine_info,
+    print_table,
+    pyplot,
+    rel_mse,
+    rmse,
+    save_figure,
+    time_interleaved,
+    verdict,
+    write_json,
+)
+
+INTEGRATORS = ("path", "nee", "mis")
+SAMPLERS = ("independent", "sobol")
+REFERENCE_INTEGRATOR = "mis"
+REFERENCE_SAMPLER = "independent"
+SCENES = ("cornell_box", "bunnies", "studio", "many_lights")
+MITSUBA_SCENE = "cornell_box"
+FIREFLY_TRIM = 1e-3  # fraction of pixels with the largest error left out of relMSE*
+METRICS = ("rmse", "rel_mse", "rel_mse_trimmed")
+
+
+@dataclass(frozen=True)
+class IntegratorBenchConfig:
+    square_size: tuple[int, int] = (128, 128)  # scenes with a square image (the Cornell box)
+    wide_size: tuple[int, int] = (160, 90)  # every other scene
+    budget_s: float = 10.0  # render time per (integrator, sampler) curve: the equal-time budget
+    reference_s: float = 60.0  # render time of each scene's reference
+    reference_launch_s: float = 3.0  # longest single launch while rendering the reference
+    max_spp: int = 1 << 16  # curves stop here even within the budget
+    seed: int = 1  # test images (one seed for every integrator and sampler)
+    reference_seed: int = 104729  # reference: independent of the test seed
+    scenes: tuple[str, ...] = SCENES
+    integrators: tuple[str, ...] = INTEGRATORS
+    samplers: tuple[str, ...] = SAMPLERS
+    mitsuba: bool = True
+    mitsuba_threads: int = 2
+    mitsuba_reference_spp: int = 2048  # rendered in passes of mitsuba_pass_spp (memory: one lane per sample)
+    mitsuba_pass_spp: int = 256
+    mitsuba_target_spp: int = 64  # the target RMSE is Mitsuba's at this spp
+    mitsuba_curve_max_spp: int = 512  # Mitsuba's error curve: 1, 2, 4, ... spp, each a separate render
+    mitsuba_target_renders: int = 4  # renders (seeds) whose mean squared error sets the target
+    rate_runs: int = 3  # timed runs (median) of the samples/s comparison, round-robin
+
+
+FULL = IntegratorBenchConfig()
+QUICK = IntegratorBenchConfig(square_size=(64, 64), wide_size=(96, 54), budget_s=2.0, reference_s=8.0,
+                              reference_launch_s=2.0, mitsuba_reference_spp=1024, mitsuba_pass_spp=256,
+                              mitsuba_target_spp=32, mitsuba_curve_max_spp=256, rate_runs=3)
+
+_T0 = time.perf_counter()
+
+
+def log(message: str) -> None:
+    print(f"{time.perf_counter() - _T0:6.1f} s  {message}", file=sys.stderr, flush=True)
+
+
+def _sync() -> None:
+    import taichi as ti
+
+    ti.sync()
+
+
+def combo(integrator: str, sampler: str) -> str:
+    return f"{integrator}/{sampler}"
+
+
+# --- measurement -----------------------------------------------------------------------------------
+
+def noise_floor(mean: np.ndarray, var_of_mean: np.ndarray) -> dict:
+    """The expected MSE / relMSE that an image's own noise adds to any comparison with it."""
+    mean = np.asarray(mean, np.float64)
+    var = np.asarray(var_of_mean, np.float64)
+    var = np.where(np.isfinite(var), var, 0.0)
+    mse = float(var.mean())
+    return {"mse": mse, "rmse": math.sqrt(mse), "rel_mse": float((var / (mean * mean + REL_MSE_EPS)).mean())}
+
+
+def progressive(renderer, camera, integrator: str, sampler: str, seed: int, budget_s: float, max_spp: int,
+                observe=None, max_launch_s: float | None = None) -> dict:
+    """Render from an empty film until `budget_s` seconds of render time (or `max_spp`).
+
+    Launches of 1, 1, 2, 4, ... spp (totals 1, 2, 4, 8, ...), the last one sized from the speed of
+    the previous launch to end near the budget; with `max_launch_s`, no launch is planned longer
+    than that. After each launch, untimed, `observe(image)` may return a dict of measurements.
+    Returns {"points": [{"spp", "seconds", ...}], "spp", "seconds"}.
+    """
+    renderer.reset()
+    points = []
+    seconds = 0.0
+    done = 0
+    n = 1
+    while True:
+        t0 = time.perf_counter()
+        renderer.render(camera, n, integrator, seed=seed, sampler=sampler)
+        _sync()
+        dt = time.perf_counter() - t0
+        seconds += dt
+        done += n
+        point = {"spp": done, "seconds": seconds}
+        if observe is not None:
+            point.update(observe(renderer.image()))
+        points.append(point)
+        if seconds >= budget_s or done >= max_spp:
+            break
+        per_spp = dt / n
+        n = done  # double the total
+        if max_launch_s is not None:
+            n = min(n, max(1, int(max_launch_s / max(per_spp, 1e-9))))
+        remaining = budget_s - seconds
+        if per_spp * n > remaining:  # the last launch: end at the budget
+            n = max(1, int(math.ceil(remaining / max(per_spp, 1e-9))))
+        n = min(n, max_spp - done)
+    return {"points": points, "spp": done, "seconds": seconds}
+
+
+def value_at(points: list[dict], key: str, x_key: str, x: float) -> float:
+    """points[key] at x_key = x, interpolated linearly in log-log between the points around x
+    (the first point's value when x is before it; the last one's when x is after it)."""
+    xs = [p[x_key] for p in points]
+    if x <= xs[0]:
+        return float(points[0][key])
+    for a, b in zip(points, points[1:]):
+        if a[x_key] <= x <= b[x_key]:
+            ya, yb = a[key], b[key]
+            if ya <= 0 or yb <= 0 or b[x_key] == a[x_key]:
+                return float(yb)
+            t = math.log(x / a[x_key]) / math.log(b[x_key] / a[x_key])
+            return float(math.exp(math.log(ya) + t * (math.log(yb) - math.log(ya))))
+    return float(points[-1][key])
+
+
+def spp_to_reach(points: list[dict], key: str, target: float, power: float = 0.5) -> tuple[float, bool]:
+    """(spp at which points[key] first falls to `target`, extrapolated?): log-log interpolation
+    between the points around it; past the last point, extrapolated with error ~ spp^-power (1/2
+    for an RMSE, 1 for an MSE-like metric, of an unbiased estimator), which is then flagged."""
+    previous = None
+    for p in points:
+        if p[key] <= target:
+            if previous is None:
+                return float(p["spp"]), False
+            ya, yb = math.log(previous[key]), math.log(p[key])
+            xa, xb = math.log(previous["spp"]), math.log(p["spp"])
+            if ya == yb:
+                return float(p["spp"]), False
+            return float(math.exp(xa + (math.log(target) - ya) * (xb - xa) / (yb - ya))), False
+        previous = p
+    last = points[-1]
+    return float(last["spp"] * (last[key] / target) ** (1.0 / power)), True
+
+
+def convergence(renderer, camera, integrator: str, sampler: str, references: dict, config: IntegratorBenchConfig,
+                budget_s: float | None = None) -> dict:
+    """One error-against-time curve of (integrator, sampler) against each named reference image.
+
+    references: {name: image}; the first is the main reference (its metrics are stored without a
+    prefix), the others' RMSE as "rmse_<name>". Returns the curve, its points at the budget, and
+    the final spp and seconds.
+    """
+    names = list(references)
+    main = references[names[0]]
+
+    def observe(image):
+        out = image_errors(image, main, FIREFLY_TRIM)
+        for name in names[1:]:
+            out[f"rmse_{name}"] = rmse(image, references[name])
+            out[f"rel_mse_{name}"] = rel_mse(image, references[name])
+        return out
+
+    budget = config.budget_s if budget_s is None else budget_s
+    run = progressive(renderer, camera, integrator, sampler, config.seed, budget, config.max_spp, observe)
+    points = run["points"]
+    at_budget = {key: value_at(points, key, "seconds", budget) for key in points[-1] if key not in ("spp", "seconds")}
+    at_budget["spp"] = value_at(points, "spp", "seconds", budget)
+    rejected = int(renderer.film.rejected_counts().sum())
+    return {"integrator": integrator, "sampler": sampler, "curve": points, "spp": run["spp"], "seconds": run["seconds"],
+            "samples_per_s": run["spp"] * renderer.film.width * renderer.film.height / run["seconds"],
+            "at_budget": at_budget, "rejected_samples": rejected}
+
+
+class SceneBench:
+    """One scene's Renderer at the benchmark size, its camera and compile times."""
+
+    def __init__(self, scene, size: tuple[int, int]):
+        from renderer.camera import CameraFrame
+        from renderer.renderer import Renderer
+
+        self.scene = scene
+        t0 = time.perf_counter()
+        self.renderer = Renderer(scene, size)
+        self.build_s = time.perf_counter() - t0
+        self.camera = CameraFrame.from_spec(scene.camera)
+        self.compile_s: dict[str, float] = {}
+
+    @property
+    def pixels(self) -> int:
+        return self.renderer.film.width * self.renderer.film.height
+
+    def compile(self, integrator: str, sampler: str) -> float:
+        """First launch of the program (compiles it, or loads it from the offline cache): 1 spp."""
+        key = combo(integrator, sampler)
+        if key not in self.compile_s:
+            self.renderer.reset()
+            t0 = time.perf_counter()
+            self.renderer.render(self.camera, 1, integrator, sampler=sampler, seed=0)
+            _sync()
+            self.compile_s[key] = time.perf_counter() - t0
+        return self.compile_s[key]
+
+    def reference(self, config: IntegratorBenchConfig) -> dict:
+        """The long `mis` render: image, spp, seconds and its own noise floor."""
+        run = progressive(self.renderer, self.camera, REFERENCE_INTEGRATOR, REFERENCE_SAMPLER, config.reference_seed,
+                          config.reference_s, 1 << 24, max_launch_s=config.reference_launch_s)
+        image = self.renderer.image()
+        floor = noise_floor(image, self.renderer.film.variance_of_mean_image())
+        return {"image": image, "integrator": REFERENCE_INTEGRATOR, "sampler": REFERENCE_SAMPLER,
+                "seed": config.reference_seed, "spp": run["spp"], "seconds": run["seconds"], "noise_floor": floor,
+                "rejected_samples": int(self.renderer.film.rejected_counts().sum())}
+
+
+def scene_size(scene, config: IntegratorBenchConfig) -> tuple[int, int]:
+    return config.square_size if scene.render.width == scene.render.height else config.wide_size
+
+
+def bench_scene(scene, config: IntegratorBenchConfig, extra_references: dict | None = None) -> dict:
+    """Compile, reference and the error curves of every (integrator, sampler) for one scene."""
+    size = scene_size(scene, config)
+    bench = SceneBench(scene, size)
+    result = {"scene": scene.name, "size": list(size), "max_depth": scene.render.max_depth, "build_s": bench.build_s,
+              "errors": {}}
+    combos = [(i, s) for i in config.integrators for s in config.samplers]
+    if (REFERENCE_INTEGRATOR, REFERENCE_SAMPLER) not in combos:
+        combos.insert(0, (REFERENCE_INTEGRATOR, REFERENCE_SAMPLER))
+    log(f"[{scene.name}] {size[0]}x{size[1]}: compiling {len(combos)} programs ...")
+    for integrator, sampler in combos:
+        try:
+            seconds = bench.compile(integrator, sampler)
+            log(f"[{scene.name}]   {combo(integrator, sampler)}: {seconds:.1f} s")
+        except Exception as error:  # noqa: BLE001 - one broken program must not end the benchmark
+            result["errors"][combo(integrator, sampler)] = _describe(error)
+            log(f"[{scene.name}]   {combo(integrator, sampler)} FAILED: {_describe(error)}")
+    result["compile_s"] = dict(bench.compile_s)
+    if combo(REFERENCE_INTEGRATOR, REFERENCE_SAMPLER) in result["errors"]:
+        result["skipped"] = f"the reference integrator failed: {result['errors'][combo(REFERENCE_INTEGRATOR, REFERENCE_SAMPLER)]}"
+        return result
+
+    log(f"[{scene.name}] reference: {REFERENCE_INTEGRATOR} for {config.reference_s:g} s ...")
+    reference = bench.reference(config)
+    result["reference"] = {k: v for k, v in reference.items() if k != "image"}
+    log(f"[{scene.name}]   {reference['spp']} spp in {reference['seconds']:.1f} s, noise floor RMSE "
+        f"{reference['noise_floor']['rmse']:.3g}, relMSE {reference['noise_floor']['rel_mse']:.3g}")
+    references = {"reference": reference["image"], **(extra_references or {})}
+    curves = []
+    for integrator in config.integrators:
+        for sampler in config.samplers:
+            if combo(integrator, sampler) in result["errors"]:
+                continue
+            log(f"[{scene.name}] {combo(integrator, sampler)}: {config.budget_s:g} s ...")
+            try:
+                curves.append(convergence(bench.renderer, bench.camera, integrator, sampler, references, config))
+            except Exception as error:  # noqa: BLE001
+                result["errors"][combo(integrator, sampler)] = _describe(error)
+    floor = reference["noise_floor"]
+    for c in curves:
+        b = c["at_budget"]
+        c["at_budget_floor_corrected"] = {
+            "rmse": math.sqrt(max(b["rmse"] ** 2 - floor["mse"], 0.0)),
+            "rel_mse": max(b["rel_mse"] - floor["rel_mse"], 0.0)}
+    result["curves"] = curves
+    result["renderer"] = bench  # kept for the Mitsuba comparison; removed before writing JSON
+    return result
+
+
+def _describe(error: BaseException) -> str:
+    text = str(error).strip().splitlines()
+    last = text[-1] if text else ""
+    return f"{type(error).__name__}: {last}"[:300]
+
+
+# --- Mitsuba ------------------------------------------------------------------------------------
+
+def mitsuba_reference(config: IntegratorBenchConfig, size: tuple[int, int], max_depth: int) -> dict:
+    """Mitsuba's reference image (mean of independent passes) and its noise floor (from the spread
+    of the passes: var of the mean = sample variance of the pass images / passes)."""
+    from renderer.bench import mitsuba_side as ms
+
+    ms.set_threads(config.mitsuba_threads)
+    scene = ms.load_cornell_box(size[0], size[1], max_depth)
+    passes = max(2, config.mitsuba_reference_spp // config.mitsuba_pass_spp)
+    t0 = time.perf_counter()
+    images = [ms.render_scene(scene, config.mitsuba_pass_spp, seed=config.reference_seed + k).astype(np.float64)
+              for k in range(passes)]
+    seconds = time.perf_counter() - t0
+    stack = np.stack(images)
+    mean = stack.mean(axis=0)
+    var_of_mean = stack.var(axis=0, ddof=1) / passes
+    return {"scene": scene, "image": mean.astype(np.float32), "spp": passes * config.mitsuba_pass_spp,
+            "passes": passes, "seconds": seconds, "noise_floor": noise_floor(mean, var_of_mean)}
+
+
+def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref: dict) -> dict:
+    """Samples/s and time to Mitsuba's target RMSE: Mitsuba against Lantern's mis and path."""
+    from renderer.bench import mitsuba_side as ms
+
+    bench: SceneBench = cornell["renderer"]
+    size = tuple(cornell["size"])
+    pixels = size[0] * size[1]
+    mscene = mitsuba_ref["scene"]
+    ref = mitsuba_ref["image"]
+    # Mitsuba's own curve: separate renders at 1, 2, 4, ... spp (a Mitsuba render is not
+    # progressive), each on its own seed; JIT kernels are warmed up by the reference passes.
+    curve = []
+    spp = 1
+    while spp <= config.mitsuba_curve_max_spp:
+        t0 = time.perf_counter()
+        image = ms.render_scene(mscene, spp, seed=config.seed + spp)
+        seconds = time.perf_counter() - t0
+        curve.append({"spp": spp, "seconds": seconds, "rmse": rmse(image, ref)})
+        spp *= 2
+    # The targets: Mitsuba's expected error at target_spp, from the mean squared error of a few
+    # renders on different seeds (a handful of pixels on the light's edges weigh a lot in one
+    # image's RMSE, so one render alone is a noisy target).
+    target_spp = config.mitsuba_target_spp
+    target_images = [ms.render_scene(mscene, target_spp, seed=config.seed + 7919 * (k + 1))
+                     for k in range(config.mitsuba_target_renders)]
+    target = math.sqrt(float(np.mean([rmse(im, ref) ** 2 for im in target_images])))
+    target_rel = float(np.mean([rel_mse(im, ref) for im in target_images]))
+
+    # Samples/s at the target spp, round-robin (a slow drift of the machine hits all alike).
+    lantern = [name for name in ("mis", "path") if combo(name, "independent") in bench.compile_s]
+    calls = {"mitsuba": lambda: ms.render_scene(mscene, target_spp, seed=config.seed)}
+
+    def lantern_call(name):
+        def call():
+            bench.renderer.reset()
+            bench.renderer.render(bench.camera, target_spp, name, seed=config.seed, sampler="independent")
+            _sync()
+        return call
+
+    for name in lantern:
+        calls[name] = lantern_call(name)
+    timings = time_interleaved(calls, runs=config.rate_runs, warmup=1)
+    rows = {}
+    m_seconds = timings["mitsuba"].median
+    rows["mitsuba"] = {"spp_per_s": target_spp / m_seconds, "samples_per_s": target_spp * pixels / m_seconds,
+                       "timing": timings["mitsuba"].as_dict(), "spp_to_target": float(target_spp),
+                       "extrapolated": False, "seconds_to_target": m_seconds,
+                       "spp_to_target_rel_mse": float(target_spp), "extrapolated_rel_mse": False,
+                       "seconds_to_target_rel_mse": m_seconds}
+    curves = {(c["integrator"], c["sampler"]): c for c in cornell["curves"]}
+    for (integrator, sampler), c in curves.items():
+        if sampler == "independent" and integrator in timings:
+            per_spp = timings[integrator].median / target_spp
+            timing = timings[integrator].as_dict()
+        else:  # not timed round-robin: its own curve's speed
+            per_spp = c["seconds"] / c["spp"]
+            timing = None
+        spp_needed, extrapolated = spp_to_reach(c["curve"], "rmse_mitsuba", target)
+        spp_rel, extrapolated_rel = spp_to_reach(c["curve"], "rel_mse_mitsuba", target_rel, power=1.0)
+        rows[combo(integrator, sampler)] = {
+            "spp_per_s": 1.0 / per_spp, "samples_per_s": pixels / per_spp, "timing": timing,
+            "spp_to_target": spp_needed, "extrapolated": extrapolated, "seconds_to_target": spp_needed * per_spp,
+            "spp_to_target_rel_mse": spp_rel, "extrapolated_rel_mse": extrapolated_rel,
+            "seconds_to_target_rel_mse": spp_rel * per_spp}
+    judged = rows.get(combo("mis", "independent"))
+    passed = judged is not None and judged["seconds_to_target"] <= rows["mitsuba"]["seconds_to_target"]
+    return {"available": True, "size": list(size), "max_depth": cornell["max_depth"], "threads": config.mitsuba_threads,
+            "reference": {k: v for k, v in mitsuba_ref.items() if k not in ("scene", "image")},
+            "target_spp": target_spp, "target_renders": config.mitsuba_target_renders, "target_rmse": target,
+            "target_rel_mse": target_rel, "curve": curve, "rows": rows,
+            "lantern_curves": {combo(i, s): [{"spp": p["spp"], "seconds": p["seconds"], "rmse": p["rmse_mitsuba"]}
+                                             for p in c["curve"]] for (i, s), c in curves.items()},
+            "passed": passed}
+
+
+# --- report ------------------------------------------------------------------------------------
+
+def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBenchConfig) -> None:
+    print()
+    compile_rows = []
+    for res in results:
+        for key, seconds in res.get("compile_s", {}).items():
+            compile_rows.append([res["scene"], key, seconds])
+        for key, error in res.get("errors", {}).items():
+            compile_rows.append([res["scene"], key, f"FAILED: {error}"])
+    if compile_rows:
+        print_table(["scene", "integrator/sampler", "compile s"], compile_rows,
+                    title="Compile time (first 1-spp launch: compilation or offline-cache load; not in any timing below)")
+    for res in results:
+        if "skipped" in res:
+            print(f"{res['scene']}: skipped ({res['skipped']})\n")
+            continue
+        ref = res["reference"]
+        floor = ref["noise_floor"]
+        rows = []
+        best = min(c["at_budget"]["rel_mse"] for c in res["curves"]) if res["curves"] else 1.0
+        for c in res["curves"]:
+            b = c["at_budget"]
+            rows.append([combo(c["integrator"], c["sampler"]), round(b["spp"]), c["samples_per_s"] / 1e6, b["rmse"],
+                         c["at_budget_floor_corrected"]["rmse"], b["rel_mse"], c["at_budget_floor_corrected"]["rel_mse"],
+                         b["rel_mse_trimmed"], f"{b['rel_mse'] / best:.2f}x"])
+        print_table(["integrator/sampler", "spp@T", "Msamples/s", "RMSE@T", "RMSE-floor", "relMSE@T", "relMSE-floor",
+                     "relMSE*@T", "relMSE/best"], rows,
+                    title=f"{res['scene']} ({res['size'][0]}x{res['size'][1]}, max depth {res['max_depth']}): equal time "
+                          f"T = {config.budget_s:g} s. Reference: {ref['integrator']} {ref['spp']} spp in "
+                          f"{ref['seconds']:.0f} s, its own noise: RMSE {floor['rmse']:.3g}, relMSE {floor['rel_mse']:.3g} "
+                          f"(the floor; '-floor' columns subtract it). * = top {FIREFLY_TRIM:.1%} pixels left out")
+        for key, error in res.get("errors", {}).items():
+            print(f"   {key}: FAILED ({error})")
+    if mitsuba is None:
+        return
+    if not mitsuba.get("available"):
+        print(f"Mitsuba 3 comparison skipped: {mitsuba.get('note')}\n")
+        return
+    ref = mitsuba["reference"]
+    rows = []
+    m = mitsuba["rows"]["mitsuba"]
+    for name, r in mitsuba["rows"].items():
+        rows.append([f"Mitsuba {mitsuba['variant']}" if name == "mitsuba" else f"Lantern {name}",
+                     r["samples_per_s"] / 1e6, f"{r['samples_per_s'] / m['samples_per_s']:.2f}x",
+                     f"{r['spp_to_target']:.0f}" + ("(ext)" if r["extrapolated"] else ""),
+                     r["seconds_to_target"], f"{m['seconds_to_target'] / r['seconds_to_target']:.2f}x",
+                     f"{r['spp_to_target_rel_mse']:.0f}" + ("(ext)" if r["extrapolated_rel_mse"] else ""),
+                     r["seconds_to_target_rel_mse"],
+                     f"{m['seconds_to_target_rel_mse'] / r['seconds_to_target_rel_mse']:.2f}x"])
+    print_table(["renderer", "Msamples/s", "vs Mitsuba", "spp to RMSE", "s to RMSE", "speed (RMSE)",
+                 "spp to relMSE", "s to relMSE", "speed (relMSE)"], rows,
+                title=f"Cornell box vs Mitsuba {mitsuba['version']} ({mitsuba['variant']}, {mitsuba['threads']} threads), "
+                      f"{mitsuba['size'][0]}x{mitsuba['size'][1]}, max depth {mitsuba['max_depth']}: target RMSE "
+                      f"{mitsuba['target_rmse']:.4g} (and relMSE {mitsuba['target_rel_mse']:.4g}) = Mitsuba's at "
+                      f"{mitsuba['target_spp']} spp (mean square over {mitsuba['target_renders']} seeds), against a Mitsuba "
+                      f"reference of {ref['spp']} spp (its own noise RMSE {ref['noise_floor']['rmse']:.3g}). "
+                      f"Samples/s: median of {config.rate_runs} runs round-robin at {mitsuba['target_spp']} spp "
+                      f"(sobol rows: from their own curves); speed = Mitsuba's seconds / the row's, >1 is faster "
+                      f"than Mitsuba; (ext) = extrapolated past the curve")
+    r = mitsuba["rows"].get("mis/independent")
+    if r is not None:
+        print(f"Target (Lantern mis at least as fast as Mitsuba's LLVM CPU variant to the same RMSE): "
+              f"{verdict(mitsuba['passed'])}  (Lantern mis {r['seconds_to_target']:.2f} s vs Mitsuba "
+              f"{m['seconds_to_target']:.2f} s; samples/s {r['samples_per_s'] / 1e6:.2f} M vs "
+              f"{m['samples_per_s'] / 1e6:.2f} M)")
+    if mitsuba.get("note"):
+        print(f"   note: {mitsuba['note']}")
+    print(flush=True)
+
+
+_STYLE = {"path": "C0", "nee": "C1", "mis": "C2"}
+_LINE = {"independent": "-", "sobol": "--"}
+
+
+def write_plots(results: list[dict], mitsuba: dict | None, out_dir: Path, config: IntegratorBenchConfig) -> list[Path]:
+    plt = pyplot()
+    written = []
+    for res in results:
+        if "skipped" in res or not res.get("curves"):
+            continue
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+        floor = res["reference"]["noise_floor"]
+        for ax, key, label, floor_value in ((axes[0], "rmse", "RMSE", floor["rmse"]),
+                                             (axes[1], "rel_mse", "relMSE", floor["rel_mse"])):
+            for c in res["curves"]:
+                pts = [p for p in c["curve"] if p[key] > 0]
+                ax.loglog([p["seconds"] for p in pts], [p[key] for p in pts], _LINE.get(c["sampler"], ":"),
+                          color=_STYLE.get(c["integrator"]), marker=".", label=combo(c["integrator"], c["sampler"]))
+            ax.axhline(floor_value, color="grey", ls=":", lw=1, label="reference's own noise")
+            ax.axvline(config.budget_s, color="grey", ls="--", lw=1)
+            ax.set_xlabel("render seconds (compile excluded)")
+            ax.set_ylabel(f"{label} vs reference")
+            ax.set_title(f"{res['scene']} {res['size'][0]}x{res['size'][1]}: {label} against time")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=7)
+        written.append(save_figure(fig, out_dir / f"bench_integrators_{res['scene']}.png"))
+    if mitsuba and mitsuba.get("available"):
+        fig, ax = plt.subplots(figsize=(6.5, 4.5))
+        mc = mitsuba["curve"]
+        ax.loglog([p["seconds"] for p in mc], [p["rmse"] for p in mc], "k-o", ms=3,
+                  label=f"Mitsuba {mitsuba['variant']} ({mitsuba['threads']} threads)")
+        for name, pts in mitsuba["lantern_curves"].items():
+            integrator, sampler = name.split("/")
+            ax.loglog([p["seconds"] for p in pts], [p["rmse"] for p in pts], _LINE.get(sampler, ":"),
+                      color=_STYLE.get(integrator), marker=".", label=f"Lantern {name}")
+        ax.axhline(mitsuba["target_rmse"], color="grey", ls=":", lw=1, label=f"target (Mitsuba {mitsuba['target_spp']} spp)")
+        ax.set_xlabel("render seconds")
+        ax.set_ylabel("RMSE vs Mitsuba reference")
+        ax.set_title("Cornell box: Lantern vs Mitsuba 3")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+        written.append(save_figure(fig, out_dir / "bench_integrators_mitsuba.png"))
+    return written
+
+
+# --- entry point ---------------------------------------------------------------------------------
+
+def _load(name: str):
+    from renderer.scene.catalog import load_any, resolve_scene
+
+    return load_any(resolve_scene(name))
+
+
+def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
+        config: IntegratorBenchConfig | None = None) -> int:
+    """Benchmark the scenes (names or scene files; default config.scenes); print, write JSON and plots."""
+    import warnings
+
+    import taichi as ti
+
+    from renderer.arch import init_taichi
+
+    config = config or (QUICK if quick else FULL)
+    if scenes is not None:
+        config = replace(config, scenes=tuple(str(s) for s in scenes))
+    out_dir = Path(out_dir)
+    t_start = time.perf_counter()
+    if not ti.lang.impl.get_runtime().prog:  # the test session initialises Taichi itself
+        init_taichi("cpu")
+    arch = str(ti.lang.impl.current_cfg().arch).split(".")[-1]
+    load_before = load_average()
+
+    mitsuba_info = None
+    mitsuba_ref = None
+    if config.mitsuba and MITSUBA_SCENE in config.scenes:
+        try:
+            from renderer.bench import mitsuba_side
+
+            mitsuba_info = mitsuba_side.availability()
+        except Exception as error:  # noqa: BLE001 - the module itself may be missing or broken
+            mitsuba_info = {"available": False, "note": f"renderer.bench.mitsuba_side unusable ({_describe(error)})"}
+        if mitsuba_info["available"] and not str(mitsuba_info["variant"]).startswith("llvm"):
+            mitsuba_info = {**mitsuba_info, "note": (mitsuba_info.get("note") or "") + " (not the LLVM variant: "
+                            "the comparison runs, but is not the one the target names)"}
+
+    results = []
+    for name in config.scenes:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # e.g. negative env-map pixels clamped: reported by `info`
+                scene = _load(name)
+        except Exception as error:  # noqa: BLE001 - e.g. a scene another change has not added yet
+            results.append({"scene": Path(name).stem, "skipped": f"cannot load ({_describe(error)})"})
+            log(f"[{name}] skipped: {_describe(error)}")
+            continue
+        extra = {}
+        if scene.name == MITSUBA_SCENE and mitsuba_info and mitsuba_info["available"]:
+            try:
+                log(f"[{scene.name}] Mitsuba reference: {config.mitsuba_reference_spp} spp ...")
+                mitsuba_ref = mitsuba_reference(config, scene_size(scene, config), scene.render.max_depth)
+                extra["mitsuba"] = mitsuba_ref["image"]
+                log(f"[{scene.name}]   {mitsuba_ref['spp']} spp in {mitsuba_ref['seconds']:.1f} s, noise RMSE "
+                    f"{mitsuba_ref['noise_floor']['rmse']:.3g}")
+            except Exception as error:  # noqa: BLE001
+                mitsuba_info = {**mitsuba_info, "available": False,
+                                "note": f"Mitsuba failed to render: {_describe(error)}"}
+                traceback.print_exc()
+        try:
+            results.append(bench_scene(scene, config, extra))
+        except Exception as error:  # noqa: BLE001
+            traceback.print_exc()
+            results.append({"scene": scene.name, "skipped": f"failed ({_describe(error)})"})
+
+    mitsuba = None
+    if mitsuba_info is not None:
+        mitsuba = {"available": False, "note": mitsuba_info.get("note")}
+        cornell = next((r for r in results if r["scene"] == MITSUBA_SCENE and "curves" in r), None)
+        if mitsuba_info["available"] and mitsuba_ref is not None and cornell is not None:
+            log("[mitsuba] error curve and samples/s ...")
+            try:
+                mitsuba = {**mitsuba_comparison(cornell, config, mitsuba_ref), "version": mitsuba_info["version"],
+                           "variant": mitsuba_info["variant"], "note": mitsuba_info.get("note")}
+            except Exception as error:  # noqa: BLE001
+                traceback.print_exc()
+                mitsuba = {"available": False, "note": f"comparison failed: {_describe(error)}"}
+        elif mitsuba_info["available"]:
+            mitsuba["note"] = "the Cornell box did not render, nothing to compare"
+
+    for res in results:
+        res.pop("renderer", None)
+    print_report(results, mitsuba, config)
+    plots = write_plots(results, mitsuba, out_dir, config)
+    total = time.perf_counter() - t_start
+    report = {
+        "benchmark": "integrators",
+        "quick": quick,
+        "arch": arch,
+        "machine": machine_info(),
+        "config": asdict(config),
+        "load_average": {"before": load_before, "after": load_average()},
+        "notes": ("Error vs reference: RMSE and relMSE = mean((x-ref)^2/(ref^2+1e-2)); rel_mse_trimmed leaves out the "
+                  "0.1% pixels of largest error. Reference: mis, independent sampler, its own seed; its noise floor "
+                  "is mean(film variance of the mean). Curves: one seed for every integrator and sampler, launches "
+                  "of 1,1,2,4,... spp; seconds = wall-clock render time, compile excluded. at_budget: log-log "
+                  "interpolation at the budget. Mitsuba: target RMSE = Mitsuba's at target_spp against a Mitsuba "
+                  "reference; seconds_to_target = spp needed (from the curves) x measured seconds per spp."),
+        "scenes": results,
+        "mitsuba": {k: v for k, v in (mitsuba or {}).items()},
+        "plots": [p.name for p in plots],
+        "total_seconds": total,
+    }
+    path = write_json(out_dir / "bench_integrators.json", report)
+    print(f"wrote {path} and {', '.join(p.name for p in plots)} in {out_dir}  (total {total:.0f} s)")
+    return 0 if any("curves" in r for r in results) else 1
