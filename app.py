@@ -62,7 +62,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("scene", help="scene name, scene file (.toml) or model file (.glb .gltf .obj .ply .stl)")
     budget = render.add_mutually_exclusive_group()
     budget.add_argument("--spp", type=_positive_int, help="samples per pixel (default: the scene's)")
-    budget.add_argument("--time", type=float, dest="seconds", help="render for this many seconds")
+    budget.add_argument("--time", type=float, dest="seconds", help="render for this many seconds (after compiling)")
     render.add_argument("--size", type=_size, help="image size WxH (default: the scene's)")
     render.add_argument("--integrator", help="integrator name (see `list`)")
     render.add_argument("--out", type=Path, help="output .png (tone-mapped) or .exr (linear float32)")

@@ -56,12 +56,13 @@ def render(scene: Scene, job: RenderJob, progress=None) -> RenderResult:
     renderer = Renderer(scene, (width, height))
     camera = CameraFrame.from_spec(scene.camera)
     start = time.perf_counter()
+    budget_start = None  # a --time budget counts rendering only, from the end of the first pass
     chunk = 1
     while True:
         done = renderer.samples_done
         if target_spp is not None and done >= target_spp:
             break
-        if target_spp is None and time.perf_counter() - start >= job.seconds:
+        if target_spp is None and budget_start is not None and time.perf_counter() - budget_start >= job.seconds:
             break
         n = chunk if target_spp is None else min(chunk, target_spp - done)
         t0 = time.perf_counter()
@@ -69,8 +70,11 @@ def render(scene: Scene, job: RenderJob, progress=None) -> RenderResult:
         elapsed = time.perf_counter() - t0
         if done > 0:  # the first launch includes compilation: do not size chunks from it
             chunk = max(1, min(chunk * 4, int(n * CHUNK_SECONDS / max(elapsed, 1e-6))))
+        elif budget_start is None:
+            budget_start = time.perf_counter()
         if progress:
-            progress(renderer.samples_done, target_spp, time.perf_counter() - start, width * height, job.seconds)
+            progress(renderer.samples_done, target_spp, time.perf_counter() - (budget_start or start),
+                     width * height, job.seconds)
     total = time.perf_counter() - start
     return RenderResult(renderer.image(), renderer.samples_done, total, renderer.film.stats()["rejected"], integrator)
 

@@ -13,6 +13,9 @@ vec3 = ti.math.vec3
 DIFFUSE, CONDUCTOR, DIELECTRIC, PRINCIPLED = 0, 1, 2, 3
 KIND_IDS = {"diffuse": DIFFUSE, "conductor": CONDUCTOR, "dielectric": DIELECTRIC, "principled": PRINCIPLED}
 NO_TEXTURE = -1
+# glTF allows ior = 1 (no refraction at all); the rough-dielectric half vector wo + eta wi is then
+# zero for the transmitted direction. Just above 1 the interface is as good as invisible and finite.
+MIN_IOR = 1.0001
 
 # Only roughness == 0 is a delta lobe. Any other roughness is clamped to at least this GGX width so
 # that D(h) <= 1/(pi a^2) ~ 3e7 stays finite in f32.
@@ -58,7 +61,7 @@ class MaterialRows:
 
         self.rows.append(dict(kind=PRINCIPLED, base_color=tuple(pbr.base_color_factor[:3]),
                               roughness=pbr.roughness_factor, metallic=pbr.metallic_factor,
-                              transmission=pbr.transmission_factor, ior=pbr.ior,
+                              transmission=pbr.transmission_factor, ior=max(pbr.ior, MIN_IOR),
                               emission=tuple(pbr.emissive_factor), edge_tint=(1.0, 1.0, 1.0),
                               normal_scale=pbr.normal_scale,
                               textures=(tex(pbr.base_color_texture), tex(pbr.metallic_roughness_texture),

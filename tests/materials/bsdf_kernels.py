@@ -169,8 +169,9 @@ def frame_about(pole) -> np.ndarray:
 # hands the result to the harness as a pdf that is constant on each of its cells, which its own rule
 # integrates exactly: the expected counts are then the adaptive integrals. A feature smaller than the
 # rule's node spacing (a narrow lobe at grazing incidence) can hide between all nodes; cells that
-# hold samples but came out (nearly) empty are integrated again from a finer start (`cells`,
-# `start_depth`): the target, the pdf's integral over the cell, is the same, only better resolved.
+# look wrong after a first test are integrated again from a finer start (`cells`, `start_depth`;
+# see `chi2_adaptive`): the target, the pdf's integral over the cell, is the same, only better
+# resolved.
 
 def _rect_integrals(pdf, frame, p0, p1, t0, t1, k, order):
     """Integral of pdf * sin(theta) over rectangles [p0, p1] x [t0, t1], each split k x k with an

@@ -101,7 +101,7 @@ base_color = [0.7, 0.6, 0.5]
 [materials.gold]
 type = "conductor"
 base_color = [1.0, 0.78, 0.34]
-roughness = 0.3
+roughness = 0.5
 [[objects]]
 type = "plane"
 material = "floor"
