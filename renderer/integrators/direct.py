@@ -19,9 +19,16 @@ vec3 = ti.math.vec3
 
 @ti.func
 def power_heuristic(a, b):
-    a2 = a * a
-    b2 = b * b
-    return a2 / (a2 + b2) if a2 + b2 > 0.0 else 0.0
+    """a^2 / (a^2 + b^2), written through the ratio of the smaller to the larger density so that
+    an infinite or overflowing density (a light seen exactly edge-on) gives 1 or 0, never inf/inf."""
+    w = 0.0
+    if a >= b and a > 0.0:
+        r = b / a
+        w = 1.0 / (1.0 + r * r)
+    elif b > a:
+        r = a / b
+        w = r * r / (1.0 + r * r)
+    return w
 
 
 @ti.data_oriented

@@ -34,9 +34,10 @@ radius = 0.5
 translate = [0.0, 0.5, 0.0]
 """
 
-TINY = IntegratorBenchConfig(square_size=(16, 16), wide_size=(16, 9), budget_s=0.2, reference_s=0.4,
-                             reference_launch_s=0.2, integrators=("path", "mis"), samplers=("independent", "sobol"),
-                             mitsuba=False)
+# One Renderer, three programs: mis/independent (the reference) and path with both samplers.
+TINY = IntegratorBenchConfig(square_size=(16, 16), wide_size=(16, 9), budget_s=0.2, reference_s=0.3,
+                             reference_launch_s=0.1, max_spp=256, integrators=("path",),
+                             samplers=("independent", "sobol"), mitsuba=False)
 
 
 @pytest.fixture
@@ -69,51 +70,35 @@ def test_spp_to_reach_interpolates_then_extrapolates():
     assert spp == pytest.approx(8.0) and extrapolated
 
 
-def test_measurement_on_a_tiny_scene(tiny_scene, tmp_path, capsys):
-    from renderer.bench.integrators import SceneBench, bench_scene, progressive
-    from renderer.scene import load_scene
-
-    scene = load_scene(tiny_scene)
-
-    # progressive: totals double (1, 2, 4, ...) until the last launch, which lands on the budget
-    bench = SceneBench(scene, (16, 9))
-    bench.compile("path", "independent")
-    run = progressive(bench.renderer, bench.camera, "path", "independent", seed=1, budget_s=0.2, max_spp=64,
-                      observe=lambda image: {"mean": float(image.mean())})
-    spps = [p["spp"] for p in run["points"]]
-    assert spps[:3] == [1, 2, 4][: len(spps[:3])] and spps == sorted(spps) and spps[-1] == run["spp"] <= 64
-    assert run["seconds"] >= 0.2 or run["spp"] == 64
-    assert all(p["mean"] > 0 for p in run["points"]) and bench.renderer.samples_done == run["spp"]
-
-    # one scene: compile times, a reference with its own noise, one curve per integrator x sampler
-    result = bench_scene(scene, TINY)
-    assert not result["errors"], result["errors"]
-    assert set(result["compile_s"]) == {"path/independent", "path/sobol", "mis/independent", "mis/sobol"}
-    ref = result["reference"]
-    assert ref["spp"] >= 2 and ref["rejected_samples"] == 0 and 0 < ref["noise_floor"]["rmse"] < 1
-    assert len(result["curves"]) == 4
-    for c in result["curves"]:
-        curve = c["curve"]
-        assert curve[-1]["seconds"] >= TINY.budget_s or curve[-1]["spp"] == TINY.max_spp
-        assert all(p["rmse"] > 0 and p["rel_mse"] > 0 for p in curve)
-        # the error falls as samples accumulate (first launch against the last: >= 4x the spp)
-        if curve[-1]["spp"] >= 4 * curve[0]["spp"]:
-            assert curve[-1]["rmse"] < curve[0]["rmse"]
-        assert set(c["at_budget"]) >= {"rmse", "rel_mse", "rel_mse_trimmed", "spp"}
-
-
-def test_run_writes_report_and_skips_missing_scenes(tiny_scene, tmp_path, capsys):
+def test_run_on_a_tiny_scene(tiny_scene, tmp_path, capsys):
+    """The whole measurement on one tiny scene (and a missing one, skipped with a note): compile
+    times, a reference with its own noise, one progressive curve per integrator x sampler, the
+    equal-time table, JSON and a plot."""
     from renderer.bench.integrators import run
 
-    config = IntegratorBenchConfig(square_size=(16, 16), wide_size=(16, 9), budget_s=0.1, reference_s=0.2,
-                                   reference_launch_s=0.1, integrators=("path",), samplers=("independent",),
-                                   mitsuba=False)
     out = tmp_path / "reports"
-    assert run(quick=True, out_dir=out, scenes=[tiny_scene, "no_such_scene"], config=config) == 0
+    assert run(quick=True, out_dir=out, scenes=[tiny_scene, "no_such_scene"], config=TINY) == 0
     report = json.loads((out / "bench_integrators.json").read_text())
     scenes = {s["scene"]: s for s in report["scenes"]}
     assert "skipped" in scenes["no_such_scene"]
-    assert [c["integrator"] for c in scenes["tiny_integrators"]["curves"]] == ["path"]
+    result = scenes["tiny_integrators"]
+    assert not result["errors"], result["errors"]
+    assert set(result["compile_s"]) == {"mis/independent", "path/independent", "path/sobol"}
+    ref = result["reference"]
+    assert ref["integrator"] == "mis" and ref["spp"] >= 2 and ref["rejected_samples"] == 0
+    assert 0 < ref["noise_floor"]["rmse"] < 1 and ref["noise_floor"]["rel_mse"] > 0
+    assert [(c["integrator"], c["sampler"]) for c in result["curves"]] == [("path", "independent"), ("path", "sobol")]
+    for c in result["curves"]:
+        curve = c["curve"]
+        spps = [p["spp"] for p in curve]
+        # totals double (1, 2, 4, ...) but for the launches sized to land on the budget
+        assert spps[0] == 1 and all(a < b <= 2 * a for a, b in zip(spps, spps[1:]))
+        assert curve[-1]["seconds"] >= TINY.budget_s or curve[-1]["spp"] == TINY.max_spp
+        assert all(b["seconds"] > a["seconds"] for a, b in zip(curve, curve[1:]))
+        assert all(p["rmse"] > 0 and p["rel_mse"] > 0 for p in curve)
+        if spps[-1] >= 16:  # the error falls as samples accumulate
+            assert curve[-1]["rmse"] < curve[0]["rmse"]
+        assert set(c["at_budget"]) >= {"rmse", "rel_mse", "rel_mse_trimmed", "spp"} and c["rejected_samples"] == 0
     assert (out / "bench_integrators_tiny_integrators.png").is_file()
     printed = capsys.readouterr().out
     assert "equal time" in printed and "Compile time" in printed and "no_such_scene: skipped" in printed
