@@ -2,8 +2,14 @@ import pytest
 import taichi as ti
 
 
-@pytest.fixture(scope="session", autouse=True)
+@pytest.fixture(scope="module", autouse=True)
 def taichi_runtime():
-    """Initialise Taichi once per test session (never at import time)."""
+    """A fresh Taichi runtime per test module (never at import time).
+
+    Every field a test allocates lives until the runtime is reset, and one runtime holds a bounded
+    number of field trees: a whole suite in one runtime exhausts it (a crash inside Taichi). A reset
+    per module frees them; compiled kernels come back from the offline cache.
+    """
     ti.init(arch=ti.cpu, random_seed=0, offline_cache=True)
     yield
+    ti.reset()
