@@ -3,4 +3,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-exec .venv/bin/python -m pytest tests "$@"
+# Two workers (the machine's two cores), whole files per worker so module fixtures are shared.
+exec .venv/bin/python -m pytest tests -n 2 --dist loadfile "$@"
