@@ -388,51 +388,68 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
         seconds = time.perf_counter() - t0
         curve.append({"spp": spp, "seconds": seconds, "rmse": rmse(image, ref)})
         spp *= 2
-    # The targets: Mitsuba's expected error at target_spp, from the mean squared error of a few
-    # renders on different seeds (a handful of pixels on the light's edges weigh a lot in one
-    # image's RMSE, so one render alone is a noisy target).
+    # Equal spp, round-robin: Mitsuba and Lantern's independent-sampler integrators each render
+    # target_spp on `mitsuba_target_renders` seeds in turn (a slow drift of the machine hits all
+    # alike). Times give samples/s (median); images give each one's expected error at target_spp
+    # (the mean of the squared errors over the seeds: a handful of pixels on the light's edge weigh
+    # a lot in one image's RMSE, so one render alone is a noisy measure).
     target_spp = config.mitsuba_target_spp
-    target_images = [ms.render_scene(mscene, target_spp, seed=config.seed + 7919 * (k + 1))
-                     for k in range(config.mitsuba_target_renders)]
-    target = math.sqrt(float(np.mean([rmse(im, ref) ** 2 for im in target_images])))
-    target_rel = float(np.mean([rel_mse(im, ref) for im in target_images]))
-    edge = light_edge_mask(ref)
-    edge_share = float(np.mean([((im - ref) ** 2)[edge].sum() / max(((im - ref) ** 2).sum(), 1e-30)
-                                for im in target_images]))
+    lantern = [name for name in config.integrators if combo(name, "independent") in bench.compile_s]
+    seeds = {name: iter(range(config.seed + 7919, config.seed + 7919 + 1000)) for name in ["mitsuba", *lantern]}
+    images = {}
 
-    # Samples/s at the target spp, round-robin (a slow drift of the machine hits all alike).
-    lantern = [name for name in ("mis", "path") if combo(name, "independent") in bench.compile_s]
-    calls = {"mitsuba": lambda: ms.render_scene(mscene, target_spp, seed=config.seed)}
+    def mitsuba_call():
+        images["mitsuba"] = ms.render_scene(mscene, target_spp, seed=next(seeds["mitsuba"]))
 
     def lantern_call(name):
         def call():
             bench.renderer.reset()
-            bench.renderer.render(bench.camera, target_spp, name, seed=config.seed, sampler="independent")
+            bench.renderer.render(bench.camera, target_spp, name, seed=next(seeds[name]), sampler="independent")
             _sync()
         return call
 
-    for name in lantern:
-        calls[name] = lantern_call(name)
-    timings = time_interleaved(calls, runs=config.rate_runs, warmup=1)
+    calls = {"mitsuba": mitsuba_call, **{name: lantern_call(name) for name in lantern}}
+    edge = light_edge_mask(ref)
+    errors = {name: [] for name in calls}
+
+    def measure(name):  # untimed, after each timed run
+        image = images["mitsuba"] if name == "mitsuba" else bench.renderer.image()
+        squared = (np.asarray(image, np.float64) - ref) ** 2
+        errors[name].append({"mse": float(squared.mean()), "rel_mse": rel_mse(image, ref),
+                             "edge_share": float(squared[edge].sum() / max(squared.sum(), 1e-30))})
+
+    timings = time_interleaved(calls, runs=config.mitsuba_target_renders, warmup=1, after=measure)
+    mse = {name: float(np.mean([e["mse"] for e in errors[name]])) for name in calls}
+    rel = {name: float(np.mean([e["rel_mse"] for e in errors[name]])) for name in calls}
+    target, target_rel = math.sqrt(mse["mitsuba"]), rel["mitsuba"]
+    edge_share = float(np.mean([e["edge_share"] for e in errors["mitsuba"]]))
+
     rows = {}
-    m_seconds = timings["mitsuba"].median
-    rows["mitsuba"] = {"spp_per_s": target_spp / m_seconds, "samples_per_s": target_spp * pixels / m_seconds,
-                       "timing": timings["mitsuba"].as_dict(), "spp_to_target": float(target_spp),
-                       "extrapolated": False, "seconds_to_target": m_seconds,
-                       "spp_to_target_rel_mse": float(target_spp), "extrapolated_rel_mse": False,
-                       "seconds_to_target_rel_mse": m_seconds}
+    for name in calls:
+        per_spp = timings[name].median / target_spp
+        # MSE ~ 1/spp for an unbiased estimator with independent samples: the spp at which this
+        # one's expected error equals the target
+        spp_needed = target_spp * mse[name] / mse["mitsuba"]
+        spp_rel = target_spp * rel[name] / rel["mitsuba"]
+        rows[name if name == "mitsuba" else combo(name, "independent")] = {
+            "spp_per_s": 1.0 / per_spp, "samples_per_s": pixels / per_spp, "timing": timings[name].as_dict(),
+            "rmse_at_target_spp": math.sqrt(mse[name]), "rel_mse_at_target_spp": rel[name], "measured": "seeds",
+            "spp_to_target": spp_needed, "extrapolated": False, "seconds_to_target": spp_needed * per_spp,
+            "spp_to_target_rel_mse": spp_rel, "extrapolated_rel_mse": False,
+            "seconds_to_target_rel_mse": spp_rel * per_spp}
     curves = {(c["integrator"], c["sampler"]): c for c in cornell["curves"]}
     for (integrator, sampler), c in curves.items():
-        if sampler == "independent" and integrator in timings:
-            per_spp = timings[integrator].median / target_spp
-            timing = timings[integrator].as_dict()
-        else:  # not timed round-robin: its own curve's speed
-            per_spp = c["seconds"] / c["spp"]
-            timing = None
+        if combo(integrator, sampler) in rows:
+            continue
+        # the other samplers (Sobol: error not ~ 1/spp): read off their progressive curve, at that
+        # curve's own speed
+        per_spp = c["seconds"] / c["spp"]
         spp_needed, extrapolated = spp_to_reach(c["curve"], "rmse_mitsuba", target)
         spp_rel, extrapolated_rel = spp_to_reach(c["curve"], "rel_mse_mitsuba", target_rel, power=1.0)
         rows[combo(integrator, sampler)] = {
-            "spp_per_s": 1.0 / per_spp, "samples_per_s": pixels / per_spp, "timing": timing,
+            "spp_per_s": 1.0 / per_spp, "samples_per_s": pixels / per_spp, "timing": None,
+            "rmse_at_target_spp": value_at(c["curve"], "rmse_mitsuba", "spp", target_spp),
+            "rel_mse_at_target_spp": value_at(c["curve"], "rel_mse_mitsuba", "spp", target_spp), "measured": "curve",
             "spp_to_target": spp_needed, "extrapolated": extrapolated, "seconds_to_target": spp_needed * per_spp,
             "spp_to_target_rel_mse": spp_rel, "extrapolated_rel_mse": extrapolated_rel,
             "seconds_to_target_rel_mse": spp_rel * per_spp}
@@ -441,6 +458,7 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
     return {"available": True, "size": list(size), "max_depth": cornell["max_depth"], "threads": config.mitsuba_threads,
             "reference": {k: v for k, v in mitsuba_ref.items() if k not in ("scene", "image")},
             "target_spp": target_spp, "target_renders": config.mitsuba_target_renders, "target_rmse": target,
+            "errors_per_seed": errors,
             "target_rel_mse": target_rel, "light_edge_pixels": int(edge.sum()), "light_edge_mse_share": edge_share,
             "curve": curve, "rows": rows,
             "lantern_curves": {combo(i, s): [{"spp": p["spp"], "seconds": p["seconds"], "rmse": p["rmse_mitsuba"]}

@@ -403,8 +403,7 @@ def test_render_with_sobol_matches_and_beats_independent(tmp_path):
 _VULKAN_SCRIPT = """
 import sys
 import numpy as np
-import taichi as ti
-ti.init(arch=ti.vulkan)
+import taichi as ti; ti.init(arch=ti.vulkan)  # a subprocess of its own: its runtime is Vulkan's
 if ti.lang.impl.current_cfg().arch != ti.vulkan:
     sys.exit(3)
 from renderer.sampling.sobol import SobolSampler, reference_get2d
