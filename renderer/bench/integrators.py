@@ -30,16 +30,18 @@ note), in one process so that ratios are meaningful:
    film does), at the same size and max depth (8): Mitsuba's `path` integrator (which, like
    Lantern's `mis`, combines light and BSDF sampling) on its LLVM variant limited to 2 threads,
    against a Mitsuba reference (its spp and noise floor, estimated from the spread of its
-   independent passes, are reported). The target error is Mitsuba's RMSE at `mitsuba_target_spp`
-   (the root of the mean squared error of a few renders on different seeds: the few pixels on the
-   light's edges, where the pixel footprint straddles an emitter 20 times brighter than the
-   ceiling, weigh a lot in one image's RMSE); the same is done for relMSE, which weighs those
-   pixels down, as a second view. Samples/s of Mitsuba, and of Lantern's `mis` and `path` at the same spp,
-   are timed round-robin (median of `rate_runs` runs, JIT and kernel compilation warmed up first).
-   Lantern's spp needed to reach the target RMSE (against the same Mitsuba reference) comes from
-   its error curve of step 3 (log-log interpolation in spp; beyond the curve, extrapolated with
-   RMSE ~ spp^-1/2, and marked so); its time to the target is that spp times its measured seconds
-   per spp. Target: Lantern's `mis` reaches the target RMSE no later than Mitsuba (PASS/FAIL).
+   independent passes, are reported). At equal spp (`mitsuba_target_spp`), Mitsuba and Lantern's
+   `path`, `nee` and `mis` (independent sampler, like Mitsuba's) render in turn, round-robin, on
+   `mitsuba_target_renders` seeds each (JIT and kernel compilation warmed up first): the median
+   time gives samples/s, the images each one's expected error at that spp (RMSE = the root of the
+   mean squared error over the seeds, since a few pixels on the light's edge, whose footprint
+   straddles an emitter 20 times brighter than the ceiling, weigh a lot in one image's RMSE; the
+   same for relMSE, which weighs those pixels down, as a second view). The target is Mitsuba's
+   error; the spp each integrator needs to reach it follows from MSE ~ 1/spp (independent
+   samples, unbiased), its time from its seconds per spp. The Sobol rows, whose error does not
+   fall as 1/spp, read the spp off their step-3 curves against the same Mitsuba reference (log-log
+   interpolation; past the curve extrapolated, and marked so) at their curves' own speed.
+   Target: Lantern's `mis` reaches Mitsuba's RMSE no later than Mitsuba does (PASS/FAIL).
    Without Mitsuba (not installed, or no usable variant) the column is skipped with a note.
 
 Writes <out_dir>/bench_integrators.json and PNG plots (error against seconds, log-log, one line per
@@ -100,14 +102,13 @@ class IntegratorBenchConfig:
     mitsuba_pass_spp: int = 256
     mitsuba_target_spp: int = 64  # the target RMSE is Mitsuba's at this spp
     mitsuba_curve_max_spp: int = 512  # Mitsuba's error curve: 1, 2, 4, ... spp, each a separate render
-    mitsuba_target_renders: int = 4  # renders (seeds) whose mean squared error sets the target
-    rate_runs: int = 3  # timed runs (median) of the samples/s comparison, round-robin
+    mitsuba_target_renders: int = 5  # round-robin runs (seeds) of the equal-spp comparison
 
 
 FULL = IntegratorBenchConfig()
 QUICK = IntegratorBenchConfig(square_size=(64, 64), wide_size=(96, 54), budget_s=2.0, reference_s=8.0,
                               reference_launch_s=2.0, mitsuba_reference_spp=1024, mitsuba_pass_spp=256,
-                              mitsuba_target_spp=32, mitsuba_curve_max_spp=256, rate_runs=3)
+                              mitsuba_target_spp=32, mitsuba_curve_max_spp=256, mitsuba_target_renders=3)
 
 _T0 = time.perf_counter()
 
@@ -511,21 +512,23 @@ def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBe
     for name, r in mitsuba["rows"].items():
         rows.append([f"Mitsuba {mitsuba['variant']}" if name == "mitsuba" else f"Lantern {name}",
                      r["samples_per_s"] / 1e6, f"{r['samples_per_s'] / m['samples_per_s']:.2f}x",
+                     r["rmse_at_target_spp"], r["rel_mse_at_target_spp"],
                      f"{r['spp_to_target']:.0f}" + ("(ext)" if r["extrapolated"] else ""),
                      r["seconds_to_target"], f"{m['seconds_to_target'] / r['seconds_to_target']:.2f}x",
                      f"{r['spp_to_target_rel_mse']:.0f}" + ("(ext)" if r["extrapolated_rel_mse"] else ""),
                      r["seconds_to_target_rel_mse"],
                      f"{m['seconds_to_target_rel_mse'] / r['seconds_to_target_rel_mse']:.2f}x"])
-    print_table(["renderer", "Msamples/s", "vs Mitsuba", "spp to RMSE", "s to RMSE", "speed (RMSE)",
-                 "spp to relMSE", "s to relMSE", "speed (relMSE)"], rows,
+    n = mitsuba["target_spp"]
+    print_table(["renderer", "Msamples/s", "vs Mitsuba", f"RMSE@{n}spp", f"relMSE@{n}spp", "spp to RMSE", "s to RMSE",
+                 "speed (RMSE)", "spp to relMSE", "s to relMSE", "speed (relMSE)"], rows,
                 title=f"Cornell box vs Mitsuba {mitsuba['version']} ({mitsuba['variant']}, {mitsuba['threads']} threads), "
-                      f"{mitsuba['size'][0]}x{mitsuba['size'][1]}, max depth {mitsuba['max_depth']}: target RMSE "
-                      f"{mitsuba['target_rmse']:.4g} (and relMSE {mitsuba['target_rel_mse']:.4g}) = Mitsuba's at "
-                      f"{mitsuba['target_spp']} spp (mean square over {mitsuba['target_renders']} seeds), against a Mitsuba "
-                      f"reference of {ref['spp']} spp (its own noise RMSE {ref['noise_floor']['rmse']:.3g}). "
-                      f"Samples/s: median of {config.rate_runs} runs round-robin at {mitsuba['target_spp']} spp "
-                      f"(sobol rows: from their own curves); speed = Mitsuba's seconds / the row's, >1 is faster "
-                      f"than Mitsuba; (ext) = extrapolated past the curve")
+                      f"{mitsuba['size'][0]}x{mitsuba['size'][1]}, max depth {mitsuba['max_depth']}, against a Mitsuba "
+                      f"reference of {ref['spp']} spp (its own noise RMSE {ref['noise_floor']['rmse']:.3g}). Target: "
+                      f"Mitsuba's RMSE {mitsuba['target_rmse']:.4g} (relMSE {mitsuba['target_rel_mse']:.4g}) at {n} spp. "
+                      f"Independent-sampler rows: {mitsuba['target_renders']} renders of {n} spp each, round-robin "
+                      f"(median time; mean squared error; spp to target from MSE ~ 1/spp). Sobol rows: read off "
+                      f"their error curves, at their own speed. speed = Mitsuba's seconds / the row's (>1: faster "
+                      f"than Mitsuba); (ext) = extrapolated past the curve")
     print(f"   The RMSE is dominated by the {mitsuba['light_edge_pixels']} pixels on the light's edge "
           f"({mitsuba['light_edge_pixels'] / (mitsuba['size'][0] * mitsuba['size'][1]):.1%} of the image): they hold "
           f"{mitsuba['light_edge_mse_share']:.0%} of Mitsuba's squared error at the target, pixel-footprint noise "
