@@ -45,7 +45,13 @@ note), in one process so that ratios are meaningful:
    Without Mitsuba (not installed, or no usable variant) the column is skipped with a note.
 
 Writes <out_dir>/bench_integrators.json and PNG plots (error against seconds, log-log, one line per
-integrator x sampler, per scene; and Lantern against Mitsuba), and prints tables.
+integrator x sampler, per scene; and Lantern against Mitsuba), and prints tables. The '-floor'
+columns are clipped at 0 (the floor is an estimate too; a Sobol image can land below it).
+
+Run time, measured here on 2 cores: the full run ~11 minutes once Taichi's offline cache holds the
+programs (~1 s each), ~16 minutes cold (the light-sampling programs of the environment-lit and
+many-light scenes compile in 20-45 s each; any edit to the integrators, lights or materials makes
+them cold again); --quick ~3 minutes warm.
 """
 from __future__ import annotations
 
@@ -102,13 +108,13 @@ class IntegratorBenchConfig:
     mitsuba_pass_spp: int = 256
     mitsuba_target_spp: int = 64  # the target RMSE is Mitsuba's at this spp
     mitsuba_curve_max_spp: int = 512  # Mitsuba's error curve: 1, 2, 4, ... spp, each a separate render
-    mitsuba_target_renders: int = 5  # round-robin runs (seeds) of the equal-spp comparison
+    mitsuba_target_renders: int = 8  # round-robin runs (seeds) of the equal-spp comparison
 
 
 FULL = IntegratorBenchConfig()
 QUICK = IntegratorBenchConfig(square_size=(64, 64), wide_size=(96, 54), budget_s=2.0, reference_s=8.0,
                               reference_launch_s=2.0, mitsuba_reference_spp=1024, mitsuba_pass_spp=256,
-                              mitsuba_target_spp=32, mitsuba_curve_max_spp=256, mitsuba_target_renders=3)
+                              mitsuba_target_spp=32, mitsuba_curve_max_spp=256, mitsuba_target_renders=8)
 
 _T0 = time.perf_counter()
 
@@ -302,8 +308,9 @@ def bench_scene(scene, config: IntegratorBenchConfig, extra_references: dict | N
             result["errors"][combo(integrator, sampler)] = _describe(error)
             log(f"[{scene.name}]   {combo(integrator, sampler)} FAILED: {_describe(error)}")
     result["compile_s"] = dict(bench.compile_s)
-    if combo(REFERENCE_INTEGRATOR, REFERENCE_SAMPLER) in result["errors"]:
-        result["skipped"] = f"the reference integrator failed: {result['errors'][combo(REFERENCE_INTEGRATOR, REFERENCE_SAMPLER)]}"
+    failed = result["errors"].get(combo(REFERENCE_INTEGRATOR, REFERENCE_SAMPLER))
+    if failed:
+        result["skipped"] = f"the reference integrator failed: {failed}"
         return result
 
     log(f"[{scene.name}] reference: {REFERENCE_INTEGRATOR} for {config.reference_s:g} s ...")
