@@ -58,9 +58,9 @@ def furnace_toml(env=0.5, albedo=1.0, max_depth=-1, ball_kind="diffuse", floor=T
     return body
 
 
-CAVITY = """
+CAVITY_HEADER = """
 [scene]
-geometry = "sdf"
+geometry = "{geometry}"
 [camera]
 position = [0.2, 0.1, 0.3]
 look_at = [0.0, 0.0, -1.0]
@@ -76,7 +76,9 @@ color = [0.0, 0.0, 0.0]
 type = "diffuse"
 base_color = [{albedo}, {albedo}, {albedo}]
 emission = [{emission}, {emission}, {emission}]
-[[objects]]
+"""
+
+CAVITY = CAVITY_HEADER.replace("{geometry}", "sdf") + """[[objects]]
 type = "subtraction"
 material = "wall"
 [[objects.children]]
@@ -85,6 +87,12 @@ size = [4.0, 4.0, 4.0]
 [[objects.children]]
 type = "sphere"
 radius = 1.0
+"""
+
+MESH_CAVITY = CAVITY_HEADER.replace("{geometry}", "mesh") + """[[objects]]
+type = "mesh"
+file = "{obj}"
+material = "wall"
 """
 
 

@@ -70,7 +70,7 @@ from scipy import stats
 
 from renderer.camera import CameraFrame
 from renderer.renderer import Renderer
-from tests.scene_builder import cavity_toml, scene_from_toml
+from tests.scene_builder import MESH_CAVITY, cavity_toml, scene_from_toml
 
 ALPHA = 0.01  # significance level of every test here (the per-pixel rule Sidak-corrects it)
 PASS_FRACTION = 0.9975  # Mitsuba's rule: at least 99.75 % of the pixels pass
@@ -128,29 +128,6 @@ radius = 0.45
 translate = [0.55, 0.45, 0.0]
 """
 
-MESH_CAVITY = """
-[scene]
-geometry = "mesh"
-[camera]
-position = [0.2, 0.1, 0.3]
-look_at = [0.0, 0.0, -1.0]
-fov = 70
-[render]
-width = 16
-height = 12
-max_depth = -1
-[environment]
-type = "constant"
-color = [0.0, 0.0, 0.0]
-[materials.wall]
-type = "diffuse"
-base_color = [{albedo}, {albedo}, {albedo}]
-emission = [{emission}, {emission}, {emission}]
-[[objects]]
-type = "mesh"
-file = "{obj}"
-material = "wall"
-"""
 
 
 # --- statistics ------------------------------------------------------------------------------------
