@@ -14,6 +14,10 @@ World-space API (n: the outward shading normal; wo: towards where the path came 
   eval(mat, n, wo, wi) -> (f |cos|, pdf)        non-delta parts; pdf as `sample` would give wi
 The principled model samples one lobe chosen by its estimated albedo and weights the result by
 the whole BSDF over the mixture pdf (one-sample MIS over lobes), so `sample` and `eval` agree.
+
+With `features.energy_compensation`, rough GGX reflection of conductors and of the principled
+metal lobe adds Kulla and Conty's multiple-scattering lobe (renderer/materials/energy.py), so
+rough metals no longer darken with roughness; the dielectric lobes stay single-scattering.
 """
 import taichi as ti
 
@@ -23,7 +27,7 @@ from renderer.materials import microfacet as mf
 from renderer.materials.lobes import BsdfSample
 from renderer.materials.table import (CONDUCTOR, DIELECTRIC, DIFFUSE, NO_TEXTURE, PRINCIPLED, Material,
                                       alpha_of)
-from renderer.sampling.warps import orthonormal_basis, to_local, to_world
+from renderer.sampling.warps import cosine_hemisphere, orthonormal_basis, to_local, to_world
 
 vec3 = ti.math.vec3
 
@@ -40,6 +44,9 @@ class Bsdf:
     def __init__(self, materials, features):
         self.materials = materials
         self.features = features
+        # Energy compensation is a compile-time switch; the albedo table exists only with it.
+        self.compensate = features.energy_compensation
+        self.energy = materials.ggx_albedo if self.compensate else None
 
     @ti.func
     def shade(self, surface, wo):
@@ -89,13 +96,16 @@ class Bsdf:
                     s = lobes.diffuse_sample(mat.base_color, wo, u2)
             if ti.static(self.features.has_conductor):
                 if mat.kind == CONDUCTOR:
-                    s = lobes.conductor_sample(mat.base_color, mat.edge_tint, mat.alpha, wo, u2)
+                    if ti.static(not self.compensate):
+                        s = lobes.conductor_sample(mat.base_color, mat.edge_tint, mat.alpha, wo, u2)
+                    else:
+                        s = _compensated_conductor_sample(self.energy, mat, wo, u1, u2)
             if ti.static(self.features.has_dielectric):
                 if mat.kind == DIELECTRIC:
                     s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
             if ti.static(self.features.has_principled):
                 if mat.kind == PRINCIPLED:
-                    s = _principled_sample(mat, entering, wo, u1, u2)
+                    s = _principled_sample(self, mat, entering, wo, u1, u2)
         if s.valid == 1 and not _finite_positive(s.weight):
             s.valid = 0  # a numerically broken sample ends the path rather than reaching the film
         s.wi = to_world(s.wi, t, b, n_f)
@@ -116,13 +126,16 @@ class Bsdf:
                     value, pdf = lobes.diffuse_eval(mat.base_color, wo, wi)
             if ti.static(self.features.has_conductor):
                 if mat.kind == CONDUCTOR:
-                    value, pdf = lobes.conductor_eval(mat.base_color, mat.edge_tint, mat.alpha, wo, wi)
+                    if ti.static(not self.compensate):
+                        value, pdf = lobes.conductor_eval(mat.base_color, mat.edge_tint, mat.alpha, wo, wi)
+                    else:
+                        value, pdf = _compensated_conductor_eval(self.energy, mat, wo, wi)
             if ti.static(self.features.has_dielectric):
                 if mat.kind == DIELECTRIC:
                     value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
             if ti.static(self.features.has_principled):
                 if mat.kind == PRINCIPLED:
-                    value, pdf = _principled_eval(mat, entering, wo, wi)
+                    value, pdf = _principled_eval(self, mat, entering, wo, wi)
         return value, pdf
 
     @ti.func
@@ -183,6 +196,49 @@ def _finite_positive(v):
     return ok
 
 
+# --- GGX reflection with multiple scattering (Kulla-Conty) ------------------------------------------------
+@ti.func
+def _compensated_reflection_eval(energy, fresnel_h, f_avg, alpha, wo, wi):
+    """Single scattering (Fresnel fresnel_h at the half vector) plus the multiple-scattering lobe;
+    the pdf of _compensated_reflection_direction."""
+    v_ss, pdf_ss = lobes.ggx_reflection_eval(fresnel_h, alpha, wo, wi)
+    v_ms, pdf_ms = energy.multiple_scattering(f_avg, alpha, wo, wi)
+    share = energy.sampling_share(alpha, wo)
+    return v_ss + v_ms, (1.0 - share) * pdf_ss + share * pdf_ms
+
+
+@ti.func
+def _compensated_reflection_direction(energy, alpha, wo, u_choice, u2):
+    wi = vec3(0.0)
+    if u_choice < energy.sampling_share(alpha, wo):
+        wi = cosine_hemisphere(u2)
+    else:
+        wi = lobes.ggx_reflection_direction(alpha, wo, u2)
+    return wi
+
+
+@ti.func
+def _compensated_conductor_eval(energy, mat, wo, wi):
+    h = ti.math.normalize(wo + wi)
+    fresnel = lobes.conductor_fresnel(wo.dot(h), mat.base_color, mat.edge_tint)
+    return _compensated_reflection_eval(energy, fresnel, lobes.conductor_fresnel_average(mat.base_color, mat.edge_tint),
+                                        mat.alpha, wo, wi)
+
+
+@ti.func
+def _compensated_conductor_sample(energy, mat, wo, u1, u2):
+    s = lobes.invalid_sample()
+    if mat.alpha == 0.0:  # a smooth mirror scatters once: nothing to compensate
+        s = lobes.conductor_sample(mat.base_color, mat.edge_tint, mat.alpha, wo, u2)
+    else:
+        wi = _compensated_reflection_direction(energy, mat.alpha, wo, u1, u2)
+        if wi.z > 0.0:
+            value, pdf = _compensated_conductor_eval(energy, mat, wo, wi)
+            if pdf > 0.0:
+                s = BsdfSample(wi=wi, weight=value / pdf, pdf=pdf, delta=0, valid=1)
+    return s
+
+
 # --- principled ---------------------------------------------------------------------------------------
 @ti.func
 def _principled_lobe_probabilities(mat, wo):
@@ -202,15 +258,21 @@ def _principled_lobe_probabilities(mat, wo):
 
 
 @ti.func
-def _principled_eval(mat, entering, wo, wi):
+def _principled_eval(bsdf, mat, entering, wo, wi):
     p = _principled_lobe_probabilities(mat, wo)
     opaque = (1.0 - mat.metallic) * (1.0 - mat.transmission)
     value = vec3(0.0)
     pdf = 0.0
     if mat.alpha > 0.0:
         h = ti.math.normalize(wo + wi)
-        f_metal, pdf_metal = lobes.ggx_reflection_eval(mf.fresnel_schlick(mat.base_color, ti.max(wo.dot(h), 0.0)),
-                                                      mat.alpha, wo, wi)
+        f_metal = vec3(0.0)
+        pdf_metal = 0.0
+        fresnel_metal = mf.fresnel_schlick(mat.base_color, ti.max(wo.dot(h), 0.0))
+        if ti.static(not bsdf.compensate):
+            f_metal, pdf_metal = lobes.ggx_reflection_eval(fresnel_metal, mat.alpha, wo, wi)
+        else:
+            f_metal, pdf_metal = _compensated_reflection_eval(bsdf.energy, fresnel_metal,
+                                                              lobes.schlick_average(mat.base_color), mat.alpha, wo, wi)
         f_glass, pdf_glass = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
         f_spec, pdf_spec = lobes.coat_specular_eval(mat.ior, mat.alpha, wo, wi)
         value = mat.metallic * f_metal + (1.0 - mat.metallic) * mat.transmission * f_glass + opaque * f_spec
@@ -222,7 +284,7 @@ def _principled_eval(mat, entering, wo, wi):
 
 
 @ti.func
-def _principled_sample(mat, entering, wo, u1, u2):
+def _principled_sample(bsdf, mat, entering, wo, u1, u2):
     p = _principled_lobe_probabilities(mat, wo)
     opaque = (1.0 - mat.metallic) * (1.0 - mat.transmission)
     s = lobes.invalid_sample()
@@ -233,7 +295,10 @@ def _principled_sample(mat, entering, wo, u1, u2):
             f = mf.fresnel_schlick(mat.base_color, wo.z)
             s = BsdfSample(wi=vec3(-wo.x, -wo.y, wo.z), weight=f * (mat.metallic / p.x), pdf=p.x, delta=1, valid=1)
         else:
-            s.wi = lobes.ggx_reflection_direction(mat.alpha, wo, u2)
+            if ti.static(not bsdf.compensate):
+                s.wi = lobes.ggx_reflection_direction(mat.alpha, wo, u2)
+            else:
+                s.wi = _compensated_reflection_direction(bsdf.energy, mat.alpha, wo, u1 / p.x, u2)
             if s.wi.z > 0.0:  # a reflection below the surface is a failed sample, as in conductor_sample
                 mixture = 1
     elif u1 < p.x + p.y:
@@ -257,7 +322,7 @@ def _principled_sample(mat, entering, wo, u1, u2):
         s.wi = lobes.diffuse_sample(mat.base_color, wo, u2).wi
         mixture = 1
     if mixture == 1:
-        value, pdf = _principled_eval(mat, entering, wo, s.wi)
+        value, pdf = _principled_eval(bsdf, mat, entering, wo, s.wi)
         if pdf > 0.0 and s.wi.z != 0.0:
             s = BsdfSample(wi=s.wi, weight=value / pdf, pdf=pdf, delta=0, valid=1)
     return s

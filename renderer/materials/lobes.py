@@ -60,6 +60,21 @@ def conductor_fresnel(cos_i, reflectivity, edge_tint):
     return ti.math.clamp(mf.fresnel_schlick(reflectivity, c) - a * c * m2 * m2 * m2, 0.0, 1.0)
 
 
+@ti.func
+def schlick_average(f0):
+    """Cosine-weighted mean of Schlick's Fresnel, 2 int F(mu) mu dmu = F0 + (1 - F0) / 21."""
+    return f0 + (1.0 - f0) / 21.0
+
+
+@ti.func
+def conductor_fresnel_average(reflectivity, edge_tint):
+    """Cosine-weighted mean of conductor_fresnel: Schlick's mean minus the F82 term's,
+    2 int a mu^2 (1 - mu)^6 dmu = a / 126 (the clamp to [0, 1] is ignored: it acts only where the
+    F82 term would drive F below zero)."""
+    a = mf.fresnel_schlick(reflectivity, _COS_82) * (1.0 - ti.math.clamp(edge_tint, 0.0, 1.0)) / _F82_NORM
+    return ti.math.clamp(schlick_average(reflectivity) - a / 126.0, 0.0, 1.0)
+
+
 # --- GGX reflection (conductor, metal, dielectric coat) ------------------------------------------------
 @ti.func
 def ggx_reflection_eval(fresnel, alpha, wo, wi):

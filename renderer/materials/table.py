@@ -103,6 +103,17 @@ class MaterialTable:
         if self.count:
             self.table.from_numpy(arrays)
         self.textures = textures or TextureTable(None, [])
+        self._ggx_albedo = None
+
+    @property
+    def ggx_albedo(self):
+        """The GGX albedo table of the energy compensation, uploaded on first use (only kernels
+        compiled with compensation ask for it)."""
+        if self._ggx_albedo is None:
+            from renderer.materials.energy import GgxAlbedo
+
+            self._ggx_albedo = GgxAlbedo()
+        return self._ggx_albedo
 
     @classmethod
     def from_specs(cls, specs):

@@ -22,6 +22,8 @@ class Features:
     has_emission: bool = False
     has_textures: bool = False
     has_normal_maps: bool = False
+    # Kulla-Conty multiple scattering on rough GGX reflection (conductors, principled metal)
+    energy_compensation: bool = False
     environment: str = "sky"  # "map" | "sky" | "constant"
     depth_of_field: bool = False
     sdf_primitives: frozenset = frozenset()
@@ -33,6 +35,7 @@ class Features:
         flags = (("diffuse", self.has_diffuse), ("conductor", self.has_conductor), ("glass", self.has_dielectric),
                  ("principled", self.has_principled), ("emission", self.has_emission),
                  ("textures", self.has_textures), ("normal maps", self.has_normal_maps),
+                 ("multiple scattering", self.energy_compensation),
                  ("depth of field", self.depth_of_field))
         names = [name for name, on in flags if on]
         names.append(f"env:{self.environment}")
@@ -50,14 +53,16 @@ class Features:
         sdf = self.geometry == "sdf"
         return replace(self, has_diffuse=True, has_conductor=True, has_dielectric=True, has_principled=True,
                        has_emission=True, has_textures=not sdf, has_normal_maps=not sdf, depth_of_field=True,
+                       energy_compensation=True,
                        sdf_primitives=frozenset(SDF_PRIMITIVES) if sdf else frozenset(),
                        sdf_operators=frozenset(SDF_OPERATORS) if sdf else frozenset(),
                        mesh_primitives=frozenset() if sdf else frozenset(MESH_PRIMITIVES))
 
 
 def features_from(geometry: str, material_uses: dict, environment: str, aperture: float,
-                  sdf_nodes=(), mesh_kinds=frozenset()) -> Features:
-    """material_uses: {"kinds": set of kind names, "textures", "normal_maps", "emission": bool}."""
+                  sdf_nodes=(), mesh_kinds=frozenset(), energy_compensation: bool = True) -> Features:
+    """material_uses: {"kinds": set of kind names, "textures", "normal_maps", "emission": bool}.
+    energy_compensation: the scene's wish; compiled in only where GGX metals occur."""
     kinds = material_uses["kinds"]
     unknown = set(kinds) - set(MATERIAL_KINDS)
     if unknown:
@@ -71,6 +76,7 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         has_emission=material_uses["emission"],
         has_textures=material_uses["textures"],
         has_normal_maps=material_uses["normal_maps"],
+        energy_compensation=energy_compensation and bool({"conductor", "principled"} & set(kinds)),
         environment=environment,
         depth_of_field=aperture > 0.0,
         sdf_primitives=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_PRIMITIVES),

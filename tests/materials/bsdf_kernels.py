@@ -1,6 +1,6 @@
 """Batched calls of the BSDF on the device, for the material tests.
 
-`BsdfBench` owns a small material table (every kind compiled in) and two kernels that run
+`BsdfBench` owns a small material table (every kind compiled in; energy compensation as `features` says) and two kernels that run
 `Bsdf.shade` + `Bsdf.sample` (with `Bsdf.eval` at the sampled direction) and `Bsdf.eval` over
 arrays of samples in parallel. Materials are rows added on demand (`bench.material(spec)`);
 adding a row re-uploads the table's data and compiles nothing, so a test module builds one bench
@@ -87,7 +87,7 @@ def _vec_rows(x, n) -> np.ndarray:
 class BsdfBench:
     """A material table with room for `capacity` materials and the BSDF over it."""
 
-    def __init__(self, capacity: int = 128):
+    def __init__(self, capacity: int = 128, features: Features = ALL_KINDS):
         self.capacity = capacity
         self.rows = MaterialRows()
         self.ids: dict[MaterialSpec, int] = {}
@@ -95,7 +95,7 @@ class BsdfBench:
         for _ in range(capacity):
             filler.add_spec(MaterialSpec(name="unused"))
         self.table = MaterialTable(filler)
-        self.bsdf = Bsdf(self.table, ALL_KINDS)
+        self.bsdf = Bsdf(self.table, features)
 
     def material(self, spec: MaterialSpec) -> int:
         """The table index of `spec`, adding it (a data upload, no compilation) if it is new."""
