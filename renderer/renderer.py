@@ -51,7 +51,8 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
         geometry = MeshGeometry(mesh.data, bvh, mesh_options.traversal, mesh_options.triangle_test)
         materials = MaterialTable(mesh.rows, TextureTable(mesh.atlas, mesh.texture_slots))
         features = features_from("mesh", mesh.material_uses(), scene.environment.kind, scene.camera.aperture,
-                                 mesh_kinds=mesh.data.kinds())
+                                 mesh_kinds=mesh.data.kinds(),
+                                 energy_compensation=scene.render.energy_compensation)
         return geometry, materials, features
     raise ValueError(f"unknown geometry kind '{scene.geometry}'")
 

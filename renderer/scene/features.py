@@ -94,4 +94,5 @@ def scene_features(scene: Scene, aperture: float | None = None) -> Features:
     uses = {"kinds": {m.kind for m in used}, "textures": False, "normal_maps": False,
             "emission": any(m.is_emissive for m in used)}
     lens = scene.camera.aperture if aperture is None else aperture
-    return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes)
+    return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes,
+                         energy_compensation=scene.render.energy_compensation)

@@ -56,6 +56,7 @@ class RenderSettings:
     seed: int = 0
     march: MarchSettings = field(default_factory=MarchSettings)
     sampler: str = "independent"  # "independent" | "sobol"
+    energy_compensation: bool = True  # Kulla-Conty multiple scattering for rough GGX metals
 
 
 @dataclass(frozen=True)

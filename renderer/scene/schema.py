@@ -278,6 +278,10 @@ RENDER = Section(
         Field("sampler", "string", "independent", "Where random numbers come from: `independent` "
               "(hashed uniform numbers) or `sobol` (Owen-scrambled Sobol points, lower error at equal spp).",
               choices=("independent", "sobol")),
+        Field("energy_compensation", "bool", True, "Give rough metals back the light that single-"
+              "scattering microfacet models lose between microfacets (Kulla and Conty 2017): without "
+              "it a white metal of roughness 1 reflects 31% head-on. Only scenes with `conductor` or "
+              "`principled` materials compile it."),
         Field("march", "table", None, "Sphere-tracing settings, see `[render.march]`.",
               in_model=False, default_doc="see below", allowed_doc="see below",
               geometries=("sdf",)),

@@ -175,3 +175,13 @@ def test_compensation_never_creates_energy_for_coloured_metals(bench):
             e_comp = np.where(comp.valid[:, None], comp.weight, 0.0).mean(axis=0)
             e_single = np.where(single.valid[:, None], single.weight, 0.0).mean(axis=0)
             assert (e_comp < 0.95).all() and (e_comp > e_single * 1.02).all(), (roughness, cos, e_comp, e_single)
+
+
+def test_only_scenes_with_rough_metals_compile_compensation():
+    from renderer.scene.features import features_from
+
+    uses = lambda *kinds: {"kinds": set(kinds), "textures": False, "normal_maps": False, "emission": False}
+    assert features_from("mesh", uses("conductor"), "sky", 0.0).energy_compensation
+    assert features_from("sdf", uses("diffuse", "principled"), "sky", 0.0).energy_compensation
+    assert not features_from("mesh", uses("diffuse", "dielectric"), "sky", 0.0).energy_compensation
+    assert not features_from("mesh", uses("conductor"), "sky", 0.0, energy_compensation=False).energy_compensation
