@@ -30,6 +30,13 @@ light_panels
     row by row (z, then x); panel k holds triangles 2k and 2k + 1. Meant as many small emitters
     (with an emissive material) for many-light sampling: the defaults give 10,000 panels,
     20,000 triangles.
+water
+    A (resolution + 1)^2 grid over [-size/2, size/2]^2 in the xz plane (the terrain's vertex order
+    and triangles), each vertex displaced by a sum of Gerstner waves and given the surface's
+    analytic normal (`renderer.scene.waves`: formulas, conventions and why the checks suffice).
+    The waves are the `waves` tables or a random set from `seed`. Parameters that would alias
+    (a wave shorter than two cells) or loop (steepness sum >= 1) raise ValueError; with them
+    refused, the displaced grid has no folded or degenerate triangle and every normal has n.y > 0.
 """
 from __future__ import annotations
 
@@ -37,7 +44,7 @@ from typing import Mapping, Union
 
 import numpy as np
 
-from renderer.scene import schema
+from renderer.scene import schema, waves
 
 TERRAIN_OCTAVES = 6
 TERRAIN_BASE_CELLS = 4  # lattice cells along each side at the first (coarsest) octave
@@ -65,6 +72,8 @@ def triangle_count(generator: str, params: Params = ()) -> int:
         return 2 * int(p["resolution"]) ** 2
     if generator == "light_panels":
         return 2 * int(p["count_x"]) * int(p["count_z"])
+    if generator == "water":
+        return 2 * int(p["resolution"]) ** 2
     return 20 * 4 ** int(p["subdivisions"])
 
 
@@ -76,6 +85,9 @@ def generate(generator: str, params: Params = ()) -> tuple[np.ndarray, np.ndarra
     if generator == "light_panels":
         return light_panels(int(p["count_x"]), int(p["count_z"]), float(p["size"]),
                             float(p["panel_size"]), float(p["height"]), int(p["seed"]))
+    if generator == "water":
+        wave_set, names = waves.from_params(p)
+        return water(int(p["resolution"]), float(p["size"]), wave_set, names)
     return icosphere(int(p["subdivisions"]), float(p["radius"]))
 
 
@@ -195,3 +207,20 @@ def light_panels(count_x: int = 100, count_z: int = 100, size: float = 20.0,
     indices = (np.arange(n, dtype=np.int32)[:, None, None] * 4 + corners[None]).reshape(-1, 3)
     normals = np.tile(np.float32([0.0, -1.0, 0.0]), (4 * n, 1))
     return (positions.astype(np.float32).reshape(-1, 3), np.ascontiguousarray(indices), normals)
+
+
+# --- water -----------------------------------------------------------------------------------
+
+
+def water(resolution: int = 256, size: float = 4.0, wave_set=(), names=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A Gerstner-wave surface over a (resolution + 1)^2 grid; see `renderer.scene.waves`."""
+    if resolution < 2 or not size > 0.0:
+        raise ValueError("water resolution must be at least 2 and size positive")
+    problem = waves.problems(tuple(wave_set), size / resolution, names)
+    if problem:
+        raise ValueError(problem)
+    n = resolution + 1
+    coords = np.linspace(-0.5 * size, 0.5 * size, n)
+    positions, normals = waves.surface(wave_set, coords[None, :], coords[:, None])  # row i is z
+    return (np.ascontiguousarray(positions.reshape(-1, 3), dtype=np.float32), grid_indices(resolution),
+            np.ascontiguousarray(normals.reshape(-1, 3), dtype=np.float32))

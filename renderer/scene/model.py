@@ -20,8 +20,8 @@ SDF_PRIMITIVES = ("sphere", "box", "rounded_box", "torus", "capsule", "cylinder"
 SDF_OPERATORS = ("union", "intersection", "subtraction", "smooth_union", "repeat")
 ENVIRONMENT_KINDS = ("map", "sky", "constant")
 GEOMETRY_KINDS = ("sdf", "mesh")
-MESH_OBJECT_KINDS = ("mesh", "sphere", "quad", "disc", "generated")
-MESH_GENERATORS = ("terrain", "icosphere", "light_panels")
+MESH_OBJECT_KINDS = ("mesh", "sphere", "quad", "disc", "generated", "bezier")
+MESH_GENERATORS = ("terrain", "icosphere", "light_panels", "water")
 
 
 @dataclass(frozen=True)
@@ -143,7 +143,10 @@ class MeshObject:
     kind "sphere": radius; "disc": radius, in the local xz plane facing +y; "quad": size (x, z),
     centred in the local xz plane facing +y; "generated": a procedural mesh (`generator` and its
     `params`, e.g. terrain {"resolution", "size", "height", "seed"}, icosphere {"subdivisions",
-    "radius"}). Analytic and generated objects need `material`.
+    "radius"}); "bezier": a surface of revolution about the local y axis of a profile of Bezier
+    segments of `degree` (1 to 3) with control points `profile` ((radius, height) pairs, segments
+    sharing end points), split into `spans` patches per segment along it and `sectors` around.
+    Analytic, Bezier and generated objects need `material`.
     The transform applies scale, then rotation (Euler degrees, x then y then z), then translation.
     Spheres and discs need a uniform scale (an ellipse is not a disc).
     """
@@ -155,6 +158,10 @@ class MeshObject:
     size: tuple[float, float] = (1.0, 1.0)
     generator: Optional[str] = None
     params: tuple[tuple[str, object], ...] = ()
+    profile: tuple[tuple[float, float], ...] = ()
+    degree: int = 3
+    spans: int = 4
+    sectors: int = 16
     translate: Vec3 = (0.0, 0.0, 0.0)
     rotate: Vec3 = (0.0, 0.0, 0.0)
     scale: Vec3 = (1.0, 1.0, 1.0)

@@ -43,6 +43,7 @@ VALUE_KINDS = {
     "dir3": "array of 3 floats",  # a direction: non-zero, normalised by the loader
     "int3": "array of 3 integers",
     "vec2": "array of 2 floats",
+    "points2": "array of [float, float] pairs",
     "scale": "float, or array of 3 equal floats",
     "scale3": "float, or array of 3 floats",
     "table": "table",
@@ -111,6 +112,7 @@ class Field:
     default_doc: Optional[str] = None  # shown instead of the default when it is computed
     allowed_doc: Optional[str] = None  # shown instead of the range when another check applies
     geometries: Optional[tuple[str, ...]] = None  # the scene geometry kinds it belongs to (None: all)
+    items: Optional[tuple["Field", ...]] = None  # kind "tables": the fields of each table
 
     @property
     def model_attr(self) -> str:
@@ -182,6 +184,7 @@ class MeshKind:
     params: tuple[Field, ...] = ()
     needs_material: bool = True  # False: the object may bring its own materials (model files)
     uniform_scale_reason: Optional[str] = None  # set when only a uniform scale keeps the shape
+    rules: tuple[Rule, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -191,6 +194,7 @@ class Generator:
     name: str
     description: str
     params: tuple[Field, ...] = ()
+    rules: tuple["Rule", ...] = ()
 
 
 # --- rules -----------------------------------------------------------------------------------
@@ -222,6 +226,12 @@ def _check_rounded_box(v: dict) -> Optional[str]:
     return None
 
 
+def _check_profile(v: dict) -> Optional[str]:
+    from renderer.geometry.bezier import profile_problem
+
+    return profile_problem(v["profile"], v["degree"])
+
+
 def _check_torus(v: dict) -> Optional[str]:
     if v["minor_radius"] >= v["major_radius"]:
         minor, major = format_number(v["minor_radius"]), format_number(v["major_radius"])
@@ -240,8 +250,9 @@ SCENE = Section(
               default_doc="the file name without extension"),
         Field("description", "string", "", "Free text, shown in tools and reports."),
         Field("geometry", "string", REQUIRED, "How objects are described. `sdf`: signed distance "
-              "fields in `[[objects]]`. `mesh`: triangle meshes (model files and generated meshes) "
-              "and analytic spheres, discs and quads in `[[objects]]`.", choices=GEOMETRY_KINDS),
+              "fields in `[[objects]]`. `mesh`: triangle meshes (model files and generated meshes), "
+              "analytic spheres, discs and quads, and Bezier surfaces of revolution in `[[objects]]`.",
+              choices=GEOMETRY_KINDS),
     ),
 )
 
@@ -495,9 +506,67 @@ MESH_KINDS = (
              "fields of the object.",
              (Field("generator", "string", REQUIRED, "Which generator.",
                     choices=MESH_GENERATORS, default_doc="required"),)),
+    MeshKind("bezier", "A surface of revolution: a profile curve made of Bezier segments, in the "
+             "local (radius, height) plane, revolved about the local y axis (the transform places "
+             "that axis). Intersected exactly (Newton iteration on the surface, no tessellation); "
+             "texture u runs along the profile (an equal share per segment), v around the axis from "
+             "+x towards +z, and the tangent follows u. Normals point away from the axis where "
+             "the profile climbs: list a closed outline counter-clockwise in the (radius, height) "
+             "plane, up the outside and back down the inside, for outward normals (which "
+             "glass needs). An emissive Bezier surface glows where paths hit it, but direct "
+             "lighting does not sample it.",
+             (Field("profile", "points2", REQUIRED, "Control points `[radius, height]`, metres: "
+                    "`degree` + 1 for the first segment and `degree` more for each further one "
+                    "(a segment starts where the previous one ends). Radius 0 is on the axis.",
+                    default_doc="required", allowed_doc="see the rule below"),
+              Field("degree", "int", 3, "Degree of every segment: 1 (straight lines), 2 or 3.",
+                    Range(1, 3)),
+              Field("spans", "int", 4, "Patches per segment along the profile; a patch is split "
+                    "further until the profile turns by at most 30 degrees within it.",
+                    Range(1, 64)),
+              Field("sectors", "int", 16, "Patches around the axis.", Range(4, 256))),
+             rules=(Rule("`profile` needs `degree` x k + 1 points (k >= 1 segments), radii >= 0, and "
+                         "no segment that is a single point or lies on the axis.", _check_profile),)),
 )
 
 MESH_KINDS_BY_NAME = {k.name: k for k in MESH_KINDS}
+
+WAVE_FIELDS = (
+    Field("direction", "float", 0.0, "Direction of travel, degrees from +x towards +z."),
+    Field("wavelength", "float", REQUIRED, "Crest-to-crest distance, metres.", POSITIVE,
+          default_doc="required"),
+    Field("amplitude", "float", REQUIRED, "Height of a crest above the mean level, metres.",
+          NON_NEGATIVE, default_doc="required"),
+    Field("phase", "float", 0.0, "Phase offset, degrees."),
+    Field("steepness", "float", 0.0, "Gerstner steepness Q: 0 is a sine wave; toward 1 the crests "
+          "sharpen and the troughs flatten (1: circular orbits).", UNIT),
+)
+
+WATER_RANDOM_FIELDS = ("wave_count", "wavelength", "amplitude", "direction", "spread", "steepness", "seed")
+
+
+def _water_defaults() -> dict:
+    spec = next(g for g in GENERATORS if g.name == "water")
+    return {f.name: f.default for f in spec.params}
+
+
+def _check_water_fields(v: dict) -> Optional[str]:
+    if not v["waves"]:
+        return None
+    defaults = _water_defaults()
+    given = [name for name in WATER_RANDOM_FIELDS if v[name] != defaults[name]]
+    if given:
+        return (f"{', '.join(given)} describe{'s' if len(given) == 1 else ''} a random wave set and "
+                f"cannot be combined with `waves` (remove {'it' if len(given) == 1 else 'them'} or the waves)")
+    return None
+
+
+def _check_water_waves(v: dict) -> Optional[str]:
+    from renderer.scene import waves  # numpy only; imported here to keep the schema light
+
+    wave_set, names = waves.from_params(v)
+    return waves.problems(wave_set, v["size"] / v["resolution"], names)
+
 
 GENERATORS = (
     Generator("terrain", "A height field over a square grid in the local xz plane, centred at "
@@ -528,6 +597,38 @@ GENERATORS = (
                Field("height", "float", 3.0, "Height of the panels' plane (local y), metres."),
                Field("seed", "int", 0, "Jitter seed; the same seed gives the same panels.",
                      NON_NEGATIVE))),
+    Generator("water", "A water surface: a `resolution` x `resolution` grid of quads (2 triangles "
+              "each) over a `size` x `size` square in the local xz plane, centred at the origin, "
+              "displaced by a sum of directional Gerstner waves (heights from cosines, crests "
+              "sharpened by moving points toward them; see `renderer/scene/waves.py`), with analytic "
+              "vertex normals facing +y. The waves are the `waves` tables, or, without them, a random "
+              "set drawn from `seed`. The border moves inward by up to the sum of steepness times "
+              "amplitude: let the grid reach into the walls around it. Give it a `dielectric` "
+              "material (water: `ior = 1.33`) for refraction and caustics.",
+              (Field("resolution", "int", 256, "Quads along each side.", Range(2, 2048)),
+               Field("size", "float", 4.0, "Edge length of the square, metres.", POSITIVE),
+               Field("waves", "tables", (), "The waves, one table each (fields below). Absent or "
+                     "empty: a random set from the fields that follow.", default_doc="none (a random set)",
+                     allowed_doc="see below", items=WAVE_FIELDS),
+               Field("wave_count", "int", 4, "Random set: how many waves.", Range(1, 64)),
+               Field("wavelength", "float", 1.0, "Random set: the longest wavelength, metres; the "
+                     "others are log-uniform down to a quarter of it.", POSITIVE),
+               Field("amplitude", "float", 0.02, "Random set: the amplitude of a wave `wavelength` "
+                     "long, metres; shorter waves are proportionally lower (equally steep).",
+                     NON_NEGATIVE),
+               Field("direction", "float", 0.0, "Random set: mean direction of travel, degrees "
+                     "from +x towards +z."),
+               Field("spread", "float", 30.0, "Random set: directions are uniform within "
+                     "`direction` +- `spread`, degrees.", Range(0.0, 180.0)),
+               Field("steepness", "float", 0.5, "Random set: the Gerstner steepness of every wave.",
+                     UNIT),
+               Field("seed", "int", 0, "Random set: the seed; the same seed gives the same waves.",
+                     NON_NEGATIVE)),
+              (Rule("`waves` and the random-set fields (`wave_count`, `wavelength`, `amplitude`, "
+                    "`direction`, `spread`, `steepness`, `seed`) exclude each other.", _check_water_fields),
+               Rule("Every wavelength spans at least two grid cells (2 * `size` / `resolution`), and "
+                    "the sum over the waves of steepness * 2 pi * amplitude / wavelength stays below 1 "
+                    "(else Gerstner crests loop and the surface intersects itself).", _check_water_waves))),
 )
 
 GENERATORS_BY_NAME = {g.name: g for g in GENERATORS}
@@ -551,7 +652,7 @@ are relative to the folder of the scene file.
 
 A scene holds one kind of geometry, named by `[scene] geometry`: `sdf` (signed distance
 fields, sphere traced) or `mesh` (triangle meshes with a BVH, plus analytic spheres, discs and
-quads). The two kinds share `[camera]`, `[render]`, `[environment]` and `[materials]`; they differ
+quads, and Bezier surfaces of revolution). The two kinds share `[camera]`, `[render]`, `[environment]` and `[materials]`; they differ
 in what `[[objects]]` may hold, and `[render.march]` belongs to `sdf` scenes only.
 
 Only `[scene]` (for its `geometry` field) and at least one object are required; every other
@@ -824,12 +925,16 @@ def _mesh_kind_markdown(kind: MeshKind) -> list[str]:
         notes.append(f"Needs a uniform `scale` ({kind.uniform_scale_reason}).")
     if notes:
         lines[-1] += " " + " ".join(notes)
-    return lines + ["", *_field_table(kind.params)]
+    return lines + ["", *_field_table(kind.params), *_rules_list(kind.rules)]
 
 
 def _generator_markdown(generator: Generator) -> list[str]:
-    return ["", f"#### `{generator.name}`", "", generator.description, "",
-            *_field_table(generator.params)]
+    lines = ["", f"#### `{generator.name}`", "", generator.description, "",
+             *_field_table(generator.params)]
+    for f in generator.params:
+        if f.items:
+            lines += ["", f"Each table of `{f.name}`:", "", *_field_table(f.items)]
+    return lines + _rules_list(generator.rules)
 
 
 def render_markdown() -> str:

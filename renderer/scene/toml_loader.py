@@ -165,6 +165,13 @@ def _direction(raw: object, where: str) -> tuple[float, float, float]:
     return tuple(c / length for c in v)
 
 
+def _pairs(raw: object, where: str) -> tuple:
+    """An array of [x, y] arrays (a Bezier profile), each checked where it stands."""
+    if not isinstance(raw, list):
+        raise _Invalid(where, f"expected an array of [number, number] pairs, got {_describe(raw)}")
+    return tuple(_vector(item, f"{where}[{i}]", _number, 2) for i, item in enumerate(raw))
+
+
 def _scale(raw: object, where: str) -> float:
     if not isinstance(raw, list):
         return _number(raw, where)
@@ -188,6 +195,7 @@ _CONVERTERS = {
     "float": _number,
     "vec3": lambda raw, where: _triple(raw, where, _number),
     "vec2": lambda raw, where: _vector(raw, where, _number, 2),
+    "points2": _pairs,
     "dir3": _direction,
     "int3": lambda raw, where: _triple(raw, where, _integer),
     "scale": _scale,
@@ -209,6 +217,12 @@ def _check_range(field: Field, value, where: str) -> None:
 
 def _convert(field: Field, raw: object, where: str):
     value = _CONVERTERS[field.kind](raw, where)
+    if field.items is not None:
+        # An array of tables with known fields (e.g. a water generator's waves): each table is read
+        # like a section and kept as sorted (name, value) pairs, so the model stays hashable.
+        return tuple(tuple(sorted(_read_fields(_table(item, f"{where}[{i}]"), field.items,
+                                               f"{where}[{i}]").items()))
+                     for i, item in enumerate(value))
     if field.choices is not None and value not in field.choices:
         raise _Invalid(where, f"unknown value '{value}' (allowed: {', '.join(field.choices)})")
     _check_range(field, value, where)
@@ -491,9 +505,12 @@ def _read_mesh_object(raw: object, where: str, scene_path: Path) -> MeshObject:
         values = _read_fields(table, fields, where)
     if kind.needs_material and values["material"] is None:
         raise _Invalid(where, "missing required field 'material'")
+    if generator is not None:
+        _apply_rules(generator.rules, {f.name: values[f.name] for f in generator.params}, where)
     # The kind's own parameters (radius, size, file) have MeshObject attributes; a generator's
     # parameters (which may share those names) go to `params`.
     shape = {f.name: values[f.name] for f in kind.params}
+    _apply_rules(kind.rules, shape, where)
     model = MeshObject(kind=kind.name)
     return MeshObject(
         kind=kind.name,
@@ -504,6 +521,10 @@ def _read_mesh_object(raw: object, where: str, scene_path: Path) -> MeshObject:
         size=shape.get("size", model.size),
         generator=generator.name if generator else None,
         params=tuple(sorted((f.name, values[f.name]) for f in generator.params)) if generator else (),
+        profile=shape.get("profile", model.profile),
+        degree=shape.get("degree", model.degree),
+        spans=shape.get("spans", model.spans),
+        sectors=shape.get("sectors", model.sectors),
         translate=values["translate"],
         rotate=values["rotate"],
         scale=_expand_scale(kind, values["scale"], table.get("scale"), where),

@@ -828,13 +828,13 @@ BAD_MESH_SCENES = {
     # generators
     "no generator": (mesh_text(objects=GEN), "objects[0]: missing required field 'generator'"),
     "unknown generator": (mesh_text(objects=GEN + 'generator = "noise"\n'),
-                          "objects[0].generator: unknown value 'noise' (allowed: terrain, icosphere, light_panels)"),
+                          "objects[0].generator: unknown value 'noise' (allowed: terrain, icosphere, light_panels, water)"),
     "generator not a string": (mesh_text(objects=GEN + "generator = 1\n"), "objects[0].generator: expected a string, got integer 1"),
     "generator on sphere": (mesh_text(objects=MESH_SPHERE + 'generator = "terrain"\n'), "objects[0]: unknown field 'generator'"),
     "param of other generator": (mesh_text(objects=GEN + 'generator = "terrain"\nsubdivisions = 2\n'),
                                  "objects[0].subdivisions: only allowed with generator 'icosphere', not 'terrain'"),
     "terrain param on icosphere": (mesh_text(objects=GEN + 'generator = "icosphere"\nseed = 2\n'),
-                                   "objects[0].seed: only allowed with generator 'terrain' or 'light_panels', not 'icosphere'"),
+                                   "objects[0].seed: only allowed with generator 'terrain' or 'light_panels' or 'water', not 'icosphere'"),
     "unknown generator param": (mesh_text(objects=GEN + 'generator = "terrain"\noctaves = 2\n'),
                                 "objects[0]: unknown field 'octaves' (allowed: type, material, translate, rotate, scale, generator, "
                                 "resolution, size, height, seed)"),
@@ -884,7 +884,7 @@ def test_model_file_is_not_read_by_the_scene_loader(tmp_path):
 # --- the scenes that ship --------------------------------------------------------------------
 
 SHIPPED = sorted((REPO / "assets" / "scenes").glob("*.toml"))
-MESH_SCENES = ("cornell_box", "bunnies", "weekend", "textured", "stress", "many_lights", "studio")
+MESH_SCENES = ("cornell_box", "bunnies", "weekend", "textured", "stress", "many_lights", "studio", "pool")
 
 
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
