@@ -1,5 +1,5 @@
-"""The mesh side of the geometry interface: triangles and analytic spheres, quads and discs in one
-BVH, traversed on the device.
+"""The mesh side of the geometry interface: triangles, analytic spheres, quads and discs, and
+Bezier surfaces of revolution (patches, bezier_device.py) in one BVH, traversed on the device.
 
 Two traversals (a compile-time choice, benchmarked against each other):
   "stack":     ordered traversal; both children's boxes are tested, the nearer visited first, the
@@ -97,8 +97,12 @@ class MeshGeometry:
         self.prim_material = ti.field(ti.i32, shape=max(1, len(materials)))
         if len(materials):
             self.prim_material.from_numpy(materials)
-        self.range_end = ti.field(ti.i32, shape=4)
+        self.range_end = ti.field(ti.i32, shape=5)
         self.range_end.from_numpy(data.range_ends())
+        if "bezier" in self.kinds:  # only then: other scenes never see (or compile) Bezier code
+            from renderer.geometry.bezier_device import BezierPatches
+
+            self.bezier = BezierPatches(data)
 
     def device_bytes(self) -> dict:
         """Bytes on the device for the BVH and for the intersection data of triangles."""
@@ -127,9 +131,12 @@ class MeshGeometry:
                 i = g - self.range_end[1]
                 hit, t, b1, b2 = isect.quad(o, d, self.quads[i, 0], self.quads[i, 1], self.quads[i, 2], t_max)
         if ti.static("disc" in self.kinds):
-            if g >= self.range_end[2]:
+            if g >= self.range_end[2] and g < self.range_end[3]:
                 i = g - self.range_end[2]
                 hit, t = isect.disc(o, d, self.discs_a[i].xyz, self.discs_n[i], self.discs_a[i].w, t_max)
+        if ti.static("bezier" in self.kinds):
+            if g >= self.range_end[3]:
+                hit, t, b1, b2 = self.bezier.intersect(g - self.range_end[3], o, d, t_max)
         return hit, t, b1, b2
 
     @ti.func
@@ -268,7 +275,7 @@ class MeshGeometry:
                 ns = n
                 uv = hit.bary
         if ti.static("disc" in self.kinds):
-            if g >= self.range_end[2]:
+            if g >= self.range_end[2] and g < self.range_end[3]:
                 i = g - self.range_end[2]
                 n = self.discs_n[i]
                 c = self.discs_a[i].xyz
@@ -276,6 +283,10 @@ class MeshGeometry:
                 ns = n
                 r = (p - c).norm() / self.discs_a[i].w
                 uv = ti.math.vec2(r, 0.0)
+        if ti.static("bezier" in self.kinds):
+            if g >= self.range_end[3]:
+                p, n, uv, tangent = self.bezier.surface(g - self.range_end[3], hit.bary.x, hit.bary.y)
+                ns = n
         front = 1 if ray.d.dot(n) < 0.0 else 0
         ns = consistent_shading_normal(ns, n, -ray.d)
         return Surface(p=p, n_geo=n, n_shading=ns, uv=uv, uv1=uv1, tangent=tangent, material=self.prim_material[g],
@@ -294,9 +305,13 @@ class MeshGeometry:
 
     def emitter_info(self) -> dict:
         """Every primitive with its material, area, bounds and emission cone (for light selection):
-        flat shapes emit into the hemisphere of their normal (theta_o 0), spheres all around."""
+        flat shapes emit into the hemisphere of their normal (theta_o 0), spheres all around.
+        Bezier patches are left out (their ids come last): an emissive Bezier surface shines where
+        paths hit it, but direct lighting does not sample it."""
         d = self.data
         lo, hi = d.bounds()
+        n_sampled = d.primitive_count - d.counts["bezier"]
+        lo, hi = lo[:n_sampled], hi[:n_sampled]
         tri = d.tri_vertices.astype(np.float64)
         tri_cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         quad_cross = np.cross(d.quads[:, 1], d.quads[:, 2]).astype(np.float64) if len(d.quads) else np.zeros((0, 3))
@@ -307,7 +322,7 @@ class MeshGeometry:
         axis = np.where(length > 0, cross / np.maximum(length, 1e-30), [0.0, 1.0, 0.0])
         theta_o = np.zeros(len(area))
         theta_o[d.counts["triangle"]:d.counts["triangle"] + d.counts["sphere"]] = np.pi
-        return {"prim": np.arange(len(area), dtype=np.int32), "material": d.materials(), "area": area,
+        return {"prim": np.arange(len(area), dtype=np.int32), "material": d.materials()[:n_sampled], "area": area,
                 "lo": lo, "hi": hi, "axis": axis, "theta_o": theta_o, "theta_e": np.full(len(area), np.pi / 2)}
 
     @ti.func
@@ -332,7 +347,7 @@ class MeshGeometry:
                 i = g - self.range_end[1]
                 result = shapes.quad_sample(self.quads[i, 0], self.quads[i, 1], self.quads[i, 2], ref, u)
         if ti.static("disc" in self.kinds):
-            if g >= self.range_end[2]:
+            if g >= self.range_end[2] and g < self.range_end[3]:
                 i = g - self.range_end[2]
                 result = shapes.disc_sample(self.discs_a[i].xyz, self.discs_n[i], self.discs_a[i].w, ref, u)
         return result
@@ -352,7 +367,7 @@ class MeshGeometry:
                 i = g - self.range_end[1]
                 pdf = shapes.quad_pdf(self.quads[i, 1], self.quads[i, 2], ref, p, n)
         if ti.static("disc" in self.kinds):
-            if g >= self.range_end[2]:
+            if g >= self.range_end[2] and g < self.range_end[3]:
                 i = g - self.range_end[2]
                 pdf = shapes.disc_pdf(self.discs_n[i], self.discs_a[i].w, ref, p, n)
         return pdf

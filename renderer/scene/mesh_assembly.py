@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from renderer.geometry.bezier import bezier_fields
 from renderer.geometry.mesh_data import MeshData
 from renderer.materials.table import KIND_IDS, MaterialRows
 from renderer.scene.errors import SceneError
@@ -41,6 +42,7 @@ class _Builder:
         self.parts: dict[str, list] = {"tris": [], "normals": [], "uvs": [], "uvs1": [], "tangents": [],
                                        "tri_mat": [], "spheres": [], "sphere_mat": [], "quads": [],
                                        "quad_mat": [], "discs": [], "disc_mat": []}
+        self.beziers: list = []  # (cubic segments, matrix, material, spans, sectors) per object
 
     def material(self, name, where):
         if name not in self.material_ids:
@@ -121,6 +123,15 @@ class _Builder:
             edge_v = matrix[:3, :3] @ np.array([sx, 0.0, 0.0])
             self.parts["quads"].append([corner[:3], edge_u, edge_v])
             self.parts["quad_mat"].append(self.material(obj.material, where))
+        elif obj.kind == "bezier":
+            from renderer.geometry.bezier import cubic_segments, profile_problem
+
+            # The loader has checked scene files; scenes built in code are checked here.
+            problem = profile_problem(obj.profile, obj.degree)
+            if problem:
+                raise SceneError(self.scene.path, f"{where}: {problem}")
+            self.beziers.append((cubic_segments(obj.profile, obj.degree), matrix,
+                                 self.material(obj.material, where), obj.spans, obj.sectors))
         else:
             raise SceneError(self.scene.path, f"{where}: unknown mesh object type '{obj.kind}'")
 
@@ -147,7 +158,8 @@ class _Builder:
             quads=np.array(p["quads"], np.float32).reshape(-1, 3, 3),
             quad_material=np.array(p["quad_mat"], np.int32),
             discs=np.array(p["discs"], np.float32).reshape(-1, 7),
-            disc_material=np.array(p["disc_mat"], np.int32))
+            disc_material=np.array(p["disc_mat"], np.int32),
+            **bezier_fields(self.beziers))
         atlas, slots = None, []
         if self.slots:
             packed = pack_atlas(self.images)

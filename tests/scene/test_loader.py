@@ -760,10 +760,10 @@ BAD_MESH_SCENES = {
     "no type": (mesh_text(objects=MESH_OBJ), "objects[0]: missing required field 'type'"),
     "type not a string": (mesh_text(objects=MESH_OBJ + "type = 3\n"), "objects[0].type: expected a string, got integer 3"),
     "unknown type": (mesh_text(objects=MESH_OBJ + 'type = "cube"\n'),
-                     "objects[0]: unknown object type 'cube' (known: mesh, sphere, quad, disc, generated)"),
+                     "objects[0]: unknown object type 'cube' (known: mesh, sphere, quad, disc, generated, bezier)"),
     "sdf primitive": (mesh_text(objects=MESH_SPHERE + MESH_OBJ + 'type = "box"\n'),
                       "objects[1]: type 'box' is an sdf primitive, only allowed in scenes with geometry 'sdf', not 'mesh' "
-                      "(mesh scenes allow: mesh, sphere, quad, disc, generated)"),
+                      "(mesh scenes allow: mesh, sphere, quad, disc, generated, bezier)"),
     "sdf operator": (mesh_text(objects=MESH_OBJ + 'type = "union"\n'),
                      "objects[0]: type 'union' is an sdf operator, only allowed in scenes with geometry 'sdf', not 'mesh'"),
     "sdf plane": (mesh_text(objects=MESH_OBJ + 'type = "plane"\n'), "objects[0]: type 'plane' is an sdf primitive"),
