@@ -44,7 +44,7 @@ def _max_depth(text: str) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from renderer.arch import ARCHES
+    from renderer.arch import ARCHES, OPTIMIZE_FOR
     from renderer.bench import BENCHMARKS
     from renderer.tonemap import TONEMAPPERS
 
@@ -57,6 +57,8 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--arch", choices=ARCHES, default="auto")
     view.add_argument("--integrator", default=None)
     view.add_argument("--frames", type=int, default=None, help="quit after this many frames")
+    view.add_argument("--optimize", choices=OPTIMIZE_FOR, default="compile",
+                      help="kernel optimisation: compile (fast compiling, the default) or run (every optimisation: a few %% faster, compiles several times longer)")
 
     render = sub.add_parser("render", help="render headless to a file")
     render.add_argument("scene", help="scene name, scene file (.toml) or model file (.glb .gltf .obj .ply .stl)")
@@ -71,6 +73,8 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--arch", choices=ARCHES, default="auto")
     render.add_argument("--exposure", type=float, default=0.0, help="exposure in EV stops (PNG only)")
     render.add_argument("--tonemapper", choices=TONEMAPPERS, help="PNG tone mapper (default aces)")
+    render.add_argument("--optimize", choices=OPTIMIZE_FOR, default="compile",
+                        help="kernel optimisation: compile (fast compiling, the default) or run (every optimisation: a few %% faster, compiles several times longer)")
 
     sub.add_parser("list", help="list scenes and integrators")
     info = sub.add_parser("info", help="describe a scene")
@@ -98,7 +102,7 @@ def cmd_render(args) -> int:
     check_output_path(out)
     if args.seconds is not None and args.seconds <= 0:
         raise ValueError("--time must be positive")
-    used = init_taichi(args.arch)
+    used = init_taichi(args.arch, optimize=args.optimize)
     job = RenderJob(spp=args.spp, seconds=args.seconds, size=args.size, integrator=integrator,
                     max_depth=args.max_depth, seed=args.seed)
     print(f"rendering {scene.name} with {integrator} on {used}", file=sys.stderr)
@@ -144,7 +148,7 @@ def cmd_info(args) -> int:
 
         mesh = assemble(scene)
         features = features_from("mesh", mesh.material_uses(), scene.environment.kind, scene.camera.aperture,
-                                 mesh_kinds=mesh.data.kinds())
+                                 mesh_kinds=mesh.data.kinds(), energy_compensation=r.energy_compensation)
         counts = ", ".join(f"{n} {k}s" for k, n in mesh.data.counts.items() if n)
         print(f"geometry:    mesh, {len(scene.mesh_objects)} objects: {counts}")
     own = ", ".join(f"{m.name} ({m.kind})" for m in scene.materials)
@@ -164,7 +168,7 @@ def cmd_view(args) -> int:
     from viewer.window import run_viewer
 
     path = resolve_scene(args.scene or DEFAULT_SCENE)
-    init_taichi(args.arch)
+    init_taichi(args.arch, optimize=args.optimize)
     return run_viewer(path, size=args.size, integrator=args.integrator, max_frames=args.frames)
 
 

@@ -79,7 +79,9 @@ class Film:
             delta = value - self.mean[x, y]
             new_mean = self.mean[x, y] + delta / ti.cast(n, ti.f32)
             self.mean[x, y] = new_mean
-            self.m2[x, y] += delta * (value - new_mean)
+            # An assignment, not +=: on a global field += compiles to an atomic add, and each
+            # pixel has one writer here anyway.
+            self.m2[x, y] = self.m2[x, y] + delta * (value - new_mean)
         else:
             self.rejected[x, y] += 1
 

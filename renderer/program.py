@@ -31,13 +31,16 @@ class RenderProgram:
                up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
         for x, y in ti.ndrange(width, height):
             pixel = y * width + x
+            work = ti.math.vec3(0.0)
             for s in range(spp):
                 state = self.sampler.start(pixel, first_sample + s, seed)
                 ray = generate_ray(x, y, width, height, self.sampler, state, origin, forward, right, up,
                                    tan_half_fov, aperture, focus, self.features.depth_of_field)
                 value, stats = self.integrator.li(self, ray, state, max_depth)
                 self.film.add_sample(x, y, value)
-                self.work[x, y] += stats
+                work += stats
+            # One plain store per pixel: += on a global field would be an atomic add per sample.
+            self.work[x, y] = self.work[x, y] + work
 
     @ti.kernel
     def probe(self, u: ti.f32, v: ti.f32, width: ti.i32, height: ti.i32, origin: ti.math.vec3,

@@ -14,7 +14,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.geometry import emitter_shapes
-from renderer.geometry.interface import Hit, Ray, Surface
+from renderer.geometry.interface import INF, Hit, Ray, Surface
 from shaders_sdf.scene_sdf import SdfProgram
 
 vec3 = ti.math.vec3
@@ -207,16 +207,26 @@ class SdfGeometry:
         return emitter_shapes.sphere_pdf(centre, radius, ref, p, n)
 
     @ti.func
-    def visible(self, surface, target, target_n):
-        """No surface between `surface` and `target`: march towards it and stop short of the
-        target's own surface by the offset a spawned ray would keep from it."""
-        to = target - surface.p
-        dist = to.norm()
-        d = to / dist
+    def next_segment(self, surface, direction, target, target_n, to_target):
+        """The next ray leaving `surface` and how far to trace it: along `direction` without a
+        limit, or (to_target) towards `target`, stopping short of the target's own surface by the
+        offset a spawned ray keeps from it. One spawn call site serves continuation and shadow
+        rays alike: every call site of the SDF compiles it in again."""
+        d = direction
+        if to_target:
+            d = ti.math.normalize(target - surface.p)
         ray = self.spawn(surface, d)
-        remaining = (target - ray.o).dot(d) - SPAWN_OFFSET * surface.eps
-        blocked = False
-        if remaining > 0.0:
-            blocked = self.intersect(ray, remaining).hit == 1
-        return not blocked
+        t_max = INF
+        if to_target:
+            t_max = (target - ray.o).dot(d) - SPAWN_OFFSET * surface.eps
+        return ray, t_max
 
+    @ti.func
+    def visible(self, surface, target, target_n):
+        """No surface between `surface` and `target` (nothing to march when the target lies within
+        the spawn offset)."""
+        ray, t_max = self.next_segment(surface, target - surface.p, target, target_n, True)
+        blocked = False
+        if t_max > 0.0:
+            blocked = self.intersect(ray, t_max).hit == 1
+        return not blocked

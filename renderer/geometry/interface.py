@@ -7,6 +7,10 @@ A geometry object provides these Taichi funcs:
   spawn(surface, direction) -> Ray      a ray leaving the surface, offset so it cannot hit itself
   visible(surface, p, n) -> bool        nothing blocks the segment from the surface to point p
                                         (itself on a surface with normal n)
+  next_segment(surface, d, p, n, to_p) -> (Ray, t_max)
+                                        spawn's ray along d (t_max INF), or visible's shadow ray
+                                        to p (to_p true; t_max <= 0: nothing to trace), so that an
+                                        integrator traces both at one intersect call site
   sample_emitter(prim, ref, u2) -> EmitterPoint        a point on emissive primitive `prim`
   emitter_pdf(prim, ref, p, n) -> f32   the solid-angle density sample_emitter gives point p
 Integrators, materials, lights, camera and film never know which kind they run on.

@@ -13,7 +13,7 @@ import taichi as ti
 
 from renderer.geometry import emitter_shapes as shapes
 from renderer.geometry import intersect as isect
-from renderer.geometry.interface import EmitterPoint, Hit, Ray, Surface
+from renderer.geometry.interface import INF, EmitterPoint, Hit, Ray, Surface
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.shading import consistent_shading_normal
 from renderer.sampling.warps import PI
@@ -373,21 +373,34 @@ class MeshGeometry:
         return pdf
 
     @ti.func
+    def next_segment(self, surface, direction, target, target_n, to_target):
+        """The next ray leaving `surface` and how far to trace it: along `direction` without a
+        limit, or (to_target) a shadow ray to `target` with both ends offset off their surfaces
+        (pbrt's SpawnRayTo), stopping short of the target's own surface; 0 when there is nothing
+        to trace. Integrators trace both kinds at one call site of the traversal."""
+        ray = self.spawn(surface, direction)
+        t_max = INF
+        if to_target:
+            to = target - surface.p
+            side = surface.n_geo if to.dot(surface.n_geo) > 0.0 else -surface.n_geo
+            o = isect.offset_ray_origin(surface.p, side)
+            far_side = target_n if (o - target).dot(target_n) > 0.0 else -target_n
+            seg = isect.offset_ray_origin(target, far_side) - o
+            length = seg.norm()
+            t_max = 0.0
+            if length > 0.0:
+                ray = Ray(o=o, d=seg / length, cone_width=0.0, cone_spread=0.0)
+                # 1 - 1e-4: the offset end point is already off the target's surface; this margin
+                # only absorbs the rounding of `length`.
+                t_max = length * (1.0 - 1e-4)
+        return ray, t_max
+
+    @ti.func
     def visible(self, surface, target, target_n):
-        """Shadow ray between two surface points, both ends offset off their surfaces (pbrt's
-        SpawnRayTo): stops at the first hit, short of the target's own surface."""
-        to = target - surface.p
-        side = surface.n_geo if to.dot(surface.n_geo) > 0.0 else -surface.n_geo
-        o = isect.offset_ray_origin(surface.p, side)
-        far_side = target_n if (o - target).dot(target_n) > 0.0 else -target_n
-        end = isect.offset_ray_origin(target, far_side)
-        seg = end - o
-        length = seg.norm()
+        """Nothing blocks the shadow ray of next_segment (any hit ends the search)."""
+        ray, t_max = self.next_segment(surface, target - surface.p, target, target_n, True)
         blocked = False
-        if length > 0.0:
-            ray = Ray(o=o, d=seg / length, cone_width=0.0, cone_spread=0.0)
-            # 1 - 1e-4: the offset end point is already off the target's surface; this margin only
-            # absorbs the rounding of `length`.
-            blocked = self.occluded(ray, length * (1.0 - 1e-4))
+        if t_max > 0.0:
+            blocked = self.occluded(ray, t_max)
         return not blocked
 

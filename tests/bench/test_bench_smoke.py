@@ -191,6 +191,20 @@ def test_startup_report_parsing():
     assert summary["ok"] == 2 and summary["start_to_first_frame"] == pytest.approx(3.5)
 
 
+def test_startup_optimization_levels_and_moving_summary():
+    from renderer.bench.startup import optimization_level, summarise
+
+    phases = {"first_frame": 3.0, "next_frame": 0.5}
+    entry = {"optimize": "run", "cold": {"phases": {"first_frame": 20.0, "next_frame": 0.5}, "size": [100, 50]},
+             "warm": {"phases": phases}}
+    level = optimization_level(entry)
+    assert level["optimize"] == "run" and level["cold_kernels"] == pytest.approx(19.5)
+    assert level["warm_kernels"] == pytest.approx(2.5)
+    assert level["msamples_per_second"] == pytest.approx(100 * 50 / 0.5 / 1e6)
+    runs = [{"phases": phases, "start_to_first_frame": 3.0, "moving": {"median_ms": m}} for m in (40.0, 60.0, 45.0)]
+    assert summarise(runs)["moving_ms"] == pytest.approx(45.0)
+
+
 def test_startup_child_process_once(tiny_scene, tmp_path):
     """One real, tiny subprocess: imports, initialises, renders, reports its marks."""
     from renderer.bench.startup import measure
