@@ -85,6 +85,19 @@ class Film:
         else:
             self.rejected[x, y] += 1
 
+    @ti.func
+    def set_estimate(self, x: ti.i32, y: ti.i32, value: ti.math.vec3, passes: ti.i32):
+        """Make `value` the pixel's image, for integrators whose image is not a mean of independent
+        samples (sppm): mean = value, count = passes, and m2 = +inf, i.e. variance unknown (so
+        `variance_of_mean_image` says inf and `stats()` gives no noise estimate, never a false 0).
+        A non-finite value keeps the previous estimate and is counted as rejected."""
+        if is_finite_vec3(value):
+            self.mean[x, y] = value
+        else:
+            self.rejected[x, y] = self.rejected[x, y] + 1
+        self.count[x, y] = passes
+        self.m2[x, y] = ti.math.vec3(ti.math.inf)
+
     # --- downloads of the active region (numpy, row 0 = top) ---------------------------------
 
     def mean_image(self) -> np.ndarray:

@@ -71,6 +71,10 @@ class Renderer:
         self.work = ti.Vector.field(3, ti.f32, shape=(width, height))
         self._probe_out = ti.field(ti.f32, shape=())
         self._programs: dict[tuple[str, Features], RenderProgram] = {}
+        # Per-integrator knobs that are data, not compile-time (e.g. "sppm": SppmOptions), and
+        # device state that integrators with their own programs share between them (shared()).
+        self.integrator_options: dict[str, object] = {}
+        self._shared: dict[str, object] = {}
         self._launched: set[tuple[str, Features]] = set()
         self.samples_done = 0
         self.reset(width, height)
@@ -87,8 +91,11 @@ class Renderer:
         if key not in self._programs:
             chosen = make_integrator(integrator)
             lights = self.lights() if getattr(chosen, "uses_lights", False) else None
-            self._programs[key] = RenderProgram(self.geometry, self.materials, self.environment, chosen, self.film,
-                                                self.work, features, make_sampler(sampler), lights)
+            if hasattr(chosen, "make_program"):  # a multi-pass integrator (sppm) brings its own kernels
+                self._programs[key] = chosen.make_program(self, features, make_sampler(sampler), lights)
+            else:
+                self._programs[key] = RenderProgram(self.geometry, self.materials, self.environment, chosen,
+                                                    self.film, self.work, features, make_sampler(sampler), lights)
         return self._programs[key]
 
     def lights(self):
@@ -100,6 +107,13 @@ class Renderer:
             emitters = emitter_table(self.geometry, self.materials.arrays)
             self._lights = Lights(self.geometry, emitters, self.environment, self.scene.environment, self._env_image)
         return self._lights
+
+    def shared(self, name: str, build):
+        """A device object built once per Renderer by `build()` and shared by the programs that ask
+        for it by `name` (e.g. SPPM's per-pixel state, sized to the film)."""
+        if name not in self._shared:
+            self._shared[name] = build()
+        return self._shared[name]
 
     def is_compiled(self, integrator: str, features: Features, sampler: str = "independent") -> bool:
         """False until the combination has run once in this process (its first call compiles)."""

@@ -85,7 +85,7 @@ class HudStats:
     internal_size: tuple[int, int] = (0, 0)
     window_size: tuple[int, int] = (0, 0)
     interactive: bool = False
-    noise: Optional[float] = None  # relative standard error (RMS over pixels), None = not yet
+    noise: Optional[float] = None  # relative standard error (RMS over pixels), None = not yet, NaN = none
     rejected: int = 0
     work_per_ray: Optional[float] = None
     tests_per_ray: Optional[float] = None
@@ -103,6 +103,8 @@ def format_rate(per_second: float) -> str:
 def format_noise(noise: Optional[float]) -> str:
     if noise is None:
         return "..."
+    if math.isnan(noise):  # the integrator's image is not a mean of samples (sppm)
+        return "n/a (not a sample mean)"
     if not math.isfinite(noise):
         return "n/a (< 2 spp)"
     return f"{100.0 * noise:.2f} %"

@@ -19,6 +19,7 @@ arrows...); digits and punctuation never arrive, so the HUD has buttons for what
 """
 from __future__ import annotations
 
+import math
 import os
 import sys
 import time
@@ -354,7 +355,10 @@ class ViewerApp:
         if self._stats_due(now):
             stats = renderer.film.stats()
             work = renderer.work_stats()
-            self._stats = {"noise": stats["noise"], "rejected": stats["rejected"],
+            # An integrator whose film holds an estimate, not a mean of samples (sppm), has no
+            # variance to estimate the noise from: say so rather than show the film's inf or 0.
+            noise = stats["noise"] if getattr(INTEGRATORS[integrator], "noise_estimate", True) else math.nan
+            self._stats = {"noise": noise, "rejected": stats["rejected"],
                            "work_per_ray": work["work_per_ray"], "tests_per_ray": work["tests_per_ray"]}
         self._present(now)
         frame_seconds = time.perf_counter() - start

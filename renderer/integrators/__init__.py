@@ -8,13 +8,18 @@ An integrator is a data-oriented class with
                                     (geometry work, primitive tests, rays traced) for this sample
 `ctx` is the RenderProgram: ctx.geometry, ctx.bsdf, ctx.environment, ctx.sampler, ctx.features;
 `state` is the camera sample's sampler state (renderer.sampling.sampler).
+
+A multi-pass integrator (sppm) has no `li`; it provides make_program(renderer, features, sampler,
+lights) returning a RenderProgram subclass whose render() runs its own passes, and
+`noise_estimate = False` when its film holds an estimate rather than a mean of samples.
 """
 from renderer.integrators.debug import AlbedoView, BvhView, DepthView, NormalsView, StepsView
 from renderer.integrators.direct import MultipleImportanceSampling, NextEventEstimation
 from renderer.integrators.path import PathTracer
+from renderer.integrators.sppm import StochasticProgressivePhotonMapping
 
 _ALL = (MultipleImportanceSampling, NextEventEstimation, PathTracer, NormalsView, AlbedoView, DepthView, StepsView,
-        BvhView)
+        BvhView, StochasticProgressivePhotonMapping)
 INTEGRATORS = {cls.name: cls for cls in _ALL}
 
 

@@ -1,0 +1,555 @@
+"""`sppm`: stochastic progressive photon mapping (Hachisuka and Jensen 2009), as in pbrt-v3's SPPM.
+
+One call of `Renderer.render(camera, spp, integrator="sppm")` runs `spp` iterations; each is
+  1. a camera pass: per pixel, a camera ray follows delta (mirror, smooth glass) bounces to the
+     first vertex whose BSDF has a non-delta part, the *visible point* (VP). Emission seen along the
+     way and direct light at the VP are added to the pixel's direct sum, with the same light
+     sampling and power-heuristic MIS as `mis` (one light sample and one BSDF sample at the VP);
+     the VP keeps its position, normals, wo, shaded material and path throughput;
+  2. a hash grid over the VPs (renderer/integrators/photon_grid.py), cells as large as the largest
+     search radius, rebuilt on the device;
+  3. a photon pass: `photons` photons (default: one per pixel of the image) leave the emitters
+     (renderer/lights/emission.py) and follow BSDF samples with Russian roulette. At every hit
+     after the first (the first one is direct light, which the camera pass took), on a surface
+     whose BSDF has a non-delta part, every VP within its own radius of the hit receives
+     phi += beta * f(wo_vp, wi) and M += 1 (atomics);
+  4. a per-pixel update (Hachisuka and Jensen's progressive radius reduction):
+        N' = N + alpha M,   R' = R sqrt(N' / (N + M)),   tau' = (tau + beta_vp phi) (R' / R)^2
+     and the estimate  L = direct_sum / iterations + tau / (photons_emitted * pi * R^2),
+     written to the film.
+
+Radius. A pixel's radius is set once, at its first VP: `radius_pixels` pixel footprints at the
+VP's distance along the camera path, clamped to [1/4, 4] times the geometric mean of that pass's
+footprint radii, so that one far-away VP (a floor running to the horizon) cannot make the grid's
+cells (the largest radius) huge for everybody else. From then on it only shrinks.
+
+Depth. `max_depth` keeps Mitsuba's convention (path vertices, the emitter's included): emission at
+camera vertex i counts if i <= max_depth, direct light at a VP of depth c if c + 1 <= max_depth,
+and a photon's k-th hit (k >= 2) at a VP of depth c if c + k <= max_depth.
+
+Samples. The camera pass draws like `mis` (the program's sampler, keyed by pixel and iteration,
+dimension ids of renderer.sampling.dims). Photons draw from `photon_sampler` (Owen-scrambled Sobol
+by default): a stream key no pixel uses, a photon index that runs on across iterations (so the
+photons of all iterations are one low-discrepancy sequence per decision) and their own dimension
+ids (dims.PHOTON_*), one per decision.
+
+Film. An SPPM image is not the mean of independent samples, so the film holds the current
+estimate as its mean, the iteration count as its sample count and +inf as its variance (unknown):
+the viewer, screenshots and the command line show it like any image, and the HUD shows no noise
+estimate for it (`noise_estimate = False`).
+
+Thread-count independence. Every random number is a pure function of (photon or pixel, dimension,
+seed); photon counts M and radii are integer or per-pixel arithmetic and come out identical
+whatever the threads; phi sums floats atomically, so its order (hence the last bits) can vary.
+
+Known limits. A VP is the first vertex with a non-delta part: at a BSDF that has both (a
+principled material with roughness 0: a mirror coat over a diffuse base), the light its delta part
+reflects is not followed. Emitters that light sampling cannot sample (SDF shapes other than
+spheres) emit no photons: their light reaches the image directly and through delta bounces only.
+Photons deposit on every non-delta surface, glossy ones too (no glossy-threshold split). On SDF
+scenes the environment's photons cover the camera and the typical visible distance (CORE_DISTANCE),
+not the unbounded scene: environment light that reaches the image only by way of surfaces beyond
+that is missed.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import taichi as ti
+
+from renderer.camera import generate_ray
+from renderer.film import is_finite_vec3
+from renderer.geometry.interface import INF, Hit, Ray, Surface
+from renderer.integrators.direct import power_heuristic
+from renderer.integrators.path import MAX_VERTICES, RR_DEPTH
+from renderer.integrators.photon_grid import PhotonGrid, bucket_of, cell_of, table_size_for
+from renderer.materials.table import DIELECTRIC, PRINCIPLED, Material
+from renderer.program import RenderProgram
+from renderer.sampling import dims
+from renderer.sampling.warps import PI
+
+vec3 = ti.math.vec3
+
+# The photon stream's key: camera samples use pixel indices below 2^31, photons this plus the
+# number of times their 32-bit index has wrapped.
+PHOTON_STREAM = 0x80000000
+# A pass's initial radii lie within [1/CLAMP, CLAMP] times the geometric mean of its footprint radii.
+RADIUS_CLAMP = 4.0
+# SDF scenes have no finite bounds; the environment's photons enter through the bounding sphere of
+# the camera and the visible points up to this many times the geometric mean of their distances
+# (footprints are proportional to distance). A floor running to the horizon would otherwise spread
+# them over hundreds of metres, a few of them reaching the objects in view, each carrying a lot.
+CORE_DISTANCE = 4.0
+# |cos| below which a photon's direction is taken as tangent to the VP's surface (no estimate):
+# f = eval / |cos| is then numerically meaningless.
+MIN_COS = 1e-6
+
+
+@dataclass
+class SppmOptions:
+    """Knobs of `sppm` (data, not compile-time, except the photon sampler)."""
+
+    photons: int | None = None  # photons per iteration; None = the active image's pixel count
+    alpha: float = 2.0 / 3.0  # fraction of each pass's photons kept in N (Hachisuka and Jensen)
+    radius_pixels: float = 2.0  # initial radius in pixel footprints at the visible point
+    photon_sampler: str = "sobol"  # "sobol" | "independent"
+
+    def __post_init__(self):
+        if not 0.0 < self.alpha < 1.0:
+            raise ValueError(f"sppm alpha must be in (0, 1), got {self.alpha}")
+        if self.radius_pixels <= 0.0:
+            raise ValueError(f"sppm radius_pixels must be positive, got {self.radius_pixels}")
+        if self.photons is not None and self.photons < 1:
+            raise ValueError(f"sppm photons must be positive, got {self.photons}")
+
+
+@ti.data_oriented
+class SppmState:
+    """Per-pixel SPPM state at the film's maximum size (the active region is a kernel argument),
+    shared by every SPPM program of a Renderer."""
+
+    def __init__(self, max_width: int, max_height: int):
+        self.max_width = max_width
+        self.max_height = max_height
+        shape = (max_width, max_height)
+        self.vp_p = ti.Vector.field(3, ti.f32, shape=shape)
+        self.vp_n = ti.Vector.field(3, ti.f32, shape=shape)  # shading normal
+        self.vp_ng = ti.Vector.field(3, ti.f32, shape=shape)
+        self.vp_wo = ti.Vector.field(3, ti.f32, shape=shape)
+        self.vp_beta = ti.Vector.field(3, ti.f32, shape=shape)
+        self.vp_mat = Material.field(shape=shape)
+        self.vp_depth = ti.field(ti.i32, shape=shape)  # path vertices up to the VP; 0 = no VP this pass
+        self.footprint = ti.field(ti.f32, shape=shape)  # this pass's candidate initial radius
+        self.radius = ti.field(ti.f32, shape=shape)  # 0 until the pixel's first VP
+        self.n = ti.field(ti.f32, shape=shape)
+        self.m = ti.field(ti.i32, shape=shape)
+        self.phi = ti.Vector.field(3, ti.f32, shape=shape)
+        self.tau = ti.Vector.field(3, ti.f32, shape=shape)
+        self.direct = ti.Vector.field(3, ti.f32, shape=shape)  # sum over passes
+        self.grid = PhotonGrid(max_width * max_height)
+        # [0] lo, [1] hi of the VPs and the camera; [2], [3] of the camera and the VPs at most
+        # CORE_DISTANCE times the (geometric) mean distance away (SDF scenes' environment photons)
+        self.box = ti.Vector.field(3, ti.f32, shape=4)
+        # [0] cell size (largest radius), [1] sum of log footprint radii, [2] their count
+        self.scalars = ti.field(ti.f32, shape=3)
+        self.row_sums = ti.Vector.field(2, ti.f32, shape=max_height)
+        self.photons_emitted = 0  # over all passes since the last clear
+        self.iterations = 0
+        self.next_sample = None  # the first_sample a continuing render passes
+
+    @ti.kernel
+    def clear(self):
+        for x, y in self.radius:
+            self.radius[x, y] = 0.0
+            self.n[x, y] = 0.0
+            self.m[x, y] = 0
+            self.phi[x, y] = vec3(0.0)
+            self.tau[x, y] = vec3(0.0)
+            self.direct[x, y] = vec3(0.0)
+            self.vp_depth[x, y] = 0
+
+    def reset(self) -> None:
+        self.clear()
+        self.photons_emitted = 0
+        self.iterations = 0
+        self.next_sample = None
+
+    # --- host views (tests) ------------------------------------------------------------------------
+    def _active(self, field, width, height):
+        return np.ascontiguousarray(field.to_numpy()[:width, :height].swapaxes(0, 1)[::-1])
+
+    def radii(self, width: int, height: int) -> np.ndarray:
+        """Per-pixel radius (H, W), row 0 at the top."""
+        return self._active(self.radius, width, height)
+
+    def photon_counts(self, width: int, height: int) -> np.ndarray:
+        """Per-pixel N, the progressive photon count (H, W)."""
+        return self._active(self.n, width, height)
+
+    def tau_image(self, width: int, height: int) -> np.ndarray:
+        return self._active(self.tau, width, height)
+
+
+@ti.data_oriented
+class SppmProgram(RenderProgram):
+    """The kernels of one (geometry, Features, sampler) combination; the state is the Renderer's."""
+
+    def __init__(self, geometry, materials, environment, integrator, film, work, features, sampler, lights,
+                 state: SppmState, emission, photon_sampler, options: dict):
+        super().__init__(geometry, materials, environment, integrator, film, work, features, sampler, lights)
+        self.state = state
+        self.grid = state.grid
+        self.emission = emission
+        self.photon_sampler = photon_sampler
+        self.options = options  # the Renderer's integrator_options (read at every render call)
+        self.height_max = state.max_height
+
+    def current_options(self) -> SppmOptions:
+        return self.options.get("sppm") or SppmOptions()
+
+    # --- the passes ------------------------------------------------------------------------------------
+    def render(self, width, height, spp, first_sample, seed, max_depth, origin, forward, right, up, tan_half_fov,
+               aperture, focus):
+        """`spp` SPPM iterations (Python: four kernel launches each)."""
+        state = self.state
+        options = self.current_options()
+        if options.photon_sampler != self.photon_sampler.name:
+            raise ValueError(f"sppm: the photon sampler is chosen when the program is built "
+                             f"('{self.photon_sampler.name}'); use a new Renderer for '{options.photon_sampler}'")
+        if first_sample == 0 or state.next_sample != first_sample:
+            state.reset()
+        photons = options.photons or width * height
+        table = table_size_for(width * height)
+        for i in range(spp):
+            index = first_sample + i
+            self.camera_pass(width, height, index, seed, max_depth, options.radius_pixels, origin, forward, right, up,
+                             tan_half_fov, aperture, focus)
+            self.build_grid(width, height, table)
+            if self.emission.emits:
+                base = state.photons_emitted
+                self.photon_pass(photons, base & 0xFFFFFFFF, (base >> 32) & 0x7FFFFFFF, seed, max_depth, table - 1,
+                                 origin)
+            state.photons_emitted += photons
+            state.iterations = index + 1
+            self.update(width, height, options.alpha, float(state.photons_emitted), state.iterations)
+        state.next_sample = first_sample + spp
+
+    @ti.kernel
+    def camera_pass(self, width: ti.i32, height: ti.i32, index: ti.i32, seed: ti.u32, max_depth: ti.i32,
+                    radius_pixels: ti.f32, origin: ti.math.vec3, forward: ti.math.vec3, right: ti.math.vec3,
+                    up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
+        st = self.state
+        for x, y in ti.ndrange(width, height):
+            pixel = y * width + x
+            sample = self.sampler.start(pixel, index, seed)
+            ray = generate_ray(x, y, width, height, self.sampler, sample, origin, forward, right, up, tan_half_fov,
+                               aperture, focus, self.features.depth_of_field)
+            value, stats = self._trace_camera(x, y, ray, sample, max_depth, radius_pixels)
+            # Plain stores, not +=: on a global field += compiles to an atomic add, and each pixel
+            # has one writer here.
+            if is_finite_vec3(value):
+                st.direct[x, y] = st.direct[x, y] + value
+            else:
+                self.film.rejected[x, y] = self.film.rejected[x, y] + 1
+            self.work[x, y] = self.work[x, y] + stats
+        # The pass's statistics: the geometric mean of the footprint radii, the VPs' box (with the
+        # camera, for the environment's photons on SDF scenes), then initial radii and the cell size.
+        st.scalars[0] = 0.0
+        st.box[0] = origin
+        st.box[1] = origin
+        # Rows in parallel, then the row sums in order: a float sum whose order, hence value, does
+        # not depend on the thread count (initial radii are then the same bits however it runs).
+        for y in range(height):
+            total = 0.0
+            count = 0.0
+            for x in range(width):
+                if st.vp_depth[x, y] > 0:
+                    total += ti.log(st.footprint[x, y])
+                    count += 1.0
+                    ti.atomic_min(st.box[0], st.vp_p[x, y])  # min and max are exact in any order
+                    ti.atomic_max(st.box[1], st.vp_p[x, y])
+            st.row_sums[y] = ti.math.vec2(total, count)
+        for _ in range(1):
+            sums = ti.math.vec2(0.0)
+            for y in range(height):
+                sums += st.row_sums[y]
+            st.scalars[1] = sums.x
+            st.scalars[2] = sums.y
+        st.box[2] = origin
+        st.box[3] = origin
+        for x, y in ti.ndrange(width, height):
+            if st.vp_depth[x, y] > 0:
+                mean = ti.exp(st.scalars[1] / st.scalars[2])
+                if st.radius[x, y] == 0.0:
+                    st.radius[x, y] = ti.math.clamp(st.footprint[x, y], mean / RADIUS_CLAMP, mean * RADIUS_CLAMP)
+                ti.atomic_max(st.scalars[0], st.radius[x, y])
+                if ti.static(self.emission.bounds_per_pass):
+                    if st.footprint[x, y] <= mean * CORE_DISTANCE:
+                        ti.atomic_min(st.box[2], st.vp_p[x, y])
+                        ti.atomic_max(st.box[3], st.vp_p[x, y])
+        if ti.static(self.emission.bounds_per_pass):
+            self.emission.set_bounds_func(st.box[2], st.box[3])
+
+    @ti.func
+    def _trace_camera(self, x, y, ray_in, sample, max_depth, radius_pixels):
+        """Emission and direct light along the camera path to the VP; stores the VP.
+
+        As in `mis`, every ray (camera, delta bounces, the VP's shadow ray and its BSDF sample)
+        is traced at one call site of the geometry: a pending shadow ray is traced by the next
+        iteration, the BSDF-sampled ray by the one after."""
+        st = self.state
+        lights = self.lights
+        st.vp_depth[x, y] = 0
+        radiance = vec3(0.0)
+        beta = vec3(1.0)
+        stats = vec3(0.0)
+        ray = ray_in
+        length = 0.0  # camera path length to the current vertex (for the pixel footprint)
+        probing = 0  # 1 once the ray is the VP's BSDF sample (direct light only, then the path ends)
+        prev_p = ray.o
+        prev_n = vec3(0.0)
+        prev_pdf = 0.0
+        prev_delta = 1  # the camera and delta bounces: what they find is not light-sampled
+        s = Surface(p=ray.o, n_geo=vec3(0.0, 0.0, 1.0), n_shading=vec3(0.0, 0.0, 1.0), uv=ti.math.vec2(0.0),
+                    uv1=ti.math.vec2(0.0), tangent=ti.math.vec4(0.0), material=0, prim=-1, front_face=1, eps=0.0,
+                    cone_width=0.0, cone_spread=0.0)
+        next_dir = ray.d
+        shadow_pending = False
+        shadow_target = vec3(0.0)
+        shadow_n = vec3(0.0)
+        shadow_value = vec3(0.0)
+        ending = False  # the path is over once its pending shadow ray is traced
+        depth = 0
+        for _ in range(2 * MAX_VERTICES):
+            t_max = INF
+            if depth > 0:
+                ray, t_max = self.geometry.next_segment(s, next_dir, shadow_target, shadow_n, shadow_pending)
+            hit = Hit(hit=0, t=t_max, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0))
+            if t_max > 0.0:
+                hit = self.geometry.intersect(ray, t_max)
+                stats += vec3(hit.work, hit.tests, 1.0)
+            if shadow_pending:
+                if hit.hit == 0:
+                    radiance += shadow_value
+                shadow_pending = False
+                if ending:
+                    break
+                continue
+            if hit.hit == 0:
+                weight = 1.0
+                if ti.static(lights.has_env):
+                    if prev_delta == 0:
+                        weight = power_heuristic(prev_pdf, lights.pdf_env(ray.d))
+                radiance += beta * weight * self.environment.radiance(ray.d)
+                break
+            s = self.geometry.surface(ray, hit)
+            wo = -ray.d
+            mat, n = self.bsdf.shade(s, wo)
+            if ti.static(self.features.has_emission):
+                if s.front_face == 1 and mat.emission.max() > 0.0:
+                    weight = 1.0
+                    if prev_delta == 0 and lights.is_sampled(s.prim):
+                        weight = power_heuristic(prev_pdf, lights.pdf_hit(prev_p, prev_n, s.prim, s.p, s.n_geo))
+                    radiance += beta * weight * mat.emission
+            if probing == 1:
+                break
+            length += hit.t
+            if max_depth >= 0 and depth + 1 >= max_depth:
+                break
+            dim = dims.BOUNCE_BASE + dims.PER_BOUNCE * depth
+            if self.bsdf.has_smooth_part(mat):
+                st.vp_p[x, y] = s.p
+                st.vp_n[x, y] = n
+                st.vp_ng[x, y] = s.n_geo
+                st.vp_wo[x, y] = wo
+                st.vp_beta[x, y] = beta
+                st.vp_mat[x, y] = mat
+                st.vp_depth[x, y] = depth + 1
+                st.footprint[x, y] = radius_pixels * ti.max(ray_in.cone_width + length * ray_in.cone_spread, 1e-7)
+                ls = lights.sample(self, s.p, n, self.sampler.get1d(sample, dim + dims.LIGHT_SELECT),
+                                   self.sampler.get2d(sample, dim + dims.LIGHT_POINT))
+                if ls.pdf > 0.0 and ls.radiance.max() > 0.0:
+                    f, pdf_bsdf = self.bsdf.eval_at(mat, n, s.n_geo, wo, ls.wi)
+                    if f.max() > 0.0:
+                        shadow_pending = True
+                        shadow_target = ls.p
+                        shadow_n = ls.n
+                        shadow_value = beta * f * ls.radiance * (power_heuristic(ls.pdf, pdf_bsdf) / ls.pdf)
+                probing = 1
+            bs = self.bsdf.sample_at(mat, n, s.n_geo, wo, self.sampler.get1d(sample, dim + dims.BSDF_LOBE),
+                                     self.sampler.get2d(sample, dim + dims.BSDF_DIRECTION))
+            if bs.valid == 0:
+                ending = True
+            else:
+                beta *= bs.weight
+                prev_p = s.p
+                prev_n = n
+                prev_pdf = bs.pdf
+                prev_delta = bs.delta
+                if probing == 0 and depth >= RR_DEPTH:
+                    q = ti.min(beta.max(), 0.95)
+                    if self.sampler.get1d(sample, dim + dims.ROULETTE) >= q:
+                        ending = True
+                    else:
+                        beta /= q
+                next_dir = bs.wi
+            if ending and not shadow_pending:
+                break
+            depth += 1
+        return radiance, stats
+
+    @ti.kernel
+    def build_grid(self, width: ti.i32, height: ti.i32, table_size: ti.i32):
+        st = self.state
+        grid = self.grid
+        mask = table_size - 1
+        cell = st.scalars[0]
+        inv_cell = 1.0 / ti.max(cell, 1e-30)
+        lo = st.box[0]
+        grid.clear(table_size)
+        for x, y in ti.ndrange(width, height):
+            if self._in_grid(x, y):
+                ti.atomic_add(grid.count[bucket_of(cell_of(st.vp_p[x, y], lo, inv_cell), mask)], 1)
+        grid.scan(table_size)
+        for x, y in ti.ndrange(width, height):
+            if self._in_grid(x, y):
+                h = bucket_of(cell_of(st.vp_p[x, y], lo, inv_cell), mask)
+                slot = grid.start[h] + ti.atomic_add(grid.count[h], 1)
+                grid.entries[slot] = x * self.height_max + y
+
+    @ti.func
+    def _in_grid(self, x, y):
+        return self.state.vp_depth[x, y] > 0 and self.state.vp_beta[x, y].max() > 0.0
+
+    @ti.kernel
+    def photon_pass(self, count: ti.i32, base: ti.u32, epoch: ti.u32, seed: ti.u32, max_depth: ti.i32,
+                    mask: ti.i32, origin: ti.math.vec3):
+        for i in range(count):
+            index = base + ti.cast(i, ti.u32)
+            stream = ti.u32(PHOTON_STREAM) + epoch + (ti.u32(1) if index < base else ti.u32(0))
+            sample = self.photon_sampler.start(stream, index, seed)
+            self._trace_photon(sample, max_depth, mask)
+
+    @ti.func
+    def _trace_photon(self, sample, max_depth, mask):
+        ps = self.photon_sampler
+        em = self.emission.sample(self, ps.get1d(sample, dims.PHOTON_LIGHT_SELECT),
+                                  ps.get2d(sample, dims.PHOTON_LIGHT_POINT), ps.get2d(sample, dims.PHOTON_DIRECTION))
+        if em.valid == 1 and em.beta.max() > 0.0:
+            beta = em.beta
+            s = em.surface
+            d = em.d
+            for bounce in range(MAX_VERTICES):
+                k = bounce + 1  # index of the hit this ray finds
+                ray = Ray(o=em.o, d=d, cone_width=0.0, cone_spread=0.0)
+                if bounce > 0 or em.from_env == 0:
+                    ray = self.geometry.spawn(s, d)
+                hit = self.geometry.intersect(ray, INF)
+                if hit.hit == 0:
+                    break
+                s = self.geometry.surface(ray, hit)
+                wo = -ray.d
+                mat, n = self.bsdf.shade(s, wo)
+                if k >= 2 and self.bsdf.has_smooth_part(mat):
+                    self._deposit(s.p, wo, beta, k, max_depth, mask)
+                # The next hit, k + 1, could only count for a VP at depth >= 1: k + 2 <= max_depth.
+                if max_depth >= 0 and k + 2 > max_depth:
+                    break
+                dim = dims.PHOTON_BOUNCE_BASE + dims.PHOTON_PER_BOUNCE * bounce
+                bs = self.bsdf.sample_at(mat, n, s.n_geo, wo, ps.get1d(sample, dim + dims.BSDF_LOBE),
+                                         ps.get2d(sample, dim + dims.BSDF_DIRECTION))
+                if bs.valid == 0:
+                    break
+                weight = bs.weight * self._adjoint_factor(mat, n, s.n_geo, wo, bs.wi)
+                new_beta = beta * weight
+                # Russian roulette by the throughput's change (pbrt): photons keep their power.
+                survive = ti.min(1.0, new_beta.max() / beta.max())
+                if ps.get1d(sample, dim + dims.ROULETTE) >= survive:
+                    break
+                beta = new_beta / survive
+                d = bs.wi
+
+    @ti.func
+    def _adjoint_factor(self, mat, n, ng, wo, wi):
+        """What turns the BSDF's radiance-transport weight into the photon's (importance transport,
+        Veach 1997 5.2-5.3): shading normals make f non-symmetric, |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|),
+        and refraction's 1 / eta^2 radiance scaling does not apply to photons."""
+        factor = 1.0
+        num = ti.abs(wo.dot(n)) * ti.abs(wi.dot(ng))
+        den = ti.abs(wo.dot(ng)) * ti.abs(wi.dot(n))
+        if den > 0.0:
+            factor = num / den
+        else:
+            factor = 0.0
+        if ti.static(self.features.has_dielectric or self.features.has_principled):
+            if (mat.kind == DIELECTRIC or mat.kind == PRINCIPLED) and wo.dot(ng) * wi.dot(ng) < 0.0:
+                eta = mat.ior if n.dot(wo) >= 0.0 else 1.0 / mat.ior
+                factor *= eta * eta
+        return factor
+
+    @ti.func
+    def _deposit(self, p, wi, beta, k, max_depth, mask):
+        """Adds the photon at p (arriving from direction wi) to every VP within that VP's radius."""
+        st = self.state
+        grid = self.grid
+        cell = st.scalars[0]
+        lo = st.box[0]
+        hi = st.box[1]
+        if cell > 0.0 and (p >= lo - cell).all() and (p <= hi + cell).all():
+            inv_cell = 1.0 / cell
+            first = cell_of(p - cell, lo, inv_cell)
+            last = cell_of(p + cell, lo, inv_cell)
+            for j in range(27):  # a loop, not unrolled: its body (a BSDF evaluation) compiles once
+                c = first + ti.math.ivec3(j % 3, (j // 3) % 3, j // 9)
+                if (c <= last).all():
+                    h = bucket_of(c, mask)
+                    for e in range(grid.start[h], grid.start[h + 1]):
+                        pix = grid.entries[e]
+                        x = pix // self.height_max
+                        y = pix % self.height_max
+                        q = st.vp_p[x, y]
+                        r = st.radius[x, y]
+                        to = q - p
+                        if to.dot(to) <= r * r and (cell_of(q, lo, inv_cell) == c).all():
+                            if max_depth < 0 or st.vp_depth[x, y] + k <= max_depth:
+                                ti.atomic_add(st.m[x, y], 1)
+                                vn = st.vp_n[x, y]
+                                cos = ti.abs(wi.dot(vn))
+                                if cos > MIN_COS:
+                                    f, _ = self.bsdf.eval_at(st.vp_mat[x, y], vn, st.vp_ng[x, y], st.vp_wo[x, y], wi)
+                                    if f.max() > 0.0:
+                                        ti.atomic_add(st.phi[x, y], beta * (f / cos))
+
+    @ti.kernel
+    def update(self, width: ti.i32, height: ti.i32, alpha: ti.f32, photons_emitted: ti.f32, iterations: ti.i32):
+        st = self.state
+        for x, y in ti.ndrange(width, height):
+            m = st.m[x, y]
+            r = st.radius[x, y]
+            if m > 0 and r > 0.0:
+                n_old = st.n[x, y]
+                n_new = n_old + alpha * ti.cast(m, ti.f32)
+                r_new = r * ti.sqrt(n_new / (n_old + ti.cast(m, ti.f32)))
+                st.tau[x, y] = (st.tau[x, y] + st.vp_beta[x, y] * st.phi[x, y]) * ((r_new / r) * (r_new / r))
+                st.n[x, y] = n_new
+                st.radius[x, y] = r_new
+            st.m[x, y] = 0
+            st.phi[x, y] = vec3(0.0)
+            value = st.direct[x, y] / ti.cast(iterations, ti.f32)
+            r = st.radius[x, y]
+            if r > 0.0 and photons_emitted > 0.0:
+                value += st.tau[x, y] / (photons_emitted * PI * r * r)
+            self.film.set_estimate(x, y, value, iterations)
+
+
+@ti.data_oriented
+class StochasticProgressivePhotonMapping:
+    name = "sppm"
+    hotkey = "m"  # "photon map"
+    description = "stochastic progressive photon mapping: light paths for caustics, biased but consistent"
+    display_tonemapper = None
+    uses_lights = True
+    noise_estimate = False  # the film holds an estimate, not a mean of samples: no variance
+
+    def make_program(self, renderer, features, sampler, lights):
+        from renderer.sampling.sampler import make_sampler
+
+        options = renderer.integrator_options.get("sppm") or SppmOptions()
+        state = renderer.shared("sppm_state", lambda: SppmState(renderer.film.max_width, renderer.film.max_height))
+        emission = renderer.shared("photon_emission", lambda: _emission_for(renderer, lights))
+        return SppmProgram(renderer.geometry, renderer.materials, renderer.environment, self, renderer.film,
+                           renderer.work, features, sampler, lights, state, emission,
+                           make_sampler(options.photon_sampler), renderer.integrator_options)
+
+
+def _emission_for(renderer, lights):
+    from renderer.lights.emission import Emission
+
+    bounds = None
+    data = getattr(renderer.geometry, "data", None)
+    if renderer.scene.geometry == "mesh" and data is not None:
+        lo, hi = data.bounds()
+        if len(lo):
+            bounds = (lo.min(axis=0), hi.max(axis=0))
+    return Emission(renderer.geometry, renderer.materials.arrays, lights, renderer.scene.environment, bounds)
+

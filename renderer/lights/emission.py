@@ -1,0 +1,254 @@
+"""Where light leaves the emitters: starting rays for light paths (photons).
+
+`Lights` answers "which light reaches this point?" (directions and densities at a reference point,
+for direct lighting). Photon mapping asks the reverse: "where does light start, going where, with
+how much power?". This module answers that for the same emitters, without changing `Lights`:
+
+  sample(ctx, u_select, u_point, u_dir) -> EmittedPhoton
+      o, d       the ray's origin and direction (world)
+      beta       the power it carries, Le |cos| / (p(choice) p(point) p(direction)), so that the
+                 sum of `beta` over N photons divided by N estimates the scene's emitted power
+      surface    the emitter's surface record (for `geometry.spawn`), or none (environment)
+      from_env   1 for environment photons, whose origin is already off every surface
+
+Emissive primitives (triangles, quads, discs, spheres of meshes; spheres of SDF scenes) are chosen
+in proportion to their power (luminance x area x pi, as `emitter_table` computes it), a point is
+drawn uniformly over the chosen one's area, and the direction is cosine-weighted about its normal
+(a Lambertian emitter's radiance is the same in every direction of its front hemisphere). The
+points come from the geometry's own `sample_emitter(prim, ref, u)` seen from an anchor point where
+that routine samples by area: flat shapes sample their area uniformly from any point off their
+plane (the anchor sits one bounding-box diagonal in front of the shape), and a sphere seen from its
+centre is sampled uniformly over its whole surface (`emitter_shapes.sphere_sample`'s inside case).
+So no shape's geometry is duplicated here, and SDF and mesh scenes take the same path.
+
+The environment (map, sky or constant colour) emits from a disc perpendicular to the direction
+the light comes from, of the radius of the scene's bounding sphere, placed outside it (pbrt's
+method): the direction comes from the environment's own importance sampler (a map) or uniformly
+from the sphere, the point uniformly from the disc. Mesh scenes take the bounding sphere of their
+geometry. SDF scenes have no finite bounds (planes, infinite repetitions), so their sphere is set
+per photon pass by the caller (SPPM uses the bounds of the camera and of the pass's visible points
+that are not far beyond their typical distance): environment light that reaches the image only
+through surfaces outside that sphere is missed (a bias SPPM accepts on SDF scenes).
+
+Whether a photon comes from the environment or from a primitive is decided by the two powers (the
+environment's: its integrated luminance times the disc's area), so the photon budget follows
+where the light is.
+"""
+import math
+
+import numpy as np
+import taichi as ti
+
+from renderer.geometry.interface import Surface
+from renderer.lights.lights import environment_emits
+from renderer.sampling.warps import PI, concentric_disk, cosine_hemisphere, orthonormal_basis, to_world
+
+vec3 = ti.math.vec3
+
+EmittedPhoton = ti.types.struct(o=vec3, d=vec3, beta=vec3, surface=Surface, from_env=ti.i32, valid=ti.i32)
+
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+# Origin offset of a photon leaving an emitter, as a fraction of the emitter's size (sqrt(area)),
+# handed to `geometry.spawn` as the surface's epsilon: SDF spawns start 2.5 epsilons off the
+# surface (mesh spawns ignore it and offset by ulps). 1e-3 of the emitter is far below anything
+# visible, and above the sphere tracer's default hit threshold (1e-4 m) for emitters of 10 cm and
+# more; MIN_EMIT_EPS keeps smaller ones clear of it too.
+EMIT_EPS_FRACTION = 1e-3
+MIN_EMIT_EPS = 2e-4
+
+
+def environment_integral(env_spec, env_sampler=None) -> float:
+    """An estimate of the integral of the environment's luminance over the sphere (W/m^2 per unit
+    radiance... i.e. irradiance onto a sphere's cross-section), for choosing between environment and
+    primitive photons. Only the photon budget depends on it, never the image's expected value."""
+    if not environment_emits(env_spec):
+        return 0.0
+    if env_spec.kind == "map":
+        # The sampler's conservative total: sum over texels of (max luminance) x (solid angle).
+        return float(env_sampler.ratio_bound) * env_spec.intensity if env_sampler is not None else 4 * math.pi
+    if env_spec.kind == "constant":
+        return 4 * math.pi * float(LUMINANCE @ np.asarray(env_spec.color)) * env_spec.intensity
+    # sky: the upper hemisphere blends horizon to zenith, the lower one is mostly the ground
+    upper = 0.5 * float(LUMINANCE @ (np.asarray(env_spec.zenith) + np.asarray(env_spec.horizon)))
+    lower = float(LUMINANCE @ np.asarray(env_spec.ground))
+    return 2 * math.pi * (upper + lower) * env_spec.intensity
+
+
+@ti.data_oriented
+class Emission:
+    """Photon emission from a scene's emitters (see the module docstring)."""
+
+    def __init__(self, geometry, materials_arrays: dict, lights, env_spec, scene_bounds=None):
+        """materials_arrays: the material table's numpy rows (for emission); lights: the scene's
+        `Lights` (its environment sampler is shared); scene_bounds: (lo, hi) of a finite scene,
+        or None when the caller sets the bounding sphere per pass (`set_bounds_kernel`)."""
+        self.geometry = geometry
+        self.environment = lights.environment
+        info = geometry.emitter_info()
+        emission = materials_arrays["emission"][info["material"]] if len(info["prim"]) else np.zeros((0, 3))
+        luminance = emission @ LUMINANCE
+        keep = luminance > 0.0
+        prims = np.asarray(info["prim"])[keep].astype(np.int32)
+        area = np.asarray(info["area"], np.float64)[keep]
+        lo, hi = np.asarray(info["lo"], np.float64)[keep], np.asarray(info["hi"], np.float64)[keep]
+        axis = np.asarray(info["axis"], np.float64)[keep]
+        all_round = np.asarray(info["theta_o"], np.float64)[keep] > 0.5 * math.pi  # spheres emit all around
+        power = luminance[keep] * area * math.pi
+        self.count = len(prims)
+        self.has_area = self.count > 0 and float(power.sum()) > 0.0
+        self.has_env = lights.has_env
+        self.env_is_map = lights.env_is_map
+        if self.has_env and self.env_is_map:
+            self.env_sampler = lights.env_sampler
+        self.area_power = float(power.sum()) if self.has_area else 0.0
+        self.env_integral = environment_integral(env_spec, getattr(lights, "env_sampler", None))
+        n = max(1, self.count)
+        self.prim = ti.field(ti.i32, shape=n)
+        self.area = ti.field(ti.f32, shape=n)
+        self.eps = ti.field(ti.f32, shape=n)
+        self.anchor = ti.Vector.field(3, ti.f32, shape=n)
+        self.cdf = ti.field(ti.f32, shape=n + 1)
+        # [centre.xyz, radius] of the scene's bounding sphere; [area power, env integral]
+        self.sphere = ti.Vector.field(4, ti.f32, shape=())
+        self.powers = ti.field(ti.f32, shape=2)
+        if self.has_area:
+            centre = 0.5 * (lo + hi)
+            diagonal = np.linalg.norm(hi - lo, axis=1, keepdims=True)
+            # Flat shapes: one diagonal (plus a margin for degenerate boxes) in front of the plane;
+            # spheres: their centre.
+            anchor = np.where(all_round[:, None], centre, centre + axis * (diagonal + 1e-3))
+            cdf = np.concatenate([[0.0], np.cumsum(power)]) / power.sum()
+            cdf[-1] = 1.0
+            self.prim.from_numpy(prims)
+            self.area.from_numpy(area.astype(np.float32))
+            self.eps.from_numpy(np.maximum(MIN_EMIT_EPS, EMIT_EPS_FRACTION * np.sqrt(area)).astype(np.float32))
+            self.anchor.from_numpy(anchor.astype(np.float32))
+            self.cdf.from_numpy(cdf.astype(np.float32))
+        self.powers.from_numpy(np.array([self.area_power, self.env_integral], np.float32))
+        self.bounds_per_pass = scene_bounds is None
+        if scene_bounds is not None:
+            self.set_bounds(*scene_bounds)
+
+    @property
+    def emits(self) -> bool:
+        return self.has_area or self.has_env
+
+    def set_bounds(self, lo, hi) -> None:
+        """The scene's bounding sphere from an axis-aligned box (numpy)."""
+        lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+        centre = 0.5 * (lo + hi)
+        radius = 0.5 * float(np.linalg.norm(hi - lo))
+        self.sphere[None] = ti.math.vec4(*centre, max(radius, 1e-6))
+
+    @ti.func
+    def set_bounds_func(self, lo, hi):
+        """Device-side set_bounds (SDF scenes: per pass, from the caller's bounds)."""
+        self.sphere[None] = ti.math.vec4(0.5 * (lo + hi), ti.max(0.5 * (hi - lo).norm(), 1e-6))
+
+    @ti.func
+    def env_probability(self):
+        """The share of photons leaving from the environment (by power)."""
+        p = 0.0
+        if ti.static(self.has_env):
+            p = 1.0
+            if ti.static(self.has_area):
+                r = self.sphere[None].w
+                env_power = self.powers[1] * PI * r * r
+                total = env_power + self.powers[0]
+                p = env_power / total if total > 0.0 else 0.5
+        return p
+
+    @ti.func
+    def _select(self, u):
+        """The emitter whose CDF interval holds u (binary search), and its probability."""
+        lo = 0
+        hi = self.count
+        while hi - lo > 1:
+            mid = (lo + hi) >> 1
+            if self.cdf[mid] <= u:
+                lo = mid
+            else:
+                hi = mid
+        return lo, self.cdf[lo + 1] - self.cdf[lo]
+
+    @ti.func
+    def _emitted(self, ctx, g, p, n, uv, w):
+        """The emitted radiance of primitive g at p towards w (textured emission included)."""
+        surface = Surface(p=p, n_geo=n, n_shading=n, uv=uv, uv1=uv, tangent=ti.math.vec4(0.0),
+                          material=self.geometry.material_of(g), prim=g, front_face=1, eps=0.0,
+                          cone_width=0.0, cone_spread=0.0)
+        mat, _ = ctx.bsdf.shade(surface, w)
+        return mat.emission
+
+    @ti.func
+    def _env_direction(self, u):
+        """A direction towards the environment, its solid-angle density and radiance."""
+        d = vec3(0.0, 1.0, 0.0)
+        pdf = 0.0
+        radiance = vec3(0.0)
+        if ti.static(self.env_is_map):
+            d, pdf, radiance = self.env_sampler.sample(u)
+        else:
+            z = 1.0 - 2.0 * u.x
+            r = ti.sqrt(ti.max(0.0, 1.0 - z * z))
+            phi = 2.0 * PI * u.y
+            d = vec3(r * ti.cos(phi), z, r * ti.sin(phi))
+            pdf = 1.0 / (4.0 * PI)
+            radiance = self.environment.radiance(d)
+        return d, pdf, radiance
+
+    @ti.func
+    def sample(self, ctx, u_select, u_point, u_dir):
+        none = Surface(p=vec3(0.0), n_geo=vec3(0.0, 1.0, 0.0), n_shading=vec3(0.0, 1.0, 0.0), uv=ti.math.vec2(0.0),
+                       uv1=ti.math.vec2(0.0), tangent=ti.math.vec4(0.0), material=0, prim=-1, front_face=1, eps=0.0,
+                       cone_width=0.0, cone_spread=0.0)
+        result = EmittedPhoton(o=vec3(0.0), d=vec3(0.0, 1.0, 0.0), beta=vec3(0.0), surface=none, from_env=0, valid=0)
+        p_env = self.env_probability()
+        use_env = False
+        u = u_select
+        if ti.static(self.has_env):
+            if u < p_env:
+                use_env = True
+                u = u / p_env
+            else:
+                u = (u - p_env) / (1.0 - p_env)
+        if use_env:
+            if ti.static(self.has_env):
+                w, pdf_dir, radiance = self._env_direction(u_point)
+                sphere = self.sphere[None]
+                radius = sphere.w
+                t, b = orthonormal_basis(w)
+                disc = concentric_disk(u_dir) * radius
+                # From the disc's point, start where the ray enters the bounding sphere: nothing
+                # lies before it, and a sphere tracer's range is counted from there.
+                inside = ti.sqrt(ti.max(0.0, radius * radius - disc.dot(disc)))
+                o = sphere.xyz + inside * w + disc.x * t + disc.y * b
+                if pdf_dir > 0.0 and radiance.max() > 0.0:
+                    # flux through the disc: L dA dw / (p(w) p(point) p(env))
+                    beta = radiance * (PI * radius * radius / (pdf_dir * p_env))
+                    result = EmittedPhoton(o=o, d=-w, beta=beta, surface=none, from_env=1, valid=1)
+        else:
+            if ti.static(self.has_area):
+                e, pmf = self._select(ti.min(u, 0.99999994))
+                g = self.prim[e]
+                pt = self.geometry.sample_emitter(g, self.anchor[e], u_point)
+                if pt.pdf > 0.0 and pmf > 0.0:
+                    t, b = orthonormal_basis(pt.n)
+                    d = to_world(cosine_hemisphere(u_dir), t, b, pt.n)
+                    radiance = self._emitted(ctx, g, pt.p, pt.n, pt.uv, d)
+                    # Le cos / (pmf (1 - p_env) (1 / area) (cos / pi))
+                    beta = radiance * (PI * self.area[e] / (pmf * (1.0 - p_env)))
+                    s = Surface(p=pt.p, n_geo=pt.n, n_shading=pt.n, uv=pt.uv, uv1=pt.uv, tangent=ti.math.vec4(0.0),
+                                material=self.geometry.material_of(g), prim=g, front_face=1, eps=self.eps[e],
+                                cone_width=0.0, cone_spread=0.0)
+                    result = EmittedPhoton(o=pt.p, d=d, beta=beta, surface=s, from_env=0,
+                                           valid=1 if radiance.max() > 0.0 else 0)
+        return result
+
+    # --- host helpers (tests) -------------------------------------------------------------------------
+
+    def total_power(self) -> float:
+        """The luminance power the photons carry on average (area emitters plus the environment
+        through the current bounding sphere's disc)."""
+        r = float(self.sphere[None][3])
+        return self.area_power + (self.env_integral * math.pi * r * r if self.has_env else 0.0)
