@@ -51,7 +51,7 @@ def profile_problem(points, degree: int) -> str | None:
     if len(negative):
         i = int(negative[0])
         return f"profile[{i}] has a negative radius {p[i, 0]:g} (radii must be >= 0)"
-    for s in range(n // degree):
+    for s in range((n - 1) // degree):
         seg = p[s * degree:s * degree + degree + 1]
         if np.all(seg == seg[0]):
             return f"profile segment {s} (points {s * degree} to {s * degree + degree}) is a single point"

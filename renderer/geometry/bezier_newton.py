@@ -16,9 +16,9 @@ bezier.py); the BVH over the patches' boxes brings the ray here. Then:
 4. a converged root counts if it lies inside the patch (up to ACCEPT of the widths, so seams leave
    no cracks) at t in (0, t_max);
 5. the first root, not just a root: Newton near tangency can converge to the second root of a
-   close pair. `side` (which side of the surface a point is on, from its foot point) tells: the ray
+   close pair. The side of the surface a point is on (from its foot point, `meridian`) tells: the ray
    must reach a root from the side it entered the box on. If not, it crossed the surface before,
-   and bisection on `side` brackets that crossing for a last Newton run (see patch_hit).
+   and bisection on that side brackets the crossing for a last Newton run (see patch_hit).
 
 A reported hit always satisfies |F| < eps, so it lies on the surface; a ray that does not meet the
 patch can only exhaust its attempts, which is a miss.
@@ -38,7 +38,7 @@ SLACK_PHI = 2.0
 ACCEPT = 1e-4  # how far (in patch widths) a converged root may lie outside its patch: seam overlap
 SAMPLES = 5  # profile samples the foot point search starts from
 FOOT_STEPS = 3  # Gauss-Newton steps from the nearest sample to the foot point
-SIDE_REACH = 1.0  # how far (in span widths) `side` follows the curve beyond its span
+SIDE_REACH = 1.0  # how far (in span widths) the foot point may follow the curve beyond its span
 BISECTIONS = 12  # halvings of the bracket around a skipped root (to 1/4096 of the stretch)
 BEFORE = 1e-3  # the skipped root is sought before (1 - BEFORE) times the found one's distance
 # A Jacobian with |det| below this times |S_u| |S_phi| |d| means the ray is tangent to the surface
@@ -105,12 +105,6 @@ def meridian(cr, ch, q, rng):
 
 
 @ti.func
-def side(cr, ch, q, rng):
-    _, g = meridian(cr, ch, q, rng)
-    return g
-
-
-@ti.func
 def newton(cr, ch, base, d, u_start, phi_start, s_start, rng, s_lo, s_hi, eps):
     """Newton on S(u, phi) = base + s d. Returns (converged, u, phi, s, iterations)."""
     u = u_start
@@ -163,13 +157,14 @@ def patch_hit(cr, ch, rng, lo, hi, o, d, t_max, eps):
     Returns (hit, t, u, phi, iterations).
 
     Attempts, in order, until one gives a root in the patch: Newton from the box entry, from the
-    exit, and from a bracket where `side` differs between entry and exit (bisection first).
-    Then the nearest root any attempt converged to (in the patch or just beside it) is checked
-    against the side the ray entered on: reaching it from the other side means the ray crossed
-    the surface before (a close pair near tangency, where Newton can jump to the second root).
-    Just before that root the ray is on the side it crosses from (continuity), so [0, root)
-    brackets the earlier crossing, which a last, bounded Newton solves."""
-    inv_d = 1.0 / ti.select(ti.abs(d) > 1e-30, d, 1e-30)
+    exit, from a bracket where the side of the surface (`meridian`) differs between entry and
+    exit (bisection first), and from the middle when no attempt converged at all. Then the
+    nearest root any attempt converged to (in the patch or just beside it) is checked against
+    the side the ray entered on: reaching it from the other side means the ray crossed the
+    surface before (a close pair near tangency, where Newton can jump to the second root). Just
+    before that root the ray is on the side it crosses from (continuity), so [0, root) brackets
+    the earlier crossing, which a last, bounded Newton solves."""
+    inv_d = 1.0 / ti.select(ti.abs(d) > 1e-30, d, 1e-30)  # as in the BVH's slab test: no 0 * inf
     t0 = (lo - o) * inv_d
     t1 = (hi - o) * inv_d
     t_in = ti.max(ti.min(t0, t1).max(), 0.0)
@@ -188,58 +183,86 @@ def patch_hit(cr, ch, rng, lo, hi, o, d, t_max, eps):
         reach = (hi - lo).norm() / d.norm()
         s_min = -t_in  # t > 0
         s_max = t_max - t_in
-        g_in = 0.0
+        g_in = 0.0  # side and foot of the box entry (attempt 0 finds them)
+        u_in = 0.0
         near = 0  # the nearest converged root, in the patch or not, for the side check
         s_near = 0.0
         crossing = 0.0
-        for k in range(5):  # 0: entry, 1: exit, 2: bracket entry..exit, 3: middle, 4: before the nearest root
+        inset = 1e-3 * (rng[1] - rng[0])
+        # Every attempt goes through the same call sites of `meridian` and `newton` (Taichi
+        # inlines each call site into the traversal).
+        for k in range(5):  # 0 entry, 1 exit, 2 bracket entry..exit, 3 middle, 4 before the nearest root
             go = 1
-            lo_b = 0.0
-            hi_b = 0.0  # a bracket when hi_b > lo_b
             s0 = 0.0
             s_hi = span + reach
+            bracket = 0  # find a change of side in [lo_b, hi_b] first
+            probe = 0  # check first that the side at hi_b differs from the entry's
+            lo_b = 0.0
+            hi_b = 0.0
             if k < 4 and hit == 1:
                 go = 0
             elif k == 1:
                 s0 = span
             elif k == 2:
-                if g_in * side(cr, ch, base + span * d, rng) < 0.0:
-                    hi_b = span
-                else:
-                    go = 0
+                bracket = 1
+                probe = 1
+                hi_b = span
             elif k == 3:
-                # Nothing converged and no change of side: a close pair in the middle is all
-                # that is left to look for.
-                if near == 0:
-                    s0 = 0.5 * span
-                else:
+                # Nothing converged and no change of side: a close pair in the middle is all that
+                # is left to look for.
+                if near == 1:
                     go = 0
+                s0 = 0.5 * span
             elif k == 4:
+                # The ray reaches the nearest root from the side it did not enter on: it crossed
+                # the surface before. Just before the root it is on the side it crosses from
+                # (continuity), so [0, root) brackets that crossing; Newton there stays before it.
                 if near == 1 and s_near > 0.0 and crossing * g_in > 0.0:
+                    bracket = 1
                     hi_b = s_near * (1.0 - BEFORE)
                     s_hi = hi_b
                 else:
                     go = 0
+            u_start = 0.0
+            g_lo = g_in
+            u_lo = u_in
+            left = BISECTIONS if bracket == 1 else 0
             if go == 1:
-                if hi_b > lo_b:
-                    g_lo = g_in
-                    for _ in range(BISECTIONS):
-                        mid = 0.5 * (lo_b + hi_b)
-                        g = side(cr, ch, base + mid * d, rng)
+                for _ in range(BISECTIONS + 2):
+                    s_eval = s0
+                    if probe == 1:
+                        s_eval = hi_b
+                    elif left > 0:
+                        s_eval = 0.5 * (lo_b + hi_b)
+                    elif bracket == 1:  # bisection done: start from the bracket's low end
+                        s0 = lo_b
+                        u_start = u_lo
+                        break
+                    u_foot, g = meridian(cr, ch, base + s_eval * d, rng)
+                    if probe == 1:
+                        probe = 0
+                        if g * g_in >= 0.0:
+                            go = 0
+                            break
+                    elif left > 0:
+                        left -= 1
                         if g * g_lo > 0.0:
-                            lo_b = mid
+                            lo_b = s_eval
                             g_lo = g
+                            u_lo = u_foot
                         else:
-                            hi_b = mid
-                    s0 = lo_b
+                            hi_b = s_eval
+                    else:
+                        u_start = u_foot
+                        if k == 0:
+                            g_in = g
+                            u_in = u_foot
+                        break
+            if go == 1:
                 q = base + s0 * d
-                u_foot, g_start = meridian(cr, ch, q, rng)
-                if k == 0:
-                    g_in = g_start
                 # Starts stay a little inside the span: at an end on the axis (r = 0) S_phi
                 # vanishes and the Jacobian is singular.
-                inset = 1e-3 * (rng[1] - rng[0])
-                u0 = ti.math.clamp(u_foot, rng[0] + inset, rng[1] - inset)
+                u0 = ti.math.clamp(u_start, rng[0] + inset, rng[1] - inset)
                 ok, u, phi, s, n = newton(cr, ch, base, d, u0, wrap_angle(ti.atan2(q.z, q.x), rng), s0, rng,
                                           -reach, s_hi, eps)
                 iterations += n

@@ -9,7 +9,7 @@ from dataclasses import dataclass, fields, replace
 
 from renderer.scene.model import MATERIAL_KINDS, SDF_OPERATORS, SDF_PRIMITIVES, Scene
 
-MESH_PRIMITIVES = ("triangle", "sphere", "quad", "disc")
+MESH_PRIMITIVES = ("triangle", "sphere", "quad", "disc", "bezier")
 
 
 @dataclass(frozen=True)

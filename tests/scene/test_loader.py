@@ -884,7 +884,7 @@ def test_model_file_is_not_read_by_the_scene_loader(tmp_path):
 # --- the scenes that ship --------------------------------------------------------------------
 
 SHIPPED = sorted((REPO / "assets" / "scenes").glob("*.toml"))
-MESH_SCENES = ("cornell_box", "bunnies", "weekend", "textured", "stress", "many_lights", "studio", "pool")
+MESH_SCENES = ("cornell_box", "bunnies", "weekend", "textured", "stress", "many_lights", "studio", "pool", "goblet")
 
 
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
