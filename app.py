@@ -148,7 +148,8 @@ def cmd_info(args) -> int:
 
         mesh = assemble(scene)
         features = features_from("mesh", mesh.material_uses(), scene.environment.kind, scene.camera.aperture,
-                                 mesh_kinds=mesh.data.kinds(), energy_compensation=r.energy_compensation)
+                                 mesh_kinds=mesh.data.kinds(), energy_compensation=r.energy_compensation,
+                                 fog=scene.fog.model)
         counts = ", ".join(f"{n} {k}s" for k, n in mesh.data.counts.items() if n)
         print(f"geometry:    mesh, {len(scene.mesh_objects)} objects: {counts}")
     own = ", ".join(f"{m.name} ({m.kind})" for m in scene.materials)

@@ -14,8 +14,10 @@ from renderer.sampling.sampler import SampleState
 
 @ti.data_oriented
 class RenderProgram:
-    def __init__(self, geometry, materials, environment, integrator, film, work, features, sampler, lights=None):
+    def __init__(self, geometry, materials, environment, integrator, film, work, features, sampler, lights=None,
+                 media=None):
         self.geometry = geometry
+        self.media = media  # MediaTable (read only by kernels compiled with media or fog)
         self.lights = lights  # None for integrators that do not sample lights
         self.sampler = sampler
         self.bsdf = Bsdf(materials, features)

@@ -16,6 +16,7 @@ from renderer.integrators import make_integrator
 from renderer.lights.environment import Environment
 from renderer.materials.table import MaterialTable
 from renderer.materials.texture_sampler import TextureTable
+from renderer.media.table import MediaTable
 from renderer.program import RenderProgram
 from renderer.sampling.sampler import make_sampler
 from renderer.scene.features import Features, features_from, scene_features
@@ -37,7 +38,7 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
     if scene.geometry == "sdf":
         from shaders_sdf.geometry import SdfGeometry
 
-        return (SdfGeometry(scene, scene.material_index), MaterialTable.from_specs(scene.materials),
+        return (SdfGeometry(scene, scene.material_index), MaterialTable.from_specs(scene.materials, scene.medium_names()),
                 scene_features(scene))
     if scene.geometry == "mesh":
         from renderer.geometry.bvh_build import build_bvh
@@ -52,7 +53,7 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
         materials = MaterialTable(mesh.rows, TextureTable(mesh.atlas, mesh.texture_slots))
         features = features_from("mesh", mesh.material_uses(), scene.environment.kind, scene.camera.aperture,
                                  mesh_kinds=mesh.data.kinds(),
-                                 energy_compensation=scene.render.energy_compensation)
+                                 energy_compensation=scene.render.energy_compensation, fog=scene.fog.model)
         return geometry, materials, features
     raise ValueError(f"unknown geometry kind '{scene.geometry}'")
 
@@ -65,6 +66,7 @@ class Renderer:
         image = read_environment(scene.environment.file) if scene.environment.kind == "map" else None
         self.environment = Environment(scene.environment, image)
         self.geometry, self.materials, self._features = build_world(scene, mesh_options)
+        self.media = MediaTable(scene)
         self._env_image = image
         self._lights = None
         self.film = Film(width, height)
@@ -95,7 +97,8 @@ class Renderer:
                 self._programs[key] = chosen.make_program(self, features, make_sampler(sampler), lights)
             else:
                 self._programs[key] = RenderProgram(self.geometry, self.materials, self.environment, chosen,
-                                                    self.film, self.work, features, make_sampler(sampler), lights)
+                                                    self.film, self.work, features, make_sampler(sampler), lights,
+                                                    self.media)
         return self._programs[key]
 
     def lights(self):

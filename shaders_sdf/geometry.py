@@ -87,11 +87,13 @@ class SdfGeometry:
                 if not adaptive:
                     omega = 1.0  # Keinert et al.: no more relaxation on this ray
                 continue
+            if t > t_limit:
+                # Before the hit test: a long step can land past t_max right at a surface (a
+                # shadow ray at the emitter it aims for), which is no hit within (0, t_max).
+                break
             if radius < self.threshold(ray.cone_width + ray.cone_spread * t):
                 hit.hit = 1
                 hit.t = t
-                break
-            if t > t_limit:
                 break
             factor = omega
             if adaptive:
@@ -193,8 +195,7 @@ class SdfGeometry:
 
     @ti.func
     def _sphere(self, node):
-        prog = self.program
-        return prog.translation[node], prog.params[node].x * prog.scale[node]
+        return self.program.translation[node], self.program.params[node].x * self.program.scale[node]
 
     @ti.func
     def sample_emitter(self, node, ref, u):
@@ -215,10 +216,21 @@ class SdfGeometry:
         d = direction
         if to_target:
             d = ti.math.normalize(target - surface.p)
-        ray = self.spawn(surface, d)
+        ray = Ray(o=surface.p, d=d, cone_width=surface.cone_width, cone_spread=surface.cone_spread)
+        margin = 0.0
+        if surface.eps >= 0.0:
+            ray = self.spawn(surface, d)
+            margin = SPAWN_OFFSET * surface.eps
+        else:  # a point in a medium: no surface to leave; the target's offset at its range
+            margin = SPAWN_OFFSET * self.threshold(surface.cone_width + surface.cone_spread * (target - surface.p).norm())
         t_max = INF
         if to_target:
-            t_max = (target - ray.o).dot(d) - SPAWN_OFFSET * surface.eps
+            # The march finds a surface once its distance falls below the threshold; near the
+            # target that distance is the remaining length times the cosine at the target, so a
+            # ray meeting the target obliquely must stop further short (cosine floored at 0.05:
+            # at most 20 margins, rather than an unbounded gap at the silhouette).
+            cos_target = ti.max(ti.abs(d.dot(target_n)), 0.05)
+            t_max = (target - ray.o).dot(d) - margin / cos_target
         return ray, t_max
 
     @ti.func

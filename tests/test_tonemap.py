@@ -121,7 +121,9 @@ def test_one_to_one_copy_has_no_blur():
     for name in TONEMAPPERS:
         tonemap_into(film, out, 0.5, name)
         pointwise_display(film, reference, exposure_scale(0.5), tonemapper_index(name))
-        np.testing.assert_array_equal(out.to_numpy(), reference.to_numpy())
+        # Equal up to f32 rounding (two kernels may contract their multiply-adds differently);
+        # any blur would mix the checker's 0.9 and 0.01 and be off by orders of magnitude more.
+        np.testing.assert_allclose(out.to_numpy(), reference.to_numpy(), rtol=1e-6, atol=1e-7)
         np.testing.assert_allclose(field_to_rows(out), display_array(image, 0.5, name), atol=1e-5)
 
 

@@ -10,7 +10,8 @@ A geometry object provides these Taichi funcs:
   next_segment(surface, d, p, n, to_p) -> (Ray, t_max)
                                         spawn's ray along d (t_max INF), or visible's shadow ray
                                         to p (to_p true; t_max <= 0: nothing to trace), so that an
-                                        integrator traces both at one intersect call site
+                                        integrator traces both at one intersect call site;
+                                        from a MEDIUM_POINT (eps < 0) rays start at p itself
   sample_emitter(prim, ref, u2) -> EmitterPoint        a point on emissive primitive `prim`
   emitter_pdf(prim, ref, p, n) -> f32   the solid-angle density sample_emitter gives point p
 Integrators, materials, lights, camera and film never know which kind they run on.
@@ -44,3 +45,6 @@ Surface = ti.types.struct(p=vec3, n_geo=vec3, n_shading=vec3, uv=ti.math.vec2, u
 EmitterPoint = ti.types.struct(p=vec3, n=vec3, uv=ti.math.vec2, pdf=ti.f32)
 
 INF = 1e30  # "no hit yet"; far beyond any scene extent and still finite in f32
+# Surface.eps of a point inside a medium, not on any surface: next_segment starts rays exactly
+# there (a surface's spawn offset would be wrong where there is no surface to leave).
+MEDIUM_POINT = -1.0

@@ -378,12 +378,16 @@ class MeshGeometry:
         limit, or (to_target) a shadow ray to `target` with both ends offset off their surfaces
         (pbrt's SpawnRayTo), stopping short of the target's own surface; 0 when there is nothing
         to trace. Integrators trace both kinds at one call site of the traversal."""
-        ray = self.spawn(surface, direction)
+        ray = Ray(o=surface.p, d=direction, cone_width=surface.cone_width, cone_spread=surface.cone_spread)
+        if surface.eps >= 0.0:  # on a surface (not a MEDIUM_POINT): leave it
+            ray = self.spawn(surface, direction)
         t_max = INF
         if to_target:
             to = target - surface.p
             side = surface.n_geo if to.dot(surface.n_geo) > 0.0 else -surface.n_geo
-            o = isect.offset_ray_origin(surface.p, side)
+            o = surface.p
+            if surface.eps >= 0.0:
+                o = isect.offset_ray_origin(surface.p, side)
             far_side = target_n if (o - target).dot(target_n) > 0.0 else -target_n
             seg = isect.offset_ray_origin(target, far_side) - o
             length = seg.norm()

@@ -1,6 +1,6 @@
 """The BSDF of every material kind, over the device material table.
 
-Kinds: diffuse (Lambert), conductor (GGX; Fresnel from the colour at normal incidence and an edge
+Kinds: null (an invisible boundary, e.g. of a medium), diffuse (Lambert), conductor (GGX; Fresnel from the colour at normal incidence and an edge
 tint), dielectric (smooth or rough glass) and principled (glTF metallic-roughness: a metal lobe, a
 transmissive dielectric lobe and a dielectric coat over a diffuse base, weighted by metallic and
 transmission, with base-colour, metallic-roughness, normal, emissive and transmission textures).
@@ -25,7 +25,7 @@ from renderer.geometry.shading import consistent_shading_normal
 from renderer.materials import lobes
 from renderer.materials import microfacet as mf
 from renderer.materials.lobes import BsdfSample
-from renderer.materials.table import (CONDUCTOR, DIELECTRIC, DIFFUSE, NO_TEXTURE, PRINCIPLED, Material,
+from renderer.materials.table import (CONDUCTOR, DIELECTRIC, DIFFUSE, NO_TEXTURE, NULL, PRINCIPLED, Material,
                                       alpha_of)
 from renderer.sampling.warps import cosine_hemisphere, orthonormal_basis, to_local, to_world
 
@@ -106,6 +106,9 @@ class Bsdf:
             if ti.static(self.features.has_principled):
                 if mat.kind == PRINCIPLED:
                     s = _principled_sample(self, mat, entering, wo, u1, u2)
+            if ti.static(self.features.has_null):
+                if mat.kind == NULL:  # an invisible boundary: straight on, nothing changes
+                    s = BsdfSample(wi=-wo, weight=vec3(1.0), pdf=1.0, delta=1, valid=1)
         if s.valid == 1 and not _finite_positive(s.weight):
             s.valid = 0  # a numerically broken sample ends the path rather than reaching the film
         s.wi = to_world(s.wi, t, b, n_f)
@@ -163,6 +166,8 @@ class Bsdf:
         smooth = mat.alpha > 0.0
         if mat.kind == DIFFUSE:
             smooth = True
+        elif mat.kind == NULL:
+            smooth = False
         elif mat.kind == PRINCIPLED:
             smooth = smooth or (mat.metallic < 1.0 and mat.transmission < 1.0)
         return smooth

@@ -10,8 +10,10 @@ from renderer.materials.texture_sampler import TextureTable
 
 vec3 = ti.math.vec3
 
-DIFFUSE, CONDUCTOR, DIELECTRIC, PRINCIPLED = 0, 1, 2, 3
-KIND_IDS = {"diffuse": DIFFUSE, "conductor": CONDUCTOR, "dielectric": DIELECTRIC, "principled": PRINCIPLED}
+DIFFUSE, CONDUCTOR, DIELECTRIC, PRINCIPLED, NULL = 0, 1, 2, 3, 4
+KIND_IDS = {"diffuse": DIFFUSE, "conductor": CONDUCTOR, "dielectric": DIELECTRIC, "principled": PRINCIPLED,
+            "null": NULL}
+NO_MEDIUM = -1
 NO_TEXTURE = -1
 # glTF allows ior = 1 (no refraction at all); the rough-dielectric half vector wo + eta wi is then
 # zero for the transmitted direction. Just above 1 the interface is as good as invisible and finite.
@@ -24,9 +26,11 @@ MIN_ALPHA = 1e-4
 # As stored: one row per material. Texture slots hold a texture-table index or NO_TEXTURE:
 # textures = (base colour, metallic-roughness, normal, emissive), transmission_texture separately.
 # edge_tint: a conductor's grazing-angle tint (Hoffman's F82 model); unused by other kinds.
+# medium: index of the participating medium inside the material's surfaces, or NO_MEDIUM.
 MaterialRecord = ti.types.struct(kind=ti.i32, base_color=vec3, roughness=ti.f32, metallic=ti.f32,
                                  transmission=ti.f32, ior=ti.f32, emission=vec3, edge_tint=vec3,
-                                 normal_scale=ti.f32, textures=ti.math.ivec4, transmission_texture=ti.i32)
+                                 normal_scale=ti.f32, textures=ti.math.ivec4, transmission_texture=ti.i32,
+                                 medium=ti.i32)
 # As shaded: a record with its textures applied at one surface point.
 Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=ti.f32, transmission=ti.f32,
                            ior=ti.f32, emission=vec3, edge_tint=vec3)
@@ -44,14 +48,16 @@ def alpha_of(roughness):
 class MaterialRows:
     """Numpy rows for the device table, from scene materials and model-file materials."""
 
-    def __init__(self):
+    def __init__(self, medium_names: tuple[str, ...] = ()):
         self.rows = []
+        self.medium_ids = {name: i for i, name in enumerate(medium_names)}
 
     def add_spec(self, spec) -> int:
+        medium = self.medium_ids[spec.medium] if spec.medium else NO_MEDIUM
         self.rows.append(dict(kind=KIND_IDS[spec.kind], base_color=spec.base_color, roughness=spec.roughness,
                               metallic=spec.metallic, transmission=spec.transmission, ior=spec.ior,
                               emission=spec.emission, edge_tint=spec.edge_tint, normal_scale=1.0,
-                              textures=(NO_TEXTURE,) * 4, transmission_texture=NO_TEXTURE))
+                              textures=(NO_TEXTURE,) * 4, transmission_texture=NO_TEXTURE, medium=medium))
         return len(self.rows) - 1
 
     def add_pbr(self, pbr, texture_id) -> int:
@@ -66,7 +72,7 @@ class MaterialRows:
                               normal_scale=pbr.normal_scale,
                               textures=(tex(pbr.base_color_texture), tex(pbr.metallic_roughness_texture),
                                         tex(pbr.normal_texture), tex(pbr.emissive_texture)),
-                              transmission_texture=tex(pbr.transmission_texture)))
+                              transmission_texture=tex(pbr.transmission_texture), medium=NO_MEDIUM))
         return len(self.rows) - 1
 
     def arrays(self) -> dict:
@@ -81,14 +87,16 @@ class MaterialRows:
                 "emission": col("emission", np.float32, 3), "edge_tint": col("edge_tint", np.float32, 3),
                 "normal_scale": col("normal_scale", np.float32),
                 "textures": col("textures", np.int32, 4),
-                "transmission_texture": col("transmission_texture", np.int32)}
+                "transmission_texture": col("transmission_texture", np.int32),
+                "medium": col("medium", np.int32)}
 
     def uses(self) -> dict:
         """Which kinds and texture slots occur (for Features)."""
         kinds = {r["kind"] for r in self.rows}
         slots = [any(r["textures"][i] != NO_TEXTURE for r in self.rows) for i in range(4)]
         return {"kinds": kinds, "textures": any(slots) or any(r["transmission_texture"] != NO_TEXTURE for r in self.rows),
-                "normal_maps": slots[2], "emission": any(max(r["emission"]) > 0 for r in self.rows)}
+                "normal_maps": slots[2], "emission": any(max(r["emission"]) > 0 for r in self.rows),
+                "media": any(r["medium"] != NO_MEDIUM for r in self.rows)}
 
 
 @ti.data_oriented
@@ -116,8 +124,8 @@ class MaterialTable:
         return self._ggx_albedo
 
     @classmethod
-    def from_specs(cls, specs):
-        rows = MaterialRows()
+    def from_specs(cls, specs, medium_names: tuple[str, ...] = ()):
+        rows = MaterialRows(medium_names)
         for spec in specs:
             rows.add_spec(spec)
         return cls(rows)

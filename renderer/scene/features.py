@@ -24,6 +24,9 @@ class Features:
     has_normal_maps: bool = False
     # Kulla-Conty multiple scattering on rough GGX reflection (conductors, principled metal)
     energy_compensation: bool = False
+    has_null: bool = False  # invisible boundaries (material kind `null`)
+    has_media: bool = False  # participating media: free-flight sampling, phase functions, transmittance
+    analytic_fog: bool = False  # the exponential-blend approximation on camera rays
     environment: str = "sky"  # "map" | "sky" | "constant"
     depth_of_field: bool = False
     sdf_primitives: frozenset = frozenset()
@@ -35,7 +38,8 @@ class Features:
         flags = (("diffuse", self.has_diffuse), ("conductor", self.has_conductor), ("glass", self.has_dielectric),
                  ("principled", self.has_principled), ("emission", self.has_emission),
                  ("textures", self.has_textures), ("normal maps", self.has_normal_maps),
-                 ("multiple scattering", self.energy_compensation),
+                 ("multiple scattering", self.energy_compensation), ("null surfaces", self.has_null),
+                 ("media", self.has_media), ("analytic fog", self.analytic_fog),
                  ("depth of field", self.depth_of_field))
         names = [name for name, on in flags if on]
         names.append(f"env:{self.environment}")
@@ -53,16 +57,18 @@ class Features:
         sdf = self.geometry == "sdf"
         return replace(self, has_diffuse=True, has_conductor=True, has_dielectric=True, has_principled=True,
                        has_emission=True, has_textures=not sdf, has_normal_maps=not sdf, depth_of_field=True,
-                       energy_compensation=True,
+                       energy_compensation=True, has_null=True, has_media=True, analytic_fog=True,
                        sdf_primitives=frozenset(SDF_PRIMITIVES) if sdf else frozenset(),
                        sdf_operators=frozenset(SDF_OPERATORS) if sdf else frozenset(),
                        mesh_primitives=frozenset() if sdf else frozenset(MESH_PRIMITIVES))
 
 
 def features_from(geometry: str, material_uses: dict, environment: str, aperture: float,
-                  sdf_nodes=(), mesh_kinds=frozenset(), energy_compensation: bool = True) -> Features:
-    """material_uses: {"kinds": set of kind names, "textures", "normal_maps", "emission": bool}.
-    energy_compensation: the scene's wish; compiled in only where GGX metals occur."""
+                  sdf_nodes=(), mesh_kinds=frozenset(), energy_compensation: bool = True,
+                  fog: str = "none") -> Features:
+    """material_uses: {"kinds": set of kind names, "textures", "normal_maps", "emission", "media": bool}.
+    energy_compensation: the scene's wish; compiled in only where GGX metals occur.
+    fog: the scene's fog model ("none", "medium" or "analytic")."""
     kinds = material_uses["kinds"]
     unknown = set(kinds) - set(MATERIAL_KINDS)
     if unknown:
@@ -77,6 +83,9 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         has_textures=material_uses["textures"],
         has_normal_maps=material_uses["normal_maps"],
         energy_compensation=energy_compensation and bool({"conductor", "principled"} & set(kinds)),
+        has_null="null" in kinds,
+        has_media=fog == "medium" or bool(material_uses.get("media", False)),
+        analytic_fog=fog == "analytic",
         environment=environment,
         depth_of_field=aperture > 0.0,
         sdf_primitives=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_PRIMITIVES),
@@ -92,7 +101,7 @@ def scene_features(scene: Scene, aperture: float | None = None) -> Features:
     used = [m for m in scene.materials if m.name in used_materials] or list(scene.materials)
     nodes = [node for top in scene.sdf_objects for node in top.walk()]
     uses = {"kinds": {m.kind for m in used}, "textures": False, "normal_maps": False,
-            "emission": any(m.is_emissive for m in used)}
+            "emission": any(m.is_emissive for m in used), "media": any(m.medium for m in used)}
     lens = scene.camera.aperture if aperture is None else aperture
     return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes,
-                         energy_compensation=scene.render.energy_compensation)
+                         energy_compensation=scene.render.energy_compensation, fog=scene.fog.model)

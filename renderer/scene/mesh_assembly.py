@@ -35,7 +35,7 @@ class MeshScene:
 class _Builder:
     def __init__(self, scene: Scene):
         self.scene = scene
-        self.rows = MaterialRows()
+        self.rows = MaterialRows(scene.medium_names())
         self.material_ids = {m.name: self.rows.add_spec(m) for m in scene.materials}
         self.images: list[np.ndarray] = []
         self.slots: list = []  # (image index, wrap_s, wrap_t, uv_set, matrix)

@@ -15,7 +15,8 @@ import numpy as np
 Vec3 = tuple[float, float, float]
 
 # Kinds known to the renderer. The loader refuses anything else with a one-line error.
-MATERIAL_KINDS = ("diffuse", "conductor", "dielectric", "principled")
+MATERIAL_KINDS = ("diffuse", "conductor", "dielectric", "principled", "null")
+FOG_MODELS = ("none", "medium", "analytic")
 SDF_PRIMITIVES = ("sphere", "box", "rounded_box", "torus", "capsule", "cylinder", "cone", "plane")
 SDF_OPERATORS = ("union", "intersection", "subtraction", "smooth_union", "repeat")
 ENVIRONMENT_KINDS = ("map", "sky", "constant")
@@ -82,10 +83,31 @@ class MaterialSpec:
     edge_tint: Vec3 = (1.0, 1.0, 1.0)  # conductor only: tint at grazing angles (Hoffman's F82 model)
     metallic: float = 0.0  # principled only: 0 dielectric base, 1 metal (glTF metallic)
     transmission: float = 0.0  # principled only: fraction of the dielectric base that transmits
+    medium: str = ""  # the participating medium inside surfaces of this material ("" = none)
 
     @property
     def is_emissive(self) -> bool:
         return max(self.emission) > 0.0
+
+
+@dataclass(frozen=True)
+class MediumSpec:
+    """A homogeneous participating medium: coefficients per metre, RGB, and the Henyey-Greenstein
+    asymmetry g (0 isotropic, > 0 forward scattering)."""
+    name: str
+    sigma_a: Vec3 = (0.0, 0.0, 0.0)
+    sigma_s: Vec3 = (0.1, 0.1, 0.1)
+    g: float = 0.0
+
+
+@dataclass(frozen=True)
+class FogSpec:
+    """What fills the space between objects: nothing, a medium (physical fog), or the analytic
+    exponential blend (a named approximation applied to camera rays)."""
+    model: str = "none"  # one of FOG_MODELS
+    medium: str = ""  # model "medium": the name of a [media] entry
+    density: float = 0.1  # model "analytic": extinction per metre
+    color: Vec3 = (0.7, 0.75, 0.8)  # model "analytic": the colour distance fades to
 
 
 @dataclass(frozen=True)
@@ -186,6 +208,11 @@ class Scene:
     sdf_objects: tuple[SdfNode, ...] = ()
     description: str = ""
     mesh_objects: tuple[MeshObject, ...] = ()
+    media: tuple[MediumSpec, ...] = ()
+    fog: FogSpec = field(default_factory=FogSpec)
+
+    def medium_names(self) -> tuple[str, ...]:
+        return tuple(m.name for m in self.media)
 
     def material_index(self, name: str) -> int:
         for i, m in enumerate(self.materials):

@@ -18,6 +18,7 @@ from typing import Callable, Optional
 from .model import (
     ENVIRONMENT_KINDS,
     GEOMETRY_KINDS,
+    FOG_MODELS,
     MATERIAL_KINDS,
     MESH_GENERATORS,
     MESH_OBJECT_KINDS,
@@ -352,7 +353,9 @@ MATERIAL = Section(
     "that no object uses are allowed. `principled` follows glTF's metallic-roughness model: a "
     "dielectric base (diffuse plus a specular layer with the given `ior`) blended with a metal of "
     "colour `base_color` by `metallic`, and a `transmission` fraction of the dielectric base that "
-    "refracts instead of scattering diffusely.",
+    "refracts instead of scattering diffusely. `null` is an invisible boundary: light passes "
+    "straight through it (a path still counts it as a vertex); with `medium` it bounds a "
+    "participating medium such as smoke in a box.",
     (
         Field("type", "string", "diffuse", "Kind of material.", choices=MATERIAL_KINDS, attr="kind"),
         Field("base_color", "vec3", (0.8, 0.8, 0.8), "Albedo (diffuse), reflectance at normal "
@@ -372,6 +375,42 @@ MATERIAL = Section(
         Field("emission", "vec3", (0.0, 0.0, 0.0), "Emitted radiance, linear RGB.", NON_NEGATIVE),
         Field("emission_strength", "float", 1.0, "Multiplier folded into `emission`.",
               NON_NEGATIVE, in_model=False),
+        Field("medium", "string", "", "Name of a `[media]` entry that fills the inside of surfaces "
+              "made of this material: paths that cross the surface inwards (by refraction, or "
+              "through a `null` surface) travel in it. Media do not nest.",
+              default_doc="none", allowed_doc="a defined medium"),
+    ),
+)
+
+MEDIUM = Section(
+    "media.<name>",
+    "Homogeneous participating media (fog, smoke, murky liquid), one table per medium; materials "
+    "(`medium`) and `[fog]` refer to them by name. Light is absorbed and scattered along the way "
+    "with the Henyey-Greenstein phase function. Scenes without media compile no medium code.",
+    (
+        Field("sigma_a", "vec3", (0.0, 0.0, 0.0), "Absorption coefficient per metre, RGB.", NON_NEGATIVE),
+        Field("sigma_s", "vec3", (0.1, 0.1, 0.1), "Scattering coefficient per metre, RGB.", NON_NEGATIVE),
+        Field("g", "float", 0.0, "Henyey-Greenstein asymmetry: 0 scatters evenly, towards 1 "
+              "forwards, towards -1 backwards.", Range(-0.99, 0.99)),
+    ),
+)
+
+FOG = Section(
+    "fog",
+    "What fills the space between objects. `type = 'medium'`: the named medium fills the whole scene (the "
+    "camera sits in it; light from the environment arrives through it, attenuated to nothing from "
+    "infinitely far away, so light such scenes with emitters). `type = 'analytic'`: the exponential blend "
+    "of real-time renderers, colour = mix(`color`, radiance, exp(-`density` distance)) along "
+    "camera rays: a named approximation that assumes the same in-scattered light everywhere (no "
+    "shadows or light shafts), cheap and not physically based.",
+    (
+        Field("type", "string", "none", "Kind of fog.", choices=FOG_MODELS, attr="model"),
+        Field("medium", "string", REQUIRED, "The medium that fills the scene.", only_for=("medium",),
+              default_doc="required", allowed_doc="a defined medium"),
+        Field("density", "float", 0.1, "Extinction per metre of the analytic fog.", NON_NEGATIVE,
+              only_for=("analytic",)),
+        Field("color", "vec3", (0.7, 0.75, 0.8), "The colour distance fades to, linear RGB.",
+              NON_NEGATIVE, only_for=("analytic",)),
     ),
 )
 
@@ -634,8 +673,8 @@ GENERATORS = (
 GENERATORS_BY_NAME = {g.name: g for g in GENERATORS}
 
 # Top-level sections, in the order the documentation presents them.
-TOP_LEVEL = ("scene", "camera", "render", "environment", "materials", "objects")
-SECTIONS = (SCENE, CAMERA, RENDER, MARCH, ENVIRONMENT, MATERIAL)
+TOP_LEVEL = ("scene", "camera", "render", "environment", "materials", "media", "fog", "objects")
+SECTIONS = (SCENE, CAMERA, RENDER, MARCH, ENVIRONMENT, MATERIAL, MEDIUM, FOG)
 
 ENV_MAP_EXTENSIONS = (".exr", ".hdr")
 SCENE_EXTENSIONS = (".toml",)

@@ -19,7 +19,9 @@ from .model import (
     CameraSpec,
     EnvironmentSpec,
     MarchSettings,
+    FogSpec,
     MaterialSpec,
+    MediumSpec,
     MeshObject,
     RenderSettings,
     Scene,
@@ -368,6 +370,33 @@ def _read_materials(raw: object) -> tuple[MaterialSpec, ...]:
     return tuple(_read_material(name, body) for name, body in table.items())
 
 
+def _read_media(raw: object) -> tuple[MediumSpec, ...]:
+    table = {} if raw is None else _table(raw, "media")
+    media = []
+    for name, body in table.items():
+        values = _read_section(body, schema.MEDIUM, f"media.{name}")
+        media.append(MediumSpec(name=name, **_model_kwargs(schema.MEDIUM, values)))
+    return tuple(media)
+
+
+def _check_medium_name(name: str, media: tuple[MediumSpec, ...], where: str) -> None:
+    known = [m.name for m in media]
+    if name and name not in known:
+        listed = f"known: {', '.join(known)}" if known else "no media are defined under [media]"
+        raise _Invalid(where, f"unknown medium '{name}' ({listed})")
+
+
+def _read_fog(raw: object, media: tuple[MediumSpec, ...], materials: tuple[MaterialSpec, ...]) -> FogSpec:
+    values = _read_section(raw, schema.FOG, "fog")
+    for m in materials:
+        _check_medium_name(m.medium, media, f"materials.{m.name}.medium")
+    if values["type"] == "medium":
+        _check_medium_name(values["medium"], media, "fog.medium")
+    else:
+        values["medium"] = ""
+    return FogSpec(**_model_kwargs(schema.FOG, values))
+
+
 # --- SDF objects -----------------------------------------------------------------------------
 
 
@@ -554,6 +583,8 @@ def _build_scene(data: dict, path: Path) -> Scene:
     render = _read_render(data.get("render"), header["geometry"])
     environment = _read_environment(data.get("environment"), path)
     materials = _read_materials(data.get("materials"))
+    media = _read_media(data.get("media"))
+    fog = _read_fog(data.get("fog"), media, materials)
     geometry = _GEOMETRY_READERS[header["geometry"]](data.get("objects"), materials, path)
     return Scene(
         name=header["name"] if header["name"] is not None else path.stem,
@@ -563,6 +594,8 @@ def _build_scene(data: dict, path: Path) -> Scene:
         render=render,
         environment=environment,
         materials=materials,
+        media=media,
+        fog=fog,
         description=header["description"],
         **geometry,
     )

@@ -356,7 +356,7 @@ OBJ = '[[objects]]\nmaterial = "m"\n'
 BAD_SCENES = {
     # sections and the [scene] header
     "unknown section": (scene_text(extra="[camra]\nfov = 3\n"),
-                        "unknown section 'camra' (allowed: scene, camera, render, environment, materials, objects)"),
+                        "unknown section 'camra' (allowed: scene, camera, render, environment, materials, media, fog, objects)"),
     "no scene section": ("[materials.m]\n" + SPHERE, "missing [scene] section"),
     "scene not a table": ("scene = 3\n" + MATERIAL + SPHERE, "scene: expected a table, got integer 3"),
     "no geometry": (scene_text(header='[scene]\nname = "x"\n'), "scene: missing required field 'geometry'"),
@@ -425,9 +425,9 @@ BAD_SCENES = {
                           "environment: unknown field 'strength' (allowed: type, intensity, rotation, zenith, horizon, ground)"),
     # materials
     "material unknown field": (scene_text(materials="[materials.glass]\ntype = \"dielectric\"\niorr = 1.5\n"),
-                               "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, emission, emission_strength)"),
+                               "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, emission, emission_strength, medium)"),
     "material unknown type": (scene_text(materials='[materials.m]\ntype = "metal"\n'),
-                              "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled)"),
+                              "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null)"),
     "ior on conductor": (scene_text(materials='[materials.m]\ntype = "conductor"\nior = 1.5\n'),
                          "materials.m.ior: only allowed with type 'dielectric' or 'principled', not 'conductor'"),
     "ior on default diffuse": (scene_text(materials="[materials.m]\nior = 1.5\n"),
@@ -441,7 +441,7 @@ BAD_SCENES = {
     "transmission negative": (scene_text(materials='[materials.m]\ntype = "principled"\ntransmission = -0.1\n'),
                               "materials.m.transmission: -0.1 is out of range (allowed: [0, 1])"),
     "principled unknown field": (scene_text(materials='[materials.m]\ntype = "principled"\nspecular = 0.5\n'),
-                                 "materials.m: unknown field 'specular' (allowed: type, base_color, metallic, roughness, transmission, ior, emission, emission_strength)"),
+                                 "materials.m: unknown field 'specular' (allowed: type, base_color, metallic, roughness, transmission, ior, emission, emission_strength, medium)"),
     "ior 1": (scene_text(materials='[materials.m]\ntype = "dielectric"\nior = 1.0\n'), "materials.m.ior: 1 is out of range (allowed: (1, 4])"),
     "ior 5": (scene_text(materials='[materials.m]\ntype = "dielectric"\nior = 5\n'), "materials.m.ior: 5 is out of range"),
     "base_color above 1": (scene_text(materials="[materials.m]\nbase_color = [0.5, 0.5, 1.2]\n"),

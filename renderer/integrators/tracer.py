@@ -1,0 +1,260 @@
+"""The unidirectional path tracer behind `path`, `nee` and `mis`, with participating media.
+
+Static switches pick the estimator: `light_sampling` (next-event estimation at every vertex) and
+`mis` (BSDF- and light-sampled contributions combined by the power heuristic, Veach 1997; without
+it, emitters the lights can sample count only through light samples, except after a delta
+bounce, which light sampling cannot follow). Emitters the lights cannot sample (SDF shapes other
+than spheres) are found by BSDF sampling alone, at full weight.
+
+One loop traces every ray of the path, shadow rays included, at a single call site of the
+geometry: every call site of a traversal or of an SDF is compiled in again (the two-site form of
+`mis` compiled to a kernel 2.6 times the size of `path`'s). A vertex that samples a light leaves
+its shadow ray pending; the next iteration traces it (adding the light if nothing blocks it), and
+the one after traces the BSDF-sampled continuation from the same vertex.
+
+Media (compiled only for scenes with them, Features.has_media): a path knows the medium it is in
+(the scene's fog medium to start with; a material's `medium` after crossing into its surface).
+Along each segment a free-flight distance is sampled (spectral MIS over RGB); a scattering event
+before the surface is a vertex with the Henyey-Greenstein phase function in place of a BSDF,
+light-sampled like any other. Shadow rays carry the transmittance of their medium and pass
+through `null` surfaces (switching medium); any other surface blocks them. Media do not nest:
+crossing out of a surface leads back to the scene's medium.
+"""
+import taichi as ti
+
+from renderer.geometry.interface import INF, MEDIUM_POINT, Hit, Surface
+from renderer.materials.table import NO_MEDIUM, NULL
+from renderer.media import homogeneous, phase
+from renderer.sampling import dims
+
+vec3 = ti.math.vec3
+
+# Hard cap on path vertices when max_depth is -1 (unlimited): Russian roulette ends paths long
+# before this; the cap only bounds the loop (GPU back-ends need a bounded loop to be safe).
+MAX_VERTICES = 1024
+# Russian roulette starts after this many bounces (Mitsuba's default rr_depth is 5).
+RR_DEPTH = 5
+
+
+@ti.func
+def power_heuristic(a, b):
+    """a^2 / (a^2 + b^2), written through the ratio of the smaller to the larger density so that
+    an infinite or overflowing density (a light seen exactly edge-on) gives 1 or 0, never inf/inf."""
+    w = 0.0
+    if a >= b and a > 0.0:
+        r = b / a
+        w = 1.0 / (1.0 + r * r)
+    elif b > a:
+        r = a / b
+        w = r * r / (1.0 + r * r)
+    return w
+
+
+@ti.func
+def _medium_point(p, cone_width, cone_spread):
+    return Surface(p=p, n_geo=vec3(0.0), n_shading=vec3(0.0), uv=ti.math.vec2(0.0), uv1=ti.math.vec2(0.0),
+                   tangent=ti.math.vec4(0.0), material=0, prim=-1, front_face=1, eps=MEDIUM_POINT,
+                   cone_width=cone_width, cone_spread=cone_spread)
+
+
+@ti.func
+def _medium_beyond(ctx, s, wo, wi, current):
+    """The medium a ray from surface s towards wi travels in: `current` unless it crosses the
+    surface; crossing inwards (from the side the outward normal faces) enters the material's
+    medium, crossing outwards returns to the scene's."""
+    medium = current
+    if s.eps >= 0.0 and wi.dot(s.n_geo) * wo.dot(s.n_geo) < 0.0:
+        medium = ctx.media.outside()
+        if wo.dot(s.n_geo) > 0.0:
+            medium = ctx.bsdf.materials.table[s.material].medium
+    return medium
+
+
+@ti.data_oriented
+class PathTracerBase:
+    light_sampling = True
+    mis = True
+    uses_lights = True
+    display_tonemapper = None
+
+    @ti.func
+    def li(self, ctx, ray_in, state, max_depth):
+        radiance = vec3(0.0)
+        throughput = vec3(1.0)
+        ray = ray_in
+        stats = vec3(0.0)
+        prev_p = ray.o
+        prev_n = vec3(0.0)
+        prev_pdf = 0.0
+        prev_delta = 1  # the camera: what it sees directly is not light-sampled
+        s = _medium_point(ray.o, ray.cone_width, ray.cone_spread)  # the vertex rays leave from
+        shadow_s = s  # where the pending shadow ray continues from (past null surfaces)
+        next_dir = ray.d
+        shadow_pending = False
+        shadow_target = vec3(0.0)
+        shadow_n = vec3(0.0)
+        shadow_value = vec3(0.0)
+        medium = NO_MEDIUM
+        shadow_medium = NO_MEDIUM
+        if ti.static(ctx.features.has_media):
+            medium = ctx.media.outside()
+        first_distance = INF  # along the camera ray (analytic fog)
+        ending = False  # the path is over once its pending shadow ray is traced
+        depth = 0
+        for _ in range(2 * MAX_VERTICES):
+            t_max = INF
+            if depth > 0:
+                origin = s
+                if shadow_pending:
+                    origin = shadow_s
+                ray, t_max = ctx.geometry.next_segment(origin, next_dir, shadow_target, shadow_n, shadow_pending)
+            hit = Hit(hit=0, t=t_max, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0))
+            if t_max > 0.0:
+                hit = ctx.geometry.intersect(ray, t_max)
+                stats += vec3(hit.work, hit.tests, 1.0)
+            hs = s
+            if hit.hit == 1 and (not shadow_pending or ti.static(ctx.features.has_null)):
+                hs = ctx.geometry.surface(ray, hit)
+
+            # --- a shadow ray -----------------------------------------------------------------------
+            if shadow_pending:
+                if ti.static(ctx.features.has_media):
+                    if shadow_medium != NO_MEDIUM:
+                        rec = ctx.media.table[shadow_medium]
+                        shadow_value *= homogeneous.transmittance(rec.sigma_a + rec.sigma_s,
+                                                                  ti.max(ti.min(hit.t, t_max), 0.0))
+                passes = False
+                if hit.hit == 1:
+                    if ti.static(ctx.features.has_null):
+                        if ctx.bsdf.materials.table[hs.material].kind == NULL:
+                            passes = True  # on through the invisible boundary, into its other side
+                            if ti.static(ctx.features.has_media):
+                                shadow_medium = _medium_beyond(ctx, hs, -ray.d, ray.d, shadow_medium)
+                            shadow_s = hs
+                else:
+                    radiance += shadow_value
+                if not passes:
+                    shadow_pending = False
+                    if ending:
+                        break
+                continue
+
+            # --- the next path vertex: in the medium, on a surface, or nowhere ------------------------
+            dim = dims.BOUNCE_BASE + dims.PER_BOUNCE * depth
+            if depth == 0:
+                first_distance = hit.t if hit.hit == 1 else INF
+            scattered = False
+            if ti.static(ctx.features.has_media):
+                if medium != NO_MEDIUM:
+                    rec = ctx.media.table[medium]
+                    ms = homogeneous.sample_distance(rec.sigma_a, rec.sigma_s, hit.t if hit.hit == 1 else INF,
+                                                     ctx.sampler.get1d(state, dim + dims.MEDIUM_CHANNEL),
+                                                     ctx.sampler.get1d(state, dim + dims.MEDIUM_DISTANCE))
+                    throughput *= ms.weight
+                    if ms.scattered == 1:
+                        scattered = True
+                        p = ray.o + ms.t * ray.d
+                        wo = -ray.d
+                        if max_depth >= 0 and depth + 1 >= max_depth:
+                            break
+                        s = _medium_point(p, ray.cone_width + ray.cone_spread * ms.t, ray.cone_spread)
+                        if ti.static(self.light_sampling):
+                            ls = ctx.lights.sample(ctx, p, vec3(0.0), ctx.sampler.get1d(state, dim + dims.LIGHT_SELECT),
+                                                   ctx.sampler.get2d(state, dim + dims.LIGHT_POINT))
+                            if ls.pdf > 0.0 and ls.radiance.max() > 0.0:
+                                f = phase.hg_phase(rec.g, wo, ls.wi)
+                                weight = 1.0
+                                if ti.static(self.mis):
+                                    weight = power_heuristic(ls.pdf, f)
+                                shadow_pending = True
+                                shadow_s = s
+                                shadow_medium = medium
+                                shadow_target = ls.p
+                                shadow_n = ls.n
+                                shadow_value = throughput * ls.radiance * (f * weight / ls.pdf)
+                        wi, pdf = phase.hg_sample(rec.g, wo, ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
+                        prev_p = p
+                        prev_n = vec3(0.0)
+                        prev_pdf = pdf
+                        prev_delta = 0
+                        next_dir = wi
+            if not scattered:
+                if hit.hit == 0:
+                    weight = 1.0
+                    if ti.static(self.light_sampling):
+                        if ti.static(ctx.lights.has_env):
+                            if prev_delta == 0:
+                                if ti.static(self.mis):
+                                    weight = power_heuristic(prev_pdf, ctx.lights.pdf_env(ray.d))
+                                else:
+                                    weight = 0.0
+                    radiance += throughput * weight * ctx.environment.radiance(ray.d)
+                    break
+                s = hs
+                wo = -ray.d
+                mat, n = ctx.bsdf.shade(s, wo)
+                if ti.static(ctx.features.has_emission):
+                    if s.front_face == 1 and mat.emission.max() > 0.0:
+                        weight = 1.0
+                        if ti.static(self.light_sampling):
+                            if prev_delta == 0 and ctx.lights.is_sampled(s.prim):
+                                if ti.static(self.mis):
+                                    weight = power_heuristic(prev_pdf, ctx.lights.pdf_hit(prev_p, prev_n, s.prim, s.p,
+                                                                                          s.n_geo))
+                                else:
+                                    weight = 0.0
+                        radiance += throughput * weight * mat.emission
+                # Mitsuba's convention: max_depth counts path vertices, 1 = emitters seen directly.
+                if max_depth >= 0 and depth + 1 >= max_depth:
+                    break
+                if ti.static(self.light_sampling):
+                    if ctx.bsdf.has_smooth_part(mat):
+                        ls = ctx.lights.sample(ctx, s.p, n, ctx.sampler.get1d(state, dim + dims.LIGHT_SELECT),
+                                               ctx.sampler.get2d(state, dim + dims.LIGHT_POINT))
+                        if ls.pdf > 0.0 and ls.radiance.max() > 0.0:
+                            f, pdf_bsdf = ctx.bsdf.eval_at(mat, n, s.n_geo, wo, ls.wi)
+                            if f.max() > 0.0:
+                                # An environment sample's point lies far away: area lights and the
+                                # environment share the shadow ray.
+                                weight = 1.0
+                                if ti.static(self.mis):
+                                    weight = power_heuristic(ls.pdf, pdf_bsdf)
+                                shadow_pending = True
+                                shadow_s = s
+                                if ti.static(ctx.features.has_media):
+                                    shadow_medium = _medium_beyond(ctx, s, wo, ls.wi, medium)
+                                shadow_target = ls.p
+                                shadow_n = ls.n
+                                shadow_value = throughput * f * ls.radiance * (weight / ls.pdf)
+                bs = ctx.bsdf.sample_at(mat, n, s.n_geo, wo, ctx.sampler.get1d(state, dim + dims.BSDF_LOBE),
+                                        ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
+                if bs.valid == 0:
+                    ending = True
+                else:
+                    throughput *= bs.weight
+                    crossed_null = False
+                    if ti.static(ctx.features.has_null):
+                        crossed_null = mat.kind == NULL
+                    if not crossed_null:
+                        # An invisible boundary changes nothing about how the light at the end of
+                        # this ray was sampled: MIS keeps the vertex before it.
+                        prev_p = s.p
+                        prev_n = n
+                        prev_pdf = bs.pdf
+                        prev_delta = bs.delta
+                    next_dir = bs.wi
+                    if ti.static(ctx.features.has_media):
+                        medium = _medium_beyond(ctx, s, wo, bs.wi, medium)
+            if not ending and depth >= RR_DEPTH:
+                q = ti.min(throughput.max(), 0.95)
+                if ctx.sampler.get1d(state, dim + dims.ROULETTE) >= q:
+                    ending = True
+                else:
+                    throughput /= q
+            if ending and not shadow_pending:
+                break
+            depth += 1
+        if ti.static(ctx.features.analytic_fog):
+            fog = ctx.media.fog[None]
+            radiance = homogeneous.exponential_fog(radiance, fog.xyz, fog.w, first_distance)
+        return radiance, stats
