@@ -19,13 +19,25 @@ before the surface is a vertex with the Henyey-Greenstein phase function in plac
 light-sampled like any other. Shadow rays carry the transmittance of their medium and pass
 through `null` surfaces (switching medium); any other surface blocks them. Media do not nest:
 crossing out of a surface leads back to the scene's medium.
+
+Dispersion (Features.has_dispersion): a path is RGB until it first meets a dispersive dielectric.
+There it draws one wavelength (visible-importance pdf) and becomes spectral: its throughput turns
+into the sensor's RGB response at that wavelength over the pdf, times the spectral value of what
+it carried (RGB upsampled to a spectrum, white exactly 1), and every later colour (BSDF weights,
+emission, environment, lights, media) enters as its spectral value at that wavelength; dispersive
+surfaces refract with their index at that wavelength. One wavelength per path rather than a hero
+set of four: simpler, at the price of more colour noise behind dispersive glass.
 """
 import taichi as ti
 
 from renderer.geometry.interface import INF, MEDIUM_POINT, Hit, Surface
+from renderer.materials import dispersion
 from renderer.materials.table import NO_MEDIUM, NULL
 from renderer.media import homogeneous, phase
 from renderer.sampling import dims
+from renderer.spectral.cie import spectral_rgb_weights
+from renderer.spectral.upsample import rgb_to_spectrum
+from renderer.spectral.wavelengths import sample_visible_wavelength, visible_wavelength_pdf
 
 vec3 = ti.math.vec3
 
@@ -70,6 +82,17 @@ def _medium_beyond(ctx, s, wo, wi, current):
     return medium
 
 
+@ti.func
+def _tint(ctx, colour, spectral, lam):
+    """A colour as a spectral path sees it: its upsampled spectrum at the path's wavelength (the
+    same in every channel), or the colour itself on an RGB path."""
+    out = colour
+    if ti.static(ctx.features.has_dispersion):
+        if spectral:
+            out = vec3(rgb_to_spectrum(colour, lam))
+    return out
+
+
 @ti.data_oriented
 class PathTracerBase:
     light_sampling = True
@@ -99,6 +122,8 @@ class PathTracerBase:
         if ti.static(ctx.features.has_media):
             medium = ctx.media.outside()
         first_distance = INF  # along the camera ray (analytic fog)
+        spectral = False  # the path carries one wavelength from its first dispersive surface on
+        lam = 0.0
         ending = False  # the path is over once its pending shadow ray is traced
         depth = 0
         for _ in range(2 * MAX_VERTICES):
@@ -121,8 +146,9 @@ class PathTracerBase:
                 if ti.static(ctx.features.has_media):
                     if shadow_medium != NO_MEDIUM:
                         rec = ctx.media.table[shadow_medium]
-                        shadow_value *= homogeneous.transmittance(rec.sigma_a + rec.sigma_s,
-                                                                  ti.max(ti.min(hit.t, t_max), 0.0))
+                        shadow_value *= _tint(ctx, homogeneous.transmittance(rec.sigma_a + rec.sigma_s,
+                                                                             ti.max(ti.min(hit.t, t_max), 0.0)),
+                                              spectral, lam)
                 passes = False
                 if hit.hit == 1:
                     if ti.static(ctx.features.has_null):
@@ -150,7 +176,7 @@ class PathTracerBase:
                     ms = homogeneous.sample_distance(rec.sigma_a, rec.sigma_s, hit.t if hit.hit == 1 else INF,
                                                      ctx.sampler.get1d(state, dim + dims.MEDIUM_CHANNEL),
                                                      ctx.sampler.get1d(state, dim + dims.MEDIUM_DISTANCE))
-                    throughput *= ms.weight
+                    throughput *= _tint(ctx, ms.weight, spectral, lam)
                     if ms.scattered == 1:
                         scattered = True
                         p = ray.o + ms.t * ray.d
@@ -171,7 +197,7 @@ class PathTracerBase:
                                 shadow_medium = medium
                                 shadow_target = ls.p
                                 shadow_n = ls.n
-                                shadow_value = throughput * ls.radiance * (f * weight / ls.pdf)
+                                shadow_value = throughput * _tint(ctx, ls.radiance, spectral, lam) * (f * weight / ls.pdf)
                         wi, pdf = phase.hg_sample(rec.g, wo, ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
                         prev_p = p
                         prev_n = vec3(0.0)
@@ -188,11 +214,20 @@ class PathTracerBase:
                                     weight = power_heuristic(prev_pdf, ctx.lights.pdf_env(ray.d))
                                 else:
                                     weight = 0.0
-                    radiance += throughput * weight * ctx.environment.radiance(ray.d)
+                    radiance += throughput * weight * _tint(ctx, ctx.environment.radiance(ray.d), spectral, lam)
                     break
                 s = hs
                 wo = -ray.d
                 mat, n = ctx.bsdf.shade(s, wo)
+                if ti.static(ctx.features.has_dispersion):
+                    rec = ctx.bsdf.materials.table[s.material]
+                    if rec.dispersion != dispersion.NONE:
+                        if not spectral:
+                            spectral = True
+                            lam = sample_visible_wavelength(ctx.sampler.get1d(state, dims.WAVELENGTH))
+                            throughput = (spectral_rgb_weights(lam) / visible_wavelength_pdf(lam)
+                                          * rgb_to_spectrum(throughput, lam))
+                        mat.ior = dispersion.ior_at(rec, lam)
                 if ti.static(ctx.features.has_emission):
                     if s.front_face == 1 and mat.emission.max() > 0.0:
                         weight = 1.0
@@ -203,7 +238,7 @@ class PathTracerBase:
                                                                                           s.n_geo))
                                 else:
                                     weight = 0.0
-                        radiance += throughput * weight * mat.emission
+                        radiance += throughput * weight * _tint(ctx, mat.emission, spectral, lam)
                 # Mitsuba's convention: max_depth counts path vertices, 1 = emitters seen directly.
                 if max_depth >= 0 and depth + 1 >= max_depth:
                     break
@@ -225,13 +260,14 @@ class PathTracerBase:
                                     shadow_medium = _medium_beyond(ctx, s, wo, ls.wi, medium)
                                 shadow_target = ls.p
                                 shadow_n = ls.n
-                                shadow_value = throughput * f * ls.radiance * (weight / ls.pdf)
+                                shadow_value = (throughput * _tint(ctx, f, spectral, lam)
+                                                * _tint(ctx, ls.radiance, spectral, lam) * (weight / ls.pdf))
                 bs = ctx.bsdf.sample_at(mat, n, s.n_geo, wo, ctx.sampler.get1d(state, dim + dims.BSDF_LOBE),
                                         ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
                 if bs.valid == 0:
                     ending = True
                 else:
-                    throughput *= bs.weight
+                    throughput *= _tint(ctx, bs.weight, spectral, lam)
                     crossed_null = False
                     if ti.static(ctx.features.has_null):
                         crossed_null = mat.kind == NULL

@@ -6,6 +6,7 @@ Rows come from scene-file materials (`MaterialSpec`) and from model files (glTF 
 import numpy as np
 import taichi as ti
 
+from renderer.materials.dispersion import dispersion_row
 from renderer.materials.texture_sampler import TextureTable
 
 vec3 = ti.math.vec3
@@ -30,7 +31,8 @@ MIN_ALPHA = 1e-4
 MaterialRecord = ti.types.struct(kind=ti.i32, base_color=vec3, roughness=ti.f32, metallic=ti.f32,
                                  transmission=ti.f32, ior=ti.f32, emission=vec3, edge_tint=vec3,
                                  normal_scale=ti.f32, textures=ti.math.ivec4, transmission_texture=ti.i32,
-                                 medium=ti.i32)
+                                 medium=ti.i32, dispersion=ti.i32, dispersion_b=ti.math.vec4,
+                                 dispersion_c=ti.math.vec4)
 # As shaded: a record with its textures applied at one surface point.
 Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=ti.f32, transmission=ti.f32,
                            ior=ti.f32, emission=vec3, edge_tint=vec3)
@@ -57,7 +59,8 @@ class MaterialRows:
         self.rows.append(dict(kind=KIND_IDS[spec.kind], base_color=spec.base_color, roughness=spec.roughness,
                               metallic=spec.metallic, transmission=spec.transmission, ior=spec.ior,
                               emission=spec.emission, edge_tint=spec.edge_tint, normal_scale=1.0,
-                              textures=(NO_TEXTURE,) * 4, transmission_texture=NO_TEXTURE, medium=medium))
+                              textures=(NO_TEXTURE,) * 4, transmission_texture=NO_TEXTURE, medium=medium,
+                              **dispersion_row(spec)))
         return len(self.rows) - 1
 
     def add_pbr(self, pbr, texture_id) -> int:
@@ -72,7 +75,8 @@ class MaterialRows:
                               normal_scale=pbr.normal_scale,
                               textures=(tex(pbr.base_color_texture), tex(pbr.metallic_roughness_texture),
                                         tex(pbr.normal_texture), tex(pbr.emissive_texture)),
-                              transmission_texture=tex(pbr.transmission_texture), medium=NO_MEDIUM))
+                              transmission_texture=tex(pbr.transmission_texture), medium=NO_MEDIUM,
+                              dispersion=0, dispersion_b=(0.0,) * 4, dispersion_c=(0.0,) * 4))
         return len(self.rows) - 1
 
     def arrays(self) -> dict:
@@ -88,7 +92,8 @@ class MaterialRows:
                 "normal_scale": col("normal_scale", np.float32),
                 "textures": col("textures", np.int32, 4),
                 "transmission_texture": col("transmission_texture", np.int32),
-                "medium": col("medium", np.int32)}
+                "medium": col("medium", np.int32), "dispersion": col("dispersion", np.int32),
+                "dispersion_b": col("dispersion_b", np.float32, 4), "dispersion_c": col("dispersion_c", np.float32, 4)}
 
     def uses(self) -> dict:
         """Which kinds and texture slots occur (for Features)."""
@@ -96,7 +101,8 @@ class MaterialRows:
         slots = [any(r["textures"][i] != NO_TEXTURE for r in self.rows) for i in range(4)]
         return {"kinds": kinds, "textures": any(slots) or any(r["transmission_texture"] != NO_TEXTURE for r in self.rows),
                 "normal_maps": slots[2], "emission": any(max(r["emission"]) > 0 for r in self.rows),
-                "media": any(r["medium"] != NO_MEDIUM for r in self.rows)}
+                "media": any(r["medium"] != NO_MEDIUM for r in self.rows),
+                "dispersion": any(r["dispersion"] != 0 for r in self.rows)}
 
 
 @ti.data_oriented

@@ -17,6 +17,11 @@ MEDIUM_CHANNEL = 6  # 1D: the colour channel that picks the free-flight distance
 MEDIUM_DISTANCE = 7  # 1D: the free-flight distance
 
 
+# The wavelength of a spectral path (scenes with dispersive glass), drawn once per camera path
+# when it first meets a dispersive surface: an id of its own, beyond every bounce's.
+WAVELENGTH = 0x7000
+
+
 def bounce(k: int, offset: int) -> int:
     """Python-side helper (kernels inline the same arithmetic)."""
     return BOUNCE_BASE + k * PER_BOUNCE + offset

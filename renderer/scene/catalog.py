@@ -6,7 +6,7 @@ from renderer.scene.errors import SceneError
 ASSETS = Path(__file__).resolve().parents[2] / "assets"
 SCENES_DIR = ASSETS / "scenes"
 # The viewer's order (next/previous scene); scenes not listed follow alphabetically.
-PREFERRED_ORDER = ("showcase", "mirror_field", "hard_cases", "foggy", "cornell_box", "bunnies", "weekend", "textured",
+PREFERRED_ORDER = ("showcase", "mirror_field", "hard_cases", "foggy", "prism", "cornell_box", "bunnies", "weekend", "textured",
                    "many_lights", "studio", "pool", "goblet", "stress")
 DEFAULT_SCENE = "showcase"
 

@@ -27,6 +27,7 @@ class Features:
     has_null: bool = False  # invisible boundaries (material kind `null`)
     has_media: bool = False  # participating media: free-flight sampling, phase functions, transmittance
     analytic_fog: bool = False  # the exponential-blend approximation on camera rays
+    has_dispersion: bool = False  # dispersive dielectrics: spectral paths (one wavelength per path)
     environment: str = "sky"  # "map" | "sky" | "constant"
     depth_of_field: bool = False
     sdf_primitives: frozenset = frozenset()
@@ -40,6 +41,7 @@ class Features:
                  ("textures", self.has_textures), ("normal maps", self.has_normal_maps),
                  ("multiple scattering", self.energy_compensation), ("null surfaces", self.has_null),
                  ("media", self.has_media), ("analytic fog", self.analytic_fog),
+                 ("dispersion", self.has_dispersion),
                  ("depth of field", self.depth_of_field))
         names = [name for name, on in flags if on]
         names.append(f"env:{self.environment}")
@@ -58,6 +60,7 @@ class Features:
         return replace(self, has_diffuse=True, has_conductor=True, has_dielectric=True, has_principled=True,
                        has_emission=True, has_textures=not sdf, has_normal_maps=not sdf, depth_of_field=True,
                        energy_compensation=True, has_null=True, has_media=True, analytic_fog=True,
+                       has_dispersion=True,
                        sdf_primitives=frozenset(SDF_PRIMITIVES) if sdf else frozenset(),
                        sdf_operators=frozenset(SDF_OPERATORS) if sdf else frozenset(),
                        mesh_primitives=frozenset() if sdf else frozenset(MESH_PRIMITIVES))
@@ -86,6 +89,7 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         has_null="null" in kinds,
         has_media=fog == "medium" or bool(material_uses.get("media", False)),
         analytic_fog=fog == "analytic",
+        has_dispersion=bool(material_uses.get("dispersion", False)),
         environment=environment,
         depth_of_field=aperture > 0.0,
         sdf_primitives=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_PRIMITIVES),
@@ -101,7 +105,8 @@ def scene_features(scene: Scene, aperture: float | None = None) -> Features:
     used = [m for m in scene.materials if m.name in used_materials] or list(scene.materials)
     nodes = [node for top in scene.sdf_objects for node in top.walk()]
     uses = {"kinds": {m.kind for m in used}, "textures": False, "normal_maps": False,
-            "emission": any(m.is_emissive for m in used), "media": any(m.medium for m in used)}
+            "emission": any(m.is_emissive for m in used), "media": any(m.medium for m in used),
+            "dispersion": any(m.is_dispersive for m in used)}
     lens = scene.camera.aperture if aperture is None else aperture
     return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes,
                          energy_compensation=scene.render.energy_compensation, fog=scene.fog.model)

@@ -84,6 +84,12 @@ class MaterialSpec:
     metallic: float = 0.0  # principled only: 0 dielectric base, 1 metal (glTF metallic)
     transmission: float = 0.0  # principled only: fraction of the dielectric base that transmits
     medium: str = ""  # the participating medium inside surfaces of this material ("" = none)
+    abbe: float = 0.0  # dielectric dispersion: Abbe number of a Cauchy curve through ior (0 = none)
+    glass: str = ""  # dielectric dispersion: a real glass's Sellmeier curve (overrides ior and abbe)
+
+    @property
+    def is_dispersive(self) -> bool:
+        return self.kind == "dielectric" and (self.abbe > 0.0 or bool(self.glass))
 
     @property
     def is_emissive(self) -> bool:

@@ -346,6 +346,7 @@ ENVIRONMENT = Section(
 )
 
 _PRINCIPLED = ("principled",)
+GLASSES_CHOICES = ("bk7", "fused_silica", "sf11", "water")  # renderer/spectral/ior.py SELLMEIER_PRESETS
 
 MATERIAL = Section(
     "materials.<name>",
@@ -375,6 +376,13 @@ MATERIAL = Section(
         Field("emission", "vec3", (0.0, 0.0, 0.0), "Emitted radiance, linear RGB.", NON_NEGATIVE),
         Field("emission_strength", "float", 1.0, "Multiplier folded into `emission`.",
               NON_NEGATIVE, in_model=False),
+        Field("abbe", "float", 0.0, "Dispersion: the Abbe number of the glass (about 64 for crown "
+              "glass, 25-35 for flint, lower disperses more); the index then follows a Cauchy curve "
+              "through `ior` at 587.6 nm. 0 is no dispersion. A dispersive material makes the scene "
+              "render spectrally (hero wavelengths).", NON_NEGATIVE, only_for=("dielectric",)),
+        Field("glass", "string", "", "Dispersion of a real glass from its published Sellmeier "
+              "coefficients: `bk7`, `fused_silica`, `sf11` or `water`; replaces `ior` and `abbe`.",
+              only_for=("dielectric",), choices=GLASSES_CHOICES, default_doc="none"),
         Field("medium", "string", "", "Name of a `[media]` entry that fills the inside of surfaces "
               "made of this material: paths that cross the surface inwards (by refraction, or "
               "through a `null` surface) travel in it. Media do not nest.",

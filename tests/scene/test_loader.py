@@ -425,7 +425,7 @@ BAD_SCENES = {
                           "environment: unknown field 'strength' (allowed: type, intensity, rotation, zenith, horizon, ground)"),
     # materials
     "material unknown field": (scene_text(materials="[materials.glass]\ntype = \"dielectric\"\niorr = 1.5\n"),
-                               "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, emission, emission_strength, medium)"),
+                               "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, emission, emission_strength, abbe, glass, medium)"),
     "material unknown type": (scene_text(materials='[materials.m]\ntype = "metal"\n'),
                               "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null)"),
     "ior on conductor": (scene_text(materials='[materials.m]\ntype = "conductor"\nior = 1.5\n'),
