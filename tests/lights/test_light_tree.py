@@ -351,8 +351,9 @@ def test_select_frequencies_match_pmf(kind, name, max_leaf_size):
     for i in range(CHI2_POINTS):
         em, pm, again = draw(sel, points[i], normals[i], CHI2_SAMPLES, seed=100 + i)
         # The same formula at two call sites: equal up to how each site's code contracts its
-        # multiply-adds (a few ulp when Taichi's own IR optimisations are off).
-        np.testing.assert_allclose(pm, again, rtol=1e-6)
+        # multiply-adds when Taichi's own IR optimisations are off; the pmf is a product of one
+        # factor per tree level, so a few ulp each (2.3e-6 relative seen here).
+        np.testing.assert_allclose(pm, again, rtol=1e-5)
         np.testing.assert_allclose(pm, table[i, em], rtol=1e-6)
         assert np.all(pm > 0)
         observed = np.bincount(em, minlength=len(e))
