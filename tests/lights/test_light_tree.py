@@ -354,7 +354,7 @@ def test_select_frequencies_match_pmf(kind, name, max_leaf_size):
         # multiply-adds when Taichi's own IR optimisations are off; the pmf is a product of one
         # factor per tree level, so a few ulp each (2.3e-6 relative seen here).
         np.testing.assert_allclose(pm, again, rtol=1e-5)
-        np.testing.assert_allclose(pm, table[i, em], rtol=1e-6)
+        np.testing.assert_allclose(pm, table[i, em], rtol=1e-5)  # as above: one f32 factor per level
         assert np.all(pm > 0)
         observed = np.bincount(em, minlength=len(e))
         assert observed[table[i] == 0].sum() == 0
