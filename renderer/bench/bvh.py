@@ -874,7 +874,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), config: BvhBenchCo
     out_dir = Path(out_dir)
     t_start = time.perf_counter()
     if not ti.lang.impl.get_runtime().prog:  # a test session initialises Taichi itself
-        init_taichi("cpu")
+        init_taichi("cpu", optimize="run")  # speed figures: every kernel optimisation
     arch = str(ti.lang.impl.current_cfg().arch).split(".")[-1]
     threads = int(ti.lang.impl.current_cfg().cpu_max_num_threads)
     load_before = load_average()
