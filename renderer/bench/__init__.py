@@ -25,4 +25,17 @@ def _integrators(**kw):
     return run(**kw)
 
 
-BENCHMARKS = {"sdf": _sdf, "startup": _startup, "bvh": _bvh, "integrators": _integrators}
+def _features(**kw):
+    from renderer.bench.features import run
+
+    return run(**kw)
+
+
+def _photons(**kw):
+    from renderer.bench.photons import run
+
+    return run(**kw)
+
+
+BENCHMARKS = {"sdf": _sdf, "startup": _startup, "bvh": _bvh, "integrators": _integrators, "features": _features,
+              "photons": _photons}

@@ -1,0 +1,120 @@
+"""Smoke test of `bench features`: its decision rule and statistics exactly, and one real run on a
+tiny scene at 16x9 (report structure, every build renders; not speed)."""
+import json
+
+import numpy as np
+import pytest
+
+from renderer.bench import BENCHMARKS
+from renderer.bench.features import (
+    EffectCase,
+    FeaturesBenchConfig,
+    image_difference,
+    optional_effects,
+    paired_ratio,
+    unused_effect_passes,
+)
+from renderer.scene.features import Features
+
+# Diffuse and glass under a sky: the glass case strips the dielectric (a scene variant), and the
+# unused effects forced on have no data here (their branches are compiled, never taken).
+TINY_SCENE = """
+[scene]
+name = "tiny_features"
+geometry = "sdf"
+[camera]
+position = [0.0, 1.0, 3.0]
+look_at = [0.0, 0.4, 0.0]
+fov = 50
+[render]
+width = 16
+height = 9
+max_depth = 3
+[environment]
+type = "sky"
+[materials.white]
+type = "diffuse"
+[materials.glass]
+type = "dielectric"
+[[objects]]
+type = "plane"
+material = "white"
+[[objects]]
+type = "sphere"
+material = "glass"
+radius = 0.5
+translate = [0.0, 0.5, 0.0]
+"""
+
+TINY = FeaturesBenchConfig(size=(16, 9), rounds=2, pass_seconds=0.005, max_pass_spp=4, image_spp=2,
+                           unused_effects=("has_media", "energy_compensation"),
+                           effect_cases=(EffectCase("glass", "tiny_features", "own", "no glass"),),
+                           child_timeout_s=600.0)
+
+
+def test_registered():
+    assert "features" in BENCHMARKS
+
+
+def test_paired_ratio_and_the_rule():
+    base = [1.0, 1.0, 1.0, 1.0, 1.0]
+    same = paired_ratio([1.0] * 5, base)
+    assert same["median"] == same["lo"] == same["hi"] == 1.0 and unused_effect_passes(same)
+    slower = paired_ratio([1.10, 1.12, 1.08, 1.11, 1.09], base)
+    assert slower["lo"] > 1.0 and unused_effect_passes(slower)  # an unused effect that costs: fine
+    noisy = paired_ratio([0.90, 1.05, 0.97, 1.02, 0.95], base)
+    assert noisy["lo"] < 1.0 < noisy["hi"] and unused_effect_passes(noisy)  # zero within noise
+    faster = paired_ratio([0.90, 0.91, 0.89, 0.90, 0.92], base)
+    assert faster["hi"] < 0.98 and not unused_effect_passes(faster)  # own build measurably slower
+    slight = paired_ratio([0.99, 0.985, 0.99, 0.99, 0.99], base)
+    assert slight["hi"] < 1.0 and unused_effect_passes(slight)  # within the 2 % layout tolerance
+
+
+def test_optional_effects_are_the_bools_everything_adds():
+    own = Features(geometry="mesh", has_diffuse=True, has_emission=True)
+    effects = optional_effects(own)
+    assert "has_diffuse" not in effects and "has_emission" not in effects
+    assert {"has_dielectric", "has_media", "has_textures", "energy_compensation", "analytic_fog"} <= set(effects)
+    assert "environment" not in effects and "mesh_primitives" not in effects
+    assert "has_textures" not in optional_effects(Features(geometry="sdf"))  # SDF scenes have no uv textures
+
+
+def test_image_difference():
+    a = np.ones((2, 3, 3))
+    assert image_difference(a, a) == 0.0
+    assert image_difference(1.5 * a, a) == pytest.approx(0.5)
+
+
+def test_run_on_a_tiny_scene(tmp_path, capsys):
+    from renderer.bench.features import run
+
+    scene = tmp_path / "tiny_features.toml"
+    scene.write_text(TINY_SCENE)
+    out = tmp_path / "reports"
+    assert run(out_dir=out, scenes=[scene], config=TINY) == 0
+    report = json.loads((out / "bench_features.json").read_text())
+    assert (out / report["plot"]).stat().st_size > 1000
+    (res,) = report["scenes"]
+    assert "error" not in res, res.get("traceback", res.get("error"))
+    assert res["scene"] == "tiny_features" and res["own_features"]["has_dielectric"] is True
+    builds = res["builds"]
+    assert set(builds) == {"own", "everything", "+media", "+energy_compensation", "no glass"}
+    for name, b in builds.items():
+        assert "error" not in b, (name, b.get("error"))
+        assert b["compile_s"] > 0 and b["cache_bytes"] >= 0 and b["load_s"] > 0
+        assert len(b["times_s"]) == TINY.rounds and b["samples_per_s"] > 0
+        assert b["vs_own"]["lo"] <= b["vs_own"]["median"] <= b["vs_own"]["hi"]
+        assert b["finite"] and b["rejected"] == 0
+    assert builds["own"]["vs_own"]["median"] == 1.0
+    assert builds["own"]["cache_bytes"] > 0
+    # energy compensation has no GGX lobe to act on here: it compiles to the own build's code
+    assert builds["+energy_compensation"]["cache_bytes"] == 0
+    assert builds["+energy_compensation"]["identical_to_own"]
+    assert builds["everything"]["cache_bytes"] > builds["own"]["cache_bytes"]
+    (case,) = res["cases"]
+    assert case["effect"] == "glass" and case["without"] == "no glass"
+    assert case["image_difference"] > 0 and case["noise_floor"] >= 0
+    verdicts = report["summary"]["unused_effects"]
+    assert {v["effect"] for v in verdicts} == {"has_media", "energy_compensation"}
+    printed = capsys.readouterr().out
+    assert "tiny_features" in printed and ("PASS" in printed or "FAIL" in printed)
