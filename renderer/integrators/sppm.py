@@ -1,17 +1,18 @@
 """`sppm`: stochastic progressive photon mapping (Hachisuka and Jensen 2009), as in pbrt-v3's SPPM.
 
 One call of `Renderer.render(camera, spp, integrator="sppm")` runs `spp` iterations; each is
-  1. a camera pass: per pixel, a camera ray follows delta (mirror, smooth glass) bounces to the
-     first vertex whose BSDF has a non-delta part, the *visible point* (VP). Emission seen along the
-     way and direct light at the VP are added to the pixel's direct sum, with the same light
-     sampling and power-heuristic MIS as `mis` (one light sample and one BSDF sample at the VP);
-     the VP keeps its position, normals, wo, shaded material and path throughput;
+  1. a camera pass: per pixel, a camera ray follows delta (mirror, smooth glass) and very glossy
+     (GGX alpha < GLOSSY_ALPHA) bounces to the first diffuse or rough vertex, the *visible point*
+     (VP). Emission seen along the way and direct light at the glossy vertices and at the VP are
+     added to the pixel's direct sum, with the same light sampling and power-heuristic MIS as `mis`
+     (one light sample and one BSDF sample per vertex); the VP keeps its position, normals, wo,
+     shaded material and path throughput;
   2. a hash grid over the VPs (renderer/integrators/photon_grid.py), cells as large as the largest
      search radius, rebuilt on the device;
   3. a photon pass: `photons` photons (default: one per pixel of the image) leave the emitters
      (renderer/lights/emission.py) and follow BSDF samples with Russian roulette. At every hit
      after the first (the first one is direct light, which the camera pass took), on a surface
-     whose BSDF has a non-delta part, every VP within its own radius of the hit receives
+     that can hold VPs (diffuse or rough), every VP within its own radius of the hit receives
      phi += beta * f(wo_vp, wi) and M += 1 (atomics);
   4. a per-pixel update (Hachisuka and Jensen's progressive radius reduction):
         N' = N + alpha M,   R' = R sqrt(N' / (N + M)),   tau' = (tau + beta_vp phi) (R' / R)^2
@@ -39,14 +40,21 @@ the viewer, screenshots and the command line show it like any image, and the HUD
 estimate for it (`noise_estimate = False`).
 
 Thread-count independence. Every random number is a pure function of (photon or pixel, dimension,
-seed); photon counts M and radii are integer or per-pixel arithmetic and come out identical
-whatever the threads; phi sums floats atomically, so its order (hence the last bits) can vary.
+seed); photon counts M and radii are integer or per-pixel arithmetic (and row-ordered reductions)
+and come out identical whatever the threads; phi sums floats atomically, so its order (hence the
+last bits) can vary.
 
-Known limits. A VP is the first vertex with a non-delta part: at a BSDF that has both (a
+GPU back-ends. The kernels compile and run on Vulkan. On Mesa's software Vulkan (lavapipe) with
+Taichi 1.7.4, loops whose body holds an atomic lose iterations in some threads (reproduced without
+SPPM), so there the photon deposits, which are atomics inside the query loop, come out low.
+
+Known limits. A VP is the first diffuse or rough vertex: at a BSDF that has a delta part too (a
 principled material with roughness 0: a mirror coat over a diffuse base), the light its delta part
 reflects is not followed. Emitters that light sampling cannot sample (SDF shapes other than
 spheres) emit no photons: their light reaches the image directly and through delta bounces only.
-Photons deposit on every non-delta surface, glossy ones too (no glossy-threshold split). On SDF
+Participating media and analytic fog are not simulated (surfaces only; `null` boundaries are
+crossed by camera and photon paths but block shadow rays), nor is dispersion. Glossy surfaces just
+rough enough to hold VPs (alpha near GLOSSY_ALPHA) converge slowly. On SDF
 scenes the environment's photons cover the camera and the typical visible distance (CORE_DISTANCE),
 not the unbounded scene: environment light that reaches the image only by way of surfaces beyond
 that is missed.
@@ -63,7 +71,7 @@ from renderer.geometry.interface import INF, Hit, Ray, Surface
 from renderer.integrators.direct import power_heuristic
 from renderer.integrators.path import MAX_VERTICES, RR_DEPTH
 from renderer.integrators.photon_grid import PhotonGrid, bucket_of, cell_of, table_size_for
-from renderer.materials.table import DIELECTRIC, PRINCIPLED, Material
+from renderer.materials.table import DIELECTRIC, DIFFUSE, PRINCIPLED, Material
 from renderer.program import RenderProgram
 from renderer.sampling import dims
 from renderer.sampling.warps import PI
@@ -80,6 +88,14 @@ RADIUS_CLAMP = 4.0
 # (footprints are proportional to distance). A floor running to the horizon would otherwise spread
 # them over hundreds of metres, a few of them reaching the objects in view, each carrying a lot.
 CORE_DISTANCE = 4.0
+# Grid cells are this much wider than the largest radius, so that a VP within its radius of a
+# photon lies strictly inside the photon's 3x3x3 block of cells, whatever the rounding of the two
+# kernels that compute cells (build and query).
+CELL_MARGIN = 1.0 + 1e-3
+# Non-delta surfaces smoother than this GGX alpha (roughness ~0.3) are traced through by the camera
+# pass instead of holding visible points: a photon density estimate over a radius of pixels cannot
+# resolve a lobe that narrow (a chrome-like sphere would come out black and blotchy).
+GLOSSY_ALPHA = 0.1
 # |cos| below which a photon's direction is taken as tangent to the VP's surface (no estimate):
 # f = eval / |cos| is then numerically meaningless.
 MIN_COS = 1e-6
@@ -119,6 +135,10 @@ class SppmState:
         self.vp_beta = ti.Vector.field(3, ti.f32, shape=shape)
         self.vp_mat = Material.field(shape=shape)
         self.vp_depth = ti.field(ti.i32, shape=shape)  # path vertices up to the VP; 0 = no VP this pass
+        # The grid cell the VP was filed under. Queries compare with this rather than recompute it:
+        # two kernels may round (q - lo) / cell differently (a GPU compiler may turn the division
+        # into a reciprocal in one and not the other), and a VP would then be missed.
+        self.vp_cell = ti.Vector.field(3, ti.i32, shape=shape)
         self.footprint = ti.field(ti.f32, shape=shape)  # this pass's candidate initial radius
         self.radius = ti.field(ti.f32, shape=shape)  # 0 until the pixel's first VP
         self.n = ti.field(ti.f32, shape=shape)
@@ -132,7 +152,10 @@ class SppmState:
         self.box = ti.Vector.field(3, ti.f32, shape=4)
         # [0] cell size (largest radius), [1] sum of log footprint radii, [2] their count
         self.scalars = ti.field(ti.f32, shape=3)
-        self.row_sums = ti.Vector.field(2, ti.f32, shape=max_height)
+        # per-row partial reductions: [log footprint sum, VP count, largest radius, -] and boxes
+        # [lo, hi, core lo, core hi]
+        self.row_stats = ti.Vector.field(4, ti.f32, shape=max_height)
+        self.row_box = ti.Vector.field(3, ti.f32, shape=(max_height, 4))
         self.photons_emitted = 0  # over all passes since the last clear
         self.iterations = 0
         self.next_sample = None  # the first_sample a continuing render passes
@@ -233,42 +256,66 @@ class SppmProgram(RenderProgram):
                 self.film.rejected[x, y] = self.film.rejected[x, y] + 1
             self.work[x, y] = self.work[x, y] + stats
         # The pass's statistics: the geometric mean of the footprint radii, the VPs' box (with the
-        # camera, for the environment's photons on SDF scenes), then initial radii and the cell size.
-        st.scalars[0] = 0.0
-        st.box[0] = origin
-        st.box[1] = origin
-        # Rows in parallel, then the row sums in order: a float sum whose order, hence value, does
-        # not depend on the thread count (initial radii are then the same bits however it runs).
+        # camera, for the environment's photons on SDF scenes), then initial radii and the cell
+        # size. Rows in parallel, each reduced in a local variable, then the rows in order: no
+        # atomics, and a float sum whose order (hence value) does not depend on the thread count,
+        # so initial radii are the same bits however many threads run.
         for y in range(height):
             total = 0.0
             count = 0.0
+            lo = vec3(INF)
+            hi = vec3(-INF)
             for x in range(width):
                 if st.vp_depth[x, y] > 0:
                     total += ti.log(st.footprint[x, y])
                     count += 1.0
-                    ti.atomic_min(st.box[0], st.vp_p[x, y])  # min and max are exact in any order
-                    ti.atomic_max(st.box[1], st.vp_p[x, y])
-            st.row_sums[y] = ti.math.vec2(total, count)
+                    lo = ti.min(lo, st.vp_p[x, y])
+                    hi = ti.max(hi, st.vp_p[x, y])
+            st.row_stats[y] = ti.math.vec4(total, count, 0.0, 0.0)
+            st.row_box[y, 0] = lo
+            st.row_box[y, 1] = hi
         for _ in range(1):
-            sums = ti.math.vec2(0.0)
+            sums = ti.math.vec4(0.0)
+            lo = origin
+            hi = origin
             for y in range(height):
-                sums += st.row_sums[y]
+                sums += st.row_stats[y]
+                lo = ti.min(lo, st.row_box[y, 0])
+                hi = ti.max(hi, st.row_box[y, 1])
             st.scalars[1] = sums.x
             st.scalars[2] = sums.y
-        st.box[2] = origin
-        st.box[3] = origin
-        for x, y in ti.ndrange(width, height):
-            if st.vp_depth[x, y] > 0:
-                mean = ti.exp(st.scalars[1] / st.scalars[2])
-                if st.radius[x, y] == 0.0:
-                    st.radius[x, y] = ti.math.clamp(st.footprint[x, y], mean / RADIUS_CLAMP, mean * RADIUS_CLAMP)
-                ti.atomic_max(st.scalars[0], st.radius[x, y])
-                if ti.static(self.emission.bounds_per_pass):
+            st.box[0] = lo
+            st.box[1] = hi
+        for y in range(height):
+            largest = 0.0
+            lo = vec3(INF)
+            hi = vec3(-INF)
+            mean = ti.exp(st.scalars[1] / ti.max(st.scalars[2], 1.0))
+            for x in range(width):
+                if st.vp_depth[x, y] > 0:
+                    if st.radius[x, y] == 0.0:
+                        st.radius[x, y] = ti.math.clamp(st.footprint[x, y], mean / RADIUS_CLAMP,
+                                                        mean * RADIUS_CLAMP)
+                    largest = ti.max(largest, st.radius[x, y])
                     if st.footprint[x, y] <= mean * CORE_DISTANCE:
-                        ti.atomic_min(st.box[2], st.vp_p[x, y])
-                        ti.atomic_max(st.box[3], st.vp_p[x, y])
-        if ti.static(self.emission.bounds_per_pass):
-            self.emission.set_bounds_func(st.box[2], st.box[3])
+                        lo = ti.min(lo, st.vp_p[x, y])
+                        hi = ti.max(hi, st.vp_p[x, y])
+            st.row_stats[y].z = largest
+            st.row_box[y, 2] = lo
+            st.row_box[y, 3] = hi
+        for _ in range(1):
+            largest = 0.0
+            lo = origin
+            hi = origin
+            for y in range(height):
+                largest = ti.max(largest, st.row_stats[y].z)
+                lo = ti.min(lo, st.row_box[y, 2])
+                hi = ti.max(hi, st.row_box[y, 3])
+            st.scalars[0] = largest
+            st.box[2] = lo
+            st.box[3] = hi
+            if ti.static(self.emission.bounds_per_pass):
+                self.emission.set_bounds_func(lo, hi)
 
     @ti.func
     def _trace_camera(self, x, y, ray_in, sample, max_depth, radius_pixels):
@@ -338,14 +385,18 @@ class SppmProgram(RenderProgram):
                 break
             dim = dims.BOUNCE_BASE + dims.PER_BOUNCE * depth
             if self.bsdf.has_smooth_part(mat):
-                st.vp_p[x, y] = s.p
-                st.vp_n[x, y] = n
-                st.vp_ng[x, y] = s.n_geo
-                st.vp_wo[x, y] = wo
-                st.vp_beta[x, y] = beta
-                st.vp_mat[x, y] = mat
-                st.vp_depth[x, y] = depth + 1
-                st.footprint[x, y] = radius_pixels * ti.max(ray_in.cone_width + length * ray_in.cone_spread, 1e-7)
+                if self._gathers(mat):
+                    st.vp_p[x, y] = s.p
+                    st.vp_n[x, y] = n
+                    st.vp_ng[x, y] = s.n_geo
+                    st.vp_wo[x, y] = wo
+                    st.vp_beta[x, y] = beta
+                    st.vp_mat[x, y] = mat
+                    st.vp_depth[x, y] = depth + 1
+                    st.footprint[x, y] = radius_pixels * ti.max(ray_in.cone_width + length * ray_in.cone_spread,
+                                                                1e-7)
+                    probing = 1
+                # Direct light at the VP, and at the glossy vertices traced through on the way.
                 ls = lights.sample(self, s.p, n, self.sampler.get1d(sample, dim + dims.LIGHT_SELECT),
                                    self.sampler.get2d(sample, dim + dims.LIGHT_POINT))
                 if ls.pdf > 0.0 and ls.radiance.max() > 0.0:
@@ -355,7 +406,6 @@ class SppmProgram(RenderProgram):
                         shadow_target = ls.p
                         shadow_n = ls.n
                         shadow_value = beta * f * ls.radiance * (power_heuristic(ls.pdf, pdf_bsdf) / ls.pdf)
-                probing = 1
             bs = self.bsdf.sample_at(mat, n, s.n_geo, wo, self.sampler.get1d(sample, dim + dims.BSDF_LOBE),
                                      self.sampler.get2d(sample, dim + dims.BSDF_DIRECTION))
             if bs.valid == 0:
@@ -378,22 +428,37 @@ class SppmProgram(RenderProgram):
             depth += 1
         return radiance, stats
 
+    @ti.func
+    def _gathers(self, mat):
+        """Whether a surface keeps visible points and receives photons: diffuse, or rough enough
+        (GLOSSY_ALPHA) for a density estimate over the search radius to see its lobe. Smoother
+        non-delta surfaces are traced through by the camera pass, like mirrors (pbrt-v3's rule
+        for glossy BSDFs), with direct light taken at each of them."""
+        keep = mat.alpha >= GLOSSY_ALPHA
+        if mat.kind == DIFFUSE:
+            keep = True
+        elif mat.kind == PRINCIPLED:
+            keep = keep or (mat.metallic < 1.0 and mat.transmission < 1.0)  # a diffuse base
+        return keep and self.bsdf.has_smooth_part(mat)
+
     @ti.kernel
     def build_grid(self, width: ti.i32, height: ti.i32, table_size: ti.i32):
         st = self.state
         grid = self.grid
         mask = table_size - 1
-        cell = st.scalars[0]
+        cell = st.scalars[0] * CELL_MARGIN
         inv_cell = 1.0 / ti.max(cell, 1e-30)
         lo = st.box[0]
         grid.clear(table_size)
         for x, y in ti.ndrange(width, height):
             if self._in_grid(x, y):
-                ti.atomic_add(grid.count[bucket_of(cell_of(st.vp_p[x, y], lo, inv_cell), mask)], 1)
+                c = cell_of(st.vp_p[x, y], lo, inv_cell)
+                st.vp_cell[x, y] = c
+                ti.atomic_add(grid.count[bucket_of(c, mask)], 1)
         grid.scan(table_size)
         for x, y in ti.ndrange(width, height):
             if self._in_grid(x, y):
-                h = bucket_of(cell_of(st.vp_p[x, y], lo, inv_cell), mask)
+                h = bucket_of(st.vp_cell[x, y], mask)
                 slot = grid.start[h] + ti.atomic_add(grid.count[h], 1)
                 grid.entries[slot] = x * self.height_max + y
 
@@ -430,7 +495,7 @@ class SppmProgram(RenderProgram):
                 s = self.geometry.surface(ray, hit)
                 wo = -ray.d
                 mat, n = self.bsdf.shade(s, wo)
-                if k >= 2 and self.bsdf.has_smooth_part(mat):
+                if k >= 2 and self._gathers(mat):
                     self._deposit(s.p, wo, beta, k, max_depth, mask)
                 # The next hit, k + 1, could only count for a VP at depth >= 1: k + 2 <= max_depth.
                 if max_depth >= 0 and k + 2 > max_depth:
@@ -472,7 +537,7 @@ class SppmProgram(RenderProgram):
         """Adds the photon at p (arriving from direction wi) to every VP within that VP's radius."""
         st = self.state
         grid = self.grid
-        cell = st.scalars[0]
+        cell = st.scalars[0] * CELL_MARGIN
         lo = st.box[0]
         hi = st.box[1]
         if cell > 0.0 and (p >= lo - cell).all() and (p <= hi + cell).all():
@@ -490,7 +555,7 @@ class SppmProgram(RenderProgram):
                         q = st.vp_p[x, y]
                         r = st.radius[x, y]
                         to = q - p
-                        if to.dot(to) <= r * r and (cell_of(q, lo, inv_cell) == c).all():
+                        if to.dot(to) <= r * r and (st.vp_cell[x, y] == c).all():
                             if max_depth < 0 or st.vp_depth[x, y] + k <= max_depth:
                                 ti.atomic_add(st.m[x, y], 1)
                                 vn = st.vp_n[x, y]

@@ -58,9 +58,9 @@ MIN_EMIT_EPS = 2e-4
 
 
 def environment_integral(env_spec, env_sampler=None) -> float:
-    """An estimate of the integral of the environment's luminance over the sphere (W/m^2 per unit
-    radiance... i.e. irradiance onto a sphere's cross-section), for choosing between environment and
-    primitive photons. Only the photon budget depends on it, never the image's expected value."""
+    """An estimate of the integral of the environment's luminance over all directions (its power
+    through a unit area facing each direction), for choosing between environment and primitive
+    photons. Only the photon budget depends on it, never the image's expected value."""
     if not environment_emits(env_spec):
         return 0.0
     if env_spec.kind == "map":
