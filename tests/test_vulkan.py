@@ -46,9 +46,9 @@ def test_vulkan_render_matches_cpu(tmp_path):
 
 
 @pytest.mark.vulkan
-@pytest.mark.parametrize("scene", ["foggy", "prism"])
+@pytest.mark.parametrize("scene", ["foggy", "prism", "goblet"])
 def test_vulkan_runs_media_and_dispersion(tmp_path, scene):
-    """The tracer's optional parts (media, null surfaces, fog, spectral paths) compile for Vulkan
+    """The tracer's optional parts (media, null surfaces, fog, spectral paths, Bezier patches) compile for Vulkan
     and give finite, non-blank radiance there."""
     if not vulkan_available():
         pytest.skip("no Vulkan driver (install libvulkan1 mesa-vulkan-drivers)")
