@@ -114,6 +114,11 @@ class SdfGeometry:
         return self.intersect(ray, t_max).hit == 1
 
     @ti.func
+    def trace(self, ray, t_max, any_hit):
+        """intersect: sphere tracing finds the first surface along the ray either way."""
+        return self.intersect(ray, t_max)
+
+    @ti.func
     def normal(self, p, h):
         """Tetrahedral central differences: 4 evaluations, run as a loop so the SDF is inlined once."""
         g = vec3(0.0)

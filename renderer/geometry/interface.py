@@ -3,6 +3,7 @@
 A geometry object provides these Taichi funcs:
   intersect(ray, t_max) -> Hit          closest hit along ray.d in (0, t_max)
   occluded(ray, t_max) -> bool          any hit in (0, t_max): shadow rays stop at the first
+  trace(ray, t_max, any_hit) -> Hit     intersect, or (any_hit, a per-ray value) occluded's search
   surface(ray, hit) -> Surface          what the integrator shades
   spawn(surface, direction) -> Ray      a ray leaving the surface, offset so it cannot hit itself
   visible(surface, p, n) -> bool        nothing blocks the segment from the surface to point p

@@ -140,7 +140,7 @@ class MeshGeometry:
         return hit, t, b1, b2
 
     @ti.func
-    def _leaf(self, node, o, d, k, s, hit: ti.template(), any_hit: ti.template()):
+    def _leaf(self, node, o, d, k, s, hit: ti.template(), any_hit):
         link = self.node_link[node]
         for j in range(link[0], link[0] + link[1]):
             g = self.slot_prim[j]
@@ -151,11 +151,12 @@ class MeshGeometry:
                 hit.t = t
                 hit.prim = g
                 hit.bary = ti.math.vec2(b1, b2)
-                if ti.static(any_hit):
+                if any_hit:
                     break
 
     @ti.func
-    def _traverse(self, ray, t_max, any_hit: ti.template()):
+    def _traverse(self, ray, t_max, any_hit):
+        """Closest hit, or (any_hit: a constant or a per-ray value) the first hit found."""
         hit = Hit(hit=0, t=t_max, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0))
         o = ray.o
         d = ray.d
@@ -171,7 +172,7 @@ class MeshGeometry:
                 if isect.box_entry(o, inv_d, self.node_lo[node], self.node_hi[node], hit.t) <= hit.t:
                     if link[1] > 0:
                         self._leaf(node, o, d, k, s, hit, any_hit)
-                        if ti.static(any_hit):
+                        if any_hit:
                             if hit.hit == 1:
                                 break
                         node = link[2]
@@ -192,7 +193,7 @@ class MeshGeometry:
                 next_node = -1
                 if link[1] > 0:
                     self._leaf(node, o, d, k, s, hit, any_hit)
-                    if ti.static(any_hit):
+                    if any_hit:
                         if hit.hit == 1:
                             break
                 else:
@@ -227,6 +228,12 @@ class MeshGeometry:
     @ti.func
     def occluded(self, ray, t_max):
         return self._traverse(ray, t_max, True).hit == 1
+
+    @ti.func
+    def trace(self, ray, t_max, any_hit):
+        """intersect or, where any_hit (a per-ray value), a shadow ray's search that stops at the
+        first hit: one call site of the traversal serves both."""
+        return self._traverse(ray, t_max, any_hit)
 
     # --- shading -------------------------------------------------------------------------------
     @ti.func

@@ -135,7 +135,12 @@ class PathTracerBase:
                 ray, t_max = ctx.geometry.next_segment(origin, next_dir, shadow_target, shadow_n, shadow_pending)
             hit = Hit(hit=0, t=t_max, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0))
             if t_max > 0.0:
-                hit = ctx.geometry.intersect(ray, t_max)
+                # Shadow rays stop at the first hit they find, unless a null surface could be that
+                # hit: passing through it needs the nearest one.
+                any_hit = shadow_pending
+                if ti.static(ctx.features.has_null):
+                    any_hit = False
+                hit = ctx.geometry.trace(ray, t_max, any_hit)
                 stats += vec3(hit.work, hit.tests, 1.0)
             hs = s
             if hit.hit == 1 and (not shadow_pending or ti.static(ctx.features.has_null)):

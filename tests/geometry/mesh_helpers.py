@@ -72,6 +72,24 @@ class RayShooter:
         return out
 
     @ti.kernel
+    def _trace(self, o: ti.types.ndarray(), d: ti.types.ndarray(), t_max: ti.f32, any_hit: ti.types.ndarray(),
+               out_hit: ti.types.ndarray(), out_tests: ti.types.ndarray()):
+        for i in range(o.shape[0]):
+            ray = Ray(o=ti.math.vec3(o[i, 0], o[i, 1], o[i, 2]), d=ti.math.vec3(d[i, 0], d[i, 1], d[i, 2]),
+                      cone_width=0.0, cone_spread=0.0)
+            hit = self.geometry.trace(ray, t_max, any_hit[i] == 1)
+            out_hit[i] = hit.hit
+            out_tests[i] = hit.tests
+
+    def trace(self, origins, directions, t_max, any_hit):
+        """(hit flags, primitive tests) of geometry.trace with a per-ray any_hit flag."""
+        n = len(origins)
+        hits, tests = np.zeros(n, np.int32), np.zeros(n, np.int32)
+        self._trace(np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(directions, np.float32), t_max,
+                    np.ascontiguousarray(any_hit, np.int32), hits, tests)
+        return hits, tests
+
+    @ti.kernel
     def _respawn(self, o: ti.types.ndarray(), d: ti.types.ndarray(), d2: ti.types.ndarray(),
                  out_prim: ti.types.ndarray(), out_second: ti.types.ndarray(), out_t: ti.types.ndarray()):
         """Hit, then spawn a ray from the hit point in direction d2 and report what it hits."""

@@ -53,6 +53,25 @@ def test_traversal_equals_brute_force(scene_and_rays, strategy, traversal):
     assert np.array_equal(shadow == 1, t_ref < 1.5)
 
 
+@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+def test_trace_stops_shadow_rays_at_the_first_hit(scene_and_rays, traversal):
+    """geometry.trace with a per-ray flag (what the path tracer calls for every ray): flagged rays
+    report the same occlusion as closest-hit rays but never test more primitives, and in total
+    far fewer; unflagged rays are the closest-hit search."""
+    data, (o, d) = scene_and_rays
+    shooter = RayShooter(geometry_from(data, traversal=traversal))
+    n = len(o)
+    hit_any, tests_any = shooter.trace(o, d, 3.0, np.ones(n))
+    hit_closest, tests_closest = shooter.trace(o, d, 3.0, np.zeros(n))
+    t_ref, _ = shooter.closest(o, d)
+    assert np.array_equal(hit_any, hit_closest) and np.array_equal(hit_closest == 1, t_ref < 3.0)
+    assert (tests_any <= tests_closest).all() and tests_any.sum() < 0.9 * tests_closest.sum()
+    mixed = (np.arange(n) % 2).astype(np.int32)
+    hit_mixed, tests_mixed = shooter.trace(o, d, 3.0, mixed)
+    assert np.array_equal(hit_mixed, hit_closest)
+    assert np.array_equal(tests_mixed, np.where(mixed == 1, tests_any, tests_closest))
+
+
 def edge_and_vertex_rays(mesh, rng, per_edge=40):
     """Rays from outside aimed exactly at points on edges (shared by two faces) and at vertices."""
     v = np.asarray(mesh.vertices, np.float64)
