@@ -10,7 +10,7 @@ One call of `Renderer.render(camera, spp, integrator="sppm")` runs `spp` iterati
   2. a hash grid over the VPs (renderer/integrators/photon_grid.py), cells as large as the largest
      search radius, rebuilt on the device;
   3. a photon pass: `photons` photons (default: one per pixel of the image) leave the emitters
-     (renderer/lights/emission.py) and follow BSDF samples with Russian roulette. At every hit
+     (renderer/lights/emission.py; most of them aimed at the region the camera sees) and follow BSDF samples with Russian roulette. At every hit
      after the first (the first one is direct light, which the camera pass took), on a surface
      that can hold VPs (diffuse or rough), every VP within its own radius of the hit receives
      phi += beta * f(wo_vp, wi) and M += 1 (atomics);
@@ -83,10 +83,12 @@ vec3 = ti.math.vec3
 PHOTON_STREAM = 0x80000000
 # A pass's initial radii lie within [1/CLAMP, CLAMP] times the geometric mean of its footprint radii.
 RADIUS_CLAMP = 4.0
-# SDF scenes have no finite bounds; the environment's photons enter through the bounding sphere of
-# the camera and the visible points up to this many times the geometric mean of their distances
-# (footprints are proportional to distance). A floor running to the horizon would otherwise spread
-# them over hundreds of metres, a few of them reaching the objects in view, each carrying a lot.
+# The photons' target region (renderer/lights/emission.py, aiming) is the bounding sphere of the
+# camera and the visible points up to this many times the geometric mean of their distances
+# (footprints are proportional to distance); on SDF scenes, which have no finite bounds, it is also
+# the sphere the environment's photons enter through. A floor running to the horizon would
+# otherwise spread them over hundreds of metres, a few reaching the objects in view, each carrying
+# a lot.
 CORE_DISTANCE = 4.0
 # Grid cells are this much wider than the largest radius, so that a VP within its radius of a
 # photon lies strictly inside the photon's 3x3x3 block of cells, whatever the rounding of the two
@@ -316,6 +318,7 @@ class SppmProgram(RenderProgram):
             st.box[3] = hi
             if ti.static(self.emission.bounds_per_pass):
                 self.emission.set_bounds_func(lo, hi)
+            self.emission.set_target_func(lo, hi)
 
     @ti.func
     def _trace_camera(self, x, y, ray_in, sample, max_depth, radius_pixels):
@@ -479,7 +482,8 @@ class SppmProgram(RenderProgram):
     def _trace_photon(self, sample, max_depth, mask):
         ps = self.photon_sampler
         em = self.emission.sample(self, ps.get1d(sample, dims.PHOTON_LIGHT_SELECT),
-                                  ps.get2d(sample, dims.PHOTON_LIGHT_POINT), ps.get2d(sample, dims.PHOTON_DIRECTION))
+                                  ps.get2d(sample, dims.PHOTON_LIGHT_POINT), ps.get2d(sample, dims.PHOTON_DIRECTION),
+                                  ps.get1d(sample, dims.PHOTON_AIM))
         if em.valid == 1 and em.beta.max() > 0.0:
             beta = em.beta
             s = em.surface

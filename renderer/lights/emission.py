@@ -4,7 +4,7 @@
 for direct lighting). Photon mapping asks the reverse: "where does light start, going where, with
 how much power?". This module answers that for the same emitters, without changing `Lights`:
 
-  sample(ctx, u_select, u_point, u_dir) -> EmittedPhoton
+  sample(ctx, u_select, u_point, u_dir, u_mix) -> EmittedPhoton
       o, d       the ray's origin and direction (world)
       beta       the power it carries, Le |cos| / (p(choice) p(point) p(direction)), so that the
                  sum of `beta` over N photons divided by N estimates the scene's emitted power
@@ -30,6 +30,12 @@ per photon pass by the caller (SPPM uses the bounds of the camera and of the pas
 that are not far beyond their typical distance): environment light that reaches the image only
 through surfaces outside that sphere is missed (a bias SPPM accepts on SDF scenes).
 
+Aiming. A caller may name a target region (a sphere; SPPM: the camera and the visible points of
+the pass). A share TARGET_SHARE of the photons is then aimed at it: from an emitter outside it,
+uniformly in the cone it subtends; from the environment, through the target's disc instead of the
+scene's. The other photons leave as above, and every photon's power divides by the density of the
+two-way mixture, so the estimate stays unbiased and what lies outside the target still gets light.
+
 Whether a photon comes from the environment or from a primitive is decided by the two powers (the
 environment's: its integrated luminance times the disc's area), so the photon budget follows
 where the light is.
@@ -48,6 +54,12 @@ vec3 = ti.math.vec3
 EmittedPhoton = ti.types.struct(o=vec3, d=vec3, beta=vec3, surface=Surface, from_env=ti.i32, valid=ti.i32)
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+# The share of photons aimed at the target region (the part of the scene the camera sees), the rest
+# leaving as they would without a target (cosine-weighted, or through the whole scene's disc). Each
+# photon's power divides by the mixture of the two densities: aiming changes the noise, never the
+# expected value, and the rest of the scene still gets light. A distant sun (a small sphere tens of
+# metres away) otherwise sends nearly all of its photons past the scene.
+TARGET_SHARE = 0.75
 # Origin offset of a photon leaving an emitter, as a fraction of the emitter's size (sqrt(area)),
 # handed to `geometry.spawn` as the surface's epsilon: SDF spawns start 2.5 epsilons off the
 # surface (mesh spawns ignore it and offset by ulps). 1e-3 of the emitter is far below anything
@@ -110,6 +122,8 @@ class Emission:
         self.cdf = ti.field(ti.f32, shape=n + 1)
         # [centre.xyz, radius] of the scene's bounding sphere; [area power, env integral]
         self.sphere = ti.Vector.field(4, ti.f32, shape=())
+        # [centre.xyz, radius] of the region photons are aimed at (radius 0: none), set per pass
+        self.target = ti.Vector.field(4, ti.f32, shape=())
         self.powers = ti.field(ti.f32, shape=2)
         if self.has_area:
             centre = 0.5 * (lo + hi)
@@ -144,6 +158,11 @@ class Emission:
     def set_bounds_func(self, lo, hi):
         """Device-side set_bounds (SDF scenes: per pass, from the caller's bounds)."""
         self.sphere[None] = ti.math.vec4(0.5 * (lo + hi), ti.max(0.5 * (hi - lo).norm(), 1e-6))
+
+    @ti.func
+    def set_target_func(self, lo, hi):
+        """The region most photons are aimed at (SPPM: the camera and its typical visible points)."""
+        self.target[None] = ti.math.vec4(0.5 * (lo + hi), ti.max(0.5 * (hi - lo).norm(), 1e-6))
 
     @ti.func
     def env_probability(self):
@@ -198,12 +217,33 @@ class Emission:
         return d, pdf, radiance
 
     @ti.func
-    def sample(self, ctx, u_select, u_point, u_dir):
+    def _line_enters(self, sphere, o, d):
+        """Where the line o + t d (d unit) enters `sphere` (t, possibly negative), and whether it
+        meets it at all."""
+        oc = o - sphere.xyz
+        b = oc.dot(d)
+        c = oc.dot(oc) - sphere.w * sphere.w
+        disc = b * b - c
+        return -b - ti.sqrt(ti.max(disc, 0.0)), disc >= 0.0
+
+    @ti.func
+    def _disc_density(self, sphere, o, d):
+        """The area density (perpendicular to d) of drawing the line o + t d from the disc of
+        `sphere` perpendicular to d: 1 / (pi r^2) if the line meets the sphere, else 0."""
+        _, meets = self._line_enters(sphere, o, d)
+        return 1.0 / (PI * sphere.w * sphere.w) if meets else 0.0
+
+    @ti.func
+    def sample(self, ctx, u_select, u_point, u_dir, u_mix):
+        """u_mix chooses between aiming at the target sphere (share TARGET_SHARE) and the plain
+        strategy (cosine-weighted from emitters, the scene's disc for the environment); the
+        photon's power divides by the mixture's density, so nothing is left out."""
         none = Surface(p=vec3(0.0), n_geo=vec3(0.0, 1.0, 0.0), n_shading=vec3(0.0, 1.0, 0.0), uv=ti.math.vec2(0.0),
                        uv1=ti.math.vec2(0.0), tangent=ti.math.vec4(0.0), material=0, prim=-1, front_face=1, eps=0.0,
                        cone_width=0.0, cone_spread=0.0)
         result = EmittedPhoton(o=vec3(0.0), d=vec3(0.0, 1.0, 0.0), beta=vec3(0.0), surface=none, from_env=0, valid=0)
         p_env = self.env_probability()
+        target = self.target[None]
         use_env = False
         u = u_select
         if ti.static(self.has_env):
@@ -216,33 +256,67 @@ class Emission:
             if ti.static(self.has_env):
                 w, pdf_dir, radiance = self._env_direction(u_point)
                 sphere = self.sphere[None]
-                radius = sphere.w
+                chosen = sphere
+                share = TARGET_SHARE if target.w > 0.0 else 0.0
+                if u_mix < share:
+                    chosen = target
                 t, b = orthonormal_basis(w)
-                disc = concentric_disk(u_dir) * radius
-                # From the disc's point, start where the ray enters the bounding sphere: nothing
-                # lies before it, and a sphere tracer's range is counted from there.
-                inside = ti.sqrt(ti.max(0.0, radius * radius - disc.dot(disc)))
-                o = sphere.xyz + inside * w + disc.x * t + disc.y * b
-                if pdf_dir > 0.0 and radiance.max() > 0.0:
+                disc = concentric_disk(u_dir) * chosen.w
+                o = chosen.xyz + disc.x * t + disc.y * b  # a point of the line, in the disc's plane
+                density = (share * self._disc_density(target, o, -w)
+                           + (1.0 - share) * self._disc_density(sphere, o, -w))
+                # Start where the line first enters either sphere: nothing lies before that, and a
+                # sphere tracer's range counts from there.
+                t_scene, in_scene = self._line_enters(sphere, o, -w)
+                t_target, in_target = self._line_enters(target, o, -w)
+                start = t_target if in_target else t_scene
+                if in_scene and in_target:
+                    start = ti.min(t_scene, t_target)
+                if pdf_dir > 0.0 and radiance.max() > 0.0 and density > 0.0:
                     # flux through the disc: L dA dw / (p(w) p(point) p(env))
-                    beta = radiance * (PI * radius * radius / (pdf_dir * p_env))
-                    result = EmittedPhoton(o=o, d=-w, beta=beta, surface=none, from_env=1, valid=1)
+                    beta = radiance / (pdf_dir * density * p_env)
+                    result = EmittedPhoton(o=o - start * w, d=-w, beta=beta, surface=none, from_env=1, valid=1)
         else:
             if ti.static(self.has_area):
                 e, pmf = self._select(ti.min(u, 0.99999994))
                 g = self.prim[e]
                 pt = self.geometry.sample_emitter(g, self.anchor[e], u_point)
                 if pt.pdf > 0.0 and pmf > 0.0:
-                    t, b = orthonormal_basis(pt.n)
-                    d = to_world(cosine_hemisphere(u_dir), t, b, pt.n)
-                    radiance = self._emitted(ctx, g, pt.p, pt.n, pt.uv, d)
-                    # Le cos / (pmf (1 - p_env) (1 / area) (cos / pi))
-                    beta = radiance * (PI * self.area[e] / (pmf * (1.0 - p_env)))
-                    s = Surface(p=pt.p, n_geo=pt.n, n_shading=pt.n, uv=pt.uv, uv1=pt.uv, tangent=ti.math.vec4(0.0),
-                                material=self.geometry.material_of(g), prim=g, front_face=1, eps=self.eps[e],
-                                cone_width=0.0, cone_spread=0.0)
-                    result = EmittedPhoton(o=pt.p, d=d, beta=beta, surface=s, from_env=0,
-                                           valid=1 if radiance.max() > 0.0 else 0)
+                    # Aim at the target only from outside it (from inside, the cone is everything).
+                    to_c = target.xyz - pt.p
+                    d2 = to_c.dot(to_c)
+                    r2 = target.w * target.w
+                    share = TARGET_SHARE if (target.w > 0.0 and d2 > r2 * 1.0001) else 0.0
+                    axis = to_c / ti.sqrt(ti.max(d2, 1e-30))
+                    sin2_max = ti.min(r2 / ti.max(d2, 1e-30), 1.0)
+                    cos_max = ti.sqrt(ti.max(0.0, 1.0 - sin2_max))
+                    one_minus_cos_max = sin2_max / (1.0 + cos_max)  # accurate for small cones
+                    d = vec3(0.0, 1.0, 0.0)
+                    if u_mix < share:
+                        # uniform in the cone the target subtends
+                        one_minus_cos = u_dir.x * one_minus_cos_max
+                        cos_t = 1.0 - one_minus_cos
+                        sin_t = ti.sqrt(ti.max(0.0, one_minus_cos * (2.0 - one_minus_cos)))
+                        phi = 2.0 * PI * u_dir.y
+                        ta, tb = orthonormal_basis(axis)
+                        d = ti.cos(phi) * sin_t * ta + ti.sin(phi) * sin_t * tb + cos_t * axis
+                    else:
+                        t, b = orthonormal_basis(pt.n)
+                        d = to_world(cosine_hemisphere(u_dir), t, b, pt.n)
+                    cos_n = d.dot(pt.n)
+                    in_cone = 1.0 - d.dot(axis) <= one_minus_cos_max
+                    pdf_dir = (1.0 - share) * ti.max(cos_n, 0.0) / PI
+                    if share > 0.0 and in_cone:
+                        pdf_dir += share / (2.0 * PI * one_minus_cos_max)
+                    if cos_n > 0.0 and pdf_dir > 0.0:  # emitters emit from their front side only
+                        radiance = self._emitted(ctx, g, pt.p, pt.n, pt.uv, d)
+                        # Le cos / (pmf (1 - p_env) (1 / area) pdf_dir)
+                        beta = radiance * (cos_n * self.area[e] / (pmf * (1.0 - p_env) * pdf_dir))
+                        s = Surface(p=pt.p, n_geo=pt.n, n_shading=pt.n, uv=pt.uv, uv1=pt.uv,
+                                    tangent=ti.math.vec4(0.0), material=self.geometry.material_of(g), prim=g,
+                                    front_face=1, eps=self.eps[e], cone_width=0.0, cone_spread=0.0)
+                        result = EmittedPhoton(o=pt.p, d=d, beta=beta, surface=s, from_env=0,
+                                               valid=1 if radiance.max() > 0.0 else 0)
         return result
 
     # --- host helpers (tests) -------------------------------------------------------------------------

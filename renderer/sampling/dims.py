@@ -36,6 +36,7 @@ PHOTON_BASE = 0x8000
 PHOTON_LIGHT_SELECT = PHOTON_BASE + 0  # 1D: which emitter (or the environment)
 PHOTON_LIGHT_POINT = PHOTON_BASE + 1  # 2D: the point on the emitter (or the environment direction)
 PHOTON_DIRECTION = PHOTON_BASE + 2  # 2D: the emitted direction (or the point on the environment's disc)
+PHOTON_AIM = PHOTON_BASE + 3  # 1D: aimed at the target region or not
 PHOTON_BOUNCE_BASE = PHOTON_BASE + 4
 PHOTON_PER_BOUNCE = 4
 # offsets within a photon bounce: BSDF_LOBE (1D), BSDF_DIRECTION (2D) and ROULETTE (1D), as above

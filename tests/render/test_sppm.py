@@ -143,7 +143,7 @@ def _emit(program: ti.template(), n: ti.i32, out: ti.types.ndarray(dtype=ti.math
         sample = ps.start(ti.u32(PHOTON_STREAM), ti.cast(i, ti.u32), ti.u32(9))
         em = program.emission.sample(program, ps.get1d(sample, dims.PHOTON_LIGHT_SELECT),
                                      ps.get2d(sample, dims.PHOTON_LIGHT_POINT),
-                                     ps.get2d(sample, dims.PHOTON_DIRECTION))
+                                     ps.get2d(sample, dims.PHOTON_DIRECTION), ps.get1d(sample, dims.PHOTON_AIM))
         out[i, 0] = em.beta
         out[i, 1] = em.o
         out[i, 2] = em.d
@@ -170,6 +170,74 @@ def test_emitted_photons_carry_the_scene_power(cornell):
     assert (cos >= 0).all()
     # E[cos] = 2/3 for cosine-weighted directions; Sobol points: far inside 5 standard errors.
     assert abs(cos.mean() - 2.0 / 3.0) < 5 * np.sqrt(1.0 / 18.0 / n)
+
+
+AIM_SCENE = """
+[scene]
+geometry = "mesh"
+[camera]
+position = [0.0, 2.2, 3.0]
+look_at = [0.0, 0.2, 0.0]
+[render]
+width = 16
+height = 12
+[environment]
+type = "constant"
+color = [{env}, {env}, {env}]
+[materials.floor]
+type = "diffuse"
+base_color = [0.7, 0.7, 0.7]
+[materials.lamp]
+type = "diffuse"
+base_color = [0.0, 0.0, 0.0]
+emission = [{lamp}, {lamp}, {lamp}]
+[[objects]]
+type = "quad"
+material = "floor"
+size = [8, 8]
+[[objects]]
+type = "quad"
+material = "lamp"
+size = [0.1, 0.1]
+rotate = [180, 0, 0]
+translate = [0.6, 2.5, -0.3]
+"""
+
+
+@ti.kernel
+def _aim(program: ti.template(), lo: ti.math.vec3, hi: ti.math.vec3):
+    for _ in range(1):
+        program.emission.set_target_func(lo, hi)
+
+
+@pytest.mark.parametrize("light", ["area", "environment"])
+def test_aimed_photons_carry_the_scene_power_on_average(tmp_path, light):
+    """With a target region (a unit sphere on the floor, away from the light), most photons are
+    aimed at it, and their mean power is still the scene's emitted power (the mixture's density is
+    divided out): a z-test at ALPHA over 2^16 photons (Sobol points; the independent-sample standard
+    error is an overestimate for them, so the test is conservative)."""
+    from tests.scene_builder import scene_from_toml
+
+    body = AIM_SCENE.format(env=0.5 if light == "environment" else 0.0, lamp=50.0 if light == "area" else 0.0)
+    scene = scene_from_toml(tmp_path, body)
+    r = Renderer(scene, (8, 8))
+    program = r.program("sppm", r.features(), "independent")
+    centre, radius = np.array([0.0, 0.5, 0.0]), 1.0
+    _aim(program, ti.math.vec3(*(centre - radius / np.sqrt(3))), ti.math.vec3(*(centre + radius / np.sqrt(3))))
+    n = 1 << 16
+    out = np.zeros((n, 5, 3), np.float32)
+    _emit(program, n, out)
+    beta, origin, direction = (out[:, k].astype(np.float64) for k in range(3))
+    luminance = beta @ np.array([0.2126, 0.7152, 0.0722])
+    expected = program.emission.total_power()
+    z = (luminance.mean() - expected) / (luminance.std() / np.sqrt(n))
+    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (luminance.mean(), expected)
+    # Most photons head for the target: their line passes within its radius of its centre.
+    to_centre = centre - origin
+    along = np.sum(to_centre * direction, axis=1)
+    miss = np.linalg.norm(to_centre - along[:, None] * direction, axis=1)
+    valid = out[:, 4, 0] == 1
+    assert ((miss <= radius * (1 + 1e-4)) & (along > 0) & valid).mean() > 0.7
 
 
 THREAD_SCRIPT = """
