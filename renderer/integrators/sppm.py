@@ -356,7 +356,7 @@ class SppmProgram(RenderProgram):
                 ray, t_max = self.geometry.next_segment(s, next_dir, shadow_target, shadow_n, shadow_pending)
             hit = Hit(hit=0, t=t_max, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0))
             if t_max > 0.0:
-                hit = self.geometry.intersect(ray, t_max)
+                hit = self.geometry.trace(ray, t_max, shadow_pending)  # a shadow ray stops at any hit
                 stats += vec3(hit.work, hit.tests, 1.0)
             if shadow_pending:
                 if hit.hit == 0:
