@@ -10,6 +10,7 @@ from renderer.bench.features import (
     EffectCase,
     FeaturesBenchConfig,
     image_difference,
+    mean_change,
     optional_effects,
     paired_ratio,
     unused_effect_passes,
@@ -83,6 +84,7 @@ def test_image_difference():
     a = np.ones((2, 3, 3))
     assert image_difference(a, a) == 0.0
     assert image_difference(1.5 * a, a) == pytest.approx(0.5)
+    assert mean_change(1.5 * a, a) == pytest.approx(0.5) and mean_change(a, a) == 0.0
 
 
 def test_run_on_a_tiny_scene(tmp_path, capsys):
@@ -114,6 +116,7 @@ def test_run_on_a_tiny_scene(tmp_path, capsys):
     (case,) = res["cases"]
     assert case["effect"] == "glass" and case["without"] == "no glass"
     assert case["image_difference"] > 0 and case["noise_floor"] >= 0
+    assert case["mean_change"] != 0.0 and case["ratio"]["lo"] <= case["ratio"]["hi"]
     verdicts = report["summary"]["unused_effects"]
     assert {v["effect"] for v in verdicts} == {"has_media", "energy_compensation"}
     printed = capsys.readouterr().out
