@@ -159,7 +159,7 @@ def cmd_info(args) -> int:
     print(f"render:      {r.width}x{r.height}, {r.spp} spp, max depth {r.max_depth}, {r.integrator}")
     print("features:")
     for key, value in features.describe().items():
-        print(f"  {key:<16} {value}")
+        print(f"  {key:<20} {value}")
     return 0
 
 

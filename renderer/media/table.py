@@ -27,7 +27,9 @@ class MediaTable:
         self.scene_medium = ti.field(ti.i32, shape=())
         self.scene_medium[None] = self.names.index(fog.medium) if fog.model == "medium" else NO_MEDIUM
         self.fog = ti.Vector.field(4, ti.f32, shape=())  # analytic fog: colour rgb, density
-        self.fog[None] = (*fog.color, fog.density)
+        # Density 0 unless the scene asks for analytic fog: a kernel compiled with it (the cost
+        # benchmark forces every effect on) then leaves the image as it is.
+        self.fog[None] = (*fog.color, fog.density if fog.model == "analytic" else 0.0)
 
     @ti.func
     def outside(self):
