@@ -46,7 +46,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.geometry.interface import Surface
-from renderer.lights.lights import environment_emits
+from renderer.lights.lights import emitted_radiance, environment_direction, environment_emits
 from renderer.sampling.warps import PI, concentric_disk, cosine_hemisphere, orthonormal_basis, to_world
 
 vec3 = ti.math.vec3
@@ -192,29 +192,11 @@ class Emission:
 
     @ti.func
     def _emitted(self, ctx, g, p, n, uv, w):
-        """The emitted radiance of primitive g at p towards w (textured emission included)."""
-        surface = Surface(p=p, n_geo=n, n_shading=n, uv=uv, uv1=uv, tangent=ti.math.vec4(0.0),
-                          material=self.geometry.material_of(g), prim=g, front_face=1, eps=0.0,
-                          cone_width=0.0, cone_spread=0.0)
-        mat, _ = ctx.bsdf.shade(surface, w)
-        return mat.emission
+        return emitted_radiance(ctx, self.geometry, g, p, n, uv, w)
 
     @ti.func
     def _env_direction(self, u):
-        """A direction towards the environment, its solid-angle density and radiance."""
-        d = vec3(0.0, 1.0, 0.0)
-        pdf = 0.0
-        radiance = vec3(0.0)
-        if ti.static(self.env_is_map):
-            d, pdf, radiance = self.env_sampler.sample(u)
-        else:
-            z = 1.0 - 2.0 * u.x
-            r = ti.sqrt(ti.max(0.0, 1.0 - z * z))
-            phi = 2.0 * PI * u.y
-            d = vec3(r * ti.cos(phi), z, r * ti.sin(phi))
-            pdf = 1.0 / (4.0 * PI)
-            radiance = self.environment.radiance(d)
-        return d, pdf, radiance
+        return environment_direction(self, u)
 
     @ti.func
     def _line_enters(self, sphere, o, d):

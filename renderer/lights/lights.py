@@ -36,6 +36,35 @@ def environment_emits(spec) -> bool:
     return True
 
 
+@ti.func
+def emitted_radiance(ctx, geometry, g, p, n, uv, w):
+    """The radiance emissive primitive g emits at p towards w (textured emission included)."""
+    surface = Surface(p=p, n_geo=n, n_shading=n, uv=uv, uv1=uv, tangent=ti.math.vec4(0.0),
+                      material=geometry.material_of(g), prim=g, front_face=1, eps=0.0,
+                      cone_width=0.0, cone_spread=0.0)
+    mat, _ = ctx.bsdf.shade(surface, w)
+    return mat.emission
+
+
+@ti.func
+def environment_direction(source, u):
+    """(direction, solid-angle pdf, radiance) towards the environment of `source` (an object with
+    env_is_map, env_sampler and environment): importance-sampled on a map, uniform otherwise."""
+    d = vec3(0.0, 1.0, 0.0)
+    pdf = 0.0
+    radiance = vec3(0.0)
+    if ti.static(source.env_is_map):
+        d, pdf, radiance = source.env_sampler.sample(u)
+    else:
+        z = 1.0 - 2.0 * u.x
+        r = ti.sqrt(ti.max(0.0, 1.0 - z * z))
+        phi = 2.0 * PI * u.y
+        d = vec3(r * ti.cos(phi), z, r * ti.sin(phi))
+        pdf = 1.0 / (4.0 * PI)
+        radiance = source.environment.radiance(d)
+    return d, pdf, radiance
+
+
 @ti.data_oriented
 class Lights:
     def __init__(self, geometry, emitters: dict, environment, env_spec, env_image, selector_kind="auto"):
@@ -71,27 +100,11 @@ class Lights:
 
     @ti.func
     def _emission(self, ctx, g, p, n, uv, wo):
-        surface = Surface(p=p, n_geo=n, n_shading=n, uv=uv, uv1=uv, tangent=ti.math.vec4(0.0),
-                          material=self.geometry.material_of(g), prim=g, front_face=1, eps=0.0,
-                          cone_width=0.0, cone_spread=0.0)
-        mat, _ = ctx.bsdf.shade(surface, wo)
-        return mat.emission
+        return emitted_radiance(ctx, self.geometry, g, p, n, uv, wo)
 
     @ti.func
     def _sample_env(self, u):
-        d = vec3(0.0, 1.0, 0.0)
-        pdf = 0.0
-        radiance = vec3(0.0)
-        if ti.static(self.env_is_map):
-            d, pdf, radiance = self.env_sampler.sample(u)
-        else:
-            z = 1.0 - 2.0 * u.x
-            r = ti.sqrt(ti.max(0.0, 1.0 - z * z))
-            phi = 2.0 * PI * u.y
-            d = vec3(r * ti.cos(phi), z, r * ti.sin(phi))
-            pdf = 1.0 / (4.0 * PI)
-            radiance = self.environment.radiance(d)
-        return d, pdf, radiance
+        return environment_direction(self, u)
 
     @ti.func
     def sample(self, ctx, ref, ref_n, u_select, u_point):

@@ -84,31 +84,8 @@ material = "boundary"
 radius = 0.6
 """
 
-MESH_FURNACE = """
-[scene]
-geometry = "mesh"
-[camera]
-position = [0.0, 0.0, 3.0]
-look_at = [0.0, 0.0, 0.0]
-fov = 30
-[render]
-width = 16
-height = 16
-max_depth = -1
-[environment]
-type = "constant"
-color = [1.0, 1.0, 1.0]
-[media.cloud]
-sigma_s = [2.0, 3.0, 4.0]
-g = -0.3
-[materials.boundary]
-type = "null"
-medium = "cloud"
-[[objects]]
-type = "sphere"
-material = "boundary"
-radius = 0.6
-"""
+# The same furnace in the mesh world (an analytic sphere), with backward scattering for variety.
+MESH_FURNACE = SDF_FURNACE.replace('geometry = "sdf"', 'geometry = "mesh"').replace("g = 0.5", "g = -0.3")
 
 FOGGY_EMITTER = """
 [scene]
