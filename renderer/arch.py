@@ -20,8 +20,9 @@ def taichi_options(optimize: str = "compile") -> dict:
 
 
 def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str | None = None,
-                optimize: str = "compile") -> str:
+                optimize: str = "compile", cpu_threads: int | None = None) -> str:
     """Initialise Taichi on `arch` and return the name of the back-end actually in use.
+    cpu_threads: the CPU back-end's thread count (default: every core).
 
     'auto' takes CUDA when a CUDA GPU is there, else the CPU. It does not take Vulkan by itself:
     on a machine without a GPU the Vulkan device is a software rasteriser, far slower than the
@@ -32,6 +33,8 @@ def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str |
     kwargs = {"offline_cache": offline_cache, "log_level": ti.WARN, **taichi_options(optimize)}
     if cache_dir:
         kwargs["offline_cache_file_path"] = cache_dir
+    if cpu_threads is not None:
+        kwargs["cpu_max_num_threads"] = cpu_threads
     if os.environ.get("LANTERN_TAICHI_DEBUG"):
         kwargs["debug"] = True
     if arch == "auto" and ctypes.util.find_library("cuda") is None:

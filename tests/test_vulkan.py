@@ -15,9 +15,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def vulkan_available() -> bool:
-    probe = "import taichi as ti; ti.init(arch=ti.vulkan); import sys; sys.exit(0 if ti.lang.impl.current_cfg().arch == ti.vulkan else 1)"
+    probe = "from renderer.arch import init_taichi; init_taichi('vulkan')"  # raises without a Vulkan device
     try:
-        return subprocess.run([sys.executable, "-c", probe], capture_output=True, timeout=120).returncode == 0
+        return subprocess.run([sys.executable, "-c", probe], capture_output=True, timeout=120, cwd=ROOT).returncode == 0
     except subprocess.TimeoutExpired:
         return False
 

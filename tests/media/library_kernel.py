@@ -42,5 +42,7 @@ def run() -> np.ndarray:
 
 
 if __name__ == "__main__":
-    ti.init(arch=getattr(ti, sys.argv[1]), offline_cache=False)
+    from renderer.arch import init_taichi
+
+    init_taichi(sys.argv[1], offline_cache=False)
     np.save(sys.argv[2], run())

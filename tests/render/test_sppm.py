@@ -22,7 +22,7 @@ Emission: in the Cornell box (one quad light of uniform radiance), light selecti
 area sampling make every photon carry exactly the scene's emitted power (luminance), points lie on
 the light, and cosine-weighted directions have E[cos] = 2/3.
 
-Threads: the same render with ti.init(cpu_max_num_threads=1) and =4, each in a subprocess (a
+Threads: the same render with init_taichi(cpu_threads=1) and =4, each in a subprocess (a
 process holds one Taichi runtime): photon counts N and radii must be bit-identical (integer
 counts, per-pixel arithmetic, and a row-ordered sum for the initial radii); the image may differ
 only by the order of f32 atomic additions into phi: relative 1e-4 (a sum of K terms reordered
@@ -240,36 +240,14 @@ def test_aimed_photons_carry_the_scene_power_on_average(tmp_path, light):
     assert ((miss <= radius * (1 + 1e-4)) & (along > 0) & valid).mean() > 0.7
 
 
-THREAD_SCRIPT = """
-import sys, json
-import numpy as np
-import taichi as ti
-try:  # the suite's optimisation level, so that the offline cache serves both runs
-    from renderer.arch import taichi_options
-    options = taichi_options("compile")
-except ImportError:
-    options = {}
-ti.init(arch=ti.cpu, cpu_max_num_threads=int(sys.argv[1]), offline_cache=True, **options)
-from renderer.camera import CameraFrame
-from renderer.renderer import Renderer
-from renderer.scene.catalog import load_any, resolve_scene
-scene = load_any(resolve_scene("cornell_box"))
-r = Renderer(scene, (16, 16))
-r.render(CameraFrame.from_spec(scene.camera), 6, "sppm", seed=11)
-state = r.shared("sppm_state", None)
-np.savez(sys.argv[2], image=r.image(), radius=state.radii(16, 16), n=state.photon_counts(16, 16),
-         tau=state.tau_image(16, 16))
-print(json.dumps({"threads": ti.lang.impl.current_cfg().cpu_max_num_threads,
-                  "photons": r.shared("sppm_state", None).photons_emitted}))
-"""
 
 
 def test_photon_statistics_do_not_depend_on_thread_count(tmp_path):
     results = {}
     for threads in (1, 4):
         out = tmp_path / f"threads{threads}.npz"
-        proc = subprocess.run([sys.executable, "-c", THREAD_SCRIPT, str(threads), str(out)], cwd=ROOT,
-                              capture_output=True, text=True, timeout=600)
+        cmd = [sys.executable, "-m", "tests.render.sppm_threads_child", str(threads), str(out)]
+        proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600)
         assert proc.returncode == 0, proc.stderr[-2000:]
         info = json.loads(proc.stdout.strip().splitlines()[-1])
         assert info["threads"] == threads

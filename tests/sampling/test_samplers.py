@@ -400,18 +400,6 @@ def test_render_with_sobol_matches_and_beats_independent(tmp_path):
 
 
 # --- GPU back-ends ----------------------------------------------------------------------------------
-_VULKAN_SCRIPT = """
-import sys
-import numpy as np
-import taichi as ti; ti.init(arch=ti.vulkan)  # a subprocess of its own: its runtime is Vulkan's
-if ti.lang.impl.current_cfg().arch != ti.vulkan:
-    sys.exit(3)
-from renderer.sampling.sobol import SobolSampler, reference_get2d
-from tests.sampling.test_samplers import GET2D, draw
-got = draw(SobolSampler(), 16, 64, 1000, 0, 0xDEADBEEF, GET2D, 12345, 3, 2**20)
-ref = reference_get2d(np.arange(16)[:, None] * 3 + 12345, np.arange(64) + 2**20, 1000, 0xDEADBEEF)
-sys.exit(0 if np.array_equal(got, ref) else 1)
-"""
 
 
 @pytest.mark.vulkan
@@ -420,8 +408,8 @@ def test_vulkan_sobol_matches_reference_bit_for_bit():
     (in a subprocess: a process holds one Taichi runtime, and the suite's is on the CPU)."""
     root = Path(__file__).resolve().parents[2]
     try:
-        proc = subprocess.run([sys.executable, "-c", _VULKAN_SCRIPT], cwd=root, capture_output=True, text=True,
-                              timeout=300)
+        proc = subprocess.run([sys.executable, "-m", "tests.sampling.sobol_vulkan_child"], cwd=root,
+                              capture_output=True, text=True, timeout=300)
     except subprocess.TimeoutExpired:
         pytest.skip("Vulkan start-up timed out")
     if proc.returncode == 3 or "vulkan" in proc.stderr.lower() and proc.returncode not in (0, 1):
