@@ -101,3 +101,38 @@ def cavity_toml(albedo=0.5, emission=0.5):
     is Le / (1 - a) everywhere (the series Le (1 + a + a^2 + ...)). The cavity is a box minus a
     sphere, so the wall's outward normal faces the inside and its emission is seen."""
     return CAVITY.format(albedo=albedo, emission=emission)
+
+
+TINY_BENCH = """
+[scene]
+name = "{name}"
+geometry = "sdf"
+[camera]
+position = [0.0, 1.0, 3.0]
+look_at = [0.0, 0.4, 0.0]
+fov = 50
+[render]
+width = {width}
+height = {height}
+max_depth = 3
+[environment]
+type = "sky"
+[materials.white]
+type = "diffuse"
+{extra_materials}[[objects]]
+type = "plane"
+material = "white"
+[[objects]]
+type = "sphere"
+material = "{ball}"
+radius = 0.5
+translate = [0.0, 0.5, 0.0]
+"""
+
+
+def tiny_bench_toml(name: str, width: int = 32, height: int = 18, glass_ball: bool = False) -> str:
+    """A white ball on a white plane under a sky (the ball glass if asked): the benchmarks' smoke
+    tests render it in a fraction of a second."""
+    extra = '[materials.glass]\ntype = "dielectric"\n' if glass_ball else ""
+    return TINY_BENCH.format(name=name, width=width, height=height, extra_materials=extra,
+                             ball="glass" if glass_ball else "white")

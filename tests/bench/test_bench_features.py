@@ -16,36 +16,11 @@ from renderer.bench.features import (
     unused_effect_passes,
 )
 from renderer.scene.features import Features
+from tests.scene_builder import tiny_bench_toml
 
 # Diffuse and glass under a sky: the glass case strips the dielectric (a scene variant), and the
 # unused effects forced on have no data here (their branches are compiled, never taken).
-TINY_SCENE = """
-[scene]
-name = "tiny_features"
-geometry = "sdf"
-[camera]
-position = [0.0, 1.0, 3.0]
-look_at = [0.0, 0.4, 0.0]
-fov = 50
-[render]
-width = 16
-height = 9
-max_depth = 3
-[environment]
-type = "sky"
-[materials.white]
-type = "diffuse"
-[materials.glass]
-type = "dielectric"
-[[objects]]
-type = "plane"
-material = "white"
-[[objects]]
-type = "sphere"
-material = "glass"
-radius = 0.5
-translate = [0.0, 0.5, 0.0]
-"""
+TINY_SCENE = tiny_bench_toml("tiny_features", 16, 9, glass_ball=True)
 
 TINY = FeaturesBenchConfig(size=(16, 9), rounds=2, pass_seconds=0.005, max_pass_spp=4, image_spp=2,
                            unused_effects=("has_media", "energy_compensation"),

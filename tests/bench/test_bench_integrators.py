@@ -7,32 +7,9 @@ import pytest
 
 from renderer.bench import BENCHMARKS
 from renderer.bench.integrators import IntegratorBenchConfig, spp_to_reach, value_at
+from tests.scene_builder import tiny_bench_toml
 
-TINY_SCENE = """
-[scene]
-name = "tiny_integrators"
-geometry = "sdf"
-[camera]
-position = [0.0, 1.0, 3.0]
-look_at = [0.0, 0.4, 0.0]
-fov = 50
-[render]
-width = 32
-height = 18
-max_depth = 3
-[environment]
-type = "sky"
-[materials.white]
-type = "diffuse"
-[[objects]]
-type = "plane"
-material = "white"
-[[objects]]
-type = "sphere"
-material = "white"
-radius = 0.5
-translate = [0.0, 0.5, 0.0]
-"""
+TINY_SCENE = tiny_bench_toml("tiny_integrators")
 
 # One Renderer, three programs: mis/independent (the reference) and path with both samplers.
 TINY = IntegratorBenchConfig(square_size=(16, 16), wide_size=(16, 9), budget_s=0.2, reference_s=0.3,

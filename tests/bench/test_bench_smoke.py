@@ -20,32 +20,9 @@ from renderer.bench.common import (
     time_interleaved,
     write_json,
 )
+from tests.scene_builder import tiny_bench_toml
 
-TINY_SCENE = """
-[scene]
-name = "tiny"
-geometry = "sdf"
-[camera]
-position = [0.0, 1.0, 3.0]
-look_at = [0.0, 0.4, 0.0]
-fov = 50
-[render]
-width = 32
-height = 18
-max_depth = 3
-[environment]
-type = "sky"
-[materials.white]
-type = "diffuse"
-[[objects]]
-type = "plane"
-material = "white"
-[[objects]]
-type = "sphere"
-material = "white"
-radius = 0.5
-translate = [0.0, 0.5, 0.0]
-"""
+TINY_SCENE = tiny_bench_toml("tiny")
 
 
 @pytest.fixture
