@@ -53,6 +53,7 @@ from renderer.bench.common import (
     time_interleaved,
     verdict,
     write_json,
+    speed_runtime,
 )
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -868,14 +869,10 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), config: BvhBenchCo
     """Measure every mesh of the configuration; print tables, write JSON and plots."""
     import taichi as ti
 
-    from renderer.arch import init_taichi
-
     config = config or (QUICK if quick else FULL)
     out_dir = Path(out_dir)
     t_start = time.perf_counter()
-    if not ti.lang.impl.get_runtime().prog:  # a test session initialises Taichi itself
-        init_taichi("cpu", optimize="run")  # speed figures: every kernel optimisation
-    arch = str(ti.lang.impl.current_cfg().arch).split(".")[-1]
+    arch = speed_runtime()
     threads = int(ti.lang.impl.current_cfg().cpu_max_num_threads)
     load_before = load_average()
 

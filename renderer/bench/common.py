@@ -205,6 +205,18 @@ def write_json(path: Path, data: dict) -> Path:
     return path
 
 
+def speed_runtime() -> str:
+    """Taichi on the CPU with every kernel optimisation (these benchmarks measure speed), unless
+    the caller (a test session) has initialised it already; returns the back-end's name."""
+    import taichi as ti
+
+    from renderer.arch import init_taichi
+
+    if not ti.lang.impl.get_runtime().prog:
+        init_taichi("cpu", optimize="run")
+    return str(ti.lang.impl.current_cfg().arch).split(".")[-1]
+
+
 def load_average() -> list[float] | None:
     """1, 5 and 15 minute load averages: timings are only as quiet as the machine."""
     try:

@@ -77,6 +77,7 @@ from renderer.bench.common import (
     time_interleaved,
     verdict,
     write_json,
+    speed_runtime,
 )
 
 INTEGRATORS = ("path", "nee", "mis")
@@ -610,18 +611,12 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
     """Benchmark the scenes (names or scene files; default config.scenes); print, write JSON and plots."""
     import warnings
 
-    import taichi as ti
-
-    from renderer.arch import init_taichi
-
     config = config or (QUICK if quick else FULL)
     if scenes is not None:
         config = replace(config, scenes=tuple(str(s) for s in scenes))
     out_dir = Path(out_dir)
     t_start = time.perf_counter()
-    if not ti.lang.impl.get_runtime().prog:  # the test session initialises Taichi itself
-        init_taichi("cpu", optimize="run")  # speed figures: every kernel optimisation
-    arch = str(ti.lang.impl.current_cfg().arch).split(".")[-1]
+    arch = speed_runtime()
     load_before = load_average()
 
     mitsuba_info = None

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from renderer.bench.common import (REL_MSE_EPS, load_average, machine_info, print_table, pyplot, rel_mse, rmse,
-                                   save_figure, verdict, write_json)
+                                   save_figure, speed_runtime, verdict, write_json)
 from renderer.bench.integrators import log, noise_floor, progressive, value_at
 
 INTEGRATORS = ("mis", "sppm")
@@ -173,17 +173,13 @@ def write_plots(results: list[dict], out_dir: Path) -> list[Path]:
 
 
 def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, config: PhotonBenchConfig | None = None) -> int:
-    import taichi as ti
-
-    from renderer.arch import init_taichi
     from renderer.scene.catalog import load_any, resolve_scene
 
     config = config or (QUICK if quick else FULL)
     if scenes is not None:
         config = replace(config, scenes=tuple(str(s) for s in scenes))
     t_start = time.perf_counter()
-    if not ti.lang.impl.get_runtime().prog:  # the test session initialises Taichi itself
-        init_taichi("cpu", optimize="run")  # speed figures: every kernel optimisation
+    speed_runtime()
     load_before = load_average()
     results = []
     for name in config.scenes:

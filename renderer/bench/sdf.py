@@ -50,6 +50,7 @@ from renderer.bench.common import (
     time_interleaved,
     verdict,
     write_json,
+    speed_runtime,
 )
 
 STEP_REDUCTION_TARGET = 0.25  # the issue's target: at least 25 % fewer march steps
@@ -429,16 +430,10 @@ def write_plots(results: list[dict], out_dir: Path) -> list[Path]:
 
 def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, config: SdfBenchConfig | None = None) -> int:
     """Benchmark every SDF scene (or the scene files `scenes`); print tables, write JSON and plots."""
-    from renderer.arch import init_taichi
-
-    import taichi as ti
-
     config = config or (QUICK if quick else FULL)
     out_dir = Path(out_dir)
     t_start = time.perf_counter()
-    if not ti.lang.impl.get_runtime().prog:  # the test session initialises Taichi itself
-        init_taichi("cpu", optimize="run")  # speed figures: every kernel optimisation
-    arch = str(ti.lang.impl.current_cfg().arch).split(".")[-1]
+    arch = speed_runtime()
     load_before = load_average()
     results = [bench_scene(scene, config) for scene in sdf_scenes(scenes)]
     if not results:
