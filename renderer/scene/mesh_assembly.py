@@ -4,7 +4,6 @@ material rows and the texture atlas the device needs. Numpy only; the Renderer u
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 

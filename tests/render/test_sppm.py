@@ -40,7 +40,7 @@ from scipy import stats
 from scipy.ndimage import maximum_filter
 
 from renderer.camera import CameraFrame
-from renderer.integrators.sppm import PHOTON_STREAM, SppmOptions
+from renderer.integrators.sppm import PHOTON_STREAM
 from renderer.renderer import Renderer
 from renderer.sampling import dims
 from renderer.scene.catalog import load_any, resolve_scene

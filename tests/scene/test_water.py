@@ -13,7 +13,7 @@ import pytest
 from renderer.scene import load_scene
 from renderer.scene.errors import SceneError
 from renderer.scene.generators import generate, triangle_count
-from renderer.scene.waves import Wave, from_params, loop_sum, problems, random_waves
+from renderer.scene.waves import Wave, from_params, loop_sum, problems
 from tests.scene.test_generators import check_mesh, face_normals
 
 REPO = Path(__file__).resolve().parents[2]
