@@ -21,7 +21,7 @@ from renderer.renderer import Renderer
 from renderer.scene.features import scene_features
 from renderer.scene.model import MaterialSpec
 from renderer.spectral.ior import LINE_C, LINE_D, LINE_F, SELLMEIER_PRESETS
-from tests.render.test_integrator_agreement import assert_agree
+from tests.stats.image_tests import assert_agree
 from tests.scene_builder import scene_from_toml
 
 WAVELENGTHS = np.array([400.0, 450.0, 486.1327, 550.0, 587.5618, 656.2725, 700.0], np.float32)

@@ -71,9 +71,9 @@ from scipy import stats
 from renderer.camera import CameraFrame
 from renderer.renderer import Renderer
 from tests.scene_builder import MESH_CAVITY, cavity_toml, scene_from_toml
+from tests.stats.image_tests import assert_agree, mean_z
 
 ALPHA = 0.01  # significance level of every test here (the per-pixel rule Sidak-corrects it)
-PASS_FRACTION = 0.9975  # Mitsuba's rule: at least 99.75 % of the pixels pass
 SAMPLERS = ("independent", "sobol")
 INTEGRATORS = ("path", "nee", "mis")
 SEEDS = {"path": 101, "nee": 202, "mis": 303}  # different seeds: the two sides are independent
@@ -128,64 +128,6 @@ radius = 0.45
 translate = [0.55, 0.45, 0.0]
 """
 
-
-
-# --- statistics ------------------------------------------------------------------------------------
-
-def per_pixel_z_test(a, b, alpha=ALPHA):
-    """Mitsuba's rule on two (mean, variance of the mean) image pairs: (passed, fraction of pixels
-    passing, p-values, Sidak level)."""
-    (ma, va), (mb, vb) = ((np.asarray(m, np.float64), np.asarray(v, np.float64)) for m, v in (a, b))
-    pixels = ma.shape[0] * ma.shape[1]
-    difference = np.abs(ma - mb)
-    combined = va + vb
-    exact = combined == 0.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z = np.where(exact, 0.0, difference / np.sqrt(combined))
-    p_value = np.where(exact, np.where(difference == 0.0, 1.0, 0.0), 2.0 * stats.norm.sf(z))
-    level = -np.expm1(np.log1p(-alpha) / pixels)  # 1 - (1 - alpha)^(1/N) without cancellation
-    fraction = np.count_nonzero(p_value > level) / 3 / pixels
-    return fraction >= PASS_FRACTION, fraction, p_value, level
-
-
-def describe(a, b, p_value, names) -> str:
-    """The worst pixels and the image means, for a failure message."""
-    (ma, va), (mb, vb) = a, b
-    lines = [f"image means: {names[0]} {ma.mean(axis=(0, 1))}, {names[1]} {mb.mean(axis=(0, 1))}",
-             "worst pixels (row, col): a vs b (sd a, sd b), p"]
-    w = ma.shape[1]
-    for index in np.argsort(p_value.min(axis=2), axis=None)[:6]:
-        r, c = divmod(int(index), w)
-        lines.append(f"  ({r}, {c}) {np.round(ma[r, c], 4)} vs {np.round(mb[r, c], 4)} "
-                     f"({np.round(np.sqrt(va[r, c]), 4)}, {np.round(np.sqrt(vb[r, c]), 4)}), p = {p_value[r, c].min():.1e}")
-    return "\n".join(lines)
-
-
-def image_mean_z(a, b, channel=1):
-    """z of the difference of the two image means of one channel (pixels independent)."""
-    (ma, va), (mb, vb) = a, b
-    n = ma.shape[0] * ma.shape[1]
-    difference = ma[..., channel].mean() - mb[..., channel].mean()
-    return difference / np.sqrt((va[..., channel].sum() + vb[..., channel].sum()) / n**2)
-
-
-def assert_agree(a, b, names):
-    """Mitsuba's per-pixel rule, then the image means (one channel, green): far more sensitive to
-    a small bias spread over the whole image than any single pixel."""
-    passed, fraction, p_value, level = per_pixel_z_test(a, b)
-    assert passed, (f"{names[0]} vs {names[1]}: {fraction:.2%} of the pixels pass at the Sidak level {level:.1e} "
-                    f"(need {PASS_FRACTION:.2%})\n" + describe(a, b, p_value, names))
-    z = image_mean_z(a, b)
-    critical = stats.norm.isf(ALPHA / 2)
-    assert abs(z) < critical, (f"{names[0]} vs {names[1]}: image means (green) differ, z = {z:.2f} "
-                               f"(critical {critical:.2f})\n" + describe(a, b, p_value, names))
-
-
-def mean_z(mean, var_of_mean, expected, channel=1):
-    """z of the image mean of one channel against `expected` (pixels independent)."""
-    m = np.asarray(mean, np.float64)[..., channel]
-    v = np.asarray(var_of_mean, np.float64)[..., channel]
-    return (m.mean() - expected) / np.sqrt(v.sum() / m.size ** 2)
 
 
 # --- renders -------------------------------------------------------------------------------------

@@ -36,6 +36,7 @@ import pytest
 from scipy import stats
 
 from renderer.integrators import INTEGRATORS
+from tests.stats.image_tests import PASS_FRACTION, pixel_z_test
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE_FILE = ROOT / "assets" / "scenes" / "cornell_box.toml"
@@ -43,7 +44,6 @@ REF_MEAN = ROOT / "tests" / "data" / "cornell_mitsuba_mean.exr"
 REF_VAR = ROOT / "tests" / "data" / "cornell_mitsuba_var.exr"
 
 ALPHA = 0.01  # significance level of the whole image, before the Sidak correction
-PASS_FRACTION = 0.9975  # Mitsuba's: at least 99.75 % of the pixels must pass
 SEED = 1
 # integrator -> (samples per pixel, block size of the comparison). Lantern always renders at the
 # reference's size; with a block size b > 1 both images are averaged over b x b blocks first (with a
@@ -73,18 +73,7 @@ def block_average(mean, var_of_mean, block):
 
 def mitsuba_z_test(mean, var_of_mean, ref_mean, ref_var_of_mean, alpha=ALPHA):
     """(passed, fraction of pixels passing, per-channel pass mask, p-values, Sidak level)."""
-    mean, var, ref, ref_var = (np.asarray(a, np.float64) for a in (mean, var_of_mean, ref_mean, ref_var_of_mean))
-    pixel_count = mean.shape[0] * mean.shape[1]
-    difference = np.abs(mean - ref)
-    combined = var + ref_var
-    exact = combined == 0.0  # no noise on either side: nothing but equality passes
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z = np.where(exact, 0.0, difference / np.sqrt(combined))
-    p_value = np.where(exact, np.where(difference == 0.0, 1.0, 0.0), 2.0 * stats.norm.sf(z))
-    level = -np.expm1(np.log1p(-alpha) / pixel_count)  # 1 - (1 - alpha)^(1/N), without cancellation
-    success = p_value > level
-    fraction = np.count_nonzero(success) / 3 / pixel_count
-    return fraction >= PASS_FRACTION, fraction, success, p_value, level
+    return pixel_z_test(mean, var_of_mean, ref_mean, ref_var_of_mean, alpha)
 
 
 def describe_failure(mean, ref, success, p_value, blocks=4) -> str:
