@@ -207,8 +207,7 @@ def _compensated_reflection_eval(energy, fresnel_h, f_avg, alpha, wo, wi):
     """Single scattering (Fresnel fresnel_h at the half vector) plus the multiple-scattering lobe;
     the pdf of _compensated_reflection_direction."""
     v_ss, pdf_ss = lobes.ggx_reflection_eval(fresnel_h, alpha, wo, wi)
-    v_ms, pdf_ms = energy.multiple_scattering(f_avg, alpha, wo, wi)
-    share = energy.sampling_share(alpha, wo)
+    v_ms, pdf_ms, share = energy.multiple_scattering(f_avg, alpha, wo, wi)
     return v_ss + v_ms, (1.0 - share) * pdf_ss + share * pdf_ms
 
 

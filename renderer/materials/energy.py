@@ -114,18 +114,19 @@ class GgxAlbedo:
 
     @ti.func
     def multiple_scattering(self, f_avg, alpha, wo, wi):
-        """(f_ms |cos wi|, its cosine-sampling pdf) in the local frame (wo.z > 0); f_avg: vec3."""
+        """(f_ms |cos wi|, its cosine-sampling pdf, sampling_share) in the local frame (wo.z > 0);
+        f_avg: vec3. The share comes along because it needs the same lookup of E(mu_o)."""
+        roughness = ti.sqrt(alpha)
+        loss_o = ti.math.clamp(1.0 - self.albedo(wo.z, roughness), 0.0, 1.0)
         value = ti.math.vec3(0.0)
         pdf = 0.0
         if wi.z > 0.0:
-            roughness = ti.sqrt(alpha)
             e_avg = self.average(roughness)
             f_ms = f_avg * f_avg * e_avg / (1.0 - f_avg * (1.0 - e_avg))
-            loss_o = 1.0 - self.albedo(wo.z, roughness)
             loss_i = 1.0 - self.albedo(wi.z, roughness)
             value = f_ms * (loss_o * loss_i / ti.max(1.0 - e_avg, MIN_LOSS) * INV_PI * wi.z)
             pdf = wi.z * INV_PI
-        return value, pdf
+        return value, pdf, loss_o
 
     @ti.func
     def sampling_share(self, alpha, wo):
