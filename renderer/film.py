@@ -62,10 +62,16 @@ class Film:
             )
         self.width = width
         self.height = height
-        self.mean.fill(0.0)
-        self.m2.fill(0.0)
-        self.count.fill(0)
-        self.rejected.fill(0)
+        self._clear()
+
+    @ti.kernel
+    def _clear(self):
+        # One kernel for the four fields (four fill() calls would compile four).
+        for x, y in self.mean:
+            self.mean[x, y] = ti.math.vec3(0.0)
+            self.m2[x, y] = ti.math.vec3(0.0)
+            self.count[x, y] = 0
+            self.rejected[x, y] = 0
 
     @ti.func
     def add_sample(self, x: ti.i32, y: ti.i32, value: ti.math.vec3):

@@ -97,13 +97,13 @@ def display_value(linear, mapper):
 
 @ti.kernel
 def _tonemap_kernel(
-    mean: ti.template(), out: ti.template(), source_width: ti.i32, source_height: ti.i32,
-    scale: ti.f32, mapper: ti.i32,
+    mean: ti.template(), out: ti.types.ndarray(dtype=ti.math.vec3, ndim=2), source_width: ti.i32,
+    source_height: ti.i32, scale: ti.f32, mapper: ti.i32,
 ):
     out_width, out_height = out.shape[0], out.shape[1]
     step_x = ti.cast(source_width, ti.f32) / ti.cast(out_width, ti.f32)
     step_y = ti.cast(source_height, ti.f32) / ti.cast(out_height, ti.f32)
-    for x, y in out:
+    for x, y in ti.ndrange(out_width, out_height):
         # Pixel centres map to pixel centres; with equal sizes sx == x exactly, weight 0 on the
         # neighbour, so the copy is 1:1.
         sx = ti.math.clamp((ti.cast(x, ti.f32) + 0.5) * step_x - 0.5, 0.0, ti.cast(source_width - 1, ti.f32))
@@ -120,14 +120,16 @@ def _tonemap_kernel(
         out[x, y] = display_value(ti.math.clamp(linear * scale, 0.0, MAX_RADIANCE), mapper)
 
 
-def tonemap_into(film, out_field, exposure_ev: float, tonemapper_name: str) -> None:
-    """Fill `out_field` (vec3 f32, window size, [x, y] y-up) with display values in [0, 1].
+def tonemap_into(film, out: np.ndarray, exposure_ev: float, tonemapper_name: str) -> None:
+    """Fill `out` (float32 (width, height, 3), [x, y] y-up) with display values in [0, 1].
 
-    The film's active region (film.width x film.height) is stretched over the whole field with
-    bilinear filtering of the exposed linear radiance.
+    The film's active region (film.width x film.height) is stretched over the whole array with
+    bilinear filtering of the exposed linear radiance. The output is an array argument, not a
+    field: one compiled kernel per film serves every output size (a field argument would compile
+    the kernel again for each display size, ~0.1 s apiece).
     """
     _tonemap_kernel(
-        film.mean, out_field, film.width, film.height,
+        film.mean, out, film.width, film.height,
         exposure_scale(exposure_ev), tonemapper_index(tonemapper_name),
     )
 

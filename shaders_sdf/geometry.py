@@ -15,6 +15,7 @@ import taichi as ti
 
 from renderer.geometry import emitter_shapes
 from renderer.geometry.interface import INF, Hit, Ray, Surface
+from renderer.upload import upload_fields
 from shaders_sdf.scene_sdf import SdfProgram
 
 vec3 = ti.math.vec3
@@ -46,9 +47,9 @@ class SdfGeometry:
         self.set_march(scene.render.march)
 
     def set_march(self, march):
-        self.march_f.from_numpy(np.array([march.hit_threshold, march.min_threshold, march.max_distance,
-                                          march.over_relaxation], np.float32))
-        self.march_i.from_numpy(np.array([march.max_steps, 1 if march.adaptive else 0], np.int32))
+        upload_fields([(self.march_f, np.array([march.hit_threshold, march.min_threshold, march.max_distance,
+                                                march.over_relaxation], np.float32)),
+                       (self.march_i, np.array([march.max_steps, 1 if march.adaptive else 0], np.int32))])
 
     @ti.func
     def threshold(self, cone_width):
@@ -183,7 +184,7 @@ class SdfGeometry:
     def emitter_info(self) -> dict:
         """The nodes `sample_emitter` can sample: top-level spheres (a sphere's solid angle can be
         sampled exactly; other emissive SDF shapes are found by BSDF sampling alone)."""
-        materials = self.program.material.to_numpy()  # >= 0 only on top-level objects
+        materials = self.program.material_ids  # >= 0 only on top-level objects
         ids = [i for i, node in enumerate(self.program.order) if node.kind == "sphere" and materials[i] >= 0]
         nodes = [self.program.order[i] for i in ids]
         centre = np.array([n.transform.translate for n in nodes], np.float64).reshape(-1, 3)

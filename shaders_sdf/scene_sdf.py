@@ -10,6 +10,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.geometry.interface import INF
+from renderer.upload import upload_fields
 from shaders_sdf.primitives import PRIMITIVE_FUNCS, pack_parameters
 
 vec3 = ti.math.vec3
@@ -72,15 +73,15 @@ class SdfProgram:
         return order
 
     def _upload(self, order, material_index):
-        inv_rot = np.stack([n.transform.rotation_matrix().T for n in order]).astype(np.float32)
-        self.inv_rotation.from_numpy(inv_rot)
-        self.translation.from_numpy(np.array([n.transform.translate for n in order], np.float32))
-        self.scale.from_numpy(np.array([n.transform.scale for n in order], np.float32))
-        self.params.from_numpy(np.stack([pack_parameters(n) for n in order]))
         limits = [dict(n.params).get("limit") or (0, 0, 0) for n in order]
-        self.limit.from_numpy(np.array(limits, np.float32))
-        mats = [material_index(n.material) if n.material is not None else -1 for n in order]
-        self.material.from_numpy(np.array(mats, np.int32))
+        # kept on the host too: emitter_info reads it without a download
+        self.material_ids = np.array([material_index(n.material) if n.material is not None else -1 for n in order],
+                                     np.int32)
+        upload_fields([(self.inv_rotation, np.stack([n.transform.rotation_matrix().T for n in order])),
+                       (self.translation, np.array([n.transform.translate for n in order])),
+                       (self.scale, np.array([n.transform.scale for n in order])),
+                       (self.params, np.stack([pack_parameters(n) for n in order])),
+                       (self.limit, np.array(limits)), (self.material, self.material_ids)])
 
     # --- generated funcs ---------------------------------------------------------------------
     def _node_func(self, node, index_of):

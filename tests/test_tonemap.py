@@ -29,15 +29,15 @@ def film_with_image(image_rows_top: np.ndarray, max_size=None) -> Film:
     return film
 
 
-def field_to_rows(field) -> np.ndarray:
-    return field.to_numpy().transpose(1, 0, 2)[::-1]
+def display_to_rows(display: np.ndarray) -> np.ndarray:
+    return display.transpose(1, 0, 2)[::-1]
 
 
 def kernel_display(linear_rows_top: np.ndarray, exposure_ev: float, name: str) -> np.ndarray:
     height, width = linear_rows_top.shape[:2]
-    out = ti.Vector.field(3, ti.f32, shape=(width, height))
+    out = np.zeros((width, height, 3), np.float32)
     tonemap_into(film_with_image(linear_rows_top), out, exposure_ev, name)
-    return field_to_rows(out)
+    return display_to_rows(out)
 
 
 @ti.kernel
@@ -116,15 +116,15 @@ def test_one_to_one_copy_has_no_blur():
     checker = np.indices((6, 8)).sum(axis=0) % 2
     image = np.where(checker[..., None] == 1, 0.9, 0.01).astype(np.float32) * np.array([1.0, 0.5, 0.25], np.float32)
     film = film_with_image(image, max_size=(10, 9))
-    out = ti.Vector.field(3, ti.f32, shape=(8, 6))
+    out = np.zeros((8, 6, 3), np.float32)
     reference = ti.Vector.field(3, ti.f32, shape=(8, 6))
     for name in TONEMAPPERS:
         tonemap_into(film, out, 0.5, name)
         pointwise_display(film, reference, exposure_scale(0.5), tonemapper_index(name))
         # Equal up to f32 rounding (two kernels may contract their multiply-adds differently);
         # any blur would mix the checker's 0.9 and 0.01 and be off by orders of magnitude more.
-        np.testing.assert_allclose(out.to_numpy(), reference.to_numpy(), rtol=1e-6, atol=1e-7)
-        np.testing.assert_allclose(field_to_rows(out), display_array(image, 0.5, name), atol=1e-5)
+        np.testing.assert_allclose(out, reference.to_numpy(), rtol=1e-6, atol=1e-7)
+        np.testing.assert_allclose(display_to_rows(out), display_array(image, 0.5, name), atol=1e-5)
 
 
 def test_bilinear_upscale_from_half_size_film():
@@ -137,7 +137,7 @@ def test_bilinear_upscale_from_half_size_film():
     xs, ys = np.meshgrid(np.arange(width), np.arange(height))
     film_rows = ramp(xs, height - 1 - ys).astype(np.float32)  # row 0 = top = largest y
     film = film_with_image(np.repeat(film_rows[..., None], 3, axis=2), max_size=(8, 8))
-    out = ti.Vector.field(3, ti.f32, shape=(2 * width, 2 * height))
+    out = np.zeros((2 * width, 2 * height, 3), np.float32)
     tonemap_into(film, out, 0.0, "none")
 
     window_x, window_y = np.meshgrid(np.arange(2 * width), np.arange(2 * height), indexing="ij")
@@ -145,7 +145,7 @@ def test_bilinear_upscale_from_half_size_film():
     source_y = np.clip((window_y + 0.5) / 2 - 0.5, 0, height - 1)
     expected_linear = ramp(source_x, source_y).astype(np.float32)  # [x, y]
     expected = srgb_oetf_array(np.clip(expected_linear, 0.0, 1.0))
-    result = out.to_numpy()
+    result = out
     for c in range(3):
         np.testing.assert_allclose(result[:, :, c], expected, atol=1e-5)
 

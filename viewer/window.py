@@ -105,7 +105,7 @@ def camera_frame(state: CameraState) -> CameraFrame:
 
 
 def display_to_image(display: np.ndarray) -> np.ndarray:
-    """A window-sized display field's numpy copy ([x, y] y-up, values in [0, 1]) as uint8
+    """A window-sized display image ([x, y, rgb] y-up, values in [0, 1]) as uint8
     (height, width, 3), row 0 at the top: the pixels the canvas shows."""
     return quantize(np.ascontiguousarray(np.transpose(display, (1, 0, 2))[::-1]))
 
@@ -142,14 +142,15 @@ class ViewerApp:
         self.window = ti.ui.Window(TITLE, self.size, vsync=False, show_window=show_window)
         self.canvas = self.window.get_canvas()
         self.gui = self.window.get_gui()
-        # Display fields at the window size and at 1/2, 1/4... of it. A reduced internal image is
-        # tone-mapped into the smallest one that still holds all its pixels and the canvas
-        # stretches that over the window: tone mapping a full window costs ~20 ms on a 2-core CPU,
-        # most of the frame budget while moving.
-        self.display_levels = [ti.Vector.field(3, ti.f32, shape=level) for level in display_level_sizes(self.size)]
+        # Display images at the window size and at 1/2, 1/4... of it ([x, y, rgb] y-up float32
+        # arrays). A reduced internal image is tone-mapped into the smallest one that still holds
+        # all its pixels and the canvas stretches that over the window: tone mapping a full window
+        # costs ~20 ms on a 2-core CPU, most of the frame budget while moving. Arrays rather than
+        # fields: the tone-mapping kernel and GGUI's copy to the canvas then compile once for every
+        # size, not once per size (~0.1 s each, at start-up and on each new scene).
+        self.display_levels = [np.zeros((*level, 3), np.float32) for level in display_level_sizes(self.size)]
         self.display = self.display_levels[0]  # the window-sized one
         self.shown = self.display  # the one on the canvas now
-        self._warm_renderers: set[int] = set()
 
         self.running = True
         self._queued_keys: list[str] = []
@@ -242,7 +243,7 @@ class ViewerApp:
         png, exr = screenshot_paths(self.screenshot_folder, r.scene.name, s.integrator, r.samples_done, datetime.now())
         if self.shown is not self.display:  # moving: the canvas stretches a smaller field
             tonemap_into(r.film, self.display, s.exposure, self._display_tonemapper())
-        write_png(png, display_to_image(self.display.to_numpy()))
+        write_png(png, display_to_image(self.display))
         write_exr(exr, r.image())
         self.last_screenshot = (png, exr)
         print(f"saved {png} and {exr.name}", file=sys.stderr)
@@ -343,13 +344,8 @@ class ViewerApp:
         pixel_samples = plan.size[0] * plan.size[1] * plan.spp
         self._samples.add(now, pixel_samples)
 
-        level = display_level_for([f.shape for f in self.display_levels], (renderer.film.width, renderer.film.height))
-        if id(renderer) not in self._warm_renderers:
-            # Tone mapping compiles once per (film, display field): do all sizes now, while the
-            # first frame of this scene is slow anyway, rather than as hitches during motion.
-            self._warm_renderers.add(id(renderer))
-            for field in self.display_levels:
-                tonemap_into(renderer.film, field, s.exposure, self._display_tonemapper())
+        level = display_level_for([f.shape[:2] for f in self.display_levels],
+                                  (renderer.film.width, renderer.film.height))
         self.shown = self.display_levels[level]
         tonemap_into(renderer.film, self.shown, s.exposure, self._display_tonemapper())
         if self._stats_due(now):

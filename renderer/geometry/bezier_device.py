@@ -10,6 +10,7 @@ import taichi as ti
 
 from renderer.geometry import bezier_newton as newton
 from renderer.geometry.mesh_data import MeshData
+from renderer.upload import upload_fields
 
 vec3 = ti.math.vec3
 vec4 = ti.math.vec4
@@ -41,10 +42,11 @@ def _object_rows(data: MeshData):
 @ti.data_oriented
 class BezierPatches:
     def __init__(self, data: MeshData):
+        uploads = []  # (field, array): copied in one launch (renderer.upload)
+
         def upload(array, width):
-            array = np.ascontiguousarray(array, np.float32)
             f = ti.Vector.field(width, ti.f32, shape=array.shape[:-1])
-            f.from_numpy(array)
+            uploads.append((f, array))
             return f
 
         box = data.bezier_patch_box
@@ -52,17 +54,18 @@ class BezierPatches:
         self.patch_lo = upload(box[:, 0], 3)
         self.patch_hi = upload(box[:, 1], 3)
         self.patch_curve = ti.field(ti.i32, shape=len(data.bezier_patch_curve))
-        self.patch_curve.from_numpy(data.bezier_patch_curve.astype(np.int32))
+        uploads.append((self.patch_curve, data.bezier_patch_curve))
         self.curve_r = upload(data.bezier_curves[:, :, 0], 4)
         self.curve_h = upload(data.bezier_curves[:, :, 1], 4)
         self.curve_u = upload(data.bezier_curve_u, 2)
         self.curve_object = ti.field(ti.i32, shape=len(data.bezier_curve_object))
-        self.curve_object.from_numpy(data.bezier_curve_object.astype(np.int32))
+        uploads.append((self.curve_object, data.bezier_curve_object))
         inv, normal, info = _object_rows(data)
         self.to_world = upload(data.bezier_objects, 4)  # (objects, 3) rows
         self.to_object = upload(inv, 4)
         self.normal_rows = upload(normal, 3)
         self.info = upload(info, 2)
+        upload_fields(uploads)
 
     @ti.func
     def intersect(self, i, o, d, t_max):

@@ -17,6 +17,7 @@ from renderer.geometry.interface import INF, EmitterPoint, Hit, Ray, Surface
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.shading import consistent_shading_normal
 from renderer.sampling.warps import PI
+from renderer.upload import upload_fields
 
 vec3 = ti.math.vec3
 STACK_SIZE = 64  # deeper than any tree the builder makes (its depth is bounded well below this)
@@ -42,63 +43,54 @@ class MeshGeometry:
         self.has_tangents = data.tri_tangents is not None and len(data.tri_vertices) > 0
         self.node_total = len(bvh.node_count)
         self.data = data  # kept for emitter_info (the device has its own copy)
-        self._upload_bvh(bvh)
-        self._upload_primitives(data, bvh)
+        uploads = []  # (field, array): copied in one launch (renderer.upload)
+        self._upload_bvh(bvh, uploads)
+        self._upload_primitives(data, bvh, uploads)
+        upload_fields(uploads)
 
     # --- upload --------------------------------------------------------------------------------
-    def _upload_bvh(self, bvh):
+    def _upload_bvh(self, bvh, uploads):
         m = max(1, self.node_total)
         self.node_lo = ti.Vector.field(3, ti.f32, shape=m)
         self.node_hi = ti.Vector.field(3, ti.f32, shape=m)
         self.node_link = ti.Vector.field(3, ti.i32, shape=m)  # (right child | first prim, count, skip)
         if self.node_total:
-            self.node_lo.from_numpy(bvh.node_lo.astype(np.float32))
-            self.node_hi.from_numpy(bvh.node_hi.astype(np.float32))
-            self.node_link.from_numpy(np.stack([bvh.node_a, bvh.node_count, bvh.node_skip], axis=1).astype(np.int32))
+            uploads += [(self.node_lo, bvh.node_lo), (self.node_hi, bvh.node_hi),
+                        (self.node_link, np.stack([bvh.node_a, bvh.node_count, bvh.node_skip], axis=1))]
         else:  # an empty box no ray can enter
-            self.node_lo.fill(1e30)
-            self.node_hi.fill(-1e30)
+            uploads += [(self.node_lo, np.full((1, 3), 1e30)), (self.node_hi, np.full((1, 3), -1e30))]
         self.slot_prim = ti.field(ti.i32, shape=max(1, len(bvh.prim_order)))
         if len(bvh.prim_order):
-            self.slot_prim.from_numpy(bvh.prim_order.astype(np.int32))
+            uploads.append((self.slot_prim, bvh.prim_order))
 
-    def _upload_primitives(self, data: MeshData, bvh):
-        def vec_field(n, array, width=3):
-            f = ti.Vector.field(width, ti.f32, shape=max(1, n))
+    def _upload_primitives(self, data: MeshData, bvh, uploads):
+        def vec_field(n, array, width=3, rows=()):
+            f = ti.Vector.field(width, ti.f32, shape=(max(1, n), *rows))
             if n:
-                f.from_numpy(np.ascontiguousarray(array, np.float32))
+                uploads.append((f, array))
             return f
 
         t = len(data.tri_vertices)
-        self.tri_v = ti.Vector.field(3, ti.f32, shape=(max(1, t), 3))
-        if t:
-            self.tri_v.from_numpy(np.ascontiguousarray(data.tri_vertices, np.float32))
+        self.tri_v = vec_field(t, data.tri_vertices, 3, (3,))
         if self.has_normals:
-            self.tri_n = ti.Vector.field(3, ti.f32, shape=(t, 3))
-            self.tri_n.from_numpy(np.ascontiguousarray(data.tri_normals, np.float32))
+            self.tri_n = vec_field(t, data.tri_normals, 3, (3,))
         if self.has_uvs:
-            self.tri_uv = ti.Vector.field(2, ti.f32, shape=(t, 3))
-            self.tri_uv.from_numpy(np.ascontiguousarray(data.tri_uvs, np.float32))
+            self.tri_uv = vec_field(t, data.tri_uvs, 2, (3,))
         if self.has_uv1:
-            self.tri_uv1 = ti.Vector.field(2, ti.f32, shape=(t, 3))
-            self.tri_uv1.from_numpy(np.ascontiguousarray(data.tri_uvs1, np.float32))
+            self.tri_uv1 = vec_field(t, data.tri_uvs1, 2, (3,))
         if self.has_tangents:
-            self.tri_tangent = ti.Vector.field(4, ti.f32, shape=(t, 3))
-            self.tri_tangent.from_numpy(np.ascontiguousarray(data.tri_tangents, np.float32))
+            self.tri_tangent = vec_field(t, data.tri_tangents, 4, (3,))
         self.spheres = vec_field(len(data.spheres), data.spheres, 4)
-        q = len(data.quads)
-        self.quads = ti.Vector.field(3, ti.f32, shape=(max(1, q), 3))
-        if q:
-            self.quads.from_numpy(np.ascontiguousarray(data.quads, np.float32))
+        self.quads = vec_field(len(data.quads), data.quads, 3, (3,))
         discs = data.discs
         self.discs_a = vec_field(len(discs), discs[:, [0, 1, 2, 6]], 4)  # centre xyz, radius
         self.discs_n = vec_field(len(discs), discs[:, 3:6], 3)
         materials = data.materials()
         self.prim_material = ti.field(ti.i32, shape=max(1, len(materials)))
         if len(materials):
-            self.prim_material.from_numpy(materials)
+            uploads.append((self.prim_material, materials))
         self.range_end = ti.field(ti.i32, shape=5)
-        self.range_end.from_numpy(data.range_ends())
+        uploads.append((self.range_end, data.range_ends()))
         if "bezier" in self.kinds:  # only then: other scenes never see (or compile) Bezier code
             from renderer.geometry.bezier_device import BezierPatches
 

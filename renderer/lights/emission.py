@@ -48,6 +48,7 @@ import taichi as ti
 from renderer.geometry.interface import Surface
 from renderer.lights.lights import emitted_radiance, environment_direction, environment_emits
 from renderer.sampling.warps import PI, concentric_disk, cosine_hemisphere, orthonormal_basis, to_world
+from renderer.upload import upload_fields
 
 vec3 = ti.math.vec3
 
@@ -133,12 +134,9 @@ class Emission:
             anchor = np.where(all_round[:, None], centre, centre + axis * (diagonal + 1e-3))
             cdf = np.concatenate([[0.0], np.cumsum(power)]) / power.sum()
             cdf[-1] = 1.0
-            self.prim.from_numpy(prims)
-            self.area.from_numpy(area.astype(np.float32))
-            self.eps.from_numpy(np.maximum(MIN_EMIT_EPS, EMIT_EPS_FRACTION * np.sqrt(area)).astype(np.float32))
-            self.anchor.from_numpy(anchor.astype(np.float32))
-            self.cdf.from_numpy(cdf.astype(np.float32))
-        self.powers.from_numpy(np.array([self.area_power, self.env_integral], np.float32))
+            upload_fields([(self.prim, prims), (self.area, area), (self.anchor, anchor), (self.cdf, cdf),
+                           (self.eps, np.maximum(MIN_EMIT_EPS, EMIT_EPS_FRACTION * np.sqrt(area)))])
+        upload_fields([(self.powers, np.array([self.area_power, self.env_integral], np.float32))])
         self.bounds_per_pass = scene_bounds is None
         if scene_bounds is not None:
             self.set_bounds(*scene_bounds)

@@ -50,6 +50,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.sampling.warps import PI
+from renderer.upload import upload_fields
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec.709 luminance weights
 FLOOR = 1e-3  # see the module doc: keeps every float32 CDF interval wider than 2^-22
@@ -156,11 +157,9 @@ class EnvironmentSampler:
         self.texel_pdf = ti.field(ti.f32, shape=(h, w))
         self.north = ti.field(ti.f32, shape=h + 1)
         self.south = ti.field(ti.f32, shape=h + 1)
-        self.marginal_cdf.from_numpy(tables["marginal_cdf"])
-        self.conditional_cdf.from_numpy(tables["conditional_cdf"])
-        self.texel_pdf.from_numpy(tables["texel_pdf"].astype(np.float32))
-        self.north.from_numpy(tables["north"].astype(np.float32))
-        self.south.from_numpy(tables["south"].astype(np.float32))
+        upload_fields([(self.marginal_cdf, tables["marginal_cdf"]), (self.conditional_cdf, tables["conditional_cdf"]),
+                       (self.texel_pdf, tables["texel_pdf"]), (self.north, tables["north"]),
+                       (self.south, tables["south"])])
 
     @classmethod
     def from_environment(cls, environment):

@@ -11,6 +11,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.sampling.warps import PI
+from renderer.upload import upload_fields
 
 KINDS = ("map", "sky", "constant")
 
@@ -25,16 +26,16 @@ class Environment:
                 raise ValueError("an environment map needs its image")
             self.height, self.width = image.shape[:2]
             self.texels = ti.Vector.field(3, ti.f32, shape=(self.height, self.width))
-            self.texels.from_numpy(np.ascontiguousarray(image, dtype=np.float32))
+            upload_fields([(self.texels, image)])
         # intensity, rotation (radians), and the three sky / constant colours
         self.scalars = ti.field(ti.f32, shape=2)
         self.colors = ti.Vector.field(3, ti.f32, shape=3)
         self.set_spec(spec)
 
     def set_spec(self, spec):
-        self.scalars.from_numpy(np.array([spec.intensity, math.radians(spec.rotation)], np.float32))
         colours = [spec.color, spec.zenith, spec.horizon] if spec.kind == "constant" else [spec.zenith, spec.horizon, spec.ground]
-        self.colors.from_numpy(np.array(colours, np.float32))
+        upload_fields([(self.scalars, np.array([spec.intensity, math.radians(spec.rotation)], np.float32)),
+                       (self.colors, np.array(colours, np.float32))])
 
     @ti.func
     def radiance(self, d):

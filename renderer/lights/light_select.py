@@ -32,6 +32,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.lights.light_tree import EmitterBounds, LightTree, triangle_emitters
+from renderer.upload import upload_fields
 
 __all__ = ["SELECTOR_KINDS", "AUTO_TREE_MIN", "UniformSelector", "PowerSelector", "LightTree",
            "EmitterBounds", "triangle_emitters", "alias_table", "resolve_kind",
@@ -115,9 +116,7 @@ class PowerSelector:
         self.q = ti.field(ti.f32, shape=n)
         self.alias = ti.field(ti.i32, shape=n)
         self.table_pmf = ti.field(ti.f32, shape=n)
-        self.q.from_numpy(q)
-        self.alias.from_numpy(alias)
-        self.table_pmf.from_numpy(pmf)
+        upload_fields([(self.q, q), (self.alias, alias), (self.table_pmf, pmf)])
 
     @ti.func
     def select(self, p, n, u):

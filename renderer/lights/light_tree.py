@@ -97,6 +97,8 @@ from dataclasses import dataclass
 import numpy as np
 import taichi as ti
 
+from renderer.upload import upload_fields
+
 __all__ = ["EmitterBounds", "LightTreeData", "LightTree", "build_light_tree", "triangle_emitters",
            "cone_union", "orientation_measure", "node_importance"]
 
@@ -747,14 +749,10 @@ class LightTree:
         self.order = ti.field(ti.i32, shape=n)
         self.rank = ti.field(ti.i32, shape=n)
         self.leaf_power = ti.field(ti.f32, shape=n)  # power in leaf order
-        self.node_lo.from_numpy(d.node_lo)
-        self.node_hi.from_numpy(d.node_hi)
-        self.node_axis.from_numpy(d.node_axis)
-        self.node_scalars.from_numpy(np.stack([d.node_power, d.node_theta_o, d.node_theta_e], 1))
-        self.node_links.from_numpy(np.stack([d.node_right, d.node_first, d.node_count], 1))
-        self.order.from_numpy(d.order)
-        self.rank.from_numpy(d.rank)
-        self.leaf_power.from_numpy(d.emitter_power[d.order])
+        upload_fields([(self.node_lo, d.node_lo), (self.node_hi, d.node_hi), (self.node_axis, d.node_axis),
+                       (self.node_scalars, np.stack([d.node_power, d.node_theta_o, d.node_theta_e], 1)),
+                       (self.node_links, np.stack([d.node_right, d.node_first, d.node_count], 1)),
+                       (self.order, d.order), (self.rank, d.rank), (self.leaf_power, d.emitter_power[d.order])])
 
     @ti.func
     def importance(self, p, n, node):

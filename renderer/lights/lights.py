@@ -16,6 +16,7 @@ import taichi as ti
 
 from renderer.geometry.interface import INF, Surface
 from renderer.sampling.warps import PI
+from renderer.upload import upload_fields
 
 vec3 = ti.math.vec3
 LightSample = ti.types.struct(wi=vec3, dist=ti.f32, radiance=vec3, pdf=ti.f32, p=vec3, n=vec3, is_env=ti.i32)
@@ -85,14 +86,14 @@ class Lights:
         lookup = np.full(prim_total, -1, np.int32)
         if self.has_area:
             lookup[emitters["prim"]] = np.arange(self.count, dtype=np.int32)
-            self.emitter_prim.from_numpy(np.asarray(emitters["prim"], np.int32))
             from renderer.lights.light_select import make_light_selector
             from renderer.lights.light_tree import EmitterBounds
 
             bounds = EmitterBounds(lo=emitters["lo"], hi=emitters["hi"], power=emitters["power"], axis=emitters["axis"],
                                    theta_o=emitters["theta_o"], theta_e=emitters["theta_e"])
             self.selector = make_light_selector(selector_kind, bounds)
-        self.prim_emitter.from_numpy(lookup)
+        upload_fields([(self.prim_emitter, lookup)]
+                      + ([(self.emitter_prim, np.asarray(emitters["prim"], np.int32))] if self.has_area else []))
         if self.has_env and self.env_is_map:
             from renderer.lights.env_sampling import EnvironmentSampler
 

@@ -23,6 +23,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.sampling.warps import INV_PI
+from renderer.upload import upload_fields
 
 TABLE_FILE = Path(__file__).resolve().parent / "data" / "ggx_albedo.npz"
 # 1 - E_avg is about 1e-4 at the smallest roughness: the floor only keeps the division finite
@@ -89,8 +90,7 @@ class GgxAlbedo:
         self.size = table["albedo"].shape[0]
         self.albedo_field = ti.field(ti.f32, shape=table["albedo"].shape)
         self.average_field = ti.field(ti.f32, shape=self.size)
-        self.albedo_field.from_numpy(table["albedo"].astype(np.float32))
-        self.average_field.from_numpy(table["average"].astype(np.float32))
+        upload_fields([(self.albedo_field, table["albedo"]), (self.average_field, table["average"])])
 
     @ti.func
     def albedo(self, mu, roughness):

@@ -8,6 +8,7 @@ import taichi as ti
 
 from renderer.materials.dispersion import dispersion_row
 from renderer.materials.texture_sampler import TextureTable
+from renderer.upload import upload_fields
 
 vec3 = ti.math.vec3
 
@@ -115,7 +116,7 @@ class MaterialTable:
         self.count = len(arrays["kind"])
         self.table = MaterialRecord.field(shape=max(1, self.count))
         if self.count:
-            self.table.from_numpy(arrays)
+            upload_fields([(self.table, arrays)])
         self.textures = textures or TextureTable(None, [])
         self._ggx_albedo = None
 

@@ -8,6 +8,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.scene.textures import WRAP_CLAMP, WRAP_MIRROR
+from renderer.upload import upload_fields
 
 # Texture table row: atlas rect x, y, w, h | wrap s, wrap t, uv set | uv matrix rows 0 and 1.
 TextureSlot = ti.types.struct(rect=ti.math.ivec4, modes=ti.math.ivec3, m0=ti.math.vec3, m1=ti.math.vec3)
@@ -43,7 +44,7 @@ class TextureTable:
         if atlas is None or len(slots) == 0:
             atlas = np.zeros((1, 1, 4), np.float32)
         self.atlas = ti.Vector.field(4, ti.f32, shape=atlas.shape[:2])
-        self.atlas.from_numpy(np.ascontiguousarray(atlas, np.float32))
+        upload_fields([(self.atlas, atlas)])
         self.count = len(slots)
         self.slots = TextureSlot.field(shape=max(1, self.count))
         if self.count:

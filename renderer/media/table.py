@@ -7,6 +7,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.materials.table import NO_MEDIUM
+from renderer.upload import upload_fields
 
 vec3 = ti.math.vec3
 MediumRecord = ti.types.struct(sigma_a=vec3, sigma_s=vec3, g=ti.f32)
@@ -19,9 +20,9 @@ class MediaTable:
         self.names = tuple(m.name for m in media)
         self.table = MediumRecord.field(shape=max(1, len(media)))
         if media:
-            self.table.from_numpy({"sigma_a": np.array([m.sigma_a for m in media], np.float32),
-                                   "sigma_s": np.array([m.sigma_s for m in media], np.float32),
-                                   "g": np.array([m.g for m in media], np.float32)})
+            upload_fields([(self.table, {"sigma_a": np.array([m.sigma_a for m in media], np.float32),
+                                         "sigma_s": np.array([m.sigma_s for m in media], np.float32),
+                                         "g": np.array([m.g for m in media], np.float32)})])
         fog = scene.fog
         # Data, not constants: editing a medium or the fog recompiles nothing.
         self.scene_medium = ti.field(ti.i32, shape=())
