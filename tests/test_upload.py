@@ -1,0 +1,41 @@
+"""renderer.upload: one launch copies many arrays into fields exactly as from_numpy would."""
+import numpy as np
+import pytest
+import taichi as ti
+
+from renderer.upload import upload_fields
+
+
+def test_every_element_kind_lands_where_from_numpy_puts_it():
+    rng = np.random.default_rng(3)
+    record = ti.types.struct(a=ti.f32, b=ti.math.vec3, c=ti.i32)
+    pairs = [
+        (ti.Vector.field(3, ti.f32, shape=(4, 3)), rng.random((4, 3, 3))),
+        (ti.field(ti.i32, shape=5), rng.integers(-100, 100, 5)),
+        (ti.Matrix.field(2, 3, ti.f32, shape=2), rng.random((2, 2, 3))),
+        (ti.field(ti.f32, shape=(3, 2)), rng.random((3, 2))),
+        (ti.Vector.field(3, ti.i32, shape=7), rng.integers(0, 1 << 30, (7, 3))),
+        (ti.Vector.field(2, ti.f32, shape=(2, 3, 2)), rng.random((2, 3, 2, 2))),
+    ]
+    struct = record.field(shape=4)
+    struct_arrays = {"a": rng.random(4), "b": rng.random((4, 3)), "c": np.arange(4) * 7}
+    upload_fields(pairs + [(struct, struct_arrays)])
+    for field, array in pairs:
+        expected = field.to_numpy()  # for its dtype
+        np.testing.assert_array_equal(field.to_numpy(), array.astype(expected.dtype))
+    got = struct.to_numpy()
+    for name, array in struct_arrays.items():
+        np.testing.assert_array_equal(got[name], array.astype(got[name].dtype))
+
+
+def test_wrong_shape_is_refused():
+    field = ti.Vector.field(3, ti.f32, shape=4)
+    with pytest.raises(ValueError, match="shape"):
+        upload_fields([(field, np.zeros((4, 2)))])
+
+
+def test_same_fields_again_reuse_the_kernel_and_overwrite():
+    field = ti.field(ti.f32, shape=3)
+    upload_fields([(field, np.array([1.0, 2.0, 3.0]))])
+    upload_fields([(field, np.array([4.0, 5.0, 6.0]))])
+    np.testing.assert_array_equal(field.to_numpy(), [4.0, 5.0, 6.0])
