@@ -22,7 +22,7 @@ def _element_shape(field) -> tuple[int, ...]:
 @ti.func
 def _multi_index(local, shape):
     """The row-major multi-index of flat cell `local` in a field of `shape` (compile-time)."""
-    index = ti.Vector([0] * len(shape), dt=ti.i32)
+    index = ti.Vector([0] * ti.static(len(shape)), dt=ti.i32)
     rest = local
     for d in ti.static(range(len(shape) - 1, -1, -1)):
         index[d] = rest % shape[d]

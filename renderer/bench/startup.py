@@ -26,8 +26,10 @@ Kernel optimisation levels (renderer.arch.OPTIMIZE_FOR): the start-up figures us
 "compile"; the renderer is also measured cold and warm with "run" (every Taichi IR optimisation),
 and the table sets their compile times against their rendering speed (1 spp frames).
 
-Issue targets: warm start to first frame at most 3 s; frame time at most 50 ms while moving in a
-960x540 window. Writes <out_dir>/bench_startup.json.
+Issue targets: warm start to first frame at most 3 s, judged on the viewer's first rendered frame
+(the headless renderer's start to a full-size 1 spp image is reported beside it, and judged only
+where the viewer cannot run); frame time at most 50 ms while moving in a 960x540 window. Writes
+<out_dir>/bench_startup.json.
 """
 from __future__ import annotations
 
@@ -331,6 +333,10 @@ def print_report(report: dict) -> None:
                   f"{verdict(bool(t['passed']))}")
             continue
         value = "n/a" if t["seconds"] is None else f"{t['seconds']:.2f} s"
+        if not t.get("judged", True):
+            print(f"Reported: warm start to a headless image ({t['what']}): {value}  "
+                  f"(the target is the viewer's first frame)")
+            continue
         print(f"Target: warm start to first frame <= {TARGET_SECONDS:g} s ({t['what']}): {value}  "
               f"{verdict(bool(t['passed']))}")
     if report.get("viewer_note"):
@@ -355,6 +361,28 @@ def optimization_level(entry: dict) -> dict:
     return {"optimize": entry.get("optimize", "compile"), "cold_kernels": kernels(entry["cold"].get("phases", {})),
             "warm_kernels": kernels(warm), "frame_seconds": frame,
             "msamples_per_second": None if not frame else width * height / frame / 1e6}
+
+
+def start_up_targets(measurements: list[dict]) -> list[dict]:
+    """The target rows of the report.
+
+    A frame is what the window shows: the start-up target is the viewer's first rendered frame.
+    The headless renderer's start to a full 960x540 1 spp image (which includes ~1.3 s of pure
+    rendering) is reported beside it, and judged only where the viewer could not be measured.
+    """
+    viewer_measured = any(m["mode"] == "viewer" and "error" not in m["warm"] for m in measurements)
+    targets = []
+    for entry in measurements:
+        value = entry["warm"].get("start_to_first_frame")
+        what = ("viewer, first rendered image" if entry["mode"] == "viewer" else "renderer, 1 spp at 960x540")
+        judged = entry["mode"] == "viewer" or not viewer_measured
+        targets.append({"what": what, "mode": entry["mode"], "seconds": value, "judged": judged,
+                        "passed": value is not None and value <= TARGET_SECONDS})
+        if entry["mode"] == "viewer":
+            moving = entry["warm"].get("moving_ms")
+            targets.append({"what": "viewer 960x540, W held", "mode": "viewer", "moving_ms": moving,
+                            "passed": moving is not None and moving <= TARGET_MOVING_MS})
+    return targets
 
 
 def run(quick: bool = False, out_dir: Path = Path("reports"), warm_runs: int = 3, with_viewer: bool = True) -> int:
@@ -382,16 +410,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), warm_runs: int = 3
     else:
         viewer_note = "The viewer was not measured; the renderer path stands for it."
 
-    targets = []
-    for entry in measurements:
-        value = entry["warm"].get("start_to_first_frame")
-        what = ("viewer, first rendered image" if entry["mode"] == "viewer" else "renderer, 1 spp at 960x540")
-        targets.append({"what": what, "mode": entry["mode"], "seconds": value,
-                        "passed": value is not None and value <= TARGET_SECONDS})
-        if entry["mode"] == "viewer":
-            moving = entry["warm"].get("moving_ms")
-            targets.append({"what": "viewer 960x540, W held", "mode": "viewer", "moving_ms": moving,
-                            "passed": moving is not None and moving <= TARGET_MOVING_MS})
+    targets = start_up_targets(measurements)
     levels = [optimization_level(measurements[0]), optimization_level(full)]
     measurements.append(full)
     report = {

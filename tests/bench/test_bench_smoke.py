@@ -182,6 +182,20 @@ def test_startup_optimization_levels_and_moving_summary():
     assert summarise(runs)["moving_ms"] == pytest.approx(45.0)
 
 
+def test_startup_target_is_the_viewer_frame_unless_the_viewer_failed():
+    from renderer.bench.startup import start_up_targets
+
+    renderer = {"mode": "renderer", "warm": {"start_to_first_frame": 3.4}}
+    viewer = {"mode": "viewer", "warm": {"start_to_first_frame": 2.5, "moving_ms": 47.0}}
+    rows = start_up_targets([renderer, viewer])
+    judged = [r for r in rows if r.get("judged") and "seconds" in r]
+    assert [(r["mode"], r["passed"]) for r in judged] == [("viewer", True)]
+    assert [r["passed"] for r in rows if "moving_ms" in r] == [True]
+    broken = {"mode": "viewer", "warm": {"error": "no Vulkan"}}
+    rows = start_up_targets([renderer, broken])
+    assert [(r["mode"], r["passed"]) for r in rows if r.get("judged")] == [("renderer", False), ("viewer", False)]
+
+
 def test_startup_child_process_once(tiny_scene, tmp_path):
     """One real, tiny subprocess: imports, initialises, renders, reports its marks."""
     from renderer.bench.startup import measure
