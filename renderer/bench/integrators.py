@@ -86,6 +86,7 @@ REFERENCE_INTEGRATOR = "mis"
 REFERENCE_SAMPLER = "independent"
 SCENES = ("cornell_box", "bunnies", "studio", "many_lights")
 MITSUBA_SCENE = "cornell_box"
+MITSUBA_LD_SAMPLER = "multijitter"  # Mitsuba's best at equal time here (vs stratified, ldsampler, orthogonal)
 FIREFLY_TRIM = 1e-3  # fraction of pixels with the largest error left out of relMSE*
 METRICS = ("rmse", "rel_mse", "rel_mse_trimmed")
 
@@ -389,14 +390,23 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
     ref = mitsuba_ref["image"]
     # Mitsuba's own curve: separate renders at 1, 2, 4, ... spp (a Mitsuba render is not
     # progressive), each on its own seed; JIT kernels are warmed up by the reference passes.
-    curve = []
-    spp = 1
-    while spp <= config.mitsuba_curve_max_spp:
-        t0 = time.perf_counter()
-        image = ms.render_scene(mscene, spp, seed=config.seed + spp)
-        seconds = time.perf_counter() - t0
-        curve.append({"spp": spp, "seconds": seconds, "rmse": rmse(image, ref)})
-        spp *= 2
+    def mitsuba_curve(scene):
+        points = []
+        spp = 1
+        while spp <= config.mitsuba_curve_max_spp:
+            t0 = time.perf_counter()
+            image = ms.render_scene(scene, spp, seed=config.seed + spp)
+            seconds = time.perf_counter() - t0
+            points.append({"spp": spp, "seconds": seconds, "rmse": rmse(image, ref), "rel_mse": rel_mse(image, ref)})
+            spp *= 2
+        return points
+
+    curve = mitsuba_curve(mscene)
+    # Best against best: Mitsuba with its stratified low-discrepancy sampler (on this scene it
+    # converges like Lantern's Sobol sampler), set against Lantern's sobol rows.
+    ld_scene = ms.load_cornell_box(size[0], size[1], cornell["max_depth"], sampler=MITSUBA_LD_SAMPLER)
+    ms.render_scene(ld_scene, 1, seed=0)  # JIT warm-up for this sampler
+    ld_curve = mitsuba_curve(ld_scene)
     # Equal spp, round-robin: Mitsuba and Lantern's independent-sampler integrators each render
     # target_spp on `mitsuba_target_renders` seeds in turn (a slow drift of the machine hits all
     # alike). Times give samples/s (median); images give each one's expected error at target_spp
@@ -462,6 +472,18 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
             "spp_to_target": spp_needed, "extrapolated": extrapolated, "seconds_to_target": spp_needed * per_spp,
             "spp_to_target_rel_mse": spp_rel, "extrapolated_rel_mse": extrapolated_rel,
             "seconds_to_target_rel_mse": spp_rel * per_spp}
+    # Mitsuba's low-discrepancy row: off its curve, at the curve's own speed (as Lantern's Sobol rows)
+    last = ld_curve[-1]
+    per_spp = last["seconds"] / last["spp"]
+    spp_needed, extrapolated = spp_to_reach(ld_curve, "rmse", target)
+    spp_rel, extrapolated_rel = spp_to_reach(ld_curve, "rel_mse", target_rel, power=1.0)
+    rows[f"mitsuba/{MITSUBA_LD_SAMPLER}"] = {
+        "spp_per_s": 1.0 / per_spp, "samples_per_s": pixels / per_spp, "timing": None,
+        "rmse_at_target_spp": value_at(ld_curve, "rmse", "spp", target_spp),
+        "rel_mse_at_target_spp": value_at(ld_curve, "rel_mse", "spp", target_spp), "measured": "curve",
+        "spp_to_target": spp_needed, "extrapolated": extrapolated, "seconds_to_target": spp_needed * per_spp,
+        "spp_to_target_rel_mse": spp_rel, "extrapolated_rel_mse": extrapolated_rel,
+        "seconds_to_target_rel_mse": spp_rel * per_spp}
     judged = rows.get(combo("mis", "independent"))
     passed = judged is not None and judged["seconds_to_target"] <= rows["mitsuba"]["seconds_to_target"]
     return {"available": True, "size": list(size), "max_depth": cornell["max_depth"], "threads": config.mitsuba_threads,
@@ -469,7 +491,7 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
             "target_spp": target_spp, "target_renders": config.mitsuba_target_renders, "target_rmse": target,
             "errors_per_seed": errors,
             "target_rel_mse": target_rel, "light_edge_pixels": int(edge.sum()), "light_edge_mse_share": edge_share,
-            "curve": curve, "rows": rows,
+            "curve": curve, "low_discrepancy_curve": {"sampler": MITSUBA_LD_SAMPLER, "points": ld_curve}, "rows": rows,
             "lantern_curves": {combo(i, s): [{"spp": p["spp"], "seconds": p["seconds"], "rmse": p["rmse_mitsuba"]}
                                              for p in c["curve"]] for (i, s), c in curves.items()},
             "passed": passed}
@@ -518,7 +540,9 @@ def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBe
     rows = []
     m = mitsuba["rows"]["mitsuba"]
     for name, r in mitsuba["rows"].items():
-        rows.append([f"Mitsuba {mitsuba['variant']}" if name == "mitsuba" else f"Lantern {name}",
+        label = (f"Mitsuba {mitsuba['variant']}" if name == "mitsuba"
+                 else f"Mitsuba {name.split('/')[1]}" if name.startswith("mitsuba/") else f"Lantern {name}")
+        rows.append([label,
                      r["samples_per_s"] / 1e6, f"{r['samples_per_s'] / m['samples_per_s']:.2f}x",
                      r["rmse_at_target_spp"], r["rel_mse_at_target_spp"],
                      f"{r['spp_to_target']:.0f}" + ("(ext)" if r["extrapolated"] else ""),
@@ -534,8 +558,8 @@ def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBe
                       f"reference of {ref['spp']} spp (its own noise RMSE {ref['noise_floor']['rmse']:.3g}). Target: "
                       f"Mitsuba's RMSE {mitsuba['target_rmse']:.4g} (relMSE {mitsuba['target_rel_mse']:.4g}) at {n} spp. "
                       f"Independent-sampler rows: {mitsuba['target_renders']} renders of {n} spp each, round-robin "
-                      f"(median time; mean squared error; spp to target from MSE ~ 1/spp). Sobol rows: read off "
-                      f"their error curves, at their own speed. speed = Mitsuba's seconds / the row's (>1: faster "
+                      f"(median time; mean squared error; spp to target from MSE ~ 1/spp). Sobol and Mitsuba "
+                      f"{MITSUBA_LD_SAMPLER} rows: read off their error curves, at their own speed. speed = Mitsuba's seconds / the row's (>1: faster "
                       f"than Mitsuba); (ext) = extrapolated past the curve")
     print(f"   The RMSE is dominated by the {mitsuba['light_edge_pixels']} pixels on the light's edge "
           f"({mitsuba['light_edge_pixels'] / (mitsuba['size'][0] * mitsuba['size'][1]):.1%} of the image): they hold "
@@ -548,6 +572,11 @@ def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBe
               f"{verdict(mitsuba['passed'])}  (Lantern mis {r['seconds_to_target']:.2f} s vs Mitsuba "
               f"{m['seconds_to_target']:.2f} s; samples/s {r['samples_per_s'] / 1e6:.2f} M vs "
               f"{m['samples_per_s'] / 1e6:.2f} M)")
+    best, ld = mitsuba["rows"].get("mis/sobol"), mitsuba["rows"].get(f"mitsuba/{MITSUBA_LD_SAMPLER}")
+    if best is not None and ld is not None:
+        print(f"   Best sampler against best sampler: Lantern mis/sobol {best['seconds_to_target']:.2f} s vs Mitsuba "
+              f"{MITSUBA_LD_SAMPLER} {ld['seconds_to_target']:.2f} s to the target RMSE "
+              f"({ld['seconds_to_target'] / best['seconds_to_target']:.2f}x Mitsuba's speed)")
     if mitsuba.get("note"):
         print(f"   note: {mitsuba['note']}")
     print(flush=True)

@@ -103,20 +103,25 @@ def set_threads(threads: int | None) -> None:
     dr.set_thread_count(int(threads))
 
 
-def cornell_box_dict(width: int = 256, height: int = 256, max_depth: int = 8, rfilter: str = "box") -> dict:
-    """`mi.cornell_box()` with the film resized and the reconstruction filter replaced."""
+def cornell_box_dict(width: int = 256, height: int = 256, max_depth: int = 8, rfilter: str = "box",
+                     sampler: str | None = None) -> dict:
+    """`mi.cornell_box()` with the film resized, the reconstruction filter replaced and (if given)
+    another sampler (Mitsuba's default is `independent`)."""
     mi, _, _ = _import_mitsuba()
     scene = mi.cornell_box()
     film = scene["sensor"]["film"]
     film["width"], film["height"] = int(width), int(height)
     film["rfilter"] = {"type": rfilter}
     scene["integrator"] = {"type": "path", "max_depth": int(max_depth)}
+    if sampler is not None:
+        scene["sensor"]["sampler"] = {"type": sampler, "sample_count": scene["sensor"]["sampler"]["sample_count"]}
     return scene
 
 
-def load_cornell_box(width: int = 256, height: int = 256, max_depth: int = 8, rfilter: str = "box"):
+def load_cornell_box(width: int = 256, height: int = 256, max_depth: int = 8, rfilter: str = "box",
+                     sampler: str | None = None):
     mi, _, _ = _import_mitsuba()
-    return mi.load_dict(cornell_box_dict(width, height, max_depth, rfilter))
+    return mi.load_dict(cornell_box_dict(width, height, max_depth, rfilter, sampler))
 
 
 def render_scene(scene, spp: int, seed: int = 0) -> np.ndarray:
