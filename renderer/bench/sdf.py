@@ -75,7 +75,7 @@ class SdfBenchConfig:
     sweep_rate_spp: int = 2  # path spp per timed run when measuring a sweep setting's samples/s
     sweep_seconds: float = 1.5  # path time budget per sweep setting
     max_sweep_spp: int = 4096
-    omegas: tuple[float, ...] = (1.0, 1.2, 1.4, 1.6, 1.8, 1.9)
+    omegas: tuple[float, ...] = (1.0, 1.2, 1.4, 1.6, 1.8, 1.9, 2.5, 3.0)
     thresholds: tuple[float, ...] = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
     step_limits: tuple[int, ...] = (32, 64, 128, 256, 512)
     ref_threshold: float = 0.25

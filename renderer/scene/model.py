@@ -43,7 +43,7 @@ class MarchSettings:
     min_threshold: float = 1e-4  # absolute floor on the hit distance, metres
     max_steps: int = 256
     max_distance: float = 100.0  # metres
-    over_relaxation: float = 1.9  # the longest step in distance bounds; 1.0 is plain sphere tracing
+    over_relaxation: float = 3.0  # the longest step in distance bounds; 1.0 is plain sphere tracing
     adaptive: bool = True  # step length from the distance's slope along the ray, up to over_relaxation
 
 

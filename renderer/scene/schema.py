@@ -209,6 +209,12 @@ def _norm(v) -> float:
     return math.sqrt(sum(c * c for c in v))
 
 
+def _check_fixed_relaxation(v: dict) -> Optional[str]:
+    if not v["adaptive"] and v["over_relaxation"] >= 2.0:
+        return f"over_relaxation {v['over_relaxation']:g} needs adaptive = true (a fixed factor must be below 2)"
+    return None
+
+
 def _check_camera(v: dict) -> Optional[str]:
     view = tuple(b - a for a, b in zip(v["position"], v["look_at"]))
     if _norm(view) == 0.0:
@@ -312,13 +318,17 @@ MARCH = Section(
         Field("max_steps", "int", 256, "Most steps along one ray before it counts as a miss.",
               AT_LEAST_ONE),
         Field("max_distance", "float", 100.0, "Rays stop after this distance, metres.", POSITIVE),
-        Field("over_relaxation", "float", 1.9, "The longest step, in distance bounds; 1 is plain "
+        Field("over_relaxation", "float", 3.0, "The longest step, in distance bounds; 1 is plain "
               "sphere tracing. A longer step is kept only if the unbounding spheres of its ends overlap "
-              "(else the marcher steps back), so no step crosses a surface.", Range(1.0, 2.0, hi_open=True)),
+              "(else the marcher steps back), so no step crosses a surface. Steps beyond 2 bounds are "
+              "only taken by `adaptive` marching, where the distance grows along the ray (rays leaving "
+              "the scene); a fixed factor must stay below 2.", Range(1.0, 4.0, hi_open=True)),
         Field("adaptive", "bool", True, "Choose each step from the distance's slope along the ray "
               "(Bán and Valasek 2023), up to `over_relaxation`; false uses `over_relaxation` as a "
-              "fixed factor (Keinert et al. 2014)."),
+              "fixed factor (Keinert et al. 2014), which must then be below 2."),
     ),
+    rules=(Rule("With `adaptive = false`, `over_relaxation` must be below 2: a fixed factor of 2 or "
+                "more overshoots every surface it approaches.", _check_fixed_relaxation),),
 )
 
 _MAP, _SKY, _CONSTANT = ("map",), ("sky",), ("constant",)

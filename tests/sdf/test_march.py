@@ -39,7 +39,7 @@ from shaders_sdf.geometry import SdfGeometry
 REPO = Path(__file__).resolve().parents[2]
 THRESHOLD = 1e-4  # MarchSettings.min_threshold; rays here have no cone, so it is the hit threshold
 MAX_STEPS = 256
-OMEGAS = (1.6, 1.0)
+OMEGAS = (3.0, 1.6, 1.0)  # 3.0: the default cap of adaptive marching (steps past 2 bounds on receding rays)
 N_OUTSIDE = 2000
 N_INSIDE = 1000
 
