@@ -421,7 +421,8 @@ def first_crossing(geo: SdfGeometry, o, d, length, coarse: int, fine: float):
 def _normal_kernel(geo: ti.template(), p: ti.types.ndarray(dtype=vec3, ndim=1), h: ti.f32,
                    out: ti.types.ndarray(dtype=vec3, ndim=1)):
     for i in range(p.shape[0]):
-        out[i] = geo.normal(p[i], h)
+        n, _ = geo.normal_and_material(p[i], h)
+        out[i] = n
 
 
 def normals(geo: SdfGeometry, p, h: float) -> np.ndarray:
