@@ -53,11 +53,12 @@ def _scatter(targets: ti.template(), cells: ti.i32, f32: ti.types.ndarray(dtype=
             field, first, offset, width, kind, element = ti.static(targets[k])
             if first <= cell and cell < first + ti.static(_cell_count(field)):
                 local = cell - first
-                I = _multi_index(local, ti.static(field.shape))
-                if ti.static(kind == 0):
-                    _store(field, I, offset + local * width, width, element, f32)
+                buffer = ti.static(f32 if kind == 0 else i32)
+                if ti.static(len(field.shape) == 1):  # most fields: the cell is the index
+                    _store(field, local, offset + local * width, width, element, buffer)
                 else:
-                    _store(field, I, offset + local * width, width, element, i32)
+                    _store(field, _multi_index(local, ti.static(field.shape)), offset + local * width, width,
+                           element, buffer)
 
 
 def _cell_count(field) -> int:
