@@ -68,7 +68,7 @@ import taichi as ti
 from renderer.camera import generate_ray
 from renderer.film import is_finite_vec3
 from renderer.geometry.interface import INF, Hit, Ray, Surface
-from renderer.integrators.direct import power_heuristic
+from renderer.integrators.direct_light import emission_weight, environment_weight, sample_direct
 from renderer.integrators.path import MAX_VERTICES, RR_DEPTH
 from renderer.integrators.photon_grid import PhotonGrid, bucket_of, cell_of, table_size_for
 from renderer.materials.table import DIELECTRIC, DIFFUSE, PRINCIPLED, Material
@@ -366,10 +366,7 @@ class SppmProgram(RenderProgram):
                     break
                 continue
             if hit.hit == 0:
-                weight = 1.0
-                if ti.static(lights.has_env):
-                    if prev_delta == 0:
-                        weight = power_heuristic(prev_pdf, lights.pdf_env(ray.d))
+                weight = environment_weight(lights, True, prev_delta, prev_pdf, ray.d)
                 radiance += beta * weight * self.environment.radiance(ray.d)
                 break
             s = self.geometry.surface(ray, hit)
@@ -377,9 +374,7 @@ class SppmProgram(RenderProgram):
             mat, n = self.bsdf.shade(s, wo)
             if ti.static(self.features.has_emission):
                 if s.front_face == 1 and mat.emission.max() > 0.0:
-                    weight = 1.0
-                    if prev_delta == 0 and lights.is_sampled(s.prim):
-                        weight = power_heuristic(prev_pdf, lights.pdf_hit(prev_p, prev_n, s.prim, s.p, s.n_geo))
+                    weight = emission_weight(lights, True, prev_delta, prev_pdf, prev_p, prev_n, s)
                     radiance += beta * weight * mat.emission
             if probing == 1:
                 break
@@ -400,15 +395,14 @@ class SppmProgram(RenderProgram):
                                                                 1e-7)
                     probing = 1
                 # Direct light at the VP, and at the glossy vertices traced through on the way.
-                ls = lights.sample(self, s.p, n, self.sampler.get1d(sample, dim + dims.LIGHT_SELECT),
-                                   self.sampler.get2d(sample, dim + dims.LIGHT_POINT))
-                if ls.pdf > 0.0 and ls.radiance.max() > 0.0:
-                    f, pdf_bsdf = self.bsdf.eval_at(mat, n, s.n_geo, wo, ls.wi)
-                    if f.max() > 0.0:
-                        shadow_pending = True
-                        shadow_target = ls.p
-                        shadow_n = ls.n
-                        shadow_value = beta * f * ls.radiance * (power_heuristic(ls.pdf, pdf_bsdf) / ls.pdf)
+                found, ls, f, scale = sample_direct(self, True, mat, n, s, wo,
+                                                    self.sampler.get1d(sample, dim + dims.LIGHT_SELECT),
+                                                    self.sampler.get2d(sample, dim + dims.LIGHT_POINT))
+                if found:
+                    shadow_pending = True
+                    shadow_target = ls.p
+                    shadow_n = ls.n
+                    shadow_value = beta * f * ls.radiance * scale
             bs = self.bsdf.sample_at(mat, n, s.n_geo, wo, self.sampler.get1d(sample, dim + dims.BSDF_LOBE),
                                      self.sampler.get2d(sample, dim + dims.BSDF_DIRECTION))
             if bs.valid == 0:

@@ -31,6 +31,7 @@ set of four: simpler, at the price of more colour noise behind dispersive glass.
 import taichi as ti
 
 from renderer.geometry.interface import INF, MEDIUM_POINT, Hit, Surface
+from renderer.integrators.direct_light import emission_weight, environment_weight, power_heuristic, sample_direct
 from renderer.materials import dispersion
 from renderer.materials.table import NO_MEDIUM, NULL
 from renderer.media import homogeneous, phase
@@ -46,20 +47,6 @@ vec3 = ti.math.vec3
 MAX_VERTICES = 1024
 # Russian roulette starts after this many bounces (Mitsuba's default rr_depth is 5).
 RR_DEPTH = 5
-
-
-@ti.func
-def power_heuristic(a, b):
-    """a^2 / (a^2 + b^2), written through the ratio of the smaller to the larger density so that
-    an infinite or overflowing density (a light seen exactly edge-on) gives 1 or 0, never inf/inf."""
-    w = 0.0
-    if a >= b and a > 0.0:
-        r = b / a
-        w = 1.0 / (1.0 + r * r)
-    elif b > a:
-        r = a / b
-        w = r * r / (1.0 + r * r)
-    return w
 
 
 @ti.func
@@ -213,12 +200,7 @@ class PathTracerBase:
                 if hit.hit == 0:
                     weight = 1.0
                     if ti.static(self.light_sampling):
-                        if ti.static(ctx.lights.has_env):
-                            if prev_delta == 0:
-                                if ti.static(self.mis):
-                                    weight = power_heuristic(prev_pdf, ctx.lights.pdf_env(ray.d))
-                                else:
-                                    weight = 0.0
+                        weight = environment_weight(ctx.lights, self.mis, prev_delta, prev_pdf, ray.d)
                     radiance += throughput * weight * _tint(ctx, ctx.environment.radiance(ray.d), spectral, lam)
                     break
                 s = hs
@@ -237,36 +219,27 @@ class PathTracerBase:
                     if s.front_face == 1 and mat.emission.max() > 0.0:
                         weight = 1.0
                         if ti.static(self.light_sampling):
-                            if prev_delta == 0 and ctx.lights.is_sampled(s.prim):
-                                if ti.static(self.mis):
-                                    weight = power_heuristic(prev_pdf, ctx.lights.pdf_hit(prev_p, prev_n, s.prim, s.p,
-                                                                                          s.n_geo))
-                                else:
-                                    weight = 0.0
+                            weight = emission_weight(ctx.lights, self.mis, prev_delta, prev_pdf, prev_p, prev_n, s)
                         radiance += throughput * weight * _tint(ctx, mat.emission, spectral, lam)
                 # Mitsuba's convention: max_depth counts path vertices, 1 = emitters seen directly.
                 if max_depth >= 0 and depth + 1 >= max_depth:
                     break
                 if ti.static(self.light_sampling):
                     if ctx.bsdf.has_smooth_part(mat):
-                        ls = ctx.lights.sample(ctx, s.p, n, ctx.sampler.get1d(state, dim + dims.LIGHT_SELECT),
-                                               ctx.sampler.get2d(state, dim + dims.LIGHT_POINT))
-                        if ls.pdf > 0.0 and ls.radiance.max() > 0.0:
-                            f, pdf_bsdf = ctx.bsdf.eval_at(mat, n, s.n_geo, wo, ls.wi)
-                            if f.max() > 0.0:
-                                # An environment sample's point lies far away: area lights and the
-                                # environment share the shadow ray.
-                                weight = 1.0
-                                if ti.static(self.mis):
-                                    weight = power_heuristic(ls.pdf, pdf_bsdf)
-                                shadow_pending = True
-                                shadow_s = s
-                                if ti.static(ctx.features.has_media):
-                                    shadow_medium = _medium_beyond(ctx, s, wo, ls.wi, medium)
-                                shadow_target = ls.p
-                                shadow_n = ls.n
-                                shadow_value = (throughput * _tint(ctx, f, spectral, lam)
-                                                * _tint(ctx, ls.radiance, spectral, lam) * (weight / ls.pdf))
+                        found, ls, f, scale = sample_direct(ctx, self.mis, mat, n, s, wo,
+                                                            ctx.sampler.get1d(state, dim + dims.LIGHT_SELECT),
+                                                            ctx.sampler.get2d(state, dim + dims.LIGHT_POINT))
+                        if found:
+                            # An environment sample's point lies far away: area lights and the
+                            # environment share the shadow ray.
+                            shadow_pending = True
+                            shadow_s = s
+                            if ti.static(ctx.features.has_media):
+                                shadow_medium = _medium_beyond(ctx, s, wo, ls.wi, medium)
+                            shadow_target = ls.p
+                            shadow_n = ls.n
+                            shadow_value = (throughput * _tint(ctx, f, spectral, lam)
+                                            * _tint(ctx, ls.radiance, spectral, lam) * scale)
                 bs = ctx.bsdf.sample_at(mat, n, s.n_geo, wo, ctx.sampler.get1d(state, dim + dims.BSDF_LOBE),
                                         ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
                 if bs.valid == 0:
