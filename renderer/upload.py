@@ -19,6 +19,10 @@ def _element_shape(field) -> tuple[int, ...]:
     return (field.n,) if field.m == 1 else (field.n, field.m)
 
 
+def _cell_count(field) -> int:
+    return int(np.prod(field.shape, dtype=np.int64))
+
+
 @ti.func
 def _multi_index(local, shape):
     """The row-major multi-index of flat cell `local` in a field of `shape` (compile-time)."""
@@ -31,11 +35,11 @@ def _multi_index(local, shape):
 
 
 @ti.func
-def _store(field: ti.template(), I, value_base, width: ti.template(), element: ti.template(), buffer: ti.template()):
+def _store(field: ti.template(), I, value_base, element: ti.template(), buffer: ti.template()):
     if ti.static(element == ()):
         field[I] = buffer[value_base]
     elif ti.static(len(element) == 1):
-        for c in ti.static(range(width)):
+        for c in ti.static(range(element[0])):
             field[I][c] = buffer[value_base + c]
     else:
         for r, c in ti.static(ti.ndrange(element[0], element[1])):
@@ -55,14 +59,9 @@ def _scatter(targets: ti.template(), cells: ti.i32, f32: ti.types.ndarray(dtype=
                 local = cell - first
                 buffer = ti.static(f32 if kind == 0 else i32)
                 if ti.static(len(field.shape) == 1):  # most fields: the cell is the index
-                    _store(field, local, offset + local * width, width, element, buffer)
+                    _store(field, local, offset + local * width, element, buffer)
                 else:
-                    _store(field, _multi_index(local, ti.static(field.shape)), offset + local * width, width,
-                           element, buffer)
-
-
-def _cell_count(field) -> int:
-    return int(np.prod(field.shape, dtype=np.int64))
+                    _store(field, _multi_index(local, ti.static(field.shape)), offset + local * width, element, buffer)
 
 
 def _members(pairs):

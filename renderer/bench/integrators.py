@@ -456,34 +456,25 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
             "spp_to_target": spp_needed, "extrapolated": False, "seconds_to_target": spp_needed * per_spp,
             "spp_to_target_rel_mse": spp_rel, "extrapolated_rel_mse": False,
             "seconds_to_target_rel_mse": spp_rel * per_spp}
+    def curve_row(points, rmse_key, rel_key, per_spp):
+        # samplers whose error is not ~ 1/spp (Sobol, multijitter): read off their error curve, at
+        # that curve's own speed
+        spp_needed, extrapolated = spp_to_reach(points, rmse_key, target)
+        spp_rel, extrapolated_rel = spp_to_reach(points, rel_key, target_rel, power=1.0)
+        return {"spp_per_s": 1.0 / per_spp, "samples_per_s": pixels / per_spp, "timing": None,
+                "rmse_at_target_spp": value_at(points, rmse_key, "spp", target_spp),
+                "rel_mse_at_target_spp": value_at(points, rel_key, "spp", target_spp), "measured": "curve",
+                "spp_to_target": spp_needed, "extrapolated": extrapolated, "seconds_to_target": spp_needed * per_spp,
+                "spp_to_target_rel_mse": spp_rel, "extrapolated_rel_mse": extrapolated_rel,
+                "seconds_to_target_rel_mse": spp_rel * per_spp}
+
     curves = {(c["integrator"], c["sampler"]): c for c in cornell["curves"]}
     for (integrator, sampler), c in curves.items():
-        if combo(integrator, sampler) in rows:
-            continue
-        # the other samplers (Sobol: error not ~ 1/spp): read off their progressive curve, at that
-        # curve's own speed
-        per_spp = c["seconds"] / c["spp"]
-        spp_needed, extrapolated = spp_to_reach(c["curve"], "rmse_mitsuba", target)
-        spp_rel, extrapolated_rel = spp_to_reach(c["curve"], "rel_mse_mitsuba", target_rel, power=1.0)
-        rows[combo(integrator, sampler)] = {
-            "spp_per_s": 1.0 / per_spp, "samples_per_s": pixels / per_spp, "timing": None,
-            "rmse_at_target_spp": value_at(c["curve"], "rmse_mitsuba", "spp", target_spp),
-            "rel_mse_at_target_spp": value_at(c["curve"], "rel_mse_mitsuba", "spp", target_spp), "measured": "curve",
-            "spp_to_target": spp_needed, "extrapolated": extrapolated, "seconds_to_target": spp_needed * per_spp,
-            "spp_to_target_rel_mse": spp_rel, "extrapolated_rel_mse": extrapolated_rel,
-            "seconds_to_target_rel_mse": spp_rel * per_spp}
-    # Mitsuba's low-discrepancy row: off its curve, at the curve's own speed (as Lantern's Sobol rows)
+        if combo(integrator, sampler) not in rows:
+            rows[combo(integrator, sampler)] = curve_row(c["curve"], "rmse_mitsuba", "rel_mse_mitsuba",
+                                                         c["seconds"] / c["spp"])
     last = ld_curve[-1]
-    per_spp = last["seconds"] / last["spp"]
-    spp_needed, extrapolated = spp_to_reach(ld_curve, "rmse", target)
-    spp_rel, extrapolated_rel = spp_to_reach(ld_curve, "rel_mse", target_rel, power=1.0)
-    rows[f"mitsuba/{MITSUBA_LD_SAMPLER}"] = {
-        "spp_per_s": 1.0 / per_spp, "samples_per_s": pixels / per_spp, "timing": None,
-        "rmse_at_target_spp": value_at(ld_curve, "rmse", "spp", target_spp),
-        "rel_mse_at_target_spp": value_at(ld_curve, "rel_mse", "spp", target_spp), "measured": "curve",
-        "spp_to_target": spp_needed, "extrapolated": extrapolated, "seconds_to_target": spp_needed * per_spp,
-        "spp_to_target_rel_mse": spp_rel, "extrapolated_rel_mse": extrapolated_rel,
-        "seconds_to_target_rel_mse": spp_rel * per_spp}
+    rows[f"mitsuba/{MITSUBA_LD_SAMPLER}"] = curve_row(ld_curve, "rmse", "rel_mse", last["seconds"] / last["spp"])
     judged = rows.get(combo("mis", "independent"))
     passed = judged is not None and judged["seconds_to_target"] <= rows["mitsuba"]["seconds_to_target"]
     return {"available": True, "size": list(size), "max_depth": cornell["max_depth"], "threads": config.mitsuba_threads,

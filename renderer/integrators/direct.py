@@ -9,10 +9,9 @@ The tracer itself (one loop for every ray of a path, media) is renderer/integrat
 """
 import taichi as ti
 
-from renderer.integrators.direct_light import power_heuristic
 from renderer.integrators.tracer import PathTracerBase
 
-__all__ = ["power_heuristic", "NextEventEstimation", "MultipleImportanceSampling"]
+__all__ = ["NextEventEstimation", "MultipleImportanceSampling"]
 
 
 @ti.data_oriented
