@@ -9,8 +9,7 @@ build below; pass `scenes=` to include it), with the `mis` integrator at a small
    optional effect of its geometry kind forced on; effects with no data in the scene are compiled
    but their branches never taken). Per build: compile time, kernel size, samples/s.
 2. Unused effects: own Features plus ONE effect the scene does not use (each boolean field of
-   Features that is off in the scene's own and on in `with_everything()`, `has_dispersion`
-   included once Features has it). Switching off an effect a scene uses would not give a valid
+   Features that is off in the scene's own and on in `with_everything()`). Switching off an effect a scene uses would not give a valid
    image, so "own build at least as fast as a build with the unused effect removed by hand" is
    tested the other way round: cost of effect e = time(own + e) / time(own), at equal spp.
    The forced build's image is compared with the own image (same seed): forcing an effect the
@@ -194,16 +193,9 @@ def _without_glass(scene):
 
 def _without_dispersion(scene):
     """Dispersive glass with its index at the d line (587.56 nm), not dispersive."""
-    from renderer.materials.dispersion import dispersion_row, ior_at_np
-    from renderer.spectral.ior import LINE_D
+    from renderer.materials.dispersion import non_dispersive
 
-    out = []
-    for m in scene.materials:
-        if getattr(m, "is_dispersive", False):
-            n_d = float(ior_at_np({**dispersion_row(m), "ior": m.ior}, [LINE_D])[0])
-            m = replace(m, glass="", abbe=0.0, ior=n_d)
-        out.append(m)
-    return replace(scene, materials=tuple(out))
+    return replace(scene, materials=tuple(non_dispersive(m) for m in scene.materials))
 
 
 # build name -> (scene variant, Features edit, pinhole camera)
@@ -288,8 +280,6 @@ def plan_builds(name: str, own, config: FeaturesBenchConfig) -> tuple[list[Build
     for case in config.effect_cases:
         if case.scene != name:
             continue
-        if case.effect == "dispersion" and not hasattr(own, "has_dispersion"):
-            continue  # Features has no dispersion yet: reported as missing by the parent
         cases.append(case)
         for b in (case.with_build, case.without):
             if all(x.name != b for x in builds):
@@ -321,11 +311,6 @@ def child_scene(path: str, config: FeaturesBenchConfig) -> dict:
         for case in config.effect_cases:
             if case.scene == scene.name:
                 variants += [v for v in (case.with_build, case.without) if v in SCENE_VARIANTS and v not in variants]
-        if "no dispersion" in variants:
-            from renderer.scene.features import Features
-
-            if "has_dispersion" not in {f.name for f in fields(Features)}:
-                variants.remove("no dispersion")
 
         # --- phase A: primer, then each build cold in its own runtime ---------------------------
         init_taichi("cpu", cache_dir=cache_dir, optimize=config.optimize)
@@ -647,7 +632,6 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
         config: FeaturesBenchConfig | None = None) -> int:
     """Benchmark every catalog scene but `stress` (or the scene files `scenes`); print, write JSON and a plot."""
     from renderer.bench.common import load_average, machine_info, write_json
-    from renderer.scene.features import Features
 
     config = config or (QUICK if quick else FULL)
     out_dir = Path(out_dir)
@@ -660,9 +644,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
         if "error" in results[-1]:
             _log(f"  {path.stem}: ERROR {results[-1]['error']}")
     missing = []
-    if "has_dispersion" not in {f.name for f in fields(Features)}:
-        missing.append("dispersion (Features has no has_dispersion)")
-    elif not any(c.get("effect") == "dispersion" for r in results for c in r.get("cases", [])):
+    if not any(c.get("effect") == "dispersion" for r in results for c in r.get("cases", [])):
         if any(c.effect == "dispersion" for c in config.effect_cases) and scenes is None:
             missing.append("dispersion (no scene measured it)")
     summary = summarise(results, config)

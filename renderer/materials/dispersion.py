@@ -9,10 +9,12 @@ material compile spectral code (Features.has_dispersion).
 import numpy as np
 import taichi as ti
 
-from renderer.spectral.ior import LINE_C, LINE_D, LINE_F, SELLMEIER_PRESETS, cauchy_ior, sellmeier_ior
+from dataclasses import replace
+
+from renderer.spectral.ior import (LINE_C, LINE_D, LINE_F, SELLMEIER_PRESETS, cauchy_ior, cauchy_ior_np, sellmeier_ior,
+                                   sellmeier_ior_np)
 
 NONE, CAUCHY, SELLMEIER = 0, 1, 2
-GLASSES = tuple(SELLMEIER_PRESETS)
 
 
 def cauchy_from_abbe(ior: float, abbe: float) -> tuple[float, float]:
@@ -44,13 +46,20 @@ def ior_at(rec, lam_nm):
     return ti.max(n, 1.0001)
 
 
-def ior_at_np(row: dict, lam_nm) -> np.ndarray:
+def ior_at_np(spec, lam_nm) -> np.ndarray:
+    """A MaterialSpec's index of refraction at lam_nm (float64), as `ior_at` gives it on the device."""
+    row = dispersion_row(spec)
     lam = np.asarray(lam_nm, np.float64)
+    n = np.full_like(lam, spec.ior)
     if row["dispersion"] == CAUCHY:
-        a, b = row["dispersion_b"][:2]
-        return a + b / (lam * 1e-3) ** 2
-    if row["dispersion"] == SELLMEIER:
-        l2 = (lam * 1e-3) ** 2
-        n2 = 1.0 + sum(bi * l2 / (l2 - ci) for bi, ci in zip(row["dispersion_b"], row["dispersion_c"]))
-        return np.sqrt(n2)
-    return np.full_like(lam, row["ior"])
+        n = cauchy_ior_np(lam, *row["dispersion_b"][:2])
+    elif row["dispersion"] == SELLMEIER:
+        n = sellmeier_ior_np(lam, row["dispersion_b"], row["dispersion_c"])
+    return np.maximum(n, 1.0001)
+
+
+def non_dispersive(spec):
+    """The same material without dispersion: a plain dielectric with its index at the d line."""
+    if not spec.is_dispersive:
+        return spec
+    return replace(spec, glass="", abbe=0.0, ior=float(ior_at_np(spec, [LINE_D])[0]))

@@ -17,7 +17,6 @@ MediumRecord = ti.types.struct(sigma_a=vec3, sigma_s=vec3, g=ti.f32)
 class MediaTable:
     def __init__(self, scene):
         media = scene.media
-        self.names = tuple(m.name for m in media)
         self.table = MediumRecord.field(shape=max(1, len(media)))
         if media:
             upload_fields([(self.table, {"sigma_a": np.array([m.sigma_a for m in media], np.float32),
@@ -26,7 +25,7 @@ class MediaTable:
         fog = scene.fog
         # Data, not constants: editing a medium or the fog recompiles nothing.
         self.scene_medium = ti.field(ti.i32, shape=())
-        self.scene_medium[None] = self.names.index(fog.medium) if fog.model == "medium" else NO_MEDIUM
+        self.scene_medium[None] = scene.medium_names().index(fog.medium) if fog.model == "medium" else NO_MEDIUM
         self.fog = ti.Vector.field(4, ti.f32, shape=())  # analytic fog: colour rgb, density
         # Density 0 unless the scene asks for analytic fog: a kernel compiled with it (the cost
         # benchmark forces every effect on) then leaves the image as it is.

@@ -74,15 +74,13 @@ def test_sellmeier_presets_on_the_device(glass):
     table = _table(spec)
     out = np.zeros_like(WAVELENGTHS)
     _ior_kernel(table, 0, WAVELENGTHS, out)
-    row = {"ior": spec.ior, **dispersion.dispersion_row(spec)}
-    np.testing.assert_allclose(out, dispersion.ior_at_np(row, WAVELENGTHS), rtol=2e-6)
+    np.testing.assert_allclose(out, dispersion.ior_at_np(spec, WAVELENGTHS), rtol=2e-6)
     assert np.all(np.diff(out) < 0.0)  # normal dispersion: blue bends more
 
 
 def test_cauchy_from_abbe_hits_n_d_and_v():
     spec = MaterialSpec(name="flint", kind="dielectric", ior=1.62, abbe=36.0)
-    row = {"ior": spec.ior, **dispersion.dispersion_row(spec)}
-    n_d, n_f, n_c = dispersion.ior_at_np(row, np.array([LINE_D, LINE_F, LINE_C]))
+    n_d, n_f, n_c = dispersion.ior_at_np(spec, np.array([LINE_D, LINE_F, LINE_C]))
     assert abs(n_d - 1.62) < 1e-12 and abs((n_d - 1.0) / (n_f - n_c) - 36.0) < 1e-9
 
 
@@ -92,7 +90,7 @@ def test_prism_deviation_per_wavelength_follows_snell():
     apex, incidence = math.radians(60.0), math.radians(70.0)  # no total reflection at 400 nm
     out = np.zeros_like(WAVELENGTHS)
     _prism_kernel(table, 0, WAVELENGTHS, incidence, apex, out)
-    n = dispersion.ior_at_np({"ior": spec.ior, **dispersion.dispersion_row(spec)}, WAVELENGTHS)
+    n = dispersion.ior_at_np(spec, WAVELENGTHS)
     inside = np.arcsin(np.sin(incidence) / n)
     exit_angle = np.arcsin(n * np.sin(apex - inside))
     expected = incidence + exit_angle - apex
@@ -175,7 +173,6 @@ def test_prism_scene_splits_white_light_into_a_spectrum():
     # Shorter wavelengths deviate more, so the camera sees them higher up (smaller row numbers
     # here: row 0 is the top).
     assert rows[blue].mean() < rows[red].mean()
-    plain = replace(scene, materials=tuple(replace(m, glass="", ior=1.78472) if m.name == "sf11" else m
-                                           for m in scene.materials))
+    plain = replace(scene, materials=tuple(dispersion.non_dispersive(m) for m in scene.materials))
     chroma, _ = bright_chromaticity(plain)
     assert chroma.max() < 0.45  # white stays white (within the noise of 64 spp)
