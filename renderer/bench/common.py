@@ -343,3 +343,16 @@ def time_interleaved(calls: dict, runs: int = 3, warmup: int = 1,
             if after is not None:
                 after(name)
     return {name: Timing(times[name], warm[name]) for name in calls}
+
+
+def describe_error(error: BaseException) -> str:
+    """One line for a report: the exception's type and the last line of its message."""
+    text = str(error).strip().splitlines()
+    return f"{type(error).__name__}: {text[-1] if text else ''}"[:300]
+
+
+def load_named_scene(name: str):
+    """A catalog scene name, a scene file or a model file, loaded."""
+    from renderer.scene.catalog import load_any, resolve_scene
+
+    return load_any(resolve_scene(name))

@@ -65,6 +65,8 @@ from pathlib import Path
 
 import numpy as np
 
+from renderer.bench.common import describe_error
+
 ROOT = Path(__file__).resolve().parents[2]
 MARKER = "LANTERN-FEATURES "
 INTEGRATOR = "mis"
@@ -336,7 +338,7 @@ def child_scene(path: str, config: FeaturesBenchConfig) -> dict:
                     first, second = _first_calls(world, b, config.seed)
                     info[b.name]["compile_s"] = first - second
                 except Exception as error:  # noqa: BLE001 - one broken build must not hide the others
-                    info[b.name]["error"] = f"{type(error).__name__}: {error}".strip().splitlines()[0][:300]
+                    info[b.name]["error"] = describe_error(error)
                     info[b.name]["traceback"] = traceback.format_exc()[-2000:]
                 ti.reset()
                 grown = _dir_bytes(cache_dir)
@@ -354,7 +356,7 @@ def child_scene(path: str, config: FeaturesBenchConfig) -> dict:
                 key = "load_s" if config.fresh_cache else "compile_s"
                 info[b.name][key] = first - second
             except Exception as error:  # noqa: BLE001
-                info[b.name]["error"] = f"{type(error).__name__}: {error}".strip().splitlines()[0][:300]
+                info[b.name]["error"] = describe_error(error)
                 ok.remove(b)
         base = next((b for b in ok if b.role == "own"), None)
         if base is None:
@@ -433,7 +435,7 @@ def child_main(argv: list[str]) -> int:
     try:
         result = child_scene(path, config)
     except Exception as error:  # noqa: BLE001 - reported to the parent
-        result = {"scene": Path(path).stem, "error": f"{type(error).__name__}: {error}".strip().splitlines()[0][:300],
+        result = {"scene": Path(path).stem, "error": describe_error(error),
                   "traceback": traceback.format_exc()[-3000:]}
     print(MARKER + json.dumps(result), flush=True)
     return 0

@@ -66,8 +66,10 @@ import numpy as np
 
 from renderer.bench.common import (
     REL_MSE_EPS,
+    describe_error,
     image_errors,
     load_average,
+    load_named_scene,
     machine_info,
     print_table,
     pyplot,
@@ -307,8 +309,8 @@ def bench_scene(scene, config: IntegratorBenchConfig, extra_references: dict | N
             seconds = bench.compile(integrator, sampler)
             log(f"[{scene.name}]   {combo(integrator, sampler)}: {seconds:.1f} s")
         except Exception as error:  # noqa: BLE001 - one broken program must not end the benchmark
-            result["errors"][combo(integrator, sampler)] = _describe(error)
-            log(f"[{scene.name}]   {combo(integrator, sampler)} FAILED: {_describe(error)}")
+            result["errors"][combo(integrator, sampler)] = describe_error(error)
+            log(f"[{scene.name}]   {combo(integrator, sampler)} FAILED: {describe_error(error)}")
     result["compile_s"] = dict(bench.compile_s)
     failed = result["errors"].get(combo(REFERENCE_INTEGRATOR, REFERENCE_SAMPLER))
     if failed:
@@ -330,7 +332,7 @@ def bench_scene(scene, config: IntegratorBenchConfig, extra_references: dict | N
             try:
                 curves.append(convergence(bench.renderer, bench.camera, integrator, sampler, references, config))
             except Exception as error:  # noqa: BLE001
-                result["errors"][combo(integrator, sampler)] = _describe(error)
+                result["errors"][combo(integrator, sampler)] = describe_error(error)
     floor = reference["noise_floor"]
     for c in curves:
         b = c["at_budget"]
@@ -340,12 +342,6 @@ def bench_scene(scene, config: IntegratorBenchConfig, extra_references: dict | N
     result["curves"] = curves
     result["renderer"] = bench  # kept for the Mitsuba comparison; removed before writing JSON
     return result
-
-
-def _describe(error: BaseException) -> str:
-    text = str(error).strip().splitlines()
-    last = text[-1] if text else ""
-    return f"{type(error).__name__}: {last}"[:300]
 
 
 # --- Mitsuba ------------------------------------------------------------------------------------
@@ -620,12 +616,6 @@ def write_plots(results: list[dict], mitsuba: dict | None, out_dir: Path, config
 
 # --- entry point ---------------------------------------------------------------------------------
 
-def _load(name: str):
-    from renderer.scene.catalog import load_any, resolve_scene
-
-    return load_any(resolve_scene(name))
-
-
 def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
         config: IntegratorBenchConfig | None = None) -> int:
     """Benchmark the scenes (names or scene files; default config.scenes); print, write JSON and plots."""
@@ -647,7 +637,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
 
             mitsuba_info = mitsuba_side.availability()
         except Exception as error:  # noqa: BLE001 - the module itself may be missing or broken
-            mitsuba_info = {"available": False, "note": f"renderer.bench.mitsuba_side unusable ({_describe(error)})"}
+            mitsuba_info = {"available": False, "note": f"renderer.bench.mitsuba_side unusable ({describe_error(error)})"}
         if mitsuba_info["available"] and not str(mitsuba_info["variant"]).startswith("llvm"):
             mitsuba_info = {**mitsuba_info, "note": (mitsuba_info.get("note") or "") + " (not the LLVM variant: "
                             "the comparison runs, but is not the one the target names)"}
@@ -657,10 +647,10 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # e.g. negative env-map pixels clamped: reported by `info`
-                scene = _load(name)
+                scene = load_named_scene(name)
         except Exception as error:  # noqa: BLE001 - e.g. a scene another change has not added yet
-            results.append({"scene": Path(name).stem, "skipped": f"cannot load ({_describe(error)})"})
-            log(f"[{name}] skipped: {_describe(error)}")
+            results.append({"scene": Path(name).stem, "skipped": f"cannot load ({describe_error(error)})"})
+            log(f"[{name}] skipped: {describe_error(error)}")
             continue
         extra = {}
         if scene.name == MITSUBA_SCENE and mitsuba_info and mitsuba_info["available"]:
@@ -672,13 +662,13 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
                     f"{mitsuba_ref['noise_floor']['rmse']:.3g}")
             except Exception as error:  # noqa: BLE001
                 mitsuba_info = {**mitsuba_info, "available": False,
-                                "note": f"Mitsuba failed to render: {_describe(error)}"}
+                                "note": f"Mitsuba failed to render: {describe_error(error)}"}
                 traceback.print_exc()
         try:
             results.append(bench_scene(scene, config, extra))
         except Exception as error:  # noqa: BLE001
             traceback.print_exc()
-            results.append({"scene": scene.name, "skipped": f"failed ({_describe(error)})"})
+            results.append({"scene": scene.name, "skipped": f"failed ({describe_error(error)})"})
 
     mitsuba = None
     if mitsuba_info is not None:
@@ -691,7 +681,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
                            "variant": mitsuba_info["variant"], "note": mitsuba_info.get("note")}
             except Exception as error:  # noqa: BLE001
                 traceback.print_exc()
-                mitsuba = {"available": False, "note": f"comparison failed: {_describe(error)}"}
+                mitsuba = {"available": False, "note": f"comparison failed: {describe_error(error)}"}
         elif mitsuba_info["available"]:
             mitsuba["note"] = "the Cornell box did not render, nothing to compare"
 

@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from renderer.bench.common import (REL_MSE_EPS, load_average, machine_info, print_table, pyplot, rel_mse, rmse,
-                                   save_figure, speed_runtime, verdict, write_json)
+from renderer.bench.common import (REL_MSE_EPS, describe_error, load_average, load_named_scene, machine_info, print_table,
+                                   pyplot, rel_mse, rmse, save_figure, speed_runtime, verdict, write_json)
 from renderer.bench.integrators import log, noise_floor, progressive, value_at
 
 INTEGRATORS = ("mis", "sppm")
@@ -94,8 +94,9 @@ def bench_scene(scene, config: PhotonBenchConfig) -> dict:
 
     renderer = Renderer(scene, config.size)
     camera = CameraFrame.from_spec(scene.camera)
-    mask = region_mask((config.size[1], config.size[0]), CAUSTIC_REGIONS.get(scene.name, (0.0, 0.0, 1.0, 1.0)))
-    result = {"scene": scene.name, "size": list(config.size), "caustic_region": CAUSTIC_REGIONS.get(scene.name),
+    region = CAUSTIC_REGIONS.get(scene.name)
+    mask = region_mask((config.size[1], config.size[0]), region or (0.0, 0.0, 1.0, 1.0))
+    result = {"scene": scene.name, "size": list(config.size), "caustic_region": region,
               "caustic_pixels": int(mask.sum()), "compile_s": {}}
     for integrator in INTEGRATORS:
         renderer.reset()
@@ -162,7 +163,7 @@ def write_plots(results: list[dict], out_dir: Path) -> list[Path]:
             for integrator, c in res["curves"].items():
                 pts = c["curve"]
                 ax.loglog([p["seconds"] for p in pts], [max(p[key], 1e-12) for p in pts], marker="o", label=integrator)
-            floor = res["reference"]["noise_floor"][key.replace("rel_mse", "rel_mse")]
+            floor = res["reference"]["noise_floor"][key]
             ax.axhline(floor, color="grey", linestyle=":", label="reference noise floor")
             ax.set_xlabel("seconds")
             ax.set_ylabel("relMSE")
@@ -173,8 +174,6 @@ def write_plots(results: list[dict], out_dir: Path) -> list[Path]:
 
 
 def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, config: PhotonBenchConfig | None = None) -> int:
-    from renderer.scene.catalog import load_any, resolve_scene
-
     config = config or (QUICK if quick else FULL)
     if scenes is not None:
         config = replace(config, scenes=tuple(str(s) for s in scenes))
@@ -186,11 +185,10 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, confi
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                scene = load_any(resolve_scene(name))
+                scene = load_named_scene(name)
             results.append(bench_scene(scene, config))
         except Exception as error:  # noqa: BLE001 - one scene must not end the benchmark
-            text = str(error).strip().splitlines()
-            results.append({"scene": Path(name).stem, "skipped": f"{type(error).__name__}: {text[-1] if text else ''}"})
+            results.append({"scene": Path(name).stem, "skipped": describe_error(error)})
     print_report(results, config)
     plots = write_plots(results, out_dir)
     report = {"benchmark": "photons", "quick": quick, "machine": machine_info(), "config": asdict(config),

@@ -97,7 +97,9 @@ def child_main(argv: list[str] | None = None) -> int:
         else:
             _child_viewer(args, (width, height), marks, result)
     except Exception as error:  # noqa: BLE001 - reported to the parent, which decides
-        result["error"] = f"{type(error).__name__}: {str(error).strip().splitlines()[-1] if str(error).strip() else ''}"
+        from renderer.bench.common import describe_error
+
+        result["error"] = describe_error(error)
     print(MARKER + json.dumps(result), flush=True)
     return 0
 

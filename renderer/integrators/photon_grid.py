@@ -48,7 +48,6 @@ class PhotonGrid:
     """The grid's device arrays, sized for up to `capacity` points."""
 
     def __init__(self, capacity: int):
-        self.capacity = capacity
         self.max_table = table_size_for(capacity)
         self.blocks = max(1, (self.max_table + SCAN_BLOCK - 1) // SCAN_BLOCK)
         self.count = ti.field(ti.i32, shape=self.max_table)

@@ -127,7 +127,6 @@ class SppmState:
     shared by every SPPM program of a Renderer."""
 
     def __init__(self, max_width: int, max_height: int):
-        self.max_width = max_width
         self.max_height = max_height
         shape = (max_width, max_height)
         self.vp_p = ti.Vector.field(3, ti.f32, shape=shape)
@@ -149,9 +148,8 @@ class SppmState:
         self.tau = ti.Vector.field(3, ti.f32, shape=shape)
         self.direct = ti.Vector.field(3, ti.f32, shape=shape)  # sum over passes
         self.grid = PhotonGrid(max_width * max_height)
-        # [0] lo, [1] hi of the VPs and the camera; [2], [3] of the camera and the VPs at most
-        # CORE_DISTANCE times the (geometric) mean distance away (SDF scenes' environment photons)
-        self.box = ti.Vector.field(3, ti.f32, shape=4)
+        # lo, hi of the VPs and the camera (the photon grid's box)
+        self.box = ti.Vector.field(3, ti.f32, shape=2)
         # [0] cell size (largest radius), [1] sum of log footprint radii, [2] their count
         self.scalars = ti.field(ti.f32, shape=3)
         # per-row partial reductions: [log footprint sum, VP count, largest radius, -] and boxes
@@ -207,7 +205,6 @@ class SppmProgram(RenderProgram):
         self.emission = emission
         self.photon_sampler = photon_sampler
         self.options = options  # the Renderer's integrator_options (read at every render call)
-        self.height_max = state.max_height
 
     def current_options(self) -> SppmOptions:
         return self.options.get("sppm") or SppmOptions()
@@ -232,8 +229,7 @@ class SppmProgram(RenderProgram):
             self.build_grid(width, height, table)
             if self.emission.emits:
                 base = state.photons_emitted
-                self.photon_pass(photons, base & 0xFFFFFFFF, (base >> 32) & 0x7FFFFFFF, seed, max_depth, table - 1,
-                                 origin)
+                self.photon_pass(photons, base & 0xFFFFFFFF, (base >> 32) & 0x7FFFFFFF, seed, max_depth, table - 1)
             state.photons_emitted += photons
             state.iterations = index + 1
             self.update(width, height, options.alpha, float(state.photons_emitted), state.iterations)
@@ -314,8 +310,6 @@ class SppmProgram(RenderProgram):
                 lo = ti.min(lo, st.row_box[y, 2])
                 hi = ti.max(hi, st.row_box[y, 3])
             st.scalars[0] = largest
-            st.box[2] = lo
-            st.box[3] = hi
             if ti.static(self.emission.bounds_per_pass):
                 self.emission.set_bounds_func(lo, hi)
             self.emission.set_target_func(lo, hi)
@@ -457,7 +451,7 @@ class SppmProgram(RenderProgram):
             if self._in_grid(x, y):
                 h = bucket_of(st.vp_cell[x, y], mask)
                 slot = grid.start[h] + ti.atomic_add(grid.count[h], 1)
-                grid.entries[slot] = x * self.height_max + y
+                grid.entries[slot] = x * self.state.max_height + y
 
     @ti.func
     def _in_grid(self, x, y):
@@ -465,7 +459,7 @@ class SppmProgram(RenderProgram):
 
     @ti.kernel
     def photon_pass(self, count: ti.i32, base: ti.u32, epoch: ti.u32, seed: ti.u32, max_depth: ti.i32,
-                    mask: ti.i32, origin: ti.math.vec3):
+                    mask: ti.i32):
         for i in range(count):
             index = base + ti.cast(i, ti.u32)
             stream = ti.u32(PHOTON_STREAM) + epoch + (ti.u32(1) if index < base else ti.u32(0))
@@ -548,8 +542,8 @@ class SppmProgram(RenderProgram):
                     h = bucket_of(c, mask)
                     for e in range(grid.start[h], grid.start[h + 1]):
                         pix = grid.entries[e]
-                        x = pix // self.height_max
-                        y = pix % self.height_max
+                        x = pix // self.state.max_height
+                        y = pix % self.state.max_height
                         q = st.vp_p[x, y]
                         r = st.radius[x, y]
                         to = q - p
