@@ -10,7 +10,6 @@ import taichi as ti
 
 from renderer.geometry import bezier_newton as newton
 from renderer.geometry.mesh_data import MeshData
-from renderer.upload import upload_fields
 
 vec3 = ti.math.vec3
 vec4 = ti.math.vec4
@@ -41,31 +40,31 @@ def _object_rows(data: MeshData):
 
 @ti.data_oriented
 class BezierPatches:
-    def __init__(self, data: MeshData):
-        uploads = []  # (field, array): copied in one launch (renderer.upload)
-
-        def upload(array, width):
-            f = ti.Vector.field(width, ti.f32, shape=array.shape[:-1])
+    def __init__(self, data: MeshData, uploads: list):
+        """uploads: the caller's (field, array) list, copied to the device in one launch with the
+        rest of the mesh (renderer.upload)."""
+        def upload(array):
+            array = np.asarray(array)
+            f = ti.Vector.field(array.shape[-1], ti.f32, shape=array.shape[:-1])
             uploads.append((f, array))
             return f
 
         box = data.bezier_patch_box
-        self.patch_range = upload(data.bezier_patches, 4)
-        self.patch_lo = upload(box[:, 0], 3)
-        self.patch_hi = upload(box[:, 1], 3)
+        self.patch_range = upload(data.bezier_patches)
+        self.patch_lo = upload(box[:, 0])
+        self.patch_hi = upload(box[:, 1])
         self.patch_curve = ti.field(ti.i32, shape=len(data.bezier_patch_curve))
         uploads.append((self.patch_curve, data.bezier_patch_curve))
-        self.curve_r = upload(data.bezier_curves[:, :, 0], 4)
-        self.curve_h = upload(data.bezier_curves[:, :, 1], 4)
-        self.curve_u = upload(data.bezier_curve_u, 2)
+        self.curve_r = upload(data.bezier_curves[:, :, 0])
+        self.curve_h = upload(data.bezier_curves[:, :, 1])
+        self.curve_u = upload(data.bezier_curve_u)
         self.curve_object = ti.field(ti.i32, shape=len(data.bezier_curve_object))
         uploads.append((self.curve_object, data.bezier_curve_object))
         inv, normal, info = _object_rows(data)
-        self.to_world = upload(data.bezier_objects, 4)  # (objects, 3) rows
-        self.to_object = upload(inv, 4)
-        self.normal_rows = upload(normal, 3)
-        self.info = upload(info, 2)
-        upload_fields(uploads)
+        self.to_world = upload(data.bezier_objects)  # (objects, 3) rows
+        self.to_object = upload(inv)
+        self.normal_rows = upload(normal)
+        self.info = upload(info)
 
     @ti.func
     def intersect(self, i, o, d, t_max):

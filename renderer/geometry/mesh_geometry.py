@@ -94,7 +94,7 @@ class MeshGeometry:
         if "bezier" in self.kinds:  # only then: other scenes never see (or compile) Bezier code
             from renderer.geometry.bezier_device import BezierPatches
 
-            self.bezier = BezierPatches(data)
+            self.bezier = BezierPatches(data, uploads)
 
     def device_bytes(self) -> dict:
         """Bytes on the device for the BVH and for the intersection data of triangles."""

@@ -1,9 +1,9 @@
 """`path`: unidirectional path tracing with BSDF sampling only, and Russian roulette."""
 import taichi as ti
 
-from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH, PathTracerBase
+from renderer.integrators.tracer import PathTracerBase
 
-__all__ = ["MAX_VERTICES", "RR_DEPTH", "PathTracer"]
+__all__ = ["PathTracer"]
 
 
 @ti.data_oriented
@@ -11,6 +11,5 @@ class PathTracer(PathTracerBase):
     name = "path"
     hotkey = "t"  # "trace"
     description = "path tracing, BSDF sampling only"
-    light_sampling = False
-    mis = False
+    light_sampling = False  # (so `mis` is never read)
     uses_lights = False

@@ -69,8 +69,8 @@ from renderer.camera import generate_ray
 from renderer.film import is_finite_vec3
 from renderer.geometry.interface import INF, Hit, Ray, Surface
 from renderer.integrators.direct_light import emission_weight, environment_weight, sample_direct
-from renderer.integrators.path import MAX_VERTICES, RR_DEPTH
 from renderer.integrators.photon_grid import PhotonGrid, bucket_of, cell_of, table_size_for
+from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
 from renderer.materials.table import DIELECTRIC, DIFFUSE, PRINCIPLED, Material
 from renderer.program import RenderProgram
 from renderer.sampling import dims

@@ -100,14 +100,6 @@ class Lights:
             self.env_sampler = EnvironmentSampler(env_image, environment)
 
     @ti.func
-    def _emission(self, ctx, g, p, n, uv, wo):
-        return emitted_radiance(ctx, self.geometry, g, p, n, uv, wo)
-
-    @ti.func
-    def _sample_env(self, u):
-        return environment_direction(self, u)
-
-    @ti.func
     def sample(self, ctx, ref, ref_n, u_select, u_point):
         result = LightSample(wi=vec3(0.0, 0.0, 1.0), dist=INF, radiance=vec3(0.0), pdf=0.0, p=ref, n=vec3(0.0, 0.0, 1.0),
                              is_env=0)
@@ -122,7 +114,7 @@ class Lights:
                 u = (u - share) / (1.0 - share)
         if use_env:
             if ti.static(self.has_env):
-                d, pdf, radiance = self._sample_env(u_point)
+                d, pdf, radiance = environment_direction(self, u_point)
                 result = LightSample(wi=d, dist=INF, radiance=radiance, pdf=pdf * share, p=ref + ENV_DISTANCE * d,
                                      n=-d, is_env=1)
         else:
@@ -136,7 +128,7 @@ class Lights:
                     wi = to / dist
                     radiance = vec3(0.0)
                     if pt.n.dot(wi) < 0.0:  # the emitting (front) side faces ref
-                        radiance = self._emission(ctx, g, pt.p, pt.n, pt.uv, -wi)
+                        radiance = emitted_radiance(ctx, self.geometry, g, pt.p, pt.n, pt.uv, -wi)
                     result = LightSample(wi=wi, dist=dist, radiance=radiance, pdf=pt.pdf * pmf * (1.0 - share),
                                          p=pt.p, n=pt.n, is_env=0)
         return result

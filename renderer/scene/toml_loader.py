@@ -379,17 +379,20 @@ def _read_media(raw: object) -> tuple[MediumSpec, ...]:
     return tuple(media)
 
 
+def _check_name(kind: str, name: str, known: list[str], none_defined: str, where: str, context: str = "") -> None:
+    """A reference to a named definition (a material, a medium) that must exist."""
+    if name not in known:
+        listed = f"known: {', '.join(known)}" if known else none_defined
+        raise _Invalid(where, f"unknown {kind} '{name}'{context} ({listed})")
+
+
 def _check_medium_name(name: str, media: tuple[MediumSpec, ...], where: str) -> None:
-    known = [m.name for m in media]
-    if name and name not in known:
-        listed = f"known: {', '.join(known)}" if known else "no media are defined under [media]"
-        raise _Invalid(where, f"unknown medium '{name}' ({listed})")
+    if name:
+        _check_name("medium", name, [m.name for m in media], "no media are defined under [media]", where)
 
 
-def _read_fog(raw: object, media: tuple[MediumSpec, ...], materials: tuple[MaterialSpec, ...]) -> FogSpec:
+def _read_fog(raw: object, media: tuple[MediumSpec, ...]) -> FogSpec:
     values = _read_section(raw, schema.FOG, "fog")
-    for m in materials:
-        _check_medium_name(m.medium, media, f"materials.{m.name}.medium")
     if values["type"] == "medium":
         _check_medium_name(values["medium"], media, "fog.medium")
     else:
@@ -464,10 +467,9 @@ def _object_tables(raw: object) -> list[dict]:
 
 
 def _check_material(name: Optional[str], materials: tuple[MaterialSpec, ...], i: int) -> None:
-    known = [m.name for m in materials]
-    if name is not None and name not in known:
-        listed = f"known: {', '.join(known)}" if known else "no materials are defined"
-        raise _Invalid("", f"unknown material '{name}' in objects[{i}] ({listed})")
+    if name is not None:
+        _check_name("material", name, [m.name for m in materials], "no materials are defined", "",
+                     f" in objects[{i}]")
 
 
 def _read_sdf_objects(raw: object, materials: tuple[MaterialSpec, ...], scene_path: Path) -> dict:
@@ -584,7 +586,9 @@ def _build_scene(data: dict, path: Path) -> Scene:
     environment = _read_environment(data.get("environment"), path)
     materials = _read_materials(data.get("materials"))
     media = _read_media(data.get("media"))
-    fog = _read_fog(data.get("fog"), media, materials)
+    for m in materials:
+        _check_medium_name(m.medium, media, f"materials.{m.name}.medium")
+    fog = _read_fog(data.get("fog"), media)
     geometry = _GEOMETRY_READERS[header["geometry"]](data.get("objects"), materials, path)
     return Scene(
         name=header["name"] if header["name"] is not None else path.stem,
