@@ -129,8 +129,22 @@ class PathTracerBase:
                     any_hit = False
                 hit = ctx.geometry.trace(ray, t_max, any_hit)
                 stats += vec3(hit.work, hit.tests, 1.0)
+            # Free flight through the path's medium (shadow rays carry its transmittance instead):
+            # sampled before the surface, which a scattering event makes unneeded.
+            dim = dims.BOUNCE_BASE + dims.PER_BOUNCE * depth
+            scattered = False
+            scatter_t = 0.0
+            if ti.static(ctx.features.has_media):
+                if not shadow_pending and medium != NO_MEDIUM:
+                    rec = ctx.media.table[medium]
+                    ms = homogeneous.sample_distance(rec.sigma_a, rec.sigma_s, hit.t if hit.hit == 1 else INF,
+                                                     ctx.sampler.get1d(state, dim + dims.MEDIUM_CHANNEL),
+                                                     ctx.sampler.get1d(state, dim + dims.MEDIUM_DISTANCE))
+                    throughput *= _tint(ctx, ms.weight, spectral, lam)
+                    scattered = ms.scattered == 1
+                    scatter_t = ms.t
             hs = s
-            if hit.hit == 1 and (not shadow_pending or ti.static(ctx.features.has_null)):
+            if hit.hit == 1 and not scattered and (not shadow_pending or ti.static(ctx.features.has_null)):
                 hs = ctx.geometry.surface(ray, hit)
 
             # --- a shadow ray -----------------------------------------------------------------------
@@ -158,44 +172,36 @@ class PathTracerBase:
                 continue
 
             # --- the next path vertex: in the medium, on a surface, or nowhere ------------------------
-            dim = dims.BOUNCE_BASE + dims.PER_BOUNCE * depth
             if depth == 0:
                 first_distance = hit.t if hit.hit == 1 else INF
-            scattered = False
             if ti.static(ctx.features.has_media):
-                if medium != NO_MEDIUM:
+                if scattered:
                     rec = ctx.media.table[medium]
-                    ms = homogeneous.sample_distance(rec.sigma_a, rec.sigma_s, hit.t if hit.hit == 1 else INF,
-                                                     ctx.sampler.get1d(state, dim + dims.MEDIUM_CHANNEL),
-                                                     ctx.sampler.get1d(state, dim + dims.MEDIUM_DISTANCE))
-                    throughput *= _tint(ctx, ms.weight, spectral, lam)
-                    if ms.scattered == 1:
-                        scattered = True
-                        p = ray.o + ms.t * ray.d
-                        wo = -ray.d
-                        if max_depth >= 0 and depth + 1 >= max_depth:
-                            break
-                        s = _medium_point(p, ray.cone_width + ray.cone_spread * ms.t, ray.cone_spread)
-                        if ti.static(self.light_sampling):
-                            ls = ctx.lights.sample(ctx, p, vec3(0.0), ctx.sampler.get1d(state, dim + dims.LIGHT_SELECT),
-                                                   ctx.sampler.get2d(state, dim + dims.LIGHT_POINT))
-                            if ls.pdf > 0.0 and ls.radiance.max() > 0.0:
-                                f = phase.hg_phase(rec.g, wo, ls.wi)
-                                weight = 1.0
-                                if ti.static(self.mis):
-                                    weight = power_heuristic(ls.pdf, f)
-                                shadow_pending = True
-                                shadow_s = s
-                                shadow_medium = medium
-                                shadow_target = ls.p
-                                shadow_n = ls.n
-                                shadow_value = throughput * _tint(ctx, ls.radiance, spectral, lam) * (f * weight / ls.pdf)
-                        wi, pdf = phase.hg_sample(rec.g, wo, ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
-                        prev_p = p
-                        prev_n = vec3(0.0)
-                        prev_pdf = pdf
-                        prev_delta = 0
-                        next_dir = wi
+                    p = ray.o + scatter_t * ray.d
+                    wo = -ray.d
+                    if max_depth >= 0 and depth + 1 >= max_depth:
+                        break
+                    s = _medium_point(p, ray.cone_width + ray.cone_spread * scatter_t, ray.cone_spread)
+                    if ti.static(self.light_sampling):
+                        ls = ctx.lights.sample(ctx, p, vec3(0.0), ctx.sampler.get1d(state, dim + dims.LIGHT_SELECT),
+                                               ctx.sampler.get2d(state, dim + dims.LIGHT_POINT))
+                        if ls.pdf > 0.0 and ls.radiance.max() > 0.0:
+                            f = phase.hg_phase(rec.g, wo, ls.wi)
+                            weight = 1.0
+                            if ti.static(self.mis):
+                                weight = power_heuristic(ls.pdf, f)
+                            shadow_pending = True
+                            shadow_s = s
+                            shadow_medium = medium
+                            shadow_target = ls.p
+                            shadow_n = ls.n
+                            shadow_value = throughput * _tint(ctx, ls.radiance, spectral, lam) * (f * weight / ls.pdf)
+                    wi, pdf = phase.hg_sample(rec.g, wo, ctx.sampler.get2d(state, dim + dims.BSDF_DIRECTION))
+                    prev_p = p
+                    prev_n = vec3(0.0)
+                    prev_pdf = pdf
+                    prev_delta = 0
+                    next_dir = wi
             if not scattered:
                 if hit.hit == 0:
                     weight = 1.0
