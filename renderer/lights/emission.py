@@ -45,6 +45,7 @@ import math
 import numpy as np
 import taichi as ti
 
+from renderer.film import LUMINANCE_WEIGHTS
 from renderer.geometry.interface import Surface
 from renderer.lights.lights import emitted_radiance, environment_direction, environment_emits
 from renderer.sampling.warps import PI, concentric_disk, cosine_hemisphere, orthonormal_basis, to_world
@@ -54,7 +55,7 @@ vec3 = ti.math.vec3
 
 EmittedPhoton = ti.types.struct(o=vec3, d=vec3, beta=vec3, surface=Surface, from_env=ti.i32, valid=ti.i32)
 
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+LUMINANCE = np.array(LUMINANCE_WEIGHTS)
 # The share of photons aimed at the target region (the part of the scene the camera sees), the rest
 # leaving as they would without a target (cosine-weighted, or through the whole scene's disc). Each
 # photon's power divides by the mixture of the two densities: aiming changes the noise, never the

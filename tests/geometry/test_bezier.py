@@ -289,12 +289,17 @@ def test_straight_profiles_match_closed_forms(r0, r1):
     assert np.abs(out[both, 1] - t[both]).max() <= 1e-5 * np.maximum(1.0, t[both]).max()
 
 
+def rays_at_surface_points(world, rng, n):
+    """(o, d): n rays from random points 3 units away, each aimed at a random point of the surface."""
+    p, _ = surface_samples(world, rng, n)
+    o = p + unit(rng.normal(size=(n, 3))) * 3.0
+    return o, unit(p - o)
+
+
 def test_spawned_rays_do_not_find_their_own_point(vase):
     rng = np.random.default_rng(15)
     n = 6000
-    p, normal = surface_samples(vase, rng, n)
-    o = p + unit(rng.normal(size=(n, 3))) * 3.0
-    d = unit(p - o)
+    o, d = rays_at_surface_points(vase, rng, n)
     shooter = RayShooter(vase.probe.geometry)
     first, second, t = shooter.respawn(o, d, unit(rng.normal(size=(n, 3))))
     assert (first >= 0).all()
@@ -307,9 +312,7 @@ def test_spawned_rays_do_not_find_their_own_point(vase):
 def test_shading_follows_the_derivatives(vase):
     rng = np.random.default_rng(16)
     n = 3000
-    p, normal = surface_samples(vase, rng, n)
-    o = p + unit(rng.normal(size=(n, 3))) * 3.0
-    d = unit(p - o)
+    o, d = rays_at_surface_points(vase, rng, n)
     out = vase.probe.shoot(o, d)
     rows = out[:, 0] == 1
     _, n_exact = vase.hit_points(out)

@@ -24,6 +24,7 @@ from renderer.scene.errors import SceneError
 from renderer.scene.features import scene_features
 from tests.scene_builder import scene_from_toml
 from tests.stats.chi2 import sidak_alpha
+from tests.stats.image_tests import mean_z
 
 ALPHA = 0.01
 SLAB_CASES = ("path", "mis")
@@ -123,8 +124,7 @@ def render(scene, integrator, spp, seed=7):
     camera = CameraFrame.from_spec(scene.camera)
     renderer.render(camera, spp, integrator=integrator, seed=seed)
     image = renderer.image().astype(np.float64)
-    variance = renderer.film.variance_of_mean_image().astype(np.float64) if hasattr(
-        renderer.film, "variance_of_mean_image") else None
+    variance = renderer.film.variance_of_mean_image().astype(np.float64)
     assert renderer.film.stats()["rejected"] == 0
     return image, variance
 
@@ -139,7 +139,7 @@ def z_test_mean(image, variance, expected, what):
         if se[c] == 0.0:
             assert abs(mean[c] - expected[c]) < 1e-5, f"{what} channel {c}: {mean[c]} vs {expected[c]}"
             continue
-        z = (mean[c] - expected[c]) / se[c]
+        z = mean_z(image, variance, expected[c], channel=c)
         p = 2.0 * stats.norm.sf(abs(z))
         assert p >= sidak_alpha(ALPHA, NUM_TESTS), f"{what} channel {c}: {mean[c]:.5f} vs {expected[c]:.5f}, z {z:.2f}"
     return mean, se

@@ -40,6 +40,7 @@ from scipy import stats
 from scipy.ndimage import maximum_filter
 
 from renderer.camera import CameraFrame
+from renderer.film import LUMINANCE_WEIGHTS
 from renderer.integrators.sppm import PHOTON_STREAM
 from renderer.renderer import Renderer
 from renderer.sampling import dims
@@ -159,7 +160,7 @@ def test_emitted_photons_carry_the_scene_power(cornell):
     _emit(program, n, out)
     beta, origin, direction, normal, flags = (out[:, k].astype(np.float64) for k in range(5))
     assert (flags[:, 0] == 1).all() and (flags[:, 1] == 0).all()
-    luminance = beta @ np.array([0.2126, 0.7152, 0.0722])
+    luminance = beta @ np.array(LUMINANCE_WEIGHTS)
     np.testing.assert_allclose(luminance, program.emission.total_power(), rtol=1e-4)
     # The light: 0.46 x 0.38 at y = 0.99 centred on (0, 0.01), facing down.
     assert np.allclose(origin[:, 1], 0.99, atol=1e-5)
@@ -228,7 +229,7 @@ def test_aimed_photons_carry_the_scene_power_on_average(tmp_path, light):
     out = np.zeros((n, 5, 3), np.float32)
     _emit(program, n, out)
     beta, origin, direction = (out[:, k].astype(np.float64) for k in range(3))
-    luminance = beta @ np.array([0.2126, 0.7152, 0.0722])
+    luminance = beta @ np.array(LUMINANCE_WEIGHTS)
     expected = program.emission.total_power()
     z = (luminance.mean() - expected) / (luminance.std() / np.sqrt(n))
     assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (luminance.mean(), expected)
