@@ -208,13 +208,6 @@ class Emission:
         return -b - ti.sqrt(ti.max(disc, 0.0)), disc >= 0.0
 
     @ti.func
-    def _disc_density(self, sphere, o, d):
-        """The area density (perpendicular to d) of drawing the line o + t d from the disc of
-        `sphere` perpendicular to d: 1 / (pi r^2) if the line meets the sphere, else 0."""
-        _, meets = self._line_enters(sphere, o, d)
-        return 1.0 / (PI * sphere.w * sphere.w) if meets else 0.0
-
-    @ti.func
     def sample(self, ctx, u_select, u_point, u_dir, u_mix):
         """u_mix chooses between aiming at the target sphere (share TARGET_SHARE) and the plain
         strategy (cosine-weighted from emitters, the scene's disc for the environment); the
@@ -244,12 +237,17 @@ class Emission:
                 t, b = orthonormal_basis(w)
                 disc = concentric_disk(u_dir) * chosen.w
                 o = chosen.xyz + disc.x * t + disc.y * b  # a point of the line, in the disc's plane
-                density = (share * self._disc_density(target, o, -w)
-                           + (1.0 - share) * self._disc_density(sphere, o, -w))
-                # Start where the line first enters either sphere: nothing lies before that, and a
-                # sphere tracer's range counts from there.
                 t_scene, in_scene = self._line_enters(sphere, o, -w)
                 t_target, in_target = self._line_enters(target, o, -w)
+                # The mixture's area density (perpendicular to w) of drawing this line: each disc
+                # gives 1 / (pi r^2) to the lines that meet its sphere.
+                density = 0.0
+                if in_target and share > 0.0:  # (no target: radius 0)
+                    density += share / (PI * target.w * target.w)
+                if in_scene:
+                    density += (1.0 - share) / (PI * sphere.w * sphere.w)
+                # Start where the line first enters either sphere: nothing lies before that, and a
+                # sphere tracer's range counts from there.
                 start = t_target if in_target else t_scene
                 if in_scene and in_target:
                     start = ti.min(t_scene, t_target)
