@@ -356,3 +356,31 @@ def load_named_scene(name: str):
     from renderer.scene.catalog import load_any, resolve_scene
 
     return load_any(resolve_scene(name))
+
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+
+
+def run_module(module: str, args: Sequence[str], timeout: float):
+    """`python -m module args` in a fresh process, from the repository root with the repository
+    importable (benchmarks that must measure a cold interpreter or runtime run their work so)."""
+    import subprocess
+
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(REPO_ROOT) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    return subprocess.run([sys.executable, "-m", module, *args], cwd=REPO_ROOT, env=env, capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def child_report(stdout: str, stderr: str, returncode: int, marker: str) -> tuple[dict | None, str]:
+    """The JSON a child printed after its last `marker`, or (None, why there is none)."""
+    lines = [line for line in stdout.splitlines() if line.startswith(marker)]
+    if not lines:
+        tail = " | ".join(stderr.strip().splitlines()[-3:])
+        return None, f"child exited with {returncode} and no report: {tail}"
+    return json.loads(lines[-1][len(marker):]), ""
+
+
+def dir_bytes(path) -> int:
+    """Total size of the files below `path`."""
+    return sum(f.stat().st_size for f in Path(path).rglob("*") if f.is_file())

@@ -52,7 +52,6 @@ Writes <out_dir>/bench_features.json and bench_features.png (bar charts of the r
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import statistics
 import subprocess
@@ -65,9 +64,8 @@ from pathlib import Path
 
 import numpy as np
 
-from renderer.bench.common import describe_error
+from renderer.bench.common import child_report, describe_error, dir_bytes, run_module
 
-ROOT = Path(__file__).resolve().parents[2]
 MARKER = "LANTERN-FEATURES "
 INTEGRATOR = "mis"
 TOLERANCE = 0.02  # see the module doc: code layout moves speed by a percent or two either way
@@ -225,10 +223,6 @@ def _log(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
-def _dir_bytes(path) -> int:
-    return sum(f.stat().st_size for f in Path(path).rglob("*") if f.is_file())
-
-
 class SceneWorld:
     """The Renderers of one scene and its variants in one Taichi runtime, created in a fixed order
     and primed (light tables, GGX albedo table, film read-back) so every runtime has the same field
@@ -328,7 +322,7 @@ def child_scene(path: str, config: FeaturesBenchConfig) -> dict:
                 for b in builds}
         if config.fresh_cache:
             ti.reset()  # the primer's kernels go to the cache: every build below shares them
-            size = _dir_bytes(cache_dir)
+            size = dir_bytes(cache_dir)
             out["shared_cache_bytes"] = size
             for b in builds:
                 _log(f"[{scene.name}] compile {b.name} ...")
@@ -341,7 +335,7 @@ def child_scene(path: str, config: FeaturesBenchConfig) -> dict:
                     info[b.name]["error"] = describe_error(error)
                     info[b.name]["traceback"] = traceback.format_exc()[-2000:]
                 ti.reset()
-                grown = _dir_bytes(cache_dir)
+                grown = dir_bytes(cache_dir)
                 info[b.name]["cache_bytes"] = grown - size
                 size = grown
 
@@ -444,19 +438,15 @@ def child_main(argv: list[str]) -> int:
 # --- the parent ---------------------------------------------------------------------------------
 
 def measure_scene(path, config: FeaturesBenchConfig) -> dict:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = str(ROOT) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
-    cmd = [sys.executable, "-m", "renderer.bench.features", "--child", str(path), json.dumps(asdict(config))]
     t0 = time.perf_counter()
     try:
-        proc = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=config.child_timeout_s)
+        proc = run_module("renderer.bench.features", ["--child", str(path), json.dumps(asdict(config))],
+                          config.child_timeout_s)
     except subprocess.TimeoutExpired:
         return {"scene": Path(path).stem, "error": f"timed out after {config.child_timeout_s:.0f} s"}
-    lines = [line for line in proc.stdout.splitlines() if line.startswith(MARKER)]
-    if not lines:
-        tail = " | ".join(proc.stderr.strip().splitlines()[-3:])
-        return {"scene": Path(path).stem, "error": f"child exited with {proc.returncode} and no report: {tail}"}
-    result = json.loads(lines[-1][len(MARKER):])
+    result, error = child_report(proc.stdout, proc.stderr, proc.returncode, MARKER)
+    if result is None:
+        return {"scene": Path(path).stem, "error": error}
     result["seconds"] = time.perf_counter() - t0
     return result
 

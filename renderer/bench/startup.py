@@ -39,15 +39,12 @@ _T_MAIN = time.time()  # as early as possible: the child's "module is running" m
 
 import argparse  # noqa: E402
 import json  # noqa: E402
-import os  # noqa: E402
 import shutil  # noqa: E402
 import statistics  # noqa: E402
-import subprocess  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[2]
 MARKER = "LANTERN-STARTUP "
 TARGET_SECONDS = 3.0
 TARGET_MOVING_MS = 50.0
@@ -186,28 +183,27 @@ def _measure_moving(app, result) -> None:
 def measure(mode: str, cache_dir: str | Path, scene: str | None = None, size: tuple[int, int] = DEFAULT_SIZE,
             integrator: str | None = None, timeout: float = CHILD_TIMEOUT, optimize: str = "compile") -> dict:
     """Run one child process and return its phases (seconds) and totals."""
-    env = dict(os.environ)
-    env["PYTHONPATH"] = str(ROOT) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
-    cmd = [sys.executable, "-m", "renderer.bench.startup", "--child", "--mode", mode, "--cache-dir", str(cache_dir),
-           "--size", f"{size[0]}x{size[1]}", "--optimize", optimize]
+    from renderer.bench.common import run_module
+
+    args = ["--child", "--mode", mode, "--cache-dir", str(cache_dir), "--size", f"{size[0]}x{size[1]}",
+            "--optimize", optimize]
     if scene:
-        cmd += ["--scene", str(scene)]
+        args += ["--scene", str(scene)]
     if integrator:
-        cmd += ["--integrator", integrator]
+        args += ["--integrator", integrator]
     launched = time.time()
-    cmd += ["--launched", repr(launched)]
-    proc = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
+    args += ["--launched", repr(launched)]
+    proc = run_module("renderer.bench.startup", args, timeout)
     exited = time.time()
     return parse_child_output(proc.stdout, proc.stderr, proc.returncode, exited - launched, mode)
 
 
 def parse_child_output(stdout: str, stderr: str, returncode: int, process_seconds: float, mode: str) -> dict:
-    lines = [line for line in stdout.splitlines() if line.startswith(MARKER)]
-    if not lines:
-        tail = " | ".join(stderr.strip().splitlines()[-3:])
-        return {"mode": mode, "error": f"child exited with {returncode} and no report: {tail}",
-                "process_seconds": process_seconds}
-    result = json.loads(lines[-1][len(MARKER):])
+    from renderer.bench.common import child_report
+
+    result, error = child_report(stdout, stderr, returncode, MARKER)
+    if result is None:
+        return {"mode": mode, "error": error, "process_seconds": process_seconds}
     result["process_seconds"] = process_seconds
     result["returncode"] = returncode
     marks = result.get("marks", {})
@@ -233,7 +229,9 @@ def measure_cold_warm(mode: str, warm_runs: int, log=None, **kwargs) -> dict:
             if log:
                 log(f"{mode}: warm run {i + 1}/{warm_runs} ...")
             warm.append(measure(mode, cache_dir, **kwargs))
-        cache_bytes = sum(f.stat().st_size for f in Path(cache_dir).rglob("*") if f.is_file())
+        from renderer.bench.common import dir_bytes
+
+        cache_bytes = dir_bytes(cache_dir)
     finally:
         shutil.rmtree(cache_dir, ignore_errors=True)
     return {"mode": mode, "optimize": kwargs.get("optimize", "compile"), "cold": cold, "warm_runs": warm,
