@@ -604,9 +604,7 @@ def _emission_for(renderer, lights):
 
     bounds = None
     data = getattr(renderer.geometry, "data", None)
-    if renderer.scene.geometry == "mesh" and data is not None:
-        lo, hi = data.bounds()
-        if len(lo):
-            bounds = (lo.min(axis=0), hi.max(axis=0))
-    return Emission(renderer.geometry, renderer.materials.arrays, lights, renderer.scene.environment, bounds)
+    if renderer.scene.geometry == "mesh" and data is not None and data.primitive_count:
+        bounds = data.scene_bounds()
+    return Emission(renderer.geometry, lights, renderer.scene.environment, bounds)
 

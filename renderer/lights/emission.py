@@ -92,22 +92,19 @@ def environment_integral(env_spec, env_sampler=None) -> float:
 class Emission:
     """Photon emission from a scene's emitters (see the module docstring)."""
 
-    def __init__(self, geometry, materials_arrays: dict, lights, env_spec, scene_bounds=None):
-        """materials_arrays: the material table's numpy rows (for emission); lights: the scene's
-        `Lights` (its environment sampler is shared); scene_bounds: (lo, hi) of a finite scene,
-        or None when the caller sets the bounding sphere per pass (`set_bounds_kernel`)."""
+    def __init__(self, geometry, lights, env_spec, scene_bounds=None):
+        """lights: the scene's `Lights` (its emitter table and environment sampler are shared);
+        scene_bounds: (lo, hi) of a finite scene, or None when the caller sets the bounding sphere
+        per pass (`set_bounds_kernel`)."""
         self.geometry = geometry
         self.environment = lights.environment
-        info = geometry.emitter_info()
-        emission = materials_arrays["emission"][info["material"]] if len(info["prim"]) else np.zeros((0, 3))
-        luminance = emission @ LUMINANCE
-        keep = luminance > 0.0
-        prims = np.asarray(info["prim"])[keep].astype(np.int32)
-        area = np.asarray(info["area"], np.float64)[keep]
-        lo, hi = np.asarray(info["lo"], np.float64)[keep], np.asarray(info["hi"], np.float64)[keep]
-        axis = np.asarray(info["axis"], np.float64)[keep]
-        all_round = np.asarray(info["theta_o"], np.float64)[keep] > 0.5 * math.pi  # spheres emit all around
-        power = luminance[keep] * area * math.pi
+        table = lights.emitters
+        prims = np.asarray(table["prim"]).astype(np.int32)
+        area = np.asarray(table["area"], np.float64)
+        lo, hi = np.asarray(table["lo"], np.float64), np.asarray(table["hi"], np.float64)
+        axis = np.asarray(table["axis"], np.float64)
+        all_round = np.asarray(table["theta_o"], np.float64) > 0.5 * math.pi  # spheres emit all around
+        power = np.asarray(table["power"], np.float64)
         self.count = len(prims)
         self.has_area = self.count > 0 and float(power.sum()) > 0.0
         self.has_env = lights.has_env

@@ -14,6 +14,7 @@ import math
 import numpy as np
 import taichi as ti
 
+from renderer.film import LUMINANCE_WEIGHTS
 from renderer.geometry.interface import INF, Surface
 from renderer.sampling.warps import PI
 from renderer.upload import upload_fields
@@ -69,9 +70,10 @@ def environment_direction(source, u):
 @ti.data_oriented
 class Lights:
     def __init__(self, geometry, emitters: dict, environment, env_spec, env_image, selector_kind="auto"):
-        """emitters: {"prim": ids, "power": flux, "lo"/"hi": bounds, "axis", "theta_o", "theta_e"}
-        (numpy, one row per emissive primitive); env_image: the map for kind "map", else None."""
+        """emitters: `emitter_table`'s rows (numpy, one per emissive primitive; kept for photon
+        emission); env_image: the map for kind "map", else None."""
         self.geometry = geometry
+        self.emitters = emitters
         self.environment = environment
         self.count = len(emitters["prim"])
         self.has_area = self.count > 0
@@ -165,9 +167,10 @@ def emitter_table(geometry, rows_arrays: dict) -> dict:
     """The emissive primitives the geometry can sample, with the data light selection needs."""
     info = geometry.emitter_info()
     emission = rows_arrays["emission"][info["material"]] if len(info["prim"]) else np.zeros((0, 3))
-    luminance = emission @ np.array([0.2126, 0.7152, 0.0722])
+    luminance = emission @ np.array(LUMINANCE_WEIGHTS)
     keep = luminance > 0.0
     # Flux of a one-sided Lambertian emitter: radiance x area x pi.
     power = luminance[keep] * info["area"][keep] * math.pi
-    return {"prim": info["prim"][keep], "power": power, "lo": info["lo"][keep], "hi": info["hi"][keep],
-            "axis": info["axis"][keep], "theta_o": info["theta_o"][keep], "theta_e": info["theta_e"][keep]}
+    return {"prim": info["prim"][keep], "power": power, "area": info["area"][keep], "lo": info["lo"][keep],
+            "hi": info["hi"][keep], "axis": info["axis"][keep], "theta_o": info["theta_o"][keep],
+            "theta_e": info["theta_e"][keep]}
