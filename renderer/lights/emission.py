@@ -97,7 +97,7 @@ class Emission:
         scene_bounds: (lo, hi) of a finite scene, or None when the caller sets the bounding sphere
         per pass (`set_bounds_kernel`)."""
         self.geometry = geometry
-        self.environment = lights.environment
+        self.lights = lights  # its environment sampling serves environment photons
         table = lights.emitters
         prims = np.asarray(table["prim"]).astype(np.int32)
         area = np.asarray(table["area"], np.float64)
@@ -108,9 +108,6 @@ class Emission:
         self.count = len(prims)
         self.has_area = self.count > 0 and float(power.sum()) > 0.0
         self.has_env = lights.has_env
-        self.env_is_map = lights.env_is_map
-        if self.has_env and self.env_is_map:
-            self.env_sampler = lights.env_sampler
         self.area_power = float(power.sum()) if self.has_area else 0.0
         self.env_integral = environment_integral(env_spec, getattr(lights, "env_sampler", None))
         n = max(1, self.count)
@@ -187,14 +184,6 @@ class Emission:
         return lo, self.cdf[lo + 1] - self.cdf[lo]
 
     @ti.func
-    def _emitted(self, ctx, g, p, n, uv, w):
-        return emitted_radiance(ctx, self.geometry, g, p, n, uv, w)
-
-    @ti.func
-    def _env_direction(self, u):
-        return environment_direction(self, u)
-
-    @ti.func
     def _line_enters(self, sphere, o, d):
         """Where the line o + t d (d unit) enters `sphere` (t, possibly negative), and whether it
         meets it at all."""
@@ -225,7 +214,7 @@ class Emission:
                 u = (u - p_env) / (1.0 - p_env)
         if use_env:
             if ti.static(self.has_env):
-                w, pdf_dir, radiance = self._env_direction(u_point)
+                w, pdf_dir, radiance = environment_direction(self.lights, u_point)
                 sphere = self.sphere[None]
                 chosen = sphere
                 share = TARGET_SHARE if target.w > 0.0 else 0.0
@@ -285,7 +274,7 @@ class Emission:
                     if share > 0.0 and in_cone:
                         pdf_dir += share / (2.0 * PI * one_minus_cos_max)
                     if cos_n > 0.0 and pdf_dir > 0.0:  # emitters emit from their front side only
-                        radiance = self._emitted(ctx, g, pt.p, pt.n, pt.uv, d)
+                        radiance = emitted_radiance(ctx, self.geometry, g, pt.p, pt.n, pt.uv, d)
                         # Le cos / (pmf (1 - p_env) (1 / area) pdf_dir)
                         beta = radiance * (cos_n * self.area[e] / (pmf * (1.0 - p_env) * pdf_dir))
                         s = Surface(p=pt.p, n_geo=pt.n, n_shading=pt.n, uv=pt.uv, uv1=pt.uv,
