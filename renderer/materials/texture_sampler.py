@@ -1,27 +1,46 @@
-"""Texture lookups on the device: every texture of a scene lives in one RGBA atlas field.
+"""Texture lookups on the device: every texture of a scene lives in one page per storage kind.
 
 Follows the layout and sampling rules of `renderer.scene.textures` (its `sample_bilinear` is the
 numpy reference this sampler is tested against): UV transform, texel centres at half-integers,
-bilinear filtering with each tap wrapped (repeat / clamp / mirror) inside its own image.
+bilinear filtering with each tap wrapped (repeat / clamp / mirror) inside its own image, and each
+tap decoded (8-bit bytes through the exact sRGB table for colour slots) BEFORE blending.
+
+Pages are 32-bit integer fields (RGBA8 packed in one word per texel, half floats two to a word)
+and one float32 RGBA field: no 8- or 16-bit types, so the same code runs on CUDA and Vulkan.
+Only the storage kinds a scene's textures use are compiled into its kernels.
 """
 import numpy as np
 import taichi as ti
 
-from renderer.scene.textures import WRAP_CLAMP, WRAP_MIRROR
+from renderer.scene.srgb import SRGB8_TO_LINEAR
+from renderer.scene.textures import STORE_FLOAT, STORE_HALF, STORE_RGBA8, WRAP_CLAMP, WRAP_MIRROR, pack_atlas
 from renderer.upload import upload_fields
 
-# Texture table row: atlas rect x, y, w, h | wrap s, wrap t, uv set | uv matrix rows 0 and 1.
-TextureSlot = ti.types.struct(rect=ti.math.ivec4, modes=ti.math.ivec3, m0=ti.math.vec3, m1=ti.math.vec3)
+# Texture table row: rect x, y, w, h in its page | wrap s, wrap t, uv set | storage, sRGB |
+# uv matrix rows 0 and 1.
+TextureSlot = ti.types.struct(rect=ti.math.ivec4, modes=ti.math.ivec3, format=ti.math.ivec2,
+                              m0=ti.math.vec3, m1=ti.math.vec3)
 
 
 def slot_arrays(slots) -> dict:
-    """slots: list of (rect (4,), wrap_s code, wrap_t code, uv_set, matrix (3, 3))."""
+    """slots: list of (atlas rect row (x, y, w, h, storage, srgb), wrap_s, wrap_t, uv_set, matrix (3, 3))."""
     n = len(slots)
+    rows = np.array([np.asarray(s[0]) for s in slots], np.int32).reshape(n, 6)
     return {
-        "rect": np.array([s[0] for s in slots], np.int32).reshape(n, 4),
+        "rect": rows[:, :4].copy(),
         "modes": np.array([[s[1], s[2], s[3]] for s in slots], np.int32).reshape(n, 3),
+        "format": rows[:, 4:6].copy(),
         "m0": np.array([np.asarray(s[4], np.float32)[0] for s in slots], np.float32).reshape(n, 3),
         "m1": np.array([np.asarray(s[4], np.float32)[1] for s in slots], np.float32).reshape(n, 3),
+    }
+
+
+def page_words(atlas) -> dict:
+    """The pages as the device stores them: int32 words (rgba8, half) and float32 (float)."""
+    return {
+        STORE_RGBA8: np.ascontiguousarray(atlas.pages[STORE_RGBA8]).view(np.int32)[..., 0],
+        STORE_HALF: np.ascontiguousarray(atlas.pages[STORE_HALF]).view(np.int32),
+        STORE_FLOAT: np.ascontiguousarray(atlas.pages[STORE_FLOAT], dtype=np.float32),
     }
 
 
@@ -38,17 +57,74 @@ def _wrap(i, n, mode):
     return r
 
 
+@ti.func
+def _half_to_float(h):
+    """IEEE half (the low 16 bits of an i32) to f32, exactly, subnormals and infinities included."""
+    e = (h >> 10) & 0x1F
+    m = h & 0x3FF
+    bits = ((e + 112) << 23) | (m << 13)  # rebias the exponent 15 -> 127
+    if e == 31:
+        bits = 0x7F800000 | (m << 13)
+    v = ti.bit_cast(bits, ti.f32)
+    if e == 0:
+        v = ti.cast(m, ti.f32) * 5.960464477539063e-08  # m * 2^-24
+    return -v if (h & 0x8000) != 0 else v
+
+
+@ti.func
+def _srgb_to_linear(c):
+    return c / 12.92 if c <= 0.04045 else ti.pow((ti.max(c, 0.04045) + 0.055) / 1.055, 2.4)
+
+
 @ti.data_oriented
 class TextureTable:
-    def __init__(self, atlas: np.ndarray | None, slots):
+    def __init__(self, atlas, slots):
+        """atlas: a `renderer.scene.textures.TextureAtlas` (None: no textures); slots as `slot_arrays`."""
         if atlas is None or len(slots) == 0:
-            atlas = np.zeros((1, 1, 4), np.float32)
-        self.atlas = ti.Vector.field(4, ti.f32, shape=atlas.shape[:2])
-        upload_fields([(self.atlas, atlas)])
+            atlas, slots = pack_atlas([]), []
+        words = page_words(atlas)
+        self.storages = frozenset(int(np.asarray(s[0])[4]) for s in slots)  # compiled in
+        self.rgba8 = ti.field(ti.i32, shape=words[STORE_RGBA8].shape[:2])
+        self.half = ti.Vector.field(2, ti.i32, shape=words[STORE_HALF].shape[:2])
+        self.full = ti.Vector.field(4, ti.f32, shape=words[STORE_FLOAT].shape[:2])
+        self.srgb8 = ti.field(ti.f32, shape=256)
+        fields = {STORE_RGBA8: self.rgba8, STORE_HALF: self.half, STORE_FLOAT: self.full}
+        uploads = [(fields[s], words[s]) for s in sorted(self.storages)]
+        if STORE_RGBA8 in self.storages:
+            uploads.append((self.srgb8, SRGB8_TO_LINEAR))
+        if uploads:
+            upload_fields(uploads)
         self.count = len(slots)
         self.slots = TextureSlot.field(shape=max(1, self.count))
         if self.count:
             self.slots.from_numpy(slot_arrays(slots))
+
+    @ti.func
+    def _texel(self, storage, srgb, j, i):
+        """One texel, decoded to linear RGBA (step 5 of the atlas docs)."""
+        out = ti.math.vec4(0.0)
+        if ti.static(STORE_RGBA8 in self.storages):
+            if storage == STORE_RGBA8:
+                word = self.rgba8[j, i]
+                for c in ti.static(range(4)):
+                    k = (word >> (8 * c)) & 0xFF
+                    out[c] = ti.cast(k, ti.f32) * (1.0 / 255.0)
+                    if ti.static(c < 3):
+                        if srgb != 0:
+                            out[c] = self.srgb8[k]
+        if ti.static(STORE_HALF in self.storages):
+            if storage == STORE_HALF:
+                pair = self.half[j, i]
+                for c in ti.static(range(4)):
+                    out[c] = _half_to_float((pair[c // 2] >> (16 * (c % 2))) & 0xFFFF)
+        if ti.static(STORE_FLOAT in self.storages):
+            if storage == STORE_FLOAT:
+                out = self.full[j, i]
+        if ti.static(STORE_HALF in self.storages or STORE_FLOAT in self.storages):
+            if storage != STORE_RGBA8 and srgb != 0:
+                for c in ti.static(range(3)):
+                    out[c] = _srgb_to_linear(out[c])
+        return out
 
     @ti.func
     def sample(self, slot_id, uv0, uv1):
@@ -74,6 +150,13 @@ class TextureTable:
         ib = _wrap(i0 + 1, w, slot.modes.x) + slot.rect.x
         ja = _wrap(j0, h, slot.modes.y) + slot.rect.y
         jb = _wrap(j0 + 1, h, slot.modes.y) + slot.rect.y
-        top = self.atlas[ja, ia] * (1.0 - fx) + self.atlas[ja, ib] * fx
-        bottom = self.atlas[jb, ia] * (1.0 - fx) + self.atlas[jb, ib] * fx
-        return top * (1.0 - fy) + bottom * fy
+        # The four taps in one runtime loop: the texel decoder is compiled once, not four times.
+        result = ti.math.vec4(0.0)
+        for k in range(4):
+            right = k & 1
+            below = k >> 1
+            weight = (fx if right != 0 else 1.0 - fx) * (fy if below != 0 else 1.0 - fy)
+            texel = self._texel(slot.format.x, slot.format.y, jb if below != 0 else ja,
+                                ib if right != 0 else ia)
+            result += weight * texel
+        return result

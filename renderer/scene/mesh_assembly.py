@@ -11,9 +11,8 @@ from renderer.geometry.bezier import bezier_fields
 from renderer.geometry.mesh_data import MeshData
 from renderer.materials.table import KIND_IDS, MaterialRows
 from renderer.scene.errors import SceneError
-from renderer.scene.mesh_loader import load_mesh_asset
 from renderer.scene.model import Scene
-from renderer.scene.textures import WRAP_CODES, pack_atlas
+from renderer.scene.textures import WRAP_CODES, TextureAtlas, pack_atlas
 
 KIND_NAMES = {v: k for k, v in KIND_IDS.items()}
 
@@ -22,13 +21,19 @@ KIND_NAMES = {v: k for k, v in KIND_IDS.items()}
 class MeshScene:
     data: MeshData
     rows: MaterialRows
-    atlas: np.ndarray | None
+    atlas: TextureAtlas | None
     texture_slots: list  # (rect, wrap_s, wrap_t, uv_set, matrix) per texture slot
 
     def material_uses(self) -> dict:
         uses = self.rows.uses()
         uses["kinds"] = {KIND_NAMES[k] for k in uses["kinds"]}
         return uses
+
+
+def flattened_instances(asset) -> list:
+    """Every instance of `asset.instanced` as a world-space mesh. Temporary: the device has no
+    instancing yet (a two-level BVH will take the instances as they are)."""
+    return [inst.placed(k) for inst in asset.instanced for k in range(inst.instance_count)]
 
 
 class _Builder:
@@ -78,7 +83,7 @@ class _Builder:
         self.parts["tri_mat"].append(np.full(len(idx), material, np.int32))
 
     def add_asset(self, obj, index):
-        asset = load_mesh_asset(obj.file)
+        asset = self.scene.model_files.load(obj.file)
         if obj.material is not None:
             mats = [self.material(obj.material, f"objects[{index}]")] * max(1, len(asset.materials))
         else:
@@ -92,7 +97,7 @@ class _Builder:
 
             mats = [self.rows.add_pbr(m, texture_id) for m in asset.materials]
         matrix = obj.matrix()
-        for mesh in asset.meshes:
+        for mesh in asset.meshes + flattened_instances(asset):
             self.add_triangles(mesh.positions, mesh.indices, mesh.normals, mesh.uv0, mesh.uv1, mesh.tangents,
                                matrix, mats[mesh.material])
 
@@ -162,7 +167,7 @@ class _Builder:
         atlas, slots = None, []
         if self.slots:
             packed = pack_atlas(self.images)
-            atlas = packed.atlas
+            atlas = packed
             slots = [(packed.rects[img], ws, wt, uv_set, matrix) for img, ws, wt, uv_set, matrix in self.slots]
         return MeshScene(data, self.rows, atlas, slots)
 

@@ -1,8 +1,8 @@
 """Load triangle-mesh models (glTF 2.0 / GLB, OBJ + MTL, PLY, STL) into a `MeshAsset`.
 
-`load_mesh_asset(path)` is the one entry point. It returns world-space triangle meshes, PBR
-materials and linear float32 images (conventions in `renderer.scene.mesh_model`), or raises a
-one-line `SceneError` naming the file and the problem.
+`load_mesh_asset(path)` is the one entry point. It returns triangle meshes (world-space ones and
+instanced ones), PBR materials and images at their own precision (conventions in
+`renderer.scene.mesh_model`), or raises a one-line `SceneError` naming the file and the problem.
 
 How each format is read
 -----------------------
@@ -11,16 +11,22 @@ glTF / GLB
     accessors; images are decoded with Pillow. trimesh's glTF importer is not used because it drops
     what a path tracer needs: TEXCOORD_1, TANGENT, samplers (wrap modes), KHR_texture_transform and
     the original texture indices, and it flips V. Supported: the node hierarchy with matrix or TRS
-    transforms (a mesh used by two nodes yields two meshes), triangles / strips / fans (points and
-    lines are skipped with a warning), indexed and non-indexed primitives, sparse and normalized
-    accessors (so KHR_mesh_quantization works), embedded, data-URI and external buffers and images,
-    metallic-roughness materials with base colour, metallic-roughness, normal and emissive textures
-    (occlusion is ignored: the path tracer computes it), KHR_materials_emissive_strength,
-    KHR_materials_transmission, KHR_materials_ior, KHR_texture_transform, EXT_texture_webp.
-    A primitive without a material gets the glTF default material (white, metallic 1,
-    roughness 1), appended after the file's materials. Skins and morph targets are ignored
-    (meshes are placed in their bind pose by their node transform); cameras and lights too.
-    A file that *requires* any other extension (Draco, meshopt, KTX2/Basis textures) is refused.
+    transforms, triangles / strips / fans (points and lines are skipped with a warning), indexed
+    and non-indexed primitives, sparse and normalized accessors (so KHR_mesh_quantization works),
+    embedded, data-URI and external buffers and images, metallic-roughness materials with base
+    colour, metallic-roughness, normal and emissive textures (occlusion is ignored: the path
+    tracer computes it), and the extensions in SUPPORTED_GLTF_EXTENSIONS:
+    KHR_materials_emissive_strength, _transmission, _ior, _clearcoat, _sheen, _specular, _volume,
+    KHR_texture_transform, KHR_mesh_quantization, EXT_texture_webp, EXT_mesh_gpu_instancing.
+    A mesh placed by one node becomes world-space meshes; a mesh placed by two or more nodes, or
+    by a node with EXT_mesh_gpu_instancing (per-instance TRANSLATION / ROTATION / SCALE, applied
+    before the node's world matrix), is stored once with one matrix per placement
+    (`MeshAsset.instanced`). A primitive without a material gets the glTF default material
+    (white, metallic 1, roughness 1), appended after the file's materials. Skins and morph
+    targets are ignored (meshes are placed in their bind pose by their node transform); cameras
+    and lights too. A file that *requires* any other extension (Draco, meshopt, KTX2/Basis
+    textures) is refused; other extensions it merely *uses* are ignored with one warning that
+    lists them.
 OBJ + MTL
     Geometry through trimesh (`trimesh.exchange.obj.load_obj`, one mesh per material); the MTL
     files are parsed here, so that missing libraries and textures are reported. Mapping:
@@ -49,14 +55,18 @@ PLY / STL
 Checks (all formats)
 --------------------
 SceneError: missing file, unsupported extension, unreadable or truncated data, no triangles at
-all, non-finite positions / UVs / colours, vertex indices out of range, a missing texture or
-buffer file, a required glTF extension we do not implement.
+all, non-finite positions / UVs / colours, vertex indices out of range, a missing buffer or
+material library file, an image that does not decode, a required glTF extension we do not
+implement.
+Warning (`MeshWarning`, one line naming the model file): a missing texture file (one warning per
+file, naming the materials that use it; they keep their factors alone, as other viewers do),
+glTF extensions used but not implemented.
 Warning (`DegenerateTrianglesWarning`, one per file with the count): triangles with a repeated
 vertex index or zero area are removed. "Zero area" is tested in float64 on the world-space
-positions, relative to the triangle's size: twice the area below 1e-12 times the squared longest
+positions (local positions for instanced meshes), relative to the triangle's size: twice the area below 1e-12 times the squared longest
 edge (height < 1e-12 of its length). Normals are transformed with the cofactor matrix of the
 node transform (det(M) times the inverse transpose: the same directions, and still defined when a
-zero scale flattens the model). Normals that are zero or non-finite are replaced by the
+zero scale flattens the model; `mesh_model.normal_matrix`). Normals that are zero or non-finite are replaced by the
 area-weighted average of the adjacent face normals (`MeshWarning`).
 """
 from __future__ import annotations
@@ -78,12 +88,16 @@ import numpy as np
 
 from renderer.scene.errors import SceneError
 from renderer.scene.mesh_model import (
+    InstancedMesh,
     MeshAsset,
     PbrMaterial,
+    TextureImage,
     TextureRef,
     TriangleMesh,
+    normal_matrix,
     uv_transform_matrix,
 )
+from renderer.scene.srgb import srgb_to_linear
 
 PathLike = Union[str, os.PathLike]
 
@@ -94,9 +108,14 @@ SUPPORTED_GLTF_EXTENSIONS = frozenset({
     "KHR_materials_emissive_strength",
     "KHR_materials_transmission",
     "KHR_materials_ior",
+    "KHR_materials_clearcoat",
+    "KHR_materials_sheen",
+    "KHR_materials_specular",
+    "KHR_materials_volume",
     "KHR_texture_transform",
     "KHR_mesh_quantization",
     "EXT_texture_webp",
+    "EXT_mesh_gpu_instancing",
 })
 
 DEGENERATE_RELATIVE_AREA = 1e-12  # see the module docs ("Checks")
@@ -167,12 +186,6 @@ def frame_camera(bounds, fov_deg: float, aspect: float = 1.0,
     d = d / np.linalg.norm(d)
     position = centre + d * distance
     return tuple(float(v) for v in position), tuple(float(v) for v in centre)
-
-
-def srgb_to_linear(c: np.ndarray) -> np.ndarray:
-    """The exact sRGB decoding curve, elementwise, for values in [0, 1]."""
-    c = np.asarray(c, dtype=np.float64)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
 def vertex_normals(positions: np.ndarray, indices: np.ndarray) -> np.ndarray:
@@ -258,36 +271,97 @@ def _any_perpendicular(n: np.ndarray) -> np.ndarray:
     return np.stack([1.0 + s * n[:, 0] ** 2 * a, s * b, -s * n[:, 0]], axis=1)
 
 
-def _quaternion_matrix(q) -> np.ndarray:
-    x, y, z, w = (float(c) for c in q)
-    norm = math.sqrt(x * x + y * y + z * z + w * w)
-    if norm == 0.0 or not math.isfinite(norm):
-        return np.eye(3)
-    x, y, z, w = x / norm, y / norm, z / norm, w / norm
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+def _quaternion_matrices(q) -> np.ndarray:
+    """Rotation matrices (N, 3, 3) of unit quaternions (N, 4) given as (x, y, z, w), glTF's order.
+    Quaternions are normalised first; a zero or non-finite one is the identity."""
+    q = np.asarray(q, dtype=np.float64).reshape(-1, 4)
+    with np.errstate(over="ignore", invalid="ignore"):
+        norm = np.linalg.norm(q, axis=1)
+    ok = np.isfinite(norm) & (norm > 0.0)
+    q = np.where(ok[:, None], q / np.where(ok, norm, 1.0)[:, None], [0.0, 0.0, 0.0, 1.0])
+    x, y, z, w = q.T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+    ], axis=1)
+
+
+def _trs_matrices(translation, rotation, scale) -> np.ndarray:
+    """(N, 4, 4) matrices T @ R @ S (glTF's TRS order) from (N, 3), (N, 4), (N, 3) arrays."""
+    m = np.zeros((len(translation), 4, 4))
+    m[:, :3, :3] = _quaternion_matrices(rotation) * np.asarray(scale, dtype=np.float64)[:, None, :]
+    m[:, :3, 3] = translation
+    m[:, 3, 3] = 1.0
+    return m
+
+
+def _rgba(channels: np.ndarray, opaque) -> np.ndarray:
+    """(H, W, 4) from (H, W) grey, (H, W, 2) grey + alpha, (H, W, 3) RGB or (H, W, 4) RGBA."""
+    if channels.ndim == 2:
+        channels = channels[:, :, None]
+    h, w, c = channels.shape
+    out = np.empty((h, w, 4), dtype=channels.dtype)
+    out[:, :, :3] = channels[:, :, :3] if c >= 3 else channels[:, :, :1]
+    out[:, :, 3] = channels[:, :, c - 1] if c in (2, 4) else opaque
+    return out
+
+
+def _is_16_bit_png(data: bytes) -> bool:
+    # PNG signature, then the IHDR chunk: bit depth is byte 24 of the file.
+    return data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 25 and data[24] == 16
 
 
 def _decode_image(data: bytes) -> np.ndarray:
-    """Decode PNG / JPEG / WebP / ... bytes to float32 (H, W, 4) in [0, 1] (still encoded)."""
+    """Decode PNG / JPEG / WebP / ... bytes to (H, W, 4) RGBA texels, still encoded.
+
+    8-bit images stay uint8; 16-bit ones become float16 k / 65535 (OpenCV reads 16-bit colour
+    PNGs, which Pillow would truncate to 8 bits); float images are float32.
+    """
+    if _is_16_bit_png(data):
+        import cv2
+
+        raw = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+        if raw is None:
+            raise ValueError("OpenCV cannot decode this 16-bit PNG")
+        if raw.ndim == 3 and raw.shape[2] >= 3:  # OpenCV's BGR(A) -> RGB(A)
+            raw = raw[:, :, [2, 1, 0, 3][:raw.shape[2]]]
+        unit = raw.astype(np.float32) / np.float32(np.iinfo(raw.dtype).max)
+        return _rgba(unit, 1.0).astype(np.float16)
     from PIL import Image
 
     with Image.open(io.BytesIO(data)) as im:
         im.load()
         if im.mode.startswith("I;16") or im.mode == "I":
-            grey = np.asarray(im).astype(np.float64) / 65535.0
-            rgba = np.repeat(np.clip(grey, 0.0, 1.0)[:, :, None], 4, axis=2)
-            rgba[:, :, 3] = 1.0
-        elif im.mode == "F":
-            grey = np.asarray(im).astype(np.float64)
-            rgba = np.repeat(grey[:, :, None], 4, axis=2)
-            rgba[:, :, 3] = 1.0
-        else:
-            rgba = np.asarray(im.convert("RGBA")).astype(np.float64) / 255.0
-    return np.ascontiguousarray(rgba, dtype=np.float32)
+            grey = np.clip(np.asarray(im).astype(np.float64) / 65535.0, 0.0, 1.0)
+            return _rgba(grey.astype(np.float16), 1.0)
+        if im.mode == "F":
+            return _rgba(np.asarray(im, dtype=np.float32), 1.0)
+        return np.ascontiguousarray(np.asarray(im.convert("RGBA"), dtype=np.uint8))
+
+
+def _unit_values(pixels: np.ndarray) -> np.ndarray:
+    """Stored texels as float64 in [0, 1] (8-bit ones as k / 255), undecoded."""
+    return pixels / 255.0 if pixels.dtype == np.uint8 else pixels.astype(np.float64)
+
+
+class _MissingTexture(Exception):
+    """A texture file that is not there (the loader warns and goes on without it)."""
+
+    def __init__(self, file_name: str):
+        super().__init__(file_name)
+        self.file_name = file_name
+
+
+def _file_reader(target: Path, shown_name: str) -> Callable[[], bytes]:
+    """Reads a texture file, or raises _MissingTexture(shown_name) if it does not exist."""
+
+    def load() -> bytes:
+        if not target.is_file():
+            raise _MissingTexture(shown_name)
+        return target.read_bytes()
+
+    return load
 
 
 # ---------------------------------------------------------------------------------------------
@@ -300,10 +374,13 @@ class _AssetBuilder:
         self.file = file
         self.materials: list[PbrMaterial] = []
         self.meshes: list[TriangleMesh] = []
-        self.images: list[np.ndarray] = []
-        self.image_labels: list[str] = []
+        self.instanced: list[InstancedMesh] = []
+        self.images: list[TextureImage] = []
+        self.extensions_used: tuple[str, ...] = ()
+        self.extensions_ignored: tuple[str, ...] = ()
         self._image_index: dict[tuple, int] = {}
         self._decoded: dict[object, np.ndarray] = {}
+        self._missing: dict[object, tuple[str, list[str]]] = {}  # key -> (file name, users)
         self.degenerate = 0
         self.repaired_normals = 0
         self.input_triangles = 0
@@ -311,8 +388,12 @@ class _AssetBuilder:
     def error(self, message: str) -> SceneError:
         return SceneError(self.name, message)
 
+    def warn(self, message: str) -> None:
+        warnings.warn(f"{os.fspath(self.name)}: {message}", MeshWarning, stacklevel=4)
+
     def decoded_image(self, key, label: str, load: Callable[[], bytes]) -> np.ndarray:
-        """The image `key` decoded (cached), as stored in the file (not yet colour-converted)."""
+        """The image `key` decoded (cached), as stored in the file (not colour-converted).
+        Raises _MissingTexture when its file is missing."""
         if key not in self._decoded:
             data = load()
             try:
@@ -321,25 +402,49 @@ class _AssetBuilder:
                 raise self.error(f"cannot decode image {label} ({type(e).__name__}: {e})") from e
         return self._decoded[key]
 
-    def image(self, key, srgb: bool, label: str, load: Callable[[], bytes]) -> int:
-        """Index into `images` of image `key` in the encoding a slot needs (one copy per encoding)."""
+    def note_missing(self, key, file_name: str, user: str) -> None:
+        """Remember that `user` (e.g. "material 'wood' base colour") wanted a missing file."""
+        self._missing.setdefault(key, (file_name, []))[1].append(user)
+
+    def image(self, key, srgb: bool, label: str, load: Callable[[], bytes],
+              user: str) -> Optional[int]:
+        """Index into `images` of image `key` as a colour (`srgb`) or data slot reads it, or None
+        when its file is missing. Both uses of one image share its pixels (stored once)."""
         slot = (key, bool(srgb))
         if slot not in self._image_index:
-            raw = self.decoded_image(key, label, load)
-            if srgb:
-                linear = raw.copy()
-                linear[:, :, :3] = srgb_to_linear(raw[:, :, :3])
-                self.images.append(linear.astype(np.float32))
-                self.image_labels.append(f"{label} (sRGB -> linear)")
-            else:
-                self.images.append(raw)
-                self.image_labels.append(f"{label} (linear)")
+            if key in self._missing:
+                self.note_missing(key, self._missing[key][0], user)
+                return None
+            try:
+                pixels = self.decoded_image(key, label, load)
+            except _MissingTexture as e:
+                self.note_missing(key, e.file_name, user)
+                return None
+            encoding = "sRGB colour" if srgb else "linear data"
+            self.images.append(TextureImage(pixels, srgb, f"{label} ({encoding})"))
             self._image_index[slot] = len(self.images) - 1
         return self._image_index[slot]
 
-    def add_mesh(self, where: str, positions, indices, matrix=None, material: int = 0,
-                 normals=None, uv0=None, uv1=None, tangents=None, colors=None, name: str = "") -> None:
-        """Validate, transform to world space, clean and append one mesh."""
+    def add_mesh(self, where: str, positions, indices, matrix=None, **attributes) -> None:
+        """Validate, transform to world space with `matrix`, clean and append one mesh."""
+        mesh = self._build_mesh(where, positions, indices, matrix, **attributes)
+        if mesh is not None:
+            self.meshes.append(mesh)
+
+    def add_instanced(self, where: str, positions, indices, matrices, **attributes) -> None:
+        """Validate and clean one mesh in its local frame; append it with its (N, 4, 4)
+        object-to-world matrices."""
+        matrices = np.asarray(matrices, dtype=np.float64).reshape(-1, 4, 4)
+        if not np.isfinite(matrices).all():
+            raise self.error(f"{where}: an instance transform is not finite (NaN or infinity)")
+        mesh = self._build_mesh(where, positions, indices, None, **attributes)
+        if mesh is not None:
+            self.instanced.append(InstancedMesh(mesh, matrices))
+
+    def _build_mesh(self, where: str, positions, indices, matrix=None, material: int = 0,
+                    normals=None, uv0=None, uv1=None, tangents=None, colors=None,
+                    name: str = "") -> Optional[TriangleMesh]:
+        """The validated, transformed and cleaned mesh, or None if no triangle is left."""
         p = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
         tri = np.asarray(indices).reshape(-1, 3)
         count = len(p)
@@ -393,20 +498,14 @@ class _AssetBuilder:
             self.degenerate += int(np.count_nonzero(~keep))
             tri = tri[keep]
         if len(tri) == 0:
-            return  # nothing drawable; `finish` reports a file without any triangle
+            return None  # nothing drawable; `finish` reports a file without any triangle
 
         det = float(np.linalg.det(m3))
         if det < 0.0:  # a mirroring transform: keep counter-clockwise front faces
             tri = tri[:, [0, 2, 1]]
-        # Normals transform with the inverse transpose. The cofactor matrix equals
-        # det * inverse transpose and stays defined for a singular (flattening) transform,
-        # where it maps every normal onto the flattened plane's normal.
-        cofactor = np.array([np.cross(m3[1], m3[2]), np.cross(m3[2], m3[0]), np.cross(m3[0], m3[1])])
-        normal_matrix = cofactor if det >= 0.0 else -cofactor
-
         n = arrays["normals"]
         if n is not None:
-            n = n @ normal_matrix.T
+            n = n @ normal_matrix(m3).T  # the cofactor matrix: defined for flattening transforms
             length = np.linalg.norm(n, axis=1)
             bad_rows = ~(np.isfinite(length) & (length > 1e-20))
             n = n / np.where(bad_rows, 1.0, length)[:, None]
@@ -420,7 +519,8 @@ class _AssetBuilder:
         uvs = [arrays["uv0"], arrays["uv1"]]
         colors = arrays["colors"]
         material_spec = self.materials[material]
-        normal_map = material_spec.normal_texture
+        # Tangents follow the base normal map, or the clearcoat's when only that one exists.
+        normal_map = material_spec.normal_texture or material_spec.clearcoat_normal_texture
         t = arrays["tangents"]
         if normal_map is not None and n is None:
             # glTF: no normals means flat shading. Split the vertices so every triangle has its
@@ -456,7 +556,7 @@ class _AssetBuilder:
             t = self._tangents_for(where, world, n, uvs, tri, normal_map)
 
         f32 = (lambda a: None if a is None else np.ascontiguousarray(a, dtype=np.float32))
-        self.meshes.append(TriangleMesh(
+        return TriangleMesh(
             positions=f32(world),
             indices=np.ascontiguousarray(tri, dtype=np.int32),
             material=int(material),
@@ -466,7 +566,7 @@ class _AssetBuilder:
             tangents=f32(t),
             colors=f32(colors),
             name=name,
-        ))
+        )
 
     def _tangents_for(self, where, positions, normals, uvs, tri, ref: TextureRef) -> np.ndarray:
         uv = uvs[ref.uv_set]
@@ -481,7 +581,7 @@ class _AssetBuilder:
         return generate_tangents(positions, normals, sampled, tri)
 
     def finish(self) -> MeshAsset:
-        if not self.meshes:
+        if not self.meshes and not self.instanced:
             if self.input_triangles:
                 raise self.error(f"all {self.input_triangles} triangles are degenerate "
                                  "(zero area or a repeated vertex)")
@@ -491,24 +591,44 @@ class _AssetBuilder:
                           f"of {self.input_triangles} (zero area or a repeated vertex)",
                           DegenerateTrianglesWarning, stacklevel=3)
         if self.repaired_normals:
-            warnings.warn(f"{os.fspath(self.name)}: replaced {self.repaired_normals} zero-length or "
-                          "non-finite normals by averaged face normals", MeshWarning, stacklevel=3)
+            self.warn(f"replaced {self.repaired_normals} zero-length or non-finite normals by "
+                      "averaged face normals")
+        for file_name, users in self._missing.values():
+            self.warn(f"texture file '{file_name}' not found; drawn without it (factors alone): "
+                      + ", ".join(dict.fromkeys(users)))
         lo = np.full(3, np.inf)
         hi = np.full(3, -np.inf)
-        for mesh in self.meshes:
+        placed = [(m, None) for m in self.meshes] + [(i.mesh, i.matrices) for i in self.instanced]
+        for mesh, matrices in placed:
             referenced = np.zeros(len(mesh.positions), dtype=bool)
             referenced[mesh.indices.ravel()] = True
-            used = mesh.positions[referenced]
-            lo = np.minimum(lo, used.min(axis=0))
-            hi = np.maximum(hi, used.max(axis=0))
+            box = _instance_bounds(mesh.positions[referenced].astype(np.float64), matrices)
+            lo = np.minimum(lo, box[0])
+            hi = np.maximum(hi, box[1])
         return MeshAsset(
             meshes=self.meshes,
             materials=self.materials,
             images=self.images,
             bounds=np.stack([lo, hi]).astype(np.float32),
-            image_labels=self.image_labels,
             path=self.file,
+            instanced=self.instanced,
+            extensions_used=self.extensions_used,
+            extensions_ignored=self.extensions_ignored,
         )
+
+
+def _instance_bounds(points: np.ndarray, matrices: Optional[np.ndarray]) -> np.ndarray:
+    """(2, 3) min / max corner of `points` (P, 3), or of their images under every matrix."""
+    if matrices is None:
+        return np.stack([points.min(axis=0), points.max(axis=0)])
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    chunk = max(1, (1 << 22) // max(len(points), 1))  # bounded memory for many big instances
+    for start in range(0, len(matrices), chunk):
+        m = matrices[start:start + chunk]
+        world = np.einsum("nij,pj->npi", m[:, :3, :3], points) + m[:, None, :3, 3]
+        lo = np.minimum(lo, world.min(axis=(0, 1)))
+        hi = np.maximum(hi, world.max(axis=(0, 1)))
+    return np.stack([lo, hi])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -526,6 +646,10 @@ _GLB_MAGIC = 0x46546C67  # b"glTF"
 _CHUNK_JSON = 0x4E4F534A
 _CHUNK_BIN = 0x004E4942
 _TRIANGLES, _STRIP, _FAN = 4, 5, 6
+
+
+def _floats_of(values) -> tuple[float, ...]:
+    return tuple(float(v) for v in values)
 
 
 def _read_uri(builder: _AssetBuilder, uri: str, what: str) -> bytes:
@@ -573,6 +697,12 @@ class _GltfReader:
         unsupported = sorted(set(self.doc.get("extensionsRequired", [])) - SUPPORTED_GLTF_EXTENSIONS)
         if unsupported:
             raise self.b.error(f"requires unsupported glTF extension(s) {', '.join(unsupported)}")
+        used = tuple(dict.fromkeys(str(e) for e in self.doc.get("extensionsUsed", [])))
+        ignored = tuple(sorted(set(used) - SUPPORTED_GLTF_EXTENSIONS))
+        self.b.extensions_used, self.b.extensions_ignored = used, ignored
+        if ignored:
+            self.b.warn(f"ignoring glTF extension(s) this loader does not implement: "
+                        f"{', '.join(ignored)}")
         self._read_materials()
         self._read_nodes()
         if self.skipped_primitives:
@@ -701,7 +831,10 @@ class _GltfReader:
                 data, start, length, _ = self._view(image["bufferView"], f"images[{index}]")
                 return bytes(data[start:start + length])
             if "uri" in image:
-                return _read_uri(self.b, image["uri"], "texture")
+                uri = str(image["uri"])
+                if uri.startswith("data:"):
+                    return _read_uri(self.b, uri, f"images[{index}]")
+                return _file_reader(self.b.file.parent / unquote(uri), unquote(uri))()
             raise self.b.error(f"images[{index}] has neither a uri nor a bufferView")
 
         return load
@@ -721,7 +854,9 @@ class _GltfReader:
             label += f" '{unquote(image['uri'])}'"
         elif image.get("name"):
             label += f" '{image['name']}'"
-        image_index = self.b.image(("gltf", source), srgb, label, self._image_bytes(source))
+        image_index = self.b.image(("gltf", source), srgb, label, self._image_bytes(source), what)
+        if image_index is None:
+            return None  # a missing file: the slot keeps its factor alone (warned at the end)
 
         uv_set = int(info.get("texCoord", 0))
         transform = info.get("extensions", {}).get("KHR_texture_transform")
@@ -757,9 +892,13 @@ class _GltfReader:
                              .get("emissiveStrength", 1.0))
             transmission = ext.get("KHR_materials_transmission", {})
             normal_info = m.get("normalTexture")
+
+            def texture(info, srgb: bool, slot: str):
+                return self._texture_ref(info, srgb, f"{what} {slot}")
+
             self.b.materials.append(PbrMaterial(
                 name=name,
-                base_color_factor=tuple(float(c) for c in pbr.get("baseColorFactor", (1, 1, 1, 1))),
+                base_color_factor=_floats_of(pbr.get("baseColorFactor", (1, 1, 1, 1))),
                 metallic_factor=float(pbr.get("metallicFactor", 1.0)),
                 roughness_factor=float(pbr.get("roughnessFactor", 1.0)),
                 emissive_factor=tuple(float(c) * strength for c in m.get("emissiveFactor", (0, 0, 0))),
@@ -769,16 +908,74 @@ class _GltfReader:
                 alpha_mode=str(m.get("alphaMode", "OPAQUE")),
                 alpha_cutoff=float(m.get("alphaCutoff", 0.5)),
                 double_sided=bool(m.get("doubleSided", False)),
-                base_color_texture=self._texture_ref(pbr.get("baseColorTexture"), True,
-                                                     f"{what} base colour"),
-                metallic_roughness_texture=self._texture_ref(
-                    pbr.get("metallicRoughnessTexture"), False, f"{what} metallic-roughness"),
-                normal_texture=self._texture_ref(normal_info, False, f"{what} normal map"),
-                emissive_texture=self._texture_ref(m.get("emissiveTexture"), True,
-                                                   f"{what} emissive"),
-                transmission_texture=self._texture_ref(transmission.get("transmissionTexture"),
-                                                       False, f"{what} transmission"),
+                base_color_texture=texture(pbr.get("baseColorTexture"), True, "base colour"),
+                metallic_roughness_texture=texture(pbr.get("metallicRoughnessTexture"), False,
+                                                   "metallic-roughness"),
+                normal_texture=texture(normal_info, False, "normal map"),
+                emissive_texture=texture(m.get("emissiveTexture"), True, "emissive"),
+                transmission_texture=texture(transmission.get("transmissionTexture"), False,
+                                             "transmission"),
+                **self._clearcoat(ext.get("KHR_materials_clearcoat"), texture),
+                **self._sheen(ext.get("KHR_materials_sheen"), texture),
+                **self._specular(ext.get("KHR_materials_specular"), texture),
+                **self._volume(ext.get("KHR_materials_volume")),
+                extensions=tuple(sorted(ext)),
             ))
+
+    # Each layer extension as PbrMaterial keyword arguments ({} when the material lacks it, so
+    # the dataclass defaults, which are glTF's "no layer", apply).
+
+    @staticmethod
+    def _clearcoat(e: Optional[dict], texture) -> dict:
+        if e is None:
+            return {}
+        normal = e.get("clearcoatNormalTexture")
+        return {
+            "clearcoat_factor": float(e.get("clearcoatFactor", 0.0)),
+            "clearcoat_texture": texture(e.get("clearcoatTexture"), False, "clearcoat"),
+            "clearcoat_roughness_factor": float(e.get("clearcoatRoughnessFactor", 0.0)),
+            "clearcoat_roughness_texture": texture(e.get("clearcoatRoughnessTexture"), False,
+                                                   "clearcoat roughness"),
+            "clearcoat_normal_texture": texture(normal, False, "clearcoat normal map"),
+            "clearcoat_normal_scale": float((normal or {}).get("scale", 1.0)),
+        }
+
+    @staticmethod
+    def _sheen(e: Optional[dict], texture) -> dict:
+        if e is None:
+            return {}
+        return {
+            "sheen_color_factor": _floats_of(e.get("sheenColorFactor", (0, 0, 0))),
+            "sheen_color_texture": texture(e.get("sheenColorTexture"), True, "sheen colour"),
+            "sheen_roughness_factor": float(e.get("sheenRoughnessFactor", 0.0)),
+            "sheen_roughness_texture": texture(e.get("sheenRoughnessTexture"), False,
+                                               "sheen roughness"),
+        }
+
+    @staticmethod
+    def _specular(e: Optional[dict], texture) -> dict:
+        if e is None:
+            return {}
+        return {
+            "specular_factor": float(e.get("specularFactor", 1.0)),
+            "specular_texture": texture(e.get("specularTexture"), False, "specular"),
+            "specular_color_factor": _floats_of(e.get("specularColorFactor", (1, 1, 1))),
+            "specular_color_texture": texture(e.get("specularColorTexture"), True,
+                                              "specular colour"),
+        }
+
+    @staticmethod
+    def _volume(e: Optional[dict]) -> dict:
+        if e is None:
+            return {}
+        distance = float(e.get("attenuationDistance", math.inf))
+        return {
+            "has_volume": True,
+            "thickness_factor": float(e.get("thicknessFactor", 0.0)),
+            "attenuation_color": _floats_of(e.get("attenuationColor", (1, 1, 1))),
+            # glTF requires a positive distance; anything else means no absorption.
+            "attenuation_distance": distance if distance > 0.0 else math.inf,
+        }
 
     def _default_material(self) -> int:
         if not hasattr(self, "_default_index"):
@@ -792,11 +989,8 @@ class _GltfReader:
     def _local_matrix(node: dict) -> np.ndarray:
         if "matrix" in node:
             return np.array(node["matrix"], dtype=np.float64).reshape(4, 4).T  # column-major
-        m = np.eye(4)
-        m[:3, :3] = _quaternion_matrix(node.get("rotation", (0, 0, 0, 1))) @ np.diag(
-            np.asarray(node.get("scale", (1, 1, 1)), dtype=np.float64))
-        m[:3, 3] = np.asarray(node.get("translation", (0, 0, 0)), dtype=np.float64)
-        return m
+        return _trs_matrices([node.get("translation", (0, 0, 0))], [node.get("rotation", (0, 0, 0, 1))],
+                             [node.get("scale", (1, 1, 1))])[0]
 
     def _read_nodes(self) -> None:
         nodes = self.doc.get("nodes", [])
@@ -808,6 +1002,7 @@ class _GltfReader:
             children = {c for n in nodes for c in n.get("children", [])}
             roots = [i for i in range(len(nodes)) if i not in children]
         stack = [(r, np.eye(4), frozenset()) for r in reversed(roots)]
+        placements: dict[int, list] = {}  # mesh -> (node, (k, 4, 4) matrices, gpu instancing)
         while stack:
             index, parent, ancestors = stack.pop()
             if index in ancestors:
@@ -815,16 +1010,53 @@ class _GltfReader:
             node = self._item("nodes", index, "the scene")
             world = parent @ self._local_matrix(node)
             if "mesh" in node:
-                self._add_mesh_instance(node, index, world)
+                self._item("meshes", node["mesh"], f"nodes[{index}]")
+                gpu = "EXT_mesh_gpu_instancing" in node.get("extensions", {})
+                matrices = self._instance_matrices(node, index, world) if gpu else world[None]
+                placements.setdefault(node["mesh"], []).append((index, matrices, gpu))
             below = ancestors | {index}
             for child in reversed(node.get("children", [])):
                 stack.append((child, world, below))
+        # A mesh placed once is baked into world space; a mesh placed more often, or by
+        # EXT_mesh_gpu_instancing, is kept once with its matrices (mesh_model, "Instances").
+        for mesh_index, places in placements.items():
+            if len(places) == 1 and not places[0][2]:
+                node_index, matrices, _ = places[0]
+                node = self.doc["nodes"][node_index]
+                node_name = node.get("name") or f"nodes[{node_index}]"
+                self._add_mesh(mesh_index, node_name, world=matrices[0])
+            else:
+                matrices = np.concatenate([m for _, m, _ in places])
+                if len(matrices):
+                    self._add_mesh(mesh_index, None, matrices=matrices)
 
-    def _add_mesh_instance(self, node: dict, node_index: int, world: np.ndarray) -> None:
-        mesh_index = node["mesh"]
-        mesh = self._item("meshes", mesh_index, f"nodes[{node_index}]")
+    def _instance_matrices(self, node: dict, node_index: int, world: np.ndarray) -> np.ndarray:
+        """EXT_mesh_gpu_instancing: world @ T_i @ R_i @ S_i for every instance i, (N, 4, 4)."""
+        attributes = node["extensions"]["EXT_mesh_gpu_instancing"].get("attributes", {})
+        where = f"nodes[{node_index}] EXT_mesh_gpu_instancing"
+        columns = {}
+        for key, width in (("TRANSLATION", 3), ("ROTATION", 4), ("SCALE", 3)):
+            if key in attributes:
+                values = self.accessor(attributes[key], where)
+                if values.shape[1] != width:
+                    raise self.b.error(f"{where}: {key} has {values.shape[1]} components, "
+                                       f"not {width}")
+                columns[key] = values.astype(np.float64)
+        counts = {len(v) for v in columns.values()}
+        if len(counts) > 1:
+            raise self.b.error(f"{where}: TRANSLATION, ROTATION and SCALE have different counts "
+                               f"({', '.join(f'{k} {len(v)}' for k, v in columns.items())})")
+        n = counts.pop() if counts else 1
+        local = _trs_matrices(columns.get("TRANSLATION", np.zeros((n, 3))),
+                              columns.get("ROTATION", np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))),
+                              columns.get("SCALE", np.ones((n, 3))))
+        return world @ local
+
+    def _add_mesh(self, mesh_index: int, node_name: Optional[str], world=None,
+                  matrices=None) -> None:
+        """Every primitive of a mesh: in world space with `world`, or local with `matrices`."""
+        mesh = self.doc["meshes"][mesh_index]
         mesh_name = mesh.get("name") or f"meshes[{mesh_index}]"
-        node_name = node.get("name") or f"nodes[{node_index}]"
         for p, prim in enumerate(mesh.get("primitives", [])):
             where = f"mesh '{mesh_name}' primitive {p}"
             mode = prim.get("mode", _TRIANGLES)
@@ -853,19 +1085,32 @@ class _GltfReader:
                 return a.astype(np.float64)
 
             colors = optional("COLOR_0", (3, 4))
-            if colors is not None and colors.shape[1] == 3:
-                colors = np.concatenate([colors, np.ones((len(colors), 1))], axis=1)
+            if colors is not None:
+                colors = self._unit_colors(attributes["COLOR_0"], colors)
             material = prim.get("material")
             if material is None:
                 material = self._default_material()
             elif not 0 <= int(material) < len(self.doc.get("materials", [])):
                 raise self.b.error(f"{where} refers to materials[{material}], which does not exist")
-            self.b.add_mesh(
-                where, positions, tri, matrix=world, material=int(material),
-                normals=optional("NORMAL", (3,)), uv0=optional("TEXCOORD_0", (2,)),
-                uv1=optional("TEXCOORD_1", (2,)), tangents=optional("TANGENT", (4,)),
-                colors=colors, name=f"{node_name}/{mesh_name}/{p}",
-            )
+            data = dict(material=int(material), normals=optional("NORMAL", (3,)),
+                        uv0=optional("TEXCOORD_0", (2,)), uv1=optional("TEXCOORD_1", (2,)),
+                        tangents=optional("TANGENT", (4,)), colors=colors)
+            if matrices is None:
+                self.b.add_mesh(where, positions, tri, matrix=world,
+                                name=f"{node_name}/{mesh_name}/{p}", **data)
+            else:
+                self.b.add_instanced(where, positions, tri, matrices, name=f"{mesh_name}/{p}", **data)
+
+    def _unit_colors(self, accessor_index: int, colors: np.ndarray) -> np.ndarray:
+        """COLOR_0 as linear RGBA: glTF requires integer colours to be normalized (k / 255,
+        k / 65535); a file that forgets the flag still means that. Alpha defaults to 1."""
+        accessor = self.doc["accessors"][accessor_index]
+        ctype = accessor.get("componentType")
+        if ctype in (5121, 5123) and not accessor.get("normalized"):
+            colors = colors / _NORMALIZED_DIVISORS[ctype]
+        if colors.shape[1] == 3:
+            colors = np.concatenate([colors, np.ones((len(colors), 1))], axis=1)
+        return colors
 
     def _triangles(self, flat: np.ndarray, mode: int, where: str) -> np.ndarray:
         if mode == _TRIANGLES:
@@ -1004,15 +1249,16 @@ def _obj_material(b: _AssetBuilder, name: str, entries: dict, directory: Path) -
         if not file_name:
             return None
         target = directory / file_name
-        if not target.is_file():
-            raise b.error(f"texture file '{file_name}' not found (material '{name}', {key})")
         offset = _floats(options.get("-o"), 2) or (0.0, 0.0)
         scale = _floats(options.get("-s"), 2) or (1.0, 1.0)
         # MTL -o/-s act on v-up coordinates; in the stored v-down frame v' = s v + (1 - s - o).
         matrix = ((scale[0], 0.0, offset[0]), (0.0, scale[1], 1.0 - scale[1] - offset[1]),
                   (0.0, 0.0, 1.0))
         wrap = "clamp" if options.get("-clamp", ["off"])[0].lower() == "on" else "repeat"
-        index = b.image(("file", str(target.resolve())), srgb, f"'{file_name}'", target.read_bytes)
+        index = b.image(("file", str(target.resolve())), srgb, f"'{file_name}'",
+                        _file_reader(target, file_name), f"material '{name}' {key}")
+        if index is None:
+            return None  # missing: the material keeps its factors (warned at the end)
         return TextureRef(texture=index, uv_set=0, wrap_s=wrap, wrap_t=wrap,
                           transform=tuple(tuple(float(v) for v in row) for row in matrix))
 
@@ -1023,19 +1269,20 @@ def _obj_material(b: _AssetBuilder, name: str, entries: dict, directory: Path) -
             if entries.get(key):
                 file_name, options = _parse_map_statement(entries[key])
                 target = directory / file_name
-                if not target.is_file():
-                    raise b.error(f"texture file '{file_name}' not found (material '{name}', {key})")
-                raw = b.decoded_image(("file", str(target.resolve())), f"'{file_name}'",
-                                      target.read_bytes)
-                mean = raw[:, :, :3].reshape(-1, 3).mean(axis=0)
+                image_key = ("file", str(target.resolve()))
+                try:
+                    raw = b.decoded_image(image_key, f"'{file_name}'", _file_reader(target, file_name))
+                except _MissingTexture:
+                    b.note_missing(image_key, file_name, f"material '{name}' {key}")
+                    break
+                mean = _unit_values(raw[:, :, :3]).reshape(-1, 3).mean(axis=0)
                 if mean[2] > 0.6 and abs(mean[0] - 0.5) < 0.2 and abs(mean[1] - 0.5) < 0.2:
                     normal = texture(key, False)
                     bm = _floats(options.get("-bm"), 1)
                     normal_scale = 1.0 if bm is None else bm[0]
                 else:
-                    warnings.warn(f"{os.fspath(b.name)}: material '{name}': height-map bump "
-                                  f"'{file_name}' ignored (only normal maps are supported)",
-                                  MeshWarning, stacklevel=4)
+                    b.warn(f"material '{name}': height-map bump '{file_name}' ignored (only "
+                           "normal maps are supported)")
                 break
     emissive_texture = texture("map_ke", True)
     emission = ke if ke is not None else ((1.0, 1.0, 1.0) if emissive_texture else (0.0, 0.0, 0.0))
@@ -1187,12 +1434,12 @@ def _load_ply(b: _AssetBuilder) -> None:
         texture_file = _ply_texture_file(b.file)
         if texture_file:
             target = b.file.parent / texture_file
-            if not target.is_file():
-                raise b.error(f"texture file '{texture_file}' not found")
-            ref = TextureRef(texture=b.image(("file", str(target.resolve())), True,
-                                             f"'{texture_file}'", target.read_bytes))
-            b.materials[material] = dataclasses.replace(
-                b.materials[material], base_color_texture=ref, base_color_factor=(1.0, 1.0, 1.0, 1.0))
+            index = b.image(("file", str(target.resolve())), True, f"'{texture_file}'",
+                            _file_reader(target, texture_file), "base colour")
+            if index is not None:
+                b.materials[material] = dataclasses.replace(
+                    b.materials[material], base_color_texture=TextureRef(texture=index),
+                    base_color_factor=(1.0, 1.0, 1.0, 1.0))
     b.add_mesh("mesh", vertices, faces, material=material, normals=kwargs.get("vertex_normals"),
                uv0=uv, colors=colors, name=b.file.stem)
 

@@ -5,11 +5,14 @@ reads `positions` and `indices`, and the texture atlas (`renderer.scene.textures
 
 Conventions (shared by every loader, whatever the file format stores):
 
-- Positions are in WORLD space, metres: node transforms are already applied, and a mesh used by
-  two nodes appears twice. A triangle's vertices are counter-clockwise seen from its front side,
-  also under mirroring node transforms (the loader reverses the winding when det(M) < 0).
-- Normals are unit length, transformed with the inverse transpose of the node matrix. `None`
-  means the file had none: shade with the geometric normal (glTF prescribes flat shading then).
+- `MeshAsset.meshes` are in WORLD space, metres: node transforms are already applied. Those are
+  the meshes a file places once. A glTF mesh placed by two or more nodes, or by a node with
+  EXT_mesh_gpu_instancing, is stored once in `MeshAsset.instanced` instead (see "Instances").
+  A world mesh's triangles are counter-clockwise seen from its front side, also under mirroring
+  node transforms (the loader reverses the winding when det(M) < 0).
+- Normals are unit length, transformed with the cofactor matrix of the node matrix (det(M) times
+  its inverse transpose: the same directions, and defined for a flattening M). `None` means the
+  file had none: shade with the geometric normal (glTF prescribes flat shading then).
 - UV sets follow glTF: u to the right, v DOWN, (0, 0) is the top-left corner of the image and
   image row 0 is the top row. OBJ, PLY and other v-up formats are flipped at load (v -> 1 - v).
   The KHR_texture_transform matrix of a `TextureRef` is NOT applied to the stored UVs: the sampler
@@ -19,15 +22,38 @@ Conventions (shared by every loader, whatever the file format stores):
   (towards decreasing stored v), which is the +y of a glTF/MikkTSpace tangent-space normal map.
   A shading normal is `normalize(T * n.x + B * n.y + N * n.z)` with
   `n = (2 * texel.rgb - 1) * (normal_scale, normal_scale, 1)`.
-- Colour: every image in `MeshAsset.images` holds LINEAR values. Slots that glTF defines as sRGB
-  (base colour, emissive) are converted from sRGB to linear at load time (the alpha channel is
-  always linear); data slots (metallic-roughness, normal, transmission) are kept as decoded. An
-  image used both as colour and as data is stored twice, once per encoding. So the sampler never
-  needs to know about colour spaces.
-- Images are float32 (H, W, 4) RGBA: grey images are replicated to RGB and a missing alpha is 1.
-  8-bit files decode to k / 255, 16-bit files to k / 65535.
+- Images (`MeshAsset.images`, `TextureImage`) keep the file's precision and encoding: 8-bit
+  files stay uint8 RGBA, 16-bit ones become float16 (k / 65535), float ones float32. Grey is
+  replicated to RGB and a missing alpha is opaque. Each entry says how a lookup decodes it:
+  `srgb` entries (the colour slots glTF defines as sRGB: base colour, emissive, sheen colour,
+  specular colour) turn RGB from sRGB to linear PER TEXEL, before filtering; alpha and the data
+  slots (metallic-roughness, normal, transmission, clearcoat, ...) are read as stored. An image
+  used both as colour and as data is two entries sharing one pixel array, stored once.
+  `TextureImage.linear()` is the decoded image, the values every lookup must agree with.
+- Base colour alpha is the alpha channel of the base colour texture times `base_color_factor[3]`,
+  times the vertex colour's alpha. `alpha_mode` / `alpha_cutoff` say how to use it (glTF).
+  OBJ `d` < 1 on a non-glass illum model becomes alpha BLEND.
+- Vertex colours (`TriangleMesh.colors`) are LINEAR RGBA: glTF COLOR_0 is linear (normalized
+  8/16-bit integers are k / 255 or k / 65535); PLY colours are sRGB in the file and decoded at load.
 - Occlusion textures are ignored on purpose: a path tracer computes occlusion itself, and
   multiplying a baked ambient-occlusion map on top would darken the image twice.
+
+Instances
+---------
+`InstancedMesh` is one glTF primitive stored ONCE in its mesh's local frame (validated and
+cleaned like a world mesh, with winding, normals and tangents as in the file) and a float64
+(N, 4, 4) array `matrices` of object-to-world transforms, one per placement (node world matrix,
+times the per-instance TRS of EXT_mesh_gpu_instancing when the node has one). For instance k,
+with M = matrices[k] acting on column vectors (p_world = M @ [p, 1]):
+  - positions: M[:3, :3] @ p + M[:3, 3];
+  - normals: cofactor(M[:3, :3]) @ n, normalised (cofactor = det * inverse transpose, so a zero
+    scale still gives the flattened plane's normal); the geometric normal cross(b - a, c - a)
+    transforms the same way;
+  - tangents: M[:3, :3] @ t.xyz, re-orthogonalised against the normal; w times sign(det M);
+  - mirrored instances (det M < 0): the stored winding is then clockwise seen from the front,
+    i.e. the front side flips; a consumer reverses the winding (or flips the side it reports).
+`InstancedMesh.placed(k)` does exactly this and returns a world-space `TriangleMesh`.
+Every matrix is finite; `MeshAsset.bounds` include every instance.
 """
 from __future__ import annotations
 
@@ -39,6 +65,7 @@ from typing import Optional
 import numpy as np
 
 from renderer.scene.model import MaterialSpec
+from renderer.scene.srgb import SRGB8_TO_LINEAR, srgb_to_linear
 
 WRAP_MODES = ("repeat", "clamp", "mirror")
 ALPHA_MODES = ("OPAQUE", "MASK", "BLEND")
@@ -64,11 +91,68 @@ def uv_transform_matrix(offset=(0.0, 0.0), rotation: float = 0.0, scale=(1.0, 1.
     return t @ r @ sc
 
 
+STORAGES = ("rgba8", "half", "float")  # how an image's texels are stored, by pixel dtype
+_STORAGE_OF_DTYPE = {np.dtype(np.uint8): "rgba8", np.dtype(np.float16): "half",
+                     np.dtype(np.float32): "float"}
+
+
+class TextureImage:
+    """One image as texture slots read it: its texels as stored, and how a lookup decodes them.
+
+    `pixels` is (H, W, 4) uint8 (8-bit files), float16 (16-bit files, k / 65535) or float32
+    (float files), row 0 at the top, RGBA. `srgb`: RGB is sRGB-encoded and is decoded to linear
+    per texel (alpha never is). Two entries may share one `pixels` array (one file read as
+    colour and as data); the atlas stores such an array once. `label` says where it came from.
+    """
+
+    def __init__(self, pixels: np.ndarray, srgb: bool = False, label: str = ""):
+        pixels = np.asarray(pixels)
+        if pixels.ndim != 3 or pixels.shape[2] != 4 or pixels.dtype not in _STORAGE_OF_DTYPE:
+            raise ValueError(f"texture pixels must be (H, W, 4) uint8, float16 or float32, "
+                             f"not {pixels.shape} {pixels.dtype}")
+        self.pixels = pixels
+        self.srgb = bool(srgb)
+        self.label = label
+
+    @property
+    def storage(self) -> str:
+        """'rgba8', 'half' or 'float' (one of STORAGES)."""
+        return _STORAGE_OF_DTYPE[self.pixels.dtype]
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(height, width) in texels."""
+        return int(self.pixels.shape[0]), int(self.pixels.shape[1])
+
+    def linear(self) -> np.ndarray:
+        """float32 (H, W, 4): the values a lookup reads at texel centres (decoded, linear)."""
+        if self.pixels.dtype == np.uint8:
+            out = self.pixels.astype(np.float32) / np.float32(255.0)
+            if self.srgb:
+                out[..., :3] = SRGB8_TO_LINEAR[self.pixels[..., :3]]
+            return out
+        out = self.pixels.astype(np.float32)
+        if self.srgb:
+            out[..., :3] = srgb_to_linear(out[..., :3])
+        return out
+
+    def __eq__(self, other) -> bool:
+        return (isinstance(other, TextureImage) and self.srgb == other.srgb
+                and self.pixels.dtype == other.pixels.dtype
+                and np.array_equal(self.pixels, other.pixels))
+
+    __hash__ = None
+
+    def __repr__(self) -> str:
+        h, w = self.shape
+        return f"TextureImage({w}x{h} {self.storage}{' sRGB' if self.srgb else ''} {self.label!r})"
+
+
 @dataclass(frozen=True)
 class TextureRef:
     """One texture slot of a material: which image, which UV set, how to wrap and transform UVs.
 
-    `texture` indexes `MeshAsset.images` (already in the right colour space for this slot).
+    `texture` indexes `MeshAsset.images` (an entry that says how this slot decodes the image).
     `wrap_s` / `wrap_t` are "repeat" | "clamp" | "mirror" (glTF REPEAT, CLAMP_TO_EDGE,
     MIRRORED_REPEAT). Filters are recorded as written ("nearest", "linear",
     "linear_mipmap_linear", ...; None = not specified); the sampler may ignore them.
@@ -95,13 +179,24 @@ class TextureRef:
 
 @dataclass(frozen=True)
 class PbrMaterial:
-    """glTF 2.0 metallic-roughness material (other formats are mapped onto it by the loader).
+    """glTF 2.0 metallic-roughness material and its layers (other formats are mapped onto it).
 
-    Texture channels: base colour RGBA (sRGB in the file, linear here), metallic-roughness
-    (G = roughness, B = metallic, linear), normal (tangent space, linear), emissive (sRGB in the
-    file, linear here), transmission (R channel, linear). Each factor multiplies its texture.
-    `emissive_factor` already includes KHR_materials_emissive_strength (it is radiance-scaled and
-    may exceed 1). `alpha_mode` / `alpha_cutoff` / `double_sided` are recorded, not interpreted.
+    Each factor multiplies its texture; a slot without a texture is its factor alone. Channels:
+      base colour RGBA (sRGB colour, alpha linear); metallic-roughness G = roughness,
+      B = metallic; normal tangent space RGB; emissive RGB (sRGB); transmission R.
+      KHR_materials_clearcoat: clearcoat R; clearcoat roughness G; clearcoat normal RGB (tangent
+        space, same tangents as the base normal map, scaled by `clearcoat_normal_scale`).
+      KHR_materials_sheen: sheen colour RGB (sRGB); sheen roughness A.
+      KHR_materials_specular: specular (strength) A; specular colour RGB (sRGB). glTF's
+        defaults (1, white) leave the dielectric Fresnel of the base as it was.
+      KHR_materials_volume: `thickness_factor` is recorded, not used (a path tracer follows the
+        real geometry) except that zero means thin-walled; the interior absorbs so that light
+        keeps `attenuation_color` after `attenuation_distance` metres (Beer's law; +inf = none).
+        The thickness texture is not loaded.
+    `emissive_factor` already includes KHR_materials_emissive_strength (radiance-scaled, may
+    exceed 1). `alpha_mode` / `alpha_cutoff` / `double_sided` are recorded as written.
+    `extensions`: the glTF material extensions the file gives this material, sorted (those
+    the loader does not implement included: `info` marks them).
     """
 
     name: str
@@ -120,6 +215,34 @@ class PbrMaterial:
     normal_texture: Optional[TextureRef] = None
     emissive_texture: Optional[TextureRef] = None
     transmission_texture: Optional[TextureRef] = None
+    clearcoat_factor: float = 0.0
+    clearcoat_texture: Optional[TextureRef] = None
+    clearcoat_roughness_factor: float = 0.0
+    clearcoat_roughness_texture: Optional[TextureRef] = None
+    clearcoat_normal_texture: Optional[TextureRef] = None
+    clearcoat_normal_scale: float = 1.0
+    sheen_color_factor: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    sheen_color_texture: Optional[TextureRef] = None
+    sheen_roughness_factor: float = 0.0
+    sheen_roughness_texture: Optional[TextureRef] = None
+    specular_factor: float = 1.0
+    specular_texture: Optional[TextureRef] = None
+    specular_color_factor: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    specular_color_texture: Optional[TextureRef] = None
+    has_volume: bool = False  # KHR_materials_volume present
+    thickness_factor: float = 0.0
+    attenuation_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    attenuation_distance: float = math.inf
+    extensions: tuple[str, ...] = ()
+
+    @property
+    def thin_walled(self) -> bool:
+        """Transmission through an infinitely thin shell (no refraction into a volume).
+
+        glTF: transmission without KHR_materials_volume is thin-walled, and so is a volume of
+        thickness 0. Meaningful for transmissive materials only.
+        """
+        return not self.has_volume or self.thickness_factor <= 0.0
 
     @property
     def texture_slots(self) -> dict[str, TextureRef]:
@@ -130,6 +253,13 @@ class PbrMaterial:
             "normal": self.normal_texture,
             "emissive": self.emissive_texture,
             "transmission": self.transmission_texture,
+            "clearcoat": self.clearcoat_texture,
+            "clearcoat_roughness": self.clearcoat_roughness_texture,
+            "clearcoat_normal": self.clearcoat_normal_texture,
+            "sheen_color": self.sheen_color_texture,
+            "sheen_roughness": self.sheen_roughness_texture,
+            "specular": self.specular_texture,
+            "specular_color": self.specular_color_texture,
         }
         return {k: v for k, v in slots.items() if v is not None}
 
@@ -163,13 +293,15 @@ class PbrMaterial:
 
 @dataclass
 class TriangleMesh:
-    """One drawable piece: a glTF primitive placed by one node, or one material group of an OBJ.
+    """One drawable piece: a glTF primitive, or one material group of an OBJ.
 
-    positions (V, 3) float32, world space.      indices (T, 3) int32, counter-clockwise.
+    positions (V, 3) float32 (world space in `MeshAsset.meshes`, local in `InstancedMesh`).
+    indices (T, 3) int32, counter-clockwise seen from the front (see module docs for instances).
     normals (V, 3) float32 unit, or None.       uv0 / uv1 (V, 2) float32 (glTF UV frame), or None.
-    tangents (V, 4) float32 (see module docs), present whenever the material has a normal map.
+    tangents (V, 4) float32 (see module docs), present whenever the material has a normal map
+    (base or clearcoat).
     colors (V, 4) float32 linear RGBA vertex colours (glTF COLOR_0, PLY colours), or None; per glTF
-    they multiply the base colour.
+    they multiply the base colour (alpha included).
     material indexes `MeshAsset.materials`.
     """
 
@@ -200,26 +332,98 @@ class TriangleMesh:
         return int(len(self.indices))
 
 
+def normal_matrix(m3: np.ndarray) -> np.ndarray:
+    """The matrix that transforms normals under m3: its cofactor matrix, sign-corrected.
+
+    cofactor(M) = det(M) * inverse(M)^T gives the directions of the inverse transpose and stays
+    defined for a singular (flattening) M, where it maps every normal onto the flattened plane's
+    normal. Multiplied by sign(det) so that normals keep pointing to the same side.
+    """
+    m3 = np.asarray(m3, dtype=np.float64)
+    cofactor = np.array([np.cross(m3[1], m3[2]), np.cross(m3[2], m3[0]), np.cross(m3[0], m3[1])])
+    return cofactor if np.linalg.det(m3) >= 0.0 else -cofactor
+
+
+@dataclass
+class InstancedMesh:
+    """One mesh stored once in its local frame, drawn once per object-to-world matrix.
+
+    `mesh` is local-space (module docs, "Instances"); `matrices` is float64 (N, 4, 4), N >= 1,
+    rows of a matrix acting on column vectors, last row (0, 0, 0, 1).
+    """
+
+    mesh: TriangleMesh
+    matrices: np.ndarray
+
+    @property
+    def instance_count(self) -> int:
+        return int(len(self.matrices))
+
+    def placed(self, k: int) -> TriangleMesh:
+        """Instance k as a world-space mesh, following the conventions of world meshes."""
+        m = np.asarray(self.matrices[k], dtype=np.float64)
+        m3 = m[:3, :3]
+        mirrored = np.linalg.det(m3) < 0.0
+        src = self.mesh
+        positions = src.positions.astype(np.float64) @ m3.T + m[:3, 3]
+        normals = tangents = None
+        if src.normals is not None:
+            n = src.normals.astype(np.float64) @ normal_matrix(m3).T
+            normals = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+        if src.tangents is not None:
+            t = src.tangents[:, :3].astype(np.float64) @ m3.T
+            if normals is not None:
+                t -= normals * np.einsum("ij,ij->i", normals, t)[:, None]
+            t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-30)
+            w = src.tangents[:, 3:4] * (-1.0 if mirrored else 1.0)
+            tangents = np.concatenate([t, w], axis=1)
+        f32 = (lambda a: None if a is None else np.ascontiguousarray(a, dtype=np.float32))
+        return TriangleMesh(
+            positions=f32(positions),
+            indices=np.ascontiguousarray(src.indices[:, [0, 2, 1]] if mirrored else src.indices),
+            material=src.material, normals=f32(normals), uv0=src.uv0, uv1=src.uv1,
+            tangents=f32(tangents), colors=src.colors, name=f"{src.name}#{k}")
+
+
 @dataclass
 class MeshAsset:
     """Everything one model file provides.
 
-    `images[i]` is float32 (H, W, 4) linear RGBA (see module docs); `image_labels[i]` says where it
-    came from and how it was decoded, e.g. "images[0] 'wood.png' (sRGB -> linear)".
-    `bounds` is float32 (2, 3): world-space min and max corners of all referenced vertices.
+    `meshes`: world-space meshes (placed once); `instanced`: meshes stored once with their
+    object-to-world matrices (module docs, "Instances"). `images[i]` is a `TextureImage` (its
+    label says where it came from and how it is decoded). `bounds` is float32 (2, 3): world-space
+    min and max corners of all referenced vertices of every mesh and every instance.
+    `extensions_used`: the file's glTF extensionsUsed; `extensions_ignored`: those of them this
+    loader does not implement (the loader warned about them).
     """
 
     meshes: list[TriangleMesh]
     materials: list[PbrMaterial]
-    images: list[np.ndarray] = field(default_factory=list)
+    images: list[TextureImage] = field(default_factory=list)
     bounds: np.ndarray = field(default_factory=lambda: np.zeros((2, 3), dtype=np.float32))
-    image_labels: list[str] = field(default_factory=list)
     path: Optional[Path] = None
+    instanced: list[InstancedMesh] = field(default_factory=list)
+    extensions_used: tuple[str, ...] = ()
+    extensions_ignored: tuple[str, ...] = ()
 
     @property
     def triangle_count(self) -> int:
-        return sum(m.triangle_count for m in self.meshes)
+        """Unique triangles: each instanced mesh counts once."""
+        return (sum(m.triangle_count for m in self.meshes)
+                + sum(i.mesh.triangle_count for i in self.instanced))
+
+    @property
+    def instanced_triangle_count(self) -> int:
+        """Triangles the instances draw: each instanced mesh times its instance count."""
+        return sum(i.mesh.triangle_count * i.instance_count for i in self.instanced)
+
+    @property
+    def drawn_triangle_count(self) -> int:
+        """Every triangle the model shows: world meshes plus what the instances draw."""
+        return sum(m.triangle_count for m in self.meshes) + self.instanced_triangle_count
 
     @property
     def vertex_count(self) -> int:
-        return sum(m.vertex_count for m in self.meshes)
+        """Unique vertices: each instanced mesh counts once."""
+        return (sum(m.vertex_count for m in self.meshes)
+                + sum(i.mesh.vertex_count for i in self.instanced))

@@ -12,6 +12,8 @@ from typing import Optional
 
 import numpy as np
 
+from renderer.scene.model_files import ModelFiles
+
 Vec3 = tuple[float, float, float]
 
 # Kinds known to the renderer. The loader refuses anything else with a one-line error.
@@ -216,6 +218,8 @@ class Scene:
     mesh_objects: tuple[MeshObject, ...] = ()
     media: tuple[MediumSpec, ...] = ()
     fog: FogSpec = field(default_factory=FogSpec)
+    # The model files the scene reads, each parsed once (shared by camera framing and assembly).
+    model_files: ModelFiles = field(default_factory=ModelFiles, compare=False, repr=False)
 
     def medium_names(self) -> tuple[str, ...]:
         return tuple(m.name for m in self.media)

@@ -2,8 +2,9 @@
 default HDR environment. What `app.py view model.glb` and `render model.obj` open."""
 from pathlib import Path
 
-from renderer.scene.mesh_loader import frame_camera, load_mesh_asset
+from renderer.scene.mesh_loader import frame_camera
 from renderer.scene.model import CameraSpec, EnvironmentSpec, MeshObject, RenderSettings, Scene
+from renderer.scene.model_files import ModelFiles
 
 ASSETS = Path(__file__).resolve().parents[2] / "assets"
 # A soft, low-contrast map (peak ~7): models read clearly and converge fast under it.
@@ -14,7 +15,8 @@ SIZE = (640, 360)
 
 def scene_for_model(path) -> Scene:
     path = Path(path)
-    asset = load_mesh_asset(path)  # one-line SceneError for a bad file, before anything else
+    files = ModelFiles()  # the scene keeps the parsed file: assembly reads it from there
+    asset = files.load(path)  # one-line SceneError for a bad file, before anything else
     position, target = frame_camera(asset.bounds, FOV, aspect=SIZE[0] / SIZE[1])
     distance = sum((a - b) ** 2 for a, b in zip(position, target)) ** 0.5
     return Scene(
@@ -23,4 +25,5 @@ def scene_for_model(path) -> Scene:
         render=RenderSettings(width=SIZE[0], height=SIZE[1]),
         environment=EnvironmentSpec(kind="map", file=DEFAULT_ENVIRONMENT),
         materials=(), mesh_objects=(MeshObject(kind="mesh", file=path),),
-        description=f"{path.name}: {asset.triangle_count} triangles, {len(asset.materials)} materials")
+        description=f"{path.name}: {asset.triangle_count} triangles, {len(asset.materials)} materials",
+        model_files=files)

@@ -1,20 +1,26 @@
-"""All textures of a scene in ONE float32 RGBA atlas, plus a numpy reference sampler.
+"""All textures of a scene in one atlas per storage kind, plus a numpy reference sampler.
 
-The renderer uploads `TextureAtlas.atlas` as a single field and a table of `rects`; every texture
-lookup goes through the same code whatever the image. This module is the contract for the Taichi
-sampler; `sample_bilinear` below is its numpy reference, to test a kernel against.
+The renderer uploads the pages of a `TextureAtlas` and a table of `rects`; every texture lookup
+goes through the same code whatever the image. This module is the contract for the Taichi
+sampler (`renderer.materials.texture_sampler`); `sample_bilinear` below is its numpy reference.
 
 Layout
 ------
-- `atlas` is float32 (H, W, 4), indexed `atlas[y, x]`: row 0 is the TOP row, as in the images.
-  Images are copied unchanged (values are already linear, see `mesh_model`); grey images are
-  replicated to RGB, a missing alpha is 1.
-- `rects[i] = (x, y, w, h)` (int32): image i occupies `atlas[y:y+h, x:x+w]`, its texel (i, j)
-  (column i, row j, row 0 at the top) is `atlas[y + j, x + i]`. The rectangle excludes padding.
+- Images keep their precision (see `renderer.scene.mesh_model.TextureImage`). Each storage kind
+  has its own page, indexed `page[y, x]`, row 0 the TOP row as in the images:
+    "rgba8": uint8 (H, W, 4), i.e. one 32-bit word per texel, R in the lowest byte;
+    "half":  float16 (H, W, 4), two 32-bit words per texel (R | G << 16, B | A << 16);
+    "float": float32 (H, W, 4).
+  A page that holds no image is a single zero texel. Texels are stored as the file encodes them:
+  colour decoding happens in the lookup (step 5), so one copy serves colour and data slots.
+- `rects[i] = (x, y, w, h, storage, srgb)` (int32) for image entry i: its texels are
+  `pages[storage][y:y+h, x:x+w]`, texel (i, j) (column i, row j from the top) at
+  `[y + j, x + i]`; `storage` is the index of its kind in STORAGES, `srgb` is 1 when RGB is
+  sRGB-encoded. Entries sharing one pixel array share one rectangle.
 - Around each rectangle there are `padding` texels on every side that REPLICATE the nearest edge
   texel (clamp-to-edge extension; corners replicate the corner texel). Padding never belongs to
   another image, so a lookup that strays up to `padding` texels outside its rectangle reads its
-  own edge, never a neighbour. Unused atlas space is zero.
+  own edge, never a neighbour. Unused page space is zero.
 
 Sampling (what the Taichi sampler must do, in this order)
 ---------------------------------------------------------
@@ -31,7 +37,10 @@ Sampling (what the Taichi sampler must do, in this order)
    Every wrapped index is inside the rectangle, so filtering never reads another image and the
    seams of a repeating texture are correct; padding is only a safety margin (e.g. for a sampler
    that clamps in atlas space, or float round-off).
-5. Fetch `atlas[y + j, x + i]` for the four (i, j), blend with (fx, fy).
+5. Fetch the four texels and DECODE EACH before blending: rgba8 bytes k -> k / 255, except RGB
+   of an sRGB entry -> `SRGB8_TO_LINEAR[k]` (exact table); half / float values as stored, RGB of
+   an sRGB entry through the sRGB curve. Alpha is never colour-decoded. Then blend with (fx, fy).
+   (Decoding after blending would mix encoded values: wrong at every edge of a colour texture.)
 Nearest filtering: `i = floor(u' * w)`, `j = floor(v' * h)`, wrapped as in step 4.
 Non-finite UVs should be treated as (0, 0) before step 2 (the numpy reference does so).
 """
@@ -42,25 +51,44 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from renderer.scene.mesh_model import WRAP_MODES
+from renderer.scene.mesh_model import STORAGES, WRAP_MODES, TextureImage
+from renderer.scene.srgb import SRGB8_TO_LINEAR, srgb_to_linear
 
 WRAP_REPEAT, WRAP_CLAMP, WRAP_MIRROR = 0, 1, 2
 WRAP_CODES = {"repeat": WRAP_REPEAT, "clamp": WRAP_CLAMP, "mirror": WRAP_MIRROR}
 assert tuple(WRAP_CODES) == WRAP_MODES
+
+STORE_RGBA8, STORE_HALF, STORE_FLOAT = (STORAGES.index(s) for s in ("rgba8", "half", "float"))
+_PAGE_DTYPES = {STORE_RGBA8: np.uint8, STORE_HALF: np.float16, STORE_FLOAT: np.float32}
 
 DEFAULT_PADDING = 2  # texels; bilinear needs 1, the second absorbs float round-off
 
 
 @dataclass
 class TextureAtlas:
-    atlas: np.ndarray  # float32 (H, W, 4)
-    rects: np.ndarray  # int32 (N, 4): x, y, w, h of each image, padding excluded
+    pages: dict[int, np.ndarray]  # storage code -> (H, W, 4) page (module docs); all three present
+    rects: np.ndarray  # int32 (N, 6): x, y, w, h, storage, srgb of each image entry
     padding: int
 
+    def page_size(self, storage: int) -> tuple[int, int]:
+        """(width, height) in texels of one storage kind's page."""
+        page = self.pages[storage]
+        return int(page.shape[1]), int(page.shape[0])
+
+    def texels(self, index: int) -> np.ndarray:
+        """The stored texels of entry `index` (padding excluded), as in its page."""
+        x, y, w, h, storage, _ = (int(v) for v in self.rects[index])
+        return self.pages[storage][y:y + h, x:x + w]
+
     @property
-    def size(self) -> tuple[int, int]:
-        """(width, height) in texels."""
-        return int(self.atlas.shape[1]), int(self.atlas.shape[0])
+    def storages(self) -> frozenset[int]:
+        """The storage kinds that hold at least one image."""
+        return frozenset(int(s) for s in self.rects[:, 4])
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the pages that hold images (what the device allocates for them)."""
+        return sum(self.pages[s].nbytes for s in self.storages)
 
 
 def as_rgba(image: np.ndarray) -> np.ndarray:
@@ -81,29 +109,34 @@ def as_rgba(image: np.ndarray) -> np.ndarray:
     return out
 
 
-def pack_atlas(images: list[np.ndarray], padding: int = DEFAULT_PADDING,
-               width: int | None = None) -> TextureAtlas:
-    """Pack images into one atlas with a shelf packer (tallest first, left to right, top down).
+def as_texture_image(image) -> TextureImage:
+    """A `TextureImage` as is, or a linear one from an array: uint8 stays 8-bit, float16 half,
+    anything else float32 (grey replicated, alpha 1 if missing, as `as_rgba`)."""
+    if isinstance(image, TextureImage):
+        return image
+    a = np.asarray(image)
+    if a.dtype == np.uint8:
+        rgba = as_rgba(a)  # exact for bytes; back to uint8 below
+        alpha = a.ndim == 3 and a.shape[2] in (2, 4)
+        out = np.rint(rgba).astype(np.uint8)
+        if not alpha:
+            out[..., 3] = 255
+        return TextureImage(out)
+    if a.dtype == np.float16:
+        return TextureImage(as_rgba(a).astype(np.float16))
+    return TextureImage(as_rgba(a))
 
-    `width` is the atlas width in texels; by default about the square root of the total padded
-    area (at least the widest padded image), so the atlas comes out roughly square. An empty list
-    gives a 1x1 atlas with no rectangles.
-    """
-    if padding < 0:
-        raise ValueError("padding must be >= 0")
-    rgba = [as_rgba(im) for im in images]
-    if not rgba:
-        return TextureAtlas(np.zeros((1, 1, 4), dtype=np.float32), np.zeros((0, 4), dtype=np.int32),
-                            padding)
-    sizes = [(im.shape[1] + 2 * padding, im.shape[0] + 2 * padding) for im in rgba]  # padded w, h
+
+def _shelf_pack(sizes: list[tuple[int, int]], width: int | None) -> tuple[list, int, int]:
+    """Origins of padded (w, h) boxes packed tallest first, left to right, top down, and the
+    page (width, height). Default width: about the square root of the total area."""
     widest = max(w for w, _ in sizes)
     if width is None:
         width = max(widest, int(math.ceil(math.sqrt(sum(w * h for w, h in sizes)))))
     elif width < widest:
         raise ValueError(f"atlas width {width} is narrower than the widest padded image ({widest})")
-
-    order = sorted(range(len(rgba)), key=lambda i: (-sizes[i][1], -sizes[i][0], i))
-    origins = [(0, 0)] * len(rgba)  # padded rectangle origins
+    order = sorted(range(len(sizes)), key=lambda i: (-sizes[i][1], -sizes[i][0], i))
+    origins = [(0, 0)] * len(sizes)
     shelf_y, shelf_h, cursor_x = 0, 0, 0
     for i in order:
         w, h = sizes[i]
@@ -113,17 +146,46 @@ def pack_atlas(images: list[np.ndarray], padding: int = DEFAULT_PADDING,
         origins[i] = (cursor_x, shelf_y)
         cursor_x += w
         shelf_h = max(shelf_h, h)
-    height = shelf_y + shelf_h
+    return origins, width, shelf_y + shelf_h
 
-    atlas = np.zeros((height, width, 4), dtype=np.float32)
-    rects = np.zeros((len(rgba), 4), dtype=np.int32)
-    for i, im in enumerate(rgba):
-        ox, oy = origins[i]
-        w, h = sizes[i]
-        atlas[oy:oy + h, ox:ox + w] = np.pad(im, ((padding, padding), (padding, padding), (0, 0)),
-                                             mode="edge")
-        rects[i] = (ox + padding, oy + padding, im.shape[1], im.shape[0])
-    return TextureAtlas(atlas, rects, padding)
+
+def pack_atlas(images: list, padding: int = DEFAULT_PADDING, width: int | None = None) -> TextureAtlas:
+    """Pack images (`TextureImage`s or arrays, see `as_texture_image`) into one page per storage.
+
+    Entries that share a pixel array are stored once. `width` forces every page's width in
+    texels (it must fit the widest padded image); by default each page is roughly square.
+    """
+    if padding < 0:
+        raise ValueError("padding must be >= 0")
+    entries = [as_texture_image(im) for im in images]
+    unique: dict[int, int] = {}  # id(pixels) -> index of its first entry
+    by_storage: dict[int, list[int]] = {s: [] for s in _PAGE_DTYPES}
+    for i, entry in enumerate(entries):
+        if id(entry.pixels) not in unique:
+            unique[id(entry.pixels)] = i
+            by_storage[STORAGES.index(entry.storage)].append(i)
+
+    rects = np.zeros((len(entries), 6), dtype=np.int32)
+    pages = {}
+    for storage, members in by_storage.items():
+        dtype = _PAGE_DTYPES[storage]
+        if not members:
+            pages[storage] = np.zeros((1, 1, 4), dtype=dtype)
+            continue
+        sizes = [(entries[i].shape[1] + 2 * padding, entries[i].shape[0] + 2 * padding)
+                 for i in members]
+        origins, page_w, page_h = _shelf_pack(sizes, width)
+        page = np.zeros((page_h, page_w, 4), dtype=dtype)
+        for i, (ox, oy), (w, h) in zip(members, origins, sizes):
+            page[oy:oy + h, ox:ox + w] = np.pad(entries[i].pixels,
+                                                ((padding, padding), (padding, padding), (0, 0)),
+                                                mode="edge")
+            rects[i, :5] = (ox + padding, oy + padding, w - 2 * padding, h - 2 * padding, storage)
+        pages[storage] = page
+    for i, entry in enumerate(entries):
+        rects[i, :5] = rects[unique[id(entry.pixels)], :5]
+        rects[i, 5] = int(entry.srgb)
+    return TextureAtlas(pages, rects, padding)
 
 
 def wrap_index(i: np.ndarray, n: int, mode: str | int) -> np.ndarray:
@@ -140,10 +202,23 @@ def wrap_index(i: np.ndarray, n: int, mode: str | int) -> np.ndarray:
     raise ValueError(f"unknown wrap mode {mode!r}")
 
 
+def decode_texels(raw: np.ndarray, storage: int, srgb: bool) -> np.ndarray:
+    """Stored texels (..., 4) of one storage kind as linear float32 values (step 5)."""
+    if storage == STORE_RGBA8:
+        out = raw.astype(np.float32) / np.float32(255.0)
+        if srgb:
+            out[..., :3] = SRGB8_TO_LINEAR[raw[..., :3]]
+        return out
+    out = raw.astype(np.float32)
+    if srgb:
+        out[..., :3] = srgb_to_linear(out[..., :3])
+    return out
+
+
 def sample_bilinear(tex: TextureAtlas, index: int, uv: np.ndarray, wrap_s: str | int = "repeat",
                     wrap_t: str | int = "repeat", matrix: np.ndarray | None = None) -> np.ndarray:
-    """Reference bilinear lookup of texture `index` at uv (..., 2); returns (..., 4) float32."""
-    x, y, w, h = (int(v) for v in tex.rects[index])
+    """Reference bilinear lookup of image entry `index` at uv (..., 2); returns (..., 4) float32."""
+    x, y, w, h, storage, srgb = (int(v) for v in tex.rects[index])
     uv = np.asarray(uv, dtype=np.float64)
     if matrix is not None:
         m = np.asarray(matrix, dtype=np.float64)
@@ -159,7 +234,11 @@ def sample_bilinear(tex: TextureAtlas, index: int, uv: np.ndarray, wrap_s: str |
     j0 = j0.astype(np.int64)
     ia, ib = wrap_index(i0, w, wrap_s) + x, wrap_index(i0 + 1, w, wrap_s) + x
     ja, jb = wrap_index(j0, h, wrap_t) + y, wrap_index(j0 + 1, h, wrap_t) + y
-    a = tex.atlas
-    top = a[ja, ia] * (1 - fx) + a[ja, ib] * fx
-    bottom = a[jb, ia] * (1 - fx) + a[jb, ib] * fx
+    page = tex.pages[storage]
+
+    def tap(j, i):
+        return decode_texels(page[j, i], storage, bool(srgb)).astype(np.float64)
+
+    top = tap(ja, ia) * (1 - fx) + tap(ja, ib) * fx
+    bottom = tap(jb, ia) * (1 - fx) + tap(jb, ib) * fx
     return (top * (1 - fy) + bottom * fy).astype(np.float32)

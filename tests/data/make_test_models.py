@@ -15,6 +15,17 @@ compare what the loader returns with these exact values. Outputs, next to this s
   TANGENT and normalized COLOR_0 attributes and a sparse accessor; the buffer is a data URI.
 - materials.obj + materials.mtl: four OBJ material groups (textured with -o/-s, glass, lamp, mirror).
 - pyramid.ply: ASCII PLY, triangles and a quad, vertex normals and 8-bit vertex colours.
+- alpha_colors.gltf + alpha.png: alphaMode MASK and BLEND materials sharing an RGBA base-colour
+  texture with a varying alpha; three primitives with COLOR_0 as float VEC3, normalized u8 VEC4
+  and normalized u16 VEC4.
+- instancing.gltf: a mesh placed by two nodes (one of them mirroring), and a node under a parent
+  with EXT_mesh_gpu_instancing (TRANSLATION, normalized-short ROTATION, SCALE; one instance
+  mirrored); a mesh placed once stays in world space.
+- layers.gltf + layer.png + rgb16.png (16 bits per channel): one material per layer extension
+  (KHR_materials_clearcoat, _sheen, _specular, _volume with transmission), each factor and
+  texture slot set, and a transmissive material without a volume (thin-walled).
+- imperfect.gltf: a texture whose file is missing, and extensionsUsed that the loader does not
+  implement (KHR_materials_unlit, KHR_lights_punctual; not required).
 """
 from __future__ import annotations
 
@@ -39,6 +50,12 @@ MR = np.array([[[0, 64, 255], [0, 128, 0]],
                [[0, 255, 128], [0, 32, 64]]], dtype=np.uint8)  # G = roughness, B = metallic
 NORMAL = np.array([[[128, 128, 255], [160, 128, 240]],
                    [[128, 96, 240], [100, 150, 230]]], dtype=np.uint8)
+ALPHA = np.array([[[255, 0, 0, 0], [0, 255, 0, 64]],
+                  [[0, 0, 255, 128], [255, 255, 255, 255]]], dtype=np.uint8)  # RGBA, alpha varies
+LAYER = np.array([[[10, 60, 110, 160], [20, 70, 120, 170]],
+                  [[30, 80, 130, 180], [40, 90, 140, 190]]], dtype=np.uint8)  # RGBA, every channel distinct
+RGB16 = np.array([[[0, 1, 65535], [1000, 30000, 50000]],
+                  [[65534, 257, 12345], [40000, 20000, 100]]], dtype=np.uint16)  # needs 16 bits
 
 # --- textured quad ----------------------------------------------------------------------------
 
@@ -107,6 +124,64 @@ CHILD_B = {"name": "child_b", "translation": [0.0, 0.0, 5.0]}
 MIRROR = {"name": "mirror", "scale": [-1.0, 1.0, 1.0], "translation": [0.0, -3.0, 0.0]}
 PAIR_MATERIAL = {"name": "pair", "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1.0],
                                                          "metallicFactor": 0.0}}
+
+# --- alpha and vertex colours -------------------------------------------------------------------
+
+ALPHA_MATERIALS = [
+    {"name": "masked", "alphaMode": "MASK", "alphaCutoff": 0.3,
+     "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 0.9],
+                              "baseColorTexture": {"index": 0}}},
+    {"name": "blended", "alphaMode": "BLEND", "doubleSided": True,
+     "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
+]
+COLORS_FLOAT3 = np.array([[0.25, 0.5, 1.0], [1.0, 0.0, 0.125], [0.0, 0.75, 0.5]], dtype=np.float32)
+COLORS_U8 = np.array([[255, 0, 128, 255], [0, 255, 64, 128], [1, 2, 3, 0]], dtype=np.uint8)
+COLORS_U16 = np.array([[65535, 0, 32768, 65535], [0, 65535, 1, 16384], [300, 600, 900, 0]],
+                      dtype=np.uint16)
+
+# --- instancing -------------------------------------------------------------------------------------
+
+BOX_POSITIONS = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1]],
+                         dtype=np.float32)
+BOX_NORMALS = np.array([[0, 0, -1]] * 4 + [[0, -1, 0]] * 2, dtype=np.float32)
+BOX_INDICES = np.array([0, 2, 1, 0, 3, 2, 0, 1, 5, 0, 5, 4], dtype=np.uint16)
+SHARED_NODES = [{"name": "left", "translation": [-3.0, 0.0, 0.0]},
+                {"name": "mirrored", "translation": [3.0, 0.0, 0.0], "scale": [-1.0, 1.0, 1.0]}]
+INSTANCING_PARENT = {"name": "crowd", "translation": [0.0, 10.0, 0.0], "scale": [2.0, 2.0, 2.0]}
+INSTANCING_NODE = {"name": "instanced", "rotation": [0.0, 0.0, math.sin(math.pi / 4), math.cos(math.pi / 4)]}
+INSTANCE_TRANSLATIONS = np.array([[0, 0, 0], [5, 0, 0], [0, 0, -5]], dtype=np.float32)
+# Rotations as normalized shorts (KHR_mesh_quantization style): identity, 90 deg about y, 180 about x.
+INSTANCE_ROTATIONS = np.array([[0, 0, 0, 32767], [0, 23170, 0, 23170], [32767, 0, 0, 0]], dtype=np.int16)
+INSTANCE_SCALES = np.array([[1, 1, 1], [0.5, 2, 1], [-1, 1, 1]], dtype=np.float32)  # the last mirrors
+SINGLE_NODE = {"name": "single", "translation": [0.0, -4.0, 0.0]}
+
+# --- material layers --------------------------------------------------------------------------------
+
+LAYER_MATERIALS = [
+    {"name": "coated", "extensions": {"KHR_materials_clearcoat": {
+        "clearcoatFactor": 0.75, "clearcoatTexture": {"index": 0},
+        "clearcoatRoughnessFactor": 0.25, "clearcoatRoughnessTexture": {"index": 0},
+        "clearcoatNormalTexture": {"index": 0, "scale": 0.5}}}},
+    {"name": "velvet", "extensions": {"KHR_materials_sheen": {
+        "sheenColorFactor": [0.5, 0.25, 1.0], "sheenColorTexture": {"index": 0},
+        "sheenRoughnessFactor": 0.625, "sheenRoughnessTexture": {"index": 0}}}},
+    {"name": "tinted", "extensions": {"KHR_materials_specular": {
+        "specularFactor": 0.5, "specularTexture": {"index": 0},
+        "specularColorFactor": [1.0, 0.5, 0.25], "specularColorTexture": {"index": 1}}}},
+    {"name": "absorbing", "extensions": {
+        "KHR_materials_transmission": {"transmissionFactor": 1.0},
+        "KHR_materials_volume": {"thicknessFactor": 0.2, "attenuationColor": [0.9, 0.5, 0.1],
+                                 "attenuationDistance": 0.05}}},
+    {"name": "thin", "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5}}},
+    {"name": "volume defaults", "extensions": {"KHR_materials_volume": {}}},
+]
+LAYER_EXTENSIONS = ["KHR_materials_clearcoat", "KHR_materials_sheen", "KHR_materials_specular",
+                    "KHR_materials_transmission", "KHR_materials_volume"]
+
+# --- an imperfect file --------------------------------------------------------------------------------
+
+IGNORED_EXTENSIONS = ["KHR_lights_punctual", "KHR_materials_unlit"]
+MISSING_TEXTURE = "missing.png"
 
 # --- OBJ and PLY ----------------------------------------------------------------------------------
 
@@ -210,7 +285,7 @@ class BufferBuilder:
     def accessor(self, array: np.ndarray, normalized: bool = False, sparse: dict | None = None,
                  with_view: bool = True) -> int:
         array = np.ascontiguousarray(array)
-        component = {np.dtype(np.float32): 5126, np.dtype(np.uint8): 5121,
+        component = {np.dtype(np.float32): 5126, np.dtype(np.uint8): 5121, np.dtype(np.int16): 5122,
                      np.dtype(np.uint16): 5123, np.dtype(np.uint32): 5125}[array.dtype]
         kind = {1: "SCALAR", 2: "VEC2", 3: "VEC3", 4: "VEC4"}[1 if array.ndim == 1 else array.shape[1]]
         index_data = array.ndim == 1
@@ -234,6 +309,113 @@ def png_bytes(pixels: np.ndarray) -> bytes:
     out = io.BytesIO()
     Image.fromarray(pixels).save(out, format="PNG")
     return out.getvalue()
+
+
+def png16_bytes(pixels: np.ndarray) -> bytes:
+    """A 16-bit-per-channel RGB PNG (Pillow writes only 8-bit colour PNGs; OpenCV writes these)."""
+    import cv2
+
+    ok, data = cv2.imencode(".png", np.ascontiguousarray(pixels[:, :, ::-1]))  # OpenCV is BGR
+    assert ok
+    return data.tobytes()
+
+
+def data_uri_buffer(b: BufferBuilder) -> list[dict]:
+    return [{"byteLength": len(b.data), "uri": "data:application/octet-stream;base64,"
+             + base64.b64encode(bytes(b.data)).decode("ascii")}]
+
+
+def triangle_primitive(b: BufferBuilder, material: int | None = None, **attributes) -> dict:
+    """The unit triangle TRI_POSITIONS with extra attributes (name -> accessor index)."""
+    primitive = {"attributes": {"POSITION": b.accessor(TRI_POSITIONS), **attributes},
+                 "indices": b.accessor(TRI_INDICES)}
+    if material is not None:
+        primitive["material"] = material
+    return primitive
+
+
+def alpha_colors_document() -> dict:
+    b = BufferBuilder()
+    uv = b.accessor(np.array([[0, 0], [1, 0], [0, 1]], dtype=np.float32))
+    primitives = [
+        triangle_primitive(b, 0, TEXCOORD_0=uv, COLOR_0=b.accessor(COLORS_FLOAT3)),
+        triangle_primitive(b, 1, TEXCOORD_0=uv, COLOR_0=b.accessor(COLORS_U8, normalized=True)),
+        triangle_primitive(b, 1, COLOR_0=b.accessor(COLORS_U16, normalized=True)),
+    ]
+    return {
+        "asset": {"version": "2.0", "generator": "Lantern tests/data/make_test_models.py"},
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "panel", "mesh": 0}],
+        "meshes": [{"name": "panel", "primitives": primitives}],
+        "materials": ALPHA_MATERIALS,
+        "textures": [{"source": 0}],
+        "images": [{"uri": "alpha.png"}],
+        "accessors": b.accessors, "bufferViews": b.views, "buffers": data_uri_buffer(b),
+    }
+
+
+def instancing_document() -> dict:
+    b = BufferBuilder()
+    box = {"attributes": {"POSITION": b.accessor(BOX_POSITIONS), "NORMAL": b.accessor(BOX_NORMALS)},
+           "indices": b.accessor(BOX_INDICES)}
+    rotations = b.accessor(INSTANCE_ROTATIONS, normalized=True)
+    gpu = {"EXT_mesh_gpu_instancing": {"attributes": {
+        "TRANSLATION": b.accessor(INSTANCE_TRANSLATIONS), "ROTATION": rotations,
+        "SCALE": b.accessor(INSTANCE_SCALES)}}}
+    return {
+        "asset": {"version": "2.0", "generator": "Lantern tests/data/make_test_models.py"},
+        "extensionsUsed": ["EXT_mesh_gpu_instancing"],
+        "extensionsRequired": ["EXT_mesh_gpu_instancing"],
+        "scene": 0, "scenes": [{"nodes": [0, 1, 2, 4]}],
+        "nodes": [dict(SHARED_NODES[0], mesh=0), dict(SHARED_NODES[1], mesh=0),
+                  dict(INSTANCING_PARENT, children=[3]),
+                  dict(INSTANCING_NODE, mesh=1, extensions=gpu),
+                  dict(SINGLE_NODE, mesh=2)],
+        "meshes": [{"name": "shared box", "primitives": [box]},
+                   {"name": "crowd box", "primitives": [dict(box)]},
+                   {"name": "single", "primitives": [triangle_primitive(b)]}],
+        "accessors": b.accessors, "bufferViews": b.views, "buffers": data_uri_buffer(b),
+    }
+
+
+def layers_document() -> dict:
+    b = BufferBuilder()
+    uv = b.accessor(np.array([[0, 0], [1, 0], [0, 1]], dtype=np.float32))
+    normals = b.accessor(TRI_NORMALS)
+    primitives = [triangle_primitive(b, m, NORMAL=normals, TEXCOORD_0=uv)
+                  for m in range(len(LAYER_MATERIALS))]
+    return {
+        "asset": {"version": "2.0", "generator": "Lantern tests/data/make_test_models.py"},
+        "extensionsUsed": LAYER_EXTENSIONS,
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "swatches", "mesh": 0}],
+        "meshes": [{"name": "swatches", "primitives": primitives}],
+        "materials": LAYER_MATERIALS,
+        "textures": [{"source": 0}, {"source": 1}],
+        "images": [{"uri": "layer.png"}, {"uri": "rgb16.png"}],
+        "accessors": b.accessors, "bufferViews": b.views, "buffers": data_uri_buffer(b),
+    }
+
+
+def imperfect_document() -> dict:
+    b = BufferBuilder()
+    uv = b.accessor(np.array([[0, 0], [1, 0], [0, 1]], dtype=np.float32))
+    return {
+        "asset": {"version": "2.0", "generator": "Lantern tests/data/make_test_models.py"},
+        "extensionsUsed": IGNORED_EXTENSIONS + ["KHR_texture_transform"],
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "lamp", "mesh": 0,
+                   "extensions": {"KHR_lights_punctual": {"light": 0}}}],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point"}]}},
+        "meshes": [{"name": "lamp", "primitives": [triangle_primitive(b, 0, TEXCOORD_0=uv)]}],
+        "materials": [{"name": "painted", "pbrMetallicRoughness": {
+            "baseColorFactor": [0.5, 0.25, 0.125, 1.0], "baseColorTexture": {"index": 0},
+            "metallicRoughnessTexture": {"index": 0}},
+            "extensions": {"KHR_materials_unlit": {}}}],
+        "textures": [{"source": 0}],
+        "images": [{"uri": MISSING_TEXTURE}],
+        "accessors": b.accessors, "bufferViews": b.views, "buffers": data_uri_buffer(b),
+    }
 
 
 def quad_document(embed_images: bool) -> tuple[dict, bytes]:
@@ -322,8 +504,10 @@ def glb_bytes(doc: dict, binary: bytes) -> bytes:
 
 
 def main(out: Path = HERE) -> None:
-    for name, pixels in (("checker.png", CHECKER), ("mr.png", MR), ("normal.png", NORMAL)):
+    for name, pixels in (("checker.png", CHECKER), ("mr.png", MR), ("normal.png", NORMAL),
+                         ("alpha.png", ALPHA), ("layer.png", LAYER)):
         (out / name).write_bytes(png_bytes(pixels))
+    (out / "rgb16.png").write_bytes(png16_bytes(RGB16))
 
     doc, binary = quad_document(embed_images=False)
     doc["buffers"][0]["uri"] = "textured_quad.bin"
@@ -337,6 +521,11 @@ def main(out: Path = HERE) -> None:
     (out / "materials.mtl").write_text(MTL)
     (out / "materials.obj").write_text(OBJ)
     (out / "pyramid.ply").write_text(PLY)
+    for name, document in (("alpha_colors.gltf", alpha_colors_document()),
+                           ("instancing.gltf", instancing_document()),
+                           ("layers.gltf", layers_document()),
+                           ("imperfect.gltf", imperfect_document())):
+        (out / name).write_text(json.dumps(document, indent=1) + "\n")
 
 
 if __name__ == "__main__":

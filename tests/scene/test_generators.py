@@ -425,7 +425,7 @@ def test_textured_glb_materials_match_the_script(textured):
              (floor.metallic_roughness_texture, script.floor_metallic_roughness(), False),
              (floor.normal_texture, script.tile_normal_map(), False)]
     for ref, pixels, srgb in slots:
-        image = asset.images[ref.texture]
+        image = asset.images[ref.texture].linear()
         assert image.shape == (script.TEX, script.TEX, 4)
         np.testing.assert_allclose(image[..., :3], expected(pixels, srgb), atol=1e-6)
         assert np.all(image[..., 3] == 1.0)

@@ -25,8 +25,16 @@ from renderer.scene.mesh_loader import (
     load_mesh_asset,
     srgb_to_linear,
 )
-from renderer.scene.mesh_model import IDENTITY_UV_TRANSFORM, uv_transform_matrix
-from renderer.scene.textures import as_rgba, pack_atlas, sample_bilinear, wrap_index
+from renderer.scene.mesh_model import IDENTITY_UV_TRANSFORM, TextureImage, uv_transform_matrix
+from renderer.scene.textures import (
+    STORE_FLOAT,
+    STORE_HALF,
+    STORE_RGBA8,
+    as_rgba,
+    pack_atlas,
+    sample_bilinear,
+    wrap_index,
+)
 from tests.data import make_test_models as mtm
 
 REPO = Path(__file__).resolve().parents[2]
@@ -35,7 +43,7 @@ MODELS = REPO / "assets" / "models"
 
 
 def rgba(pixels: np.ndarray, srgb: bool) -> np.ndarray:
-    """What the loader should hold for 8-bit pixels: k / 255, sRGB-decoded if a colour slot."""
+    """What a lookup should read for 8-bit pixels: k / 255, sRGB-decoded if a colour slot."""
     values = pixels.astype(np.float64) / 255.0
     if srgb:
         values = srgb_to_linear(values)
@@ -71,15 +79,16 @@ def one_line_error(excinfo, path) -> str:
 
 def test_generated_files_are_up_to_date(tmp_path):
     """The committed models are what the generator writes (PNG bytes may differ by zlib version)."""
+    import cv2
+
     mtm.main(tmp_path)
     for name in ("textured_quad.gltf", "textured_quad.bin", "two_nodes.gltf", "materials.obj",
-                 "materials.mtl", "pyramid.ply"):
+                 "materials.mtl", "pyramid.ply", "alpha_colors.gltf", "instancing.gltf",
+                 "layers.gltf", "imperfect.gltf"):
         assert (tmp_path / name).read_bytes() == (DATA / name).read_bytes(), name
-    for name in ("checker.png", "mr.png", "normal.png"):
-        from PIL import Image
-
-        assert np.array_equal(np.asarray(Image.open(tmp_path / name)),
-                              np.asarray(Image.open(DATA / name))), name
+    for name in ("checker.png", "mr.png", "normal.png", "alpha.png", "layer.png", "rgb16.png"):
+        new, committed = (cv2.imread(str(d / name), cv2.IMREAD_UNCHANGED) for d in (tmp_path, DATA))
+        assert new.dtype == committed.dtype and np.array_equal(new, committed), name
 
 
 def test_test_models_are_tiny():
@@ -155,25 +164,27 @@ def test_quad_texture_slots(quad):
 def test_quad_images_colour_spaces(quad):
     m, second = quad.materials
     images = quad.images
-    assert len(images) == 4 and len(quad.image_labels) == 4
-    for image in images:
-        assert image.dtype == np.float32 and image.shape[2] == 4
-    np.testing.assert_allclose(images[m.base_color_texture.texture], rgba(mtm.CHECKER, True), atol=1e-6)
-    np.testing.assert_allclose(images[m.metallic_roughness_texture.texture], rgba(mtm.MR, False),
+    assert len(images) == 4
+    for image in images:  # 8-bit files stay 8-bit, RGBA
+        assert image.pixels.dtype == np.uint8 and image.pixels.shape[2] == 4
+    base, mr = images[m.base_color_texture.texture], images[m.metallic_roughness_texture.texture]
+    assert base.srgb and not mr.srgb and not images[m.normal_texture.texture].srgb
+    np.testing.assert_array_equal(base.pixels[..., :3], mtm.CHECKER)
+    np.testing.assert_allclose(base.linear(), rgba(mtm.CHECKER, True), atol=1e-6)
+    np.testing.assert_allclose(mr.linear(), rgba(mtm.MR, False), atol=1e-7)
+    np.testing.assert_allclose(images[m.normal_texture.texture].linear(), rgba(mtm.NORMAL, False),
                                atol=1e-7)
-    np.testing.assert_allclose(images[m.normal_texture.texture], rgba(mtm.NORMAL, False), atol=1e-7)
-    # mr.png is also a base colour: a second, sRGB-decoded copy
-    other = second.base_color_texture.texture
-    assert other != m.metallic_roughness_texture.texture
-    np.testing.assert_allclose(images[other], rgba(mtm.MR, True), atol=1e-6)
-    assert "sRGB" in quad.image_labels[other]
+    # mr.png is also a base colour: a second entry that decodes sRGB, sharing the same pixels
+    other = images[second.base_color_texture.texture]
+    assert other is not mr and other.pixels is mr.pixels
+    np.testing.assert_allclose(other.linear(), rgba(mtm.MR, True), atol=1e-6)
+    assert "sRGB" in other.label and "linear" in mr.label
 
 
 def test_glb_matches_gltf(quad):
     glb = load_mesh_asset(DATA / "textured_quad.glb")
     assert glb.materials == quad.materials
-    for a, b in zip(glb.images, quad.images):
-        np.testing.assert_array_equal(a, b)
+    assert glb.images == quad.images  # same pixels, same decoding
     for field in ("positions", "indices", "normals", "uv0", "uv1", "tangents"):
         np.testing.assert_array_equal(getattr(glb.meshes[0], field), getattr(quad.meshes[0], field))
 
@@ -210,28 +221,43 @@ def apply(m: np.ndarray, p: np.ndarray) -> np.ndarray:
     return p.astype(np.float64) @ m[:3, :3].T + m[:3, 3]
 
 
-def test_instancing_gives_one_mesh_per_node(nodes):
-    names = [m.name for m in nodes.meshes]
-    assert names == ["child_a/tri/0", "child_b/tri/0", "mirror/pair/0", "mirror/pair/1"]
-    assert nodes.triangle_count == 1 + 1 + 3 + 2
+def placed(asset, name: str, k: int):
+    """Instance k of the instanced mesh called `name`, in world space."""
+    return next(i for i in asset.instanced if i.mesh.name == name).placed(k)
+
+
+def test_mesh_used_by_two_nodes_is_stored_once(nodes):
+    """Contract: a mesh placed by two nodes is one local-space mesh with two matrices (it used to
+    be two world-space copies); a mesh placed once stays in world space."""
+    assert [m.name for m in nodes.meshes] == ["mirror/pair/0", "mirror/pair/1"]
+    assert [i.mesh.name for i in nodes.instanced] == ["tri/0"]
+    tri = nodes.instanced[0]
+    matrices = node_matrices()
+    np.testing.assert_allclose(tri.matrices, [matrices["child_a"], matrices["child_b"]], atol=1e-12)
+    assert tri.matrices.dtype == np.float64 and tri.matrices.shape == (2, 4, 4)
+    np.testing.assert_array_equal(tri.mesh.positions, mtm.TRI_POSITIONS)  # local: as in the file
+    np.testing.assert_array_equal(tri.mesh.normals, mtm.TRI_NORMALS)
+    assert nodes.triangle_count == 1 + 3 + 2  # unique
+    assert nodes.instanced_triangle_count == 2 and nodes.drawn_triangle_count == 2 + 3 + 2
 
 
 def test_node_transforms_applied_to_positions(nodes):
     matrices = node_matrices()
-    by_name = {m.name: m for m in nodes.meshes}
-    for node in ("child_a", "child_b"):
-        np.testing.assert_allclose(by_name[f"{node}/tri/0"].positions,
+    for k, node in enumerate(("child_a", "child_b")):
+        np.testing.assert_allclose(placed(nodes, "tri/0", k).positions,
                                    apply(matrices[node], mtm.TRI_POSITIONS), atol=1e-6)
+    by_name = {m.name: m for m in nodes.meshes}
     np.testing.assert_allclose(by_name["mirror/pair/0"].positions,
                                apply(matrices["mirror"], mtm.STRIP_POSITIONS), atol=1e-6)
-    everything = np.concatenate([m.positions for m in nodes.meshes])
-    np.testing.assert_allclose(nodes.bounds, [everything.min(0), everything.max(0)])
+    everything = np.concatenate([m.positions for m in nodes.meshes]
+                                + [placed(nodes, "tri/0", k).positions for k in range(2)])
+    np.testing.assert_allclose(nodes.bounds, [everything.min(0), everything.max(0)], atol=1e-6)
 
 
 def test_normals_use_inverse_transpose_under_nonuniform_scale(nodes):
     matrices = node_matrices()
-    for node in ("child_a", "child_b"):
-        mesh = next(m for m in nodes.meshes if m.name == f"{node}/tri/0")
+    for k, node in enumerate(("child_a", "child_b")):
+        mesh = placed(nodes, "tri/0", k)
         m3 = matrices[node][:3, :3]
         expected = mtm.TRI_NORMALS[0] @ np.linalg.inv(m3)
         expected /= np.linalg.norm(expected)
@@ -252,7 +278,8 @@ def test_flattening_node_transform_keeps_normals_defined(tmp_path):
     doc["nodes"][0]["scale"] = [0.0, 1.0, 1.0]
     path = tmp_path / "flat.gltf"
     path.write_text(json.dumps(doc))
-    for mesh in load_mesh_asset(path).meshes[:2]:
+    asset = load_mesh_asset(path)
+    for mesh in (placed(asset, "tri/0", k) for k in range(2)):
         assert np.isfinite(mesh.normals).all()
         np.testing.assert_allclose(mesh.normals, np.repeat(
             geometric_normals(mesh.positions, mesh.indices), 3, axis=0), atol=1e-6)
@@ -260,7 +287,8 @@ def test_flattening_node_transform_keeps_normals_defined(tmp_path):
 
 def test_file_tangents_are_transformed(nodes):
     matrices = node_matrices()
-    mesh = nodes.meshes[0]
+    np.testing.assert_array_equal(nodes.instanced[0].mesh.tangents, mtm.TRI_TANGENTS)  # local
+    mesh = placed(nodes, "tri/0", 0)
     t = matrices["child_a"][:3, :3] @ mtm.TRI_TANGENTS[0, :3]
     np.testing.assert_allclose(mesh.tangents[:, :3], [t / np.linalg.norm(t)] * 3, atol=1e-6)
     np.testing.assert_array_equal(mesh.tangents[:, 3], [-1, -1, -1])
@@ -284,7 +312,8 @@ def test_mirrored_tangent_handedness_flips(tmp_path):
     path = tmp_path / "mirrored.gltf"
     path.write_text(json.dumps(doc))
     asset = load_mesh_asset(path)
-    mesh = next(m for m in asset.meshes if m.name == "mirror/tri/0")
+    assert asset.instanced[0].instance_count == 3  # child_a, child_b, mirror
+    mesh = placed(asset, "tri/0", 2)
     m3 = node_matrices()["mirror"][:3, :3]
     np.testing.assert_array_equal(mesh.tangents[:, 3], [1, 1, 1])  # -1 in the file
     # The bitangent must still be the transformed file bitangent B = w * cross(N, T).
@@ -295,8 +324,27 @@ def test_mirrored_tangent_handedness_flips(tmp_path):
     assert np.dot(b_loaded, b_world) > 0.99 * np.linalg.norm(b_world)
 
 
+def test_instance_placement_matches_world_placement(tmp_path):
+    """`InstancedMesh.placed` gives what the loader gives for the same mesh placed once."""
+    doc = json.loads((DATA / "two_nodes.gltf").read_text())
+    doc["nodes"][3]["mesh"] = 0
+    (tmp_path / "all.gltf").write_text(json.dumps(doc))
+    instanced = load_mesh_asset(tmp_path / "all.gltf").instanced[0]
+    for k, node in enumerate((1, 2, 3)):  # child_a, child_b, mirror (depth-first order)
+        once = json.loads(json.dumps(doc))
+        for other in {1, 2, 3} - {node}:
+            once["nodes"][other].pop("mesh")
+        (tmp_path / f"once{k}.gltf").write_text(json.dumps(once))
+        world = next(m for m in load_mesh_asset(tmp_path / f"once{k}.gltf").meshes
+                     if m.name.endswith("/tri/0"))
+        mesh = instanced.placed(k)
+        np.testing.assert_array_equal(mesh.indices, world.indices)  # winding reversed if mirrored
+        for field in ("positions", "normals", "tangents"):
+            np.testing.assert_allclose(getattr(mesh, field), getattr(world, field), atol=1e-6)
+
+
 def test_strip_colors_sparse_and_default_material(nodes):
-    strip, no_material = nodes.meshes[2], nodes.meshes[3]
+    strip, no_material = nodes.meshes[0], nodes.meshes[1]
     expected = np.concatenate([mtm.STRIP_COLORS / 255.0, np.ones((5, 1))], axis=1)
     np.testing.assert_allclose(strip.colors, expected, atol=1e-7)  # COLOR_0 is linear in glTF
     assert strip.material == 0 and nodes.materials[0].name == "pair"
@@ -412,7 +460,7 @@ def test_obj_geometry_uvs_and_texture(obj):
     np.testing.assert_array_equal(textured.uv0, mtm.QUAD_UV0)  # v flipped to the glTF frame
     np.testing.assert_array_equal(textured.normals, mtm.QUAD_NORMALS)
     ref = obj.materials[textured.material].base_color_texture
-    np.testing.assert_allclose(obj.images[ref.texture], rgba(mtm.CHECKER, True), atol=1e-6)
+    np.testing.assert_allclose(obj.images[ref.texture].linear(), rgba(mtm.CHECKER, True), atol=1e-6)
     # -o 0.25 0.5 -s 2 2 in OBJ's v-up frame, expressed on our v-down UVs
     for u_up, v_up in [(0.1, 0.2), (0.7, 0.9)]:
         obj_lookup = np.array([2 * u_up + 0.25, 2 * v_up + 0.5])  # v-up image coordinates
@@ -425,11 +473,16 @@ def test_obj_missing_pieces(tmp_path):
     with pytest.raises(SceneError) as e:
         load_mesh_asset(tmp_path / "a.obj")
     assert "material library 'nowhere.mtl' not found" in one_line_error(e, tmp_path / "a.obj")
+    # A missing texture is a warning (contract change: it was an error); the material keeps Kd.
     shutil.copy(DATA / "materials.obj", tmp_path / "b.obj")
     shutil.copy(DATA / "materials.mtl", tmp_path / "materials.mtl")
-    with pytest.raises(SceneError) as e:
-        load_mesh_asset(tmp_path / "b.obj")
-    assert "texture file 'checker.png' not found" in one_line_error(e, tmp_path / "b.obj")
+    with pytest.warns(MeshWarning) as caught:
+        asset = load_mesh_asset(tmp_path / "b.obj")
+    assert [str(w.message) for w in caught] == [
+        f"{tmp_path / 'b.obj'}: texture file 'checker.png' not found; drawn without it "
+        "(factors alone): material 'textured' map_kd"]
+    textured = asset.materials[0]
+    assert textured.base_color_texture is None and textured.base_color_factor == (0.5, 0.6, 0.7, 1.0)
 
 
 def test_obj_without_materials_gets_default_grey(tmp_path):
@@ -455,7 +508,8 @@ def test_obj_bump_maps(tmp_path):
         asset = load_mesh_asset(tmp_path / "a.obj")
     n, h = asset.materials
     assert n.normal_texture is not None and n.normal_scale == 0.5 and h.normal_texture is None
-    np.testing.assert_allclose(asset.images[n.normal_texture.texture], rgba(mtm.NORMAL, False), atol=1e-7)
+    np.testing.assert_allclose(asset.images[n.normal_texture.texture].linear(), rgba(mtm.NORMAL, False),
+                               atol=1e-7)
     mapped = next(m for m in asset.meshes if m.material == 0)
     # no normals in the file: flat normals, and tangents along +u = +x
     np.testing.assert_allclose(mapped.normals, [[0, 0, 1]] * 3, atol=1e-7)
@@ -473,14 +527,16 @@ def test_ply_texture_file(tmp_path):
     asset = load_mesh_asset(path)
     mesh = asset.meshes[0]
     ref = asset.materials[0].base_color_texture
-    np.testing.assert_allclose(asset.images[ref.texture], rgba(mtm.CHECKER, True), atol=1e-6)
+    np.testing.assert_allclose(asset.images[ref.texture].linear(), rgba(mtm.CHECKER, True), atol=1e-6)
     # the vertex at y = 1 had t = 1 (v-up): top of the image, stored v = 0
     top = np.flatnonzero(mesh.positions[:, 1] == 1)
     np.testing.assert_array_equal(mesh.uv0[top, 1], 0.0)
     (tmp_path / "checker.png").unlink()
-    with pytest.raises(SceneError) as e:
-        load_mesh_asset(path)
-    assert "texture file 'checker.png' not found" in one_line_error(e, path)
+    with pytest.warns(MeshWarning, match=r"textured.ply: texture file 'checker.png' not found; "
+                                         r"drawn without it \(factors alone\): base colour$"):
+        asset = load_mesh_asset(path)
+    assert asset.materials[0].base_color_texture is None
+    assert asset.materials[0].base_color_factor == (0.8, 0.8, 0.8, 1.0)
 
 
 def test_ply_vertex_colours_normals_and_quads():
@@ -631,19 +687,28 @@ def test_missing_texture_and_buffer_files(tmp_path):
     shutil.copy(DATA / "mr.png", tmp_path)
     shutil.copy(DATA / "normal.png", tmp_path)
     path = tmp_path / "textured_quad.gltf"
+    # A missing texture is a warning naming the file and its users (contract change: it was an
+    # error), a missing buffer is still an error: geometry cannot be guessed.
     with pytest.raises(SceneError) as e:
         load_mesh_asset(path)
-    assert "texture file 'checker.png' not found" in one_line_error(e, path)
+    assert "buffers[0] file 'textured_quad.bin' not found" in one_line_error(e, path)
+    shutil.copy(DATA / "textured_quad.bin", tmp_path)
+    with pytest.warns(MeshWarning) as caught:
+        asset = load_mesh_asset(path)
+    assert [str(w.message) for w in caught] == [
+        f"{path}: texture file 'checker.png' not found; drawn without it (factors alone): "
+        "material 'quad' base colour, material 'quad' emissive"]
+    quad = asset.materials[0]
+    assert quad.base_color_texture is None and quad.emissive_texture is None
+    assert quad.metallic_roughness_texture is not None and quad.normal_texture is not None
     (tmp_path / "checker.png").write_bytes(b"not a png")
     with pytest.raises(SceneError) as e:
         load_mesh_asset(path)
     assert "cannot decode image images[0] 'checker.png'" in one_line_error(e, path)
     shutil.copy(DATA / "checker.png", tmp_path)
-    with pytest.raises(SceneError) as e:
-        load_mesh_asset(path)
-    assert "buffers[0] file 'textured_quad.bin' not found" in one_line_error(e, path)
-    shutil.copy(DATA / "textured_quad.bin", tmp_path)
-    assert load_mesh_asset(path).triangle_count == 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert load_mesh_asset(path).triangle_count == 2
 
 
 def test_broken_containers(tmp_path):
@@ -757,28 +822,59 @@ def random_images(seed=3):
     return [rng.random(s).astype(np.float32) for s in shapes]
 
 
+def mixed_images(seed=4):
+    """8-bit, half and float images, one 8-bit array used twice (as data and as colour)."""
+    rng = np.random.default_rng(seed)
+    shared = rng.integers(0, 256, (6, 5, 4), dtype=np.uint8)
+    return [TextureImage(shared), TextureImage(rng.integers(0, 256, (3, 9, 4), dtype=np.uint8)),
+            TextureImage(shared, srgb=True),
+            TextureImage(rng.random((4, 4, 4)).astype(np.float16), srgb=True),
+            TextureImage(rng.random((2, 7, 4)).astype(np.float32))]
+
+
 def test_atlas_no_overlap_and_exact_recovery():
     images = random_images()
     pad = 2
     tex = pack_atlas(images, padding=pad)
-    atlas, rects = tex.atlas, tex.rects
-    assert atlas.dtype == np.float32 and atlas.shape[2] == 4 and rects.dtype == np.int32
-    owner = np.full(atlas.shape[:2], -1)
-    for i, (x, y, w, h) in enumerate(rects):
-        assert x >= pad and y >= pad and x + w + pad <= atlas.shape[1] and y + h + pad <= atlas.shape[0]
+    page = tex.pages[STORE_FLOAT]
+    assert page.dtype == np.float32 and page.shape[2] == 4 and tex.rects.dtype == np.int32
+    owner = np.full(page.shape[:2], -1)
+    for i, (x, y, w, h, storage, srgb) in enumerate(tex.rects):
+        assert (storage, srgb) == (STORE_FLOAT, 0)
+        assert x >= pad and y >= pad and x + w + pad <= page.shape[1] and y + h + pad <= page.shape[0]
         region = owner[y - pad:y + h + pad, x - pad:x + w + pad]
         assert (region == -1).all(), f"image {i} overlaps another (padding included)"
         region[:] = i
-        np.testing.assert_array_equal(atlas[y:y + h, x:x + w], as_rgba(images[i]))
+        np.testing.assert_array_equal(tex.texels(i), as_rgba(images[i]))
         assert (w, h) == (images[i].shape[1], images[i].shape[0])
+
+
+def test_atlas_keeps_each_storage_and_stores_shared_pixels_once():
+    images = mixed_images()
+    tex = pack_atlas(images, padding=1)
+    assert [int(r[4]) for r in tex.rects] == [STORE_RGBA8, STORE_RGBA8, STORE_RGBA8, STORE_HALF, STORE_FLOAT]
+    assert [int(r[5]) for r in tex.rects] == [0, 0, 1, 1, 0]
+    np.testing.assert_array_equal(tex.rects[0, :5], tex.rects[2, :5])  # one rectangle, two decodings
+    for i, image in enumerate(images):
+        assert tex.texels(i).dtype == image.pixels.dtype
+        np.testing.assert_array_equal(tex.texels(i), image.pixels)
+    # the 8-bit page holds the two distinct 8-bit images only: (6+2)x(5+2) and (3+2)x(9+2) texels
+    assert tex.pages[STORE_RGBA8].dtype == np.uint8
+    assert np.count_nonzero(tex.pages[STORE_RGBA8].any(axis=2)) <= 8 * 7 + 5 * 11
+    assert tex.nbytes == sum(tex.pages[s].nbytes for s in (STORE_RGBA8, STORE_HALF, STORE_FLOAT))
+    only_bytes = pack_atlas(images[:3])
+    assert only_bytes.storages == {STORE_RGBA8}
+    assert only_bytes.nbytes == only_bytes.pages[STORE_RGBA8].nbytes  # unused pages cost nothing
+    for storage in (STORE_HALF, STORE_FLOAT):
+        assert only_bytes.pages[storage].shape == (1, 1, 4)
 
 
 def test_atlas_padding_replicates_edges():
     images = random_images()
     pad = 3
     tex = pack_atlas(images, padding=pad)
-    for i, (x, y, w, h) in enumerate(tex.rects):
-        padded = tex.atlas[y - pad:y + h + pad, x - pad:x + w + pad]
+    for i, (x, y, w, h, storage, _) in enumerate(tex.rects):
+        padded = tex.pages[storage][y - pad:y + h + pad, x - pad:x + w + pad]
         image = as_rgba(images[i])
         np.testing.assert_array_equal(padded, np.pad(image, ((pad, pad), (pad, pad), (0, 0)), mode="edge"))
         np.testing.assert_array_equal(padded[0, 0], image[0, 0])  # corners replicate the corner
@@ -786,10 +882,11 @@ def test_atlas_padding_replicates_edges():
 
 def test_atlas_is_roughly_square_and_handles_empty():
     tex = pack_atlas(random_images())
-    width, height = tex.size
+    width, height = tex.page_size(STORE_FLOAT)
     assert 0.25 < width / height < 4
     empty = pack_atlas([])
-    assert empty.atlas.shape == (1, 1, 4) and empty.rects.shape == (0, 4)
+    assert all(page.shape == (1, 1, 4) for page in empty.pages.values())
+    assert empty.rects.shape == (0, 6) and empty.nbytes == 0
     with pytest.raises(ValueError):
         pack_atlas(random_images(), width=4)
 
@@ -818,6 +915,26 @@ def test_reference_sampler_texel_centres_and_wrapping():
     np.testing.assert_array_equal(wrap_index(np.arange(-3, 4), 3, "repeat"), [0, 1, 2, 0, 1, 2, 0])
 
 
+def test_reference_sampler_decodes_each_tap_before_blending():
+    """Half-way between a black and a white sRGB texel the lookup reads 0.5 (the mean of the
+    decoded values), not the decoded mean of the codes (0.214); alpha is never decoded."""
+    pixels = np.array([[[0, 0, 0, 0], [255, 255, 255, 255]]], dtype=np.uint8)
+    tex = pack_atlas([TextureImage(pixels, srgb=True), TextureImage(pixels)])
+    for index in (0, 1):
+        middle = sample_bilinear(tex, index, np.array([0.5, 0.5]), "clamp", "clamp")
+        np.testing.assert_allclose(middle, [0.5, 0.5, 0.5, 0.5], atol=1e-6)
+    grey = np.full((1, 1, 4), 128, dtype=np.uint8)
+    tex = pack_atlas([TextureImage(grey, srgb=True)])
+    value = sample_bilinear(tex, 0, np.array([0.3, 0.7]))
+    np.testing.assert_allclose(value, [*srgb_to_linear([128 / 255.0] * 3), 128 / 255.0], atol=1e-7)
+    for image in mixed_images():  # at texel centres: exactly TextureImage.linear()
+        tex = pack_atlas([image])
+        h, w = image.shape
+        j, i = np.meshgrid(np.arange(h), np.arange(w), indexing="ij")
+        centres = np.stack([(i + 0.5) / w, (j + 0.5) / h], -1)
+        np.testing.assert_allclose(sample_bilinear(tex, 0, centres), image.linear(), atol=1e-6)
+
+
 def test_texture_transform_spec_example():
     """KHR_texture_transform: offset (0, 1), rotation 90 deg, scale 0.5 = lower-left quadrant."""
     m = uv_transform_matrix((0.0, 1.0), math.pi / 2, (0.5, 0.5))
@@ -831,8 +948,8 @@ def test_atlas_from_a_loaded_asset(quad):
     tex = pack_atlas(quad.images)
     m = quad.materials[0]
     ref = m.base_color_texture
-    x, y, w, h = tex.rects[ref.texture]
-    np.testing.assert_array_equal(tex.atlas[y:y + h, x:x + w], quad.images[ref.texture])
+    np.testing.assert_array_equal(tex.texels(ref.texture), quad.images[ref.texture].pixels)
+    assert tex.rects[ref.texture, 5] == 1  # base colour: decoded as sRGB in the lookup
     # the sampler contract: slot matrix, then wrap modes, then bilinear inside the rectangle
     value = sample_bilinear(tex, ref.texture, np.array([0.3, 0.6]), ref.wrap_s, ref.wrap_t, ref.matrix)
     assert value.shape == (4,) and np.isfinite(value).all()
