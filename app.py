@@ -5,7 +5,8 @@
   python app.py view [SCENE]         the interactive viewer
   python app.py render SCENE ...     render headless to a PNG (tone-mapped) or EXR (linear)
   python app.py list                 scenes and integrators
-  python app.py info SCENE           size, settings and Features of a scene
+  python app.py info SCENE           size, settings and Features of a scene; a model's materials,
+                                     textures, extensions, instances and device memory
   python app.py bench NAME           benchmarks (see `python app.py bench --help`)
 """
 from __future__ import annotations
@@ -160,6 +161,10 @@ def cmd_info(args) -> int:
     print("features:")
     for key, value in features.describe().items():
         print(f"  {key:<20} {value}")
+    if scene.geometry == "mesh":
+        from renderer.scene.model_report import scene_report
+
+        print("\n".join(scene_report(scene, mesh)))
     return 0
 
 

@@ -420,8 +420,7 @@ class _AssetBuilder:
             except _MissingTexture as e:
                 self.note_missing(key, e.file_name, user)
                 return None
-            encoding = "sRGB colour" if srgb else "linear data"
-            self.images.append(TextureImage(pixels, srgb, f"{label} ({encoding})"))
+            self.images.append(TextureImage(pixels, srgb, label))
             self._image_index[slot] = len(self.images) - 1
         return self._image_index[slot]
 
@@ -854,6 +853,8 @@ class _GltfReader:
             label += f" '{unquote(image['uri'])}'"
         elif image.get("name"):
             label += f" '{image['name']}'"
+        else:
+            label += f" ({image.get('mimeType', 'data URI')}, embedded)"
         image_index = self.b.image(("gltf", source), srgb, label, self._image_bytes(source), what)
         if image_index is None:
             return None  # a missing file: the slot keeps its factor alone (warned at the end)

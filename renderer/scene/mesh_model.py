@@ -102,7 +102,8 @@ class TextureImage:
     `pixels` is (H, W, 4) uint8 (8-bit files), float16 (16-bit files, k / 65535) or float32
     (float files), row 0 at the top, RGBA. `srgb`: RGB is sRGB-encoded and is decoded to linear
     per texel (alpha never is). Two entries may share one `pixels` array (one file read as
-    colour and as data); the atlas stores such an array once. `label` says where it came from.
+    colour and as data); the atlas stores such an array once. `label` says where it came from
+    (e.g. "images[0] 'wood.png'").
     """
 
     def __init__(self, pixels: np.ndarray, srgb: bool = False, label: str = ""):
@@ -391,8 +392,8 @@ class MeshAsset:
 
     `meshes`: world-space meshes (placed once); `instanced`: meshes stored once with their
     object-to-world matrices (module docs, "Instances"). `images[i]` is a `TextureImage` (its
-    label says where it came from and how it is decoded). `bounds` is float32 (2, 3): world-space
-    min and max corners of all referenced vertices of every mesh and every instance.
+    label says where it came from, its `srgb` how lookups decode it). `bounds` is float32 (2, 3):
+    world-space min and max corners of all referenced vertices of every mesh and every instance.
     `extensions_used`: the file's glTF extensionsUsed; `extensions_ignored`: those of them this
     loader does not implement (the loader warned about them).
     """
