@@ -83,6 +83,56 @@ def fresnel_dielectric(cos_i, eta):
 
 
 @ti.func
+def _fresnel_conductor_channel(c, s2, eta, k):
+    """One channel of fresnel_conductor: c = cos_i, s2 = sin_i^2."""
+    # u = sqrt((eta + i k)^2 - sin^2) = a + i b, the square root taken from whichever of a, b is
+    # the larger, so that neither comes from a difference of nearly equal numbers (large k).
+    t = eta * eta - k * k - s2
+    y = 2.0 * eta * k
+    modulus = ti.sqrt(t * t + y * y)
+    a = 0.0
+    b = 0.0
+    if t >= 0.0:
+        a = ti.sqrt(0.5 * (modulus + t))
+        b = y / ti.max(2.0 * a, 1e-30)
+    else:
+        b = ti.sqrt(0.5 * (modulus - t))
+        a = y / (2.0 * b)
+    # |rs|^2 = |c - u|^2 / |c + u|^2, |rp|^2 = |rs|^2 |a c - s^2 - i b c|^2 / |a c + s^2 + i b c|^2:
+    # sums of squares, no cancellation; at grazing (c = 0) both are exactly 1. A denominator is 0
+    # only where u = 0 as well (eta = 1, k = 0 at grazing; eta = k = 0 head-on): there the limit,
+    # 1 and |rp| = |rs|, is used.
+    b2 = b * b
+    rs = 1.0
+    den_s = (a + c) * (a + c) + b2
+    if den_s > 0.0:
+        rs = ((a - c) * (a - c) + b2) / den_s
+    p_minus = a * c - s2
+    p_plus = a * c + s2
+    bc2 = b2 * c * c
+    ratio = 1.0
+    den_p = p_plus * p_plus + bc2
+    if den_p > 0.0:
+        ratio = (p_minus * p_minus + bc2) / den_p
+    return 0.5 * rs * (1.0 + ratio)
+
+
+@ti.func
+def fresnel_conductor(cos_i, eta, k):
+    """Exact unpolarised Fresnel reflectance at an interface to a conductor of complex index
+    eta + i k (relative to the outside; vec3 per channel), cos_i in [0, 1]. k = 0 is the dielectric
+    Fresnel (total internal reflection included for eta < 1); normal incidence gives
+    ((eta - 1)^2 + k^2) / ((eta + 1)^2 + k^2). f32-stable for k = 0, for large k and at grazing
+    angles (the p-polarised factor is written without dividing by cos_i)."""
+    c = ti.math.clamp(cos_i, 0.0, 1.0)
+    s2 = 1.0 - c * c
+    f = ti.math.vec3(0.0)
+    for i in ti.static(range(3)):
+        f[i] = _fresnel_conductor_channel(c, s2, eta[i], k[i])
+    return f
+
+
+@ti.func
 def reflect(wo, h):
     return 2.0 * wo.dot(h) * h - wo
 
