@@ -6,7 +6,10 @@ column j in u) is chosen with probability P(i, j) = P(i) P(j | i) and a directio
 
     pdf(direction) = P(i, j) / Omega_i,   Omega_i = (2 pi / W) (cos theta_i - cos theta_{i+1})
 
-where theta_i = pi i / H are the row edges of the map (v = theta / pi, as `Environment` looks it up).
+where theta_i are the row edges of the map: halfway between the row centres, which sit at
+theta = pi i / (H - 1) as `Environment` looks them up (Mitsuba's convention), so the first and last
+rows own half a row each around the poles (`environment.row_edges`). Each cell is then the region
+where the bilinear lookup blends its texel with its neighbours, as the bounds below assume.
 
 Why uniform in cos theta within a texel rather than uniform in (u, v) with
 pdf = p(u, v) / (2 pi^2 sin theta) and a sin(theta_centre) weight (pbrt-v3's choice): the two agree
@@ -49,6 +52,7 @@ import math
 import numpy as np
 import taichi as ti
 
+from renderer.lights.environment import row_edges
 from renderer.sampling.warps import PI
 from renderer.upload import upload_fields
 
@@ -86,7 +90,7 @@ def build_distribution(image: np.ndarray, floor: float = FLOOR) -> dict:
     float64 views derived from those (probabilities, pdf per texel, the radiance/pdf bound)."""
     height, width = image.shape[:2]
     bound = texel_bounds(image)
-    z_edges = np.cos(np.pi * np.arange(height + 1) / height)
+    z_edges = np.cos(row_edges(height))
     z_edges[0], z_edges[-1] = 1.0, -1.0
     solid_angle = (2.0 * np.pi / width) * (z_edges[:-1] - z_edges[1:])  # of one texel in row i
 
@@ -210,19 +214,20 @@ class EnvironmentSampler:
             s = ti.math.mix(self.south[i], self.south[i + 1], fv)
             z = s - 1.0
             sin_theta = ti.sqrt(ti.max(0.0, s * (2.0 - s)))
-        phi = 2.0 * PI * ((ti.cast(j, ti.f32) + fu) / self.width) + self.environment.scalars[1]
+        phi = 2.0 * PI * ((ti.cast(j, ti.f32) + fu) / self.width) - self.environment.scalars[1]
         direction = ti.math.vec3(sin_theta * ti.sin(phi), z, -sin_theta * ti.cos(phi))
         return direction, self.texel_pdf[i, j], self.environment.radiance(direction)
 
     @ti.func
     def pdf(self, direction):
         """Solid-angle pdf of `sample` producing `direction` (unit vector); finite everywhere."""
-        u = (ti.atan2(direction.x, -direction.z) - self.environment.scalars[1]) / (2.0 * PI)
+        u = (ti.atan2(direction.x, -direction.z) + self.environment.scalars[1]) / (2.0 * PI)
         u -= ti.floor(u)
         # theta by atan2: accurate near the poles, where acos(y) loses digits
         theta = ti.atan2(ti.sqrt(direction.x * direction.x + direction.z * direction.z), direction.y)
         j = ti.math.clamp(ti.cast(u * self.width, ti.i32), 0, self.width - 1)
-        i = ti.math.clamp(ti.cast(theta * (1.0 / PI) * self.height, ti.i32), 0, self.height - 1)
+        # the row whose centre, pi i / (H - 1), is nearest
+        i = ti.math.clamp(ti.cast(theta * (1.0 / PI) * (self.height - 1) + 0.5, ti.i32), 0, self.height - 1)
         return self.texel_pdf[i, j]
 
     # -- host helpers (tests, benchmarks) --------------------------------------------------------
@@ -277,6 +282,5 @@ class EnvironmentSampler:
         atan2(d.x, -d.z) in [0, 2 pi) for the given (default: current) rotation."""
         if rotation is None:
             rotation = float(self.environment.scalars[1])
-        phi = np.mod(2.0 * math.pi * np.arange(self.width) / self.width + rotation, 2.0 * math.pi)
-        theta = math.pi * np.arange(1, self.height) / self.height
-        return phi, theta
+        phi = np.mod(2.0 * math.pi * np.arange(self.width) / self.width - rotation, 2.0 * math.pi)
+        return phi, row_edges(self.height)[1:-1]

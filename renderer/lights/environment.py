@@ -2,8 +2,12 @@
 a constant colour. Which of the three is compiled in is a `Features` decision; intensity and rotation
 are data (a small field), so the viewer's sliders never recompile a kernel.
 
-Map convention (as Mitsuba's `envmap`): u = atan2(d.x, -d.z) / 2pi, v = acos(d.y) / pi, row 0 at
-the zenith; a rotation turns the map about +y.
+Map convention, Mitsuba 3's `envmap` (src/emitters/envmap.cpp) texel for texel: u = atan2(d.x,
+-d.z) / 2pi (u = 0 looks along -z, u = 1/4 along +x), v = acos(d.y) / pi. Column j's centre is at
+u = (j + 1/2) / W, and u wraps. Row i's centre is at v = i / (H - 1): row 0 is the zenith itself and
+the last row the nadir ("align corners" in v; v clamps). `rotation` turns the map about +y by the
+right-hand rule (counter-clockwise seen from above), as Mitsuba's `to_world` rotate([0, 1, 0],
+rotation): the texel at map azimuth phi is seen at phi - rotation.
 """
 import math
 
@@ -14,6 +18,14 @@ from renderer.sampling.warps import PI
 from renderer.upload import upload_fields
 
 KINDS = ("map", "sky", "constant")
+
+
+def row_edges(height: int) -> np.ndarray:
+    """Polar angles (height + 1,) bounding each map row's share of the sphere: halfway between row
+    centres (pi i / (height - 1)), and 0 and pi at the ends, so the first and last rows own half a
+    row each around the poles. The environment sampler's cells; float64."""
+    inner = math.pi * (np.arange(1, height) - 0.5) / max(height - 1, 1)
+    return np.concatenate([[0.0], inner, [math.pi]])
 
 
 @ti.data_oriented
@@ -59,13 +71,13 @@ class Environment:
 
     @ti.func
     def _lookup(self, d):
-        """Bilinear lookup; wraps in u, clamps in v."""
-        phi = ti.atan2(d.x, -d.z) - self.scalars[1]
+        """Bilinear lookup; wraps in u, clamps in v (texel centres as in the module doc)."""
+        phi = ti.atan2(d.x, -d.z) + self.scalars[1]
         u = phi / (2.0 * PI)
         u -= ti.floor(u)
         v = ti.acos(ti.math.clamp(d.y, -1.0, 1.0)) / PI
         x = u * self.width - 0.5
-        y = ti.math.clamp(v * self.height - 0.5, 0.0, self.height - 1.0)
+        y = ti.math.clamp(v * (self.height - 1), 0.0, self.height - 1.0)
         x0f = ti.floor(x)
         y0f = ti.floor(y)
         fx = x - x0f

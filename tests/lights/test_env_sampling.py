@@ -138,8 +138,9 @@ def test_pdf_integrates_to_one(maps, case):
 def distance_to_texel_border(directions, sampler, rotation):
     """In texel units, from float64 coordinates of the (float32) directions."""
     d = directions.astype(np.float64)
-    u = np.mod((np.arctan2(d[:, 0], -d[:, 2]) - rotation) / (2 * math.pi), 1.0) * sampler.width
-    v = np.arctan2(np.hypot(d[:, 0], d[:, 2]), d[:, 1]) / math.pi * sampler.height
+    u = np.mod((np.arctan2(d[:, 0], -d[:, 2]) + rotation) / (2 * math.pi), 1.0) * sampler.width
+    # row cells are centred on pi i / (H - 1): their borders sit at half-integers of v (H - 1)
+    v = np.arctan2(np.hypot(d[:, 0], d[:, 2]), d[:, 1]) / math.pi * (sampler.height - 1) + 0.5
     du = np.abs(u - np.round(u))
     dv = np.abs(v - np.round(v))
     return np.minimum(du, dv)
@@ -198,9 +199,9 @@ def test_pdf_positive_wherever_radiance_is(maps, name):
     rng = np.random.default_rng(42)
     d = rng.normal(size=(500_000, 3))
     if name == "one_hot":
-        centre_u, centre_v = (20 + 0.5) / 64, (13 + 0.5) / 32
+        centre_u, centre_v = (20 + 0.5) / 64, 13 / 31  # row centres at i / (H - 1)
         u = centre_u + rng.uniform(-2.5, 2.5, 500_000) / 64
-        v = centre_v + rng.uniform(-2.5, 2.5, 500_000) / 32
+        v = centre_v + rng.uniform(-2.5, 2.5, 500_000) / 31
         phi, theta = 2 * math.pi * u, math.pi * v
         d = np.stack([np.sin(theta) * np.sin(phi), np.cos(theta), -np.sin(theta) * np.cos(phi)], axis=1)
     d /= np.linalg.norm(d, axis=1, keepdims=True)
@@ -247,9 +248,9 @@ def exact_integral(sampler):
     Gauss-Legendre (2 points in phi, 5 in theta with the sin theta Jacobian) integrates each piece."""
     w, h = sampler.width, sampler.height
     rotation = float(sampler.environment.scalars[1])
-    phi_lines = np.sort(np.mod(2 * math.pi * (np.arange(w) + 0.5) / w + rotation, 2 * math.pi))
+    phi_lines = np.sort(np.mod(2 * math.pi * (np.arange(w) + 0.5) / w - rotation, 2 * math.pi))
     phi_edges = np.unique(np.concatenate([[0.0], phi_lines, [2 * math.pi]]))
-    theta_edges = np.concatenate([[0.0], math.pi * (np.arange(h) + 0.5) / h, [math.pi]])
+    theta_edges = math.pi * np.arange(h) / (h - 1)  # the row centres: 0 (zenith) to pi (nadir)
 
     def nodes(edges, k):
         t, wt = np.polynomial.legendre.leggauss(k)
@@ -309,8 +310,8 @@ def test_intensity_and_rotation_are_runtime_data(maps):
     np.testing.assert_array_equal(p0, p1)
     np.testing.assert_allclose(r1, 3.0 * r0, rtol=1e-6)
     np.testing.assert_array_equal(p0, p2)
-    # turning the map by +90 degrees moves phi = atan2(x, -z) by +90 degrees: (x, y, z) -> (-z, y, x)
-    np.testing.assert_allclose(d2, np.stack([-d0[:, 2], d0[:, 1], d0[:, 0]], axis=1), atol=2e-5)
+    # turning the map by +90 degrees about +y (right-hand rule) takes (x, y, z) to (z, y, -x)
+    np.testing.assert_allclose(d2, np.stack([d0[:, 2], d0[:, 1], -d0[:, 0]], axis=1), atol=2e-5)
     assert np.mean(np.isclose(rotated_pdf, p2, rtol=1e-3)) > 0.99
 
 
