@@ -69,6 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--size", type=_size, help="image size WxH (default: the scene's)")
     render.add_argument("--integrator", help="integrator name (see `list`)")
     render.add_argument("--out", type=Path, help="output .png (tone-mapped) or .exr (linear float32)")
+    render.add_argument("--variance", type=Path, help="also write the variance of each pixel's mean to this .exr")
     render.add_argument("--max-depth", type=_max_depth, help="1 = emitters seen directly, 2 = direct light...")
     render.add_argument("--seed", type=int, help="random seed (same seed, same image)")
     render.add_argument("--arch", choices=ARCHES, default="auto")
@@ -94,13 +95,16 @@ def has_display() -> bool:
 
 def cmd_render(args) -> int:
     from renderer.arch import init_taichi
-    from renderer.headless import RenderJob, check_output_path, display_tonemapper, progress_bar, render, save
+    from renderer.headless import (RenderJob, check_output_path, check_variance_path, display_tonemapper,
+                                   progress_bar, render, save, save_variance)
     from renderer.scene.catalog import load_any, resolve_scene
 
     scene = load_any(resolve_scene(args.scene))
     integrator = args.integrator or scene.render.integrator
     out = args.out or ROOT / "out" / f"{scene.name}_{integrator}.png"
     check_output_path(out)
+    if args.variance is not None:
+        check_variance_path(args.variance)
     if args.seconds is not None and args.seconds <= 0:
         raise ValueError("--time must be positive")
     used = init_taichi(args.arch, optimize=args.optimize)
@@ -112,6 +116,9 @@ def cmd_render(args) -> int:
     save(result, out, args.exposure, display_tonemapper(integrator, args.tonemapper))
     rejected = f", {result.rejected} non-finite samples dropped" if result.rejected else ""
     print(f"{out}  ({result.spp} spp in {result.seconds:.1f} s{rejected})")
+    if args.variance is not None:
+        save_variance(result, args.variance)
+        print(f"{args.variance}  (variance of each pixel's mean)")
     return 0
 
 

@@ -40,11 +40,20 @@ class RenderResult:
     seconds: float
     rejected: int
     integrator: str
+    # per pixel and channel, the variance of the mean (s^2 / n; +inf where unknown: fewer than 2
+    # samples, or an integrator whose image is not a mean of independent samples, such as sppm)
+    variance: np.ndarray | None = None
 
 
 def check_output_path(out: Path) -> None:
     if out.suffix.lower() not in OUTPUT_EXTENSIONS:
         raise ValueError(f"{out}: unsupported output extension '{out.suffix}' (use .png or .exr)")
+
+
+def check_variance_path(out: Path) -> None:
+    if out.suffix.lower() != ".exr":
+        raise ValueError(f"{out}: unsupported variance extension '{out.suffix}' (the variance is linear "
+                         "float data: use .exr)")
 
 
 def render(scene: Scene, job: RenderJob, progress=None) -> RenderResult:
@@ -76,7 +85,8 @@ def render(scene: Scene, job: RenderJob, progress=None) -> RenderResult:
             progress(renderer.samples_done, target_spp, time.perf_counter() - (budget_start or start),
                      width * height, job.seconds)
     total = time.perf_counter() - start
-    return RenderResult(renderer.image(), renderer.samples_done, total, renderer.film.stats()["rejected"], integrator)
+    return RenderResult(renderer.image(), renderer.samples_done, total, renderer.film.stats()["rejected"], integrator,
+                        renderer.film.variance_of_mean_image())
 
 
 def save(result: RenderResult, out: Path, exposure: float = 0.0, tonemapper: str = "aces") -> None:
@@ -84,6 +94,12 @@ def save(result: RenderResult, out: Path, exposure: float = 0.0, tonemapper: str
         write_exr(out, result.image)
     else:
         write_png(out, tonemap_array(result.image, exposure, tonemapper))
+
+
+def save_variance(result: RenderResult, out: Path) -> None:
+    """The variance of each pixel's mean (linear EXR, per channel): with the mean image, what a z-test
+    of the render against a reference needs, z = (mean - reference) / sqrt(variance + reference's)."""
+    write_exr(out, result.variance)
 
 
 def display_tonemapper(integrator: str, requested: str | None) -> str:
