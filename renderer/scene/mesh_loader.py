@@ -8,9 +8,10 @@ How each format is read
 -----------------------
 glTF / GLB
     Read here with the standard library (`json`, `struct` for the GLB container) and numpy for
-    accessors; images are decoded with Pillow. trimesh's glTF importer is not used because it drops
-    what a path tracer needs: TEXCOORD_1, TANGENT, samplers (wrap modes), KHR_texture_transform and
-    the original texture indices, and it flips V. Supported: the node hierarchy with matrix or TRS
+    accessors; images are decoded with Pillow (16-bit PNGs with OpenCV, which keeps their 16
+    bits). trimesh's glTF importer is not used because it drops what a path tracer needs:
+    TEXCOORD_1, TANGENT, samplers (wrap modes), KHR_texture_transform and the original texture
+    indices, and it flips V. Supported: the node hierarchy with matrix or TRS
     transforms, triangles / strips / fans (points and lines are skipped with a warning), indexed
     and non-indexed primitives, sparse and normalized accessors (so KHR_mesh_quantization works),
     embedded, data-URI and external buffers and images, metallic-roughness materials with base
@@ -63,10 +64,11 @@ file, naming the materials that use it; they keep their factors alone, as other 
 glTF extensions used but not implemented.
 Warning (`DegenerateTrianglesWarning`, one per file with the count): triangles with a repeated
 vertex index or zero area are removed. "Zero area" is tested in float64 on the world-space
-positions (local positions for instanced meshes), relative to the triangle's size: twice the area below 1e-12 times the squared longest
-edge (height < 1e-12 of its length). Normals are transformed with the cofactor matrix of the
-node transform (det(M) times the inverse transpose: the same directions, and still defined when a
-zero scale flattens the model; `mesh_model.normal_matrix`). Normals that are zero or non-finite are replaced by the
+positions (local ones for instanced meshes), relative to the triangle's size: twice the area
+below 1e-12 times the squared longest edge (height < 1e-12 of its length). Normals are
+transformed with the cofactor matrix of the node transform (det(M) times the inverse transpose:
+the same directions, and still defined when a zero scale flattens the model;
+`mesh_model.normal_matrix`). Normals that are zero or non-finite are replaced by the
 area-weighted average of the adjacent face normals (`MeshWarning`).
 """
 from __future__ import annotations

@@ -232,7 +232,8 @@ def test_clearcoat(layers):
 def test_sheen(layers):
     m = by_name(layers)["velvet"]
     assert m.sheen_color_factor == (0.5, 0.25, 1.0) and m.sheen_roughness_factor == 0.625
-    colour, roughness = layers.images[m.sheen_color_texture.texture], layers.images[m.sheen_roughness_texture.texture]
+    colour = layers.images[m.sheen_color_texture.texture]
+    roughness = layers.images[m.sheen_roughness_texture.texture]
     assert colour.srgb and not roughness.srgb
     assert colour.pixels is roughness.pixels  # layer.png: one array, read two ways
     np.testing.assert_allclose(roughness.linear()[..., 3], mtm.LAYER[..., 3] / 255.0, atol=1e-7)  # A
