@@ -59,10 +59,11 @@ def triangle_watertight(o, k, s, v0, v1, v2, t_max):
             bz = s.z * b[k.z]
             cz = s.z * c[k.z]
             tt = u * az + v * bz + w * cz
-            if det < 0.0:
-                tt = -tt
-                det = -det
-            if tt > 0.0 and tt < t_max * det:
+            # A back face (det < 0) has u, v, w, tt all of det's sign: compare |tt| against
+            # |det| for the range, and divide by the signed det so both t and the barycentrics
+            # come out positive (flipping only tt and det once left b1, b2 negated).
+            sign = 1.0 if det > 0.0 else -1.0
+            if tt * sign > 0.0 and tt * sign < t_max * det * sign:
                 inv = 1.0 / det
                 hit = 1
                 t = tt * inv

@@ -114,3 +114,46 @@ class RayShooter:
         self._respawn(np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(directions, np.float32),
                       np.ascontiguousarray(new_directions, np.float32), prim, second, t)
         return prim, second, t
+
+
+@ti.data_oriented
+class SurfaceProbe:
+    """Closest hits of any geometry (mesh or SDF) with what its surface() makes of them, one row
+    per ray: hit, t, prim (surface().prim: a mesh primitive or an SDF node), bary (2), p (3),
+    n_geo (3), uv (2), tangent (4), front_face, n_shading (3). Column slices are the class
+    constants below."""
+
+    HIT, T, PRIM, BARY, P, N_GEO, UV, TANGENT, FRONT, N_SHADING = (
+        0, 1, 2, slice(3, 5), slice(5, 8), slice(8, 11), slice(11, 13), slice(13, 17), 17, slice(18, 21))
+    WIDTH = 21
+
+    def __init__(self, geometry):
+        self.geometry = geometry
+
+    @ti.kernel
+    def _shoot(self, o: ti.types.ndarray(), d: ti.types.ndarray(), out: ti.types.ndarray()):
+        for i in range(o.shape[0]):
+            ray = Ray(o=ti.math.vec3(o[i, 0], o[i, 1], o[i, 2]), d=ti.math.vec3(d[i, 0], d[i, 1], d[i, 2]),
+                      cone_width=0.0, cone_spread=0.0)
+            h = self.geometry.intersect(ray, INF)
+            out[i, 0] = h.hit
+            if h.hit == 1:
+                s = self.geometry.surface(ray, h)
+                out[i, 1] = h.t
+                out[i, 2] = s.prim
+                out[i, 3] = h.bary.x
+                out[i, 4] = h.bary.y
+                for k in ti.static(range(3)):
+                    out[i, 5 + k] = s.p[k]
+                    out[i, 8 + k] = s.n_geo[k]
+                    out[i, 18 + k] = s.n_shading[k]
+                out[i, 11] = s.uv.x
+                out[i, 12] = s.uv.y
+                for k in ti.static(range(4)):
+                    out[i, 13 + k] = s.tangent[k]
+                out[i, 17] = s.front_face
+
+    def shoot(self, o, d):
+        out = np.zeros((len(o), self.WIDTH), np.float32)
+        self._shoot(np.ascontiguousarray(o, np.float32), np.ascontiguousarray(d, np.float32), out)
+        return out

@@ -7,13 +7,12 @@ import math
 
 import numpy as np
 import pytest
-import taichi as ti
 
 from renderer.geometry import bezier as bz
-from renderer.geometry.interface import INF, Ray
 from renderer.geometry.mesh_data import MeshData
 from renderer.scene.model import Transform
 from tests.geometry.mesh_helpers import RayShooter, geometry_from
+from tests.geometry.mesh_helpers import SurfaceProbe as Probe  # shared with the hit-point tests
 
 # A vase: flat bottom from the axis (a pole), a convex belly, a concave neck and a flared lip. It
 # has every local shape a profile can have: convex, saddle, an inflection and a point on the axis.
@@ -26,42 +25,6 @@ def placement():
     m[:3, :3] = Transform(rotate=(20.0, 30.0, -10.0)).rotation_matrix() @ np.diag([1.2, 0.8, 1.0])
     m[:3, 3] = (0.1, -0.2, 0.3)
     return m
-
-
-@ti.data_oriented
-class Probe:
-    """Closest hits with what surface() makes of them, one row per ray:
-    hit, t, prim, u, phi, p (3), n_geo (3), uv (2), tangent (4), front_face."""
-
-    def __init__(self, geometry):
-        self.geometry = geometry
-
-    @ti.kernel
-    def _shoot(self, o: ti.types.ndarray(), d: ti.types.ndarray(), out: ti.types.ndarray()):
-        for i in range(o.shape[0]):
-            ray = Ray(o=ti.math.vec3(o[i, 0], o[i, 1], o[i, 2]), d=ti.math.vec3(d[i, 0], d[i, 1], d[i, 2]),
-                      cone_width=0.0, cone_spread=0.0)
-            h = self.geometry.intersect(ray, INF)
-            out[i, 0] = h.hit
-            if h.hit == 1:
-                s = self.geometry.surface(ray, h)
-                out[i, 1] = h.t
-                out[i, 2] = h.prim
-                out[i, 3] = h.bary.x
-                out[i, 4] = h.bary.y
-                for k in ti.static(range(3)):
-                    out[i, 5 + k] = s.p[k]
-                    out[i, 8 + k] = s.n_geo[k]
-                out[i, 11] = s.uv.x
-                out[i, 12] = s.uv.y
-                for k in ti.static(range(4)):
-                    out[i, 13 + k] = s.tangent[k]
-                out[i, 17] = s.front_face
-
-    def shoot(self, o, d):
-        out = np.zeros((len(o), 18), np.float32)
-        self._shoot(np.ascontiguousarray(o, np.float32), np.ascontiguousarray(d, np.float32), out)
-        return out
 
 
 class World:
