@@ -8,8 +8,6 @@ Two traversals (a compile-time choice, benchmarked against each other):
 Two triangle tests: "watertight" (Woop et al. 2013, the default) and "moller" (Moller-Trumbore).
 Only the primitive kinds the scene has are compiled in.
 """
-import dataclasses
-
 import numpy as np
 import taichi as ti
 
@@ -27,32 +25,6 @@ TRAVERSALS = ("stack", "stackless")
 TRIANGLE_TESTS = ("watertight", "moller")
 
 
-def wound_to_normals(data: MeshData) -> MeshData:
-    """The triangles with their corners 1 and 2 (and those corners' attributes) swapped wherever
-    the vertex normals point against the winding's normal e1 x e2, as pbrt orients a triangle by
-    its shading normals: the normals of a smooth mesh say where its outside is, whatever order the
-    file lists the corners in. Otherwise a glass ball whose faces are wound clockwise renders as a
-    bubble of air in glass (the BSDF's side follows the geometric normal), and its emitting side,
-    front_face and spawn offsets all turn inside out. Flat triangles keep their winding."""
-    if data.tri_normals is None or not len(data.tri_vertices):
-        return data
-    v = data.tri_vertices.astype(np.float64)
-    facing = (np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]) * data.tri_normals.sum(axis=1)).sum(axis=1)
-    flip = facing < 0.0
-    if not flip.any():
-        return data
-
-    def swapped(corners):
-        if corners is None:
-            return None
-        corners = corners.copy()
-        corners[flip] = corners[flip][:, [0, 2, 1]]
-        return corners
-
-    return dataclasses.replace(data, **{name: swapped(getattr(data, name)) for name in
-                                        ("tri_vertices", "tri_normals", "tri_uvs", "tri_uvs1", "tri_tangents")})
-
-
 @ti.data_oriented
 class MeshGeometry:
     kind = "mesh"
@@ -64,7 +36,6 @@ class MeshGeometry:
             raise ValueError(f"unknown triangle test '{triangle_test}' (choose from {', '.join(TRIANGLE_TESTS)})")
         self.traversal = traversal
         self.triangle_test = triangle_test
-        data = wound_to_normals(data)
         self.kinds = data.kinds()
         self.has_normals = data.tri_normals is not None and len(data.tri_vertices) > 0
         self.has_uvs = data.tri_uvs is not None and len(data.tri_vertices) > 0

@@ -7,7 +7,8 @@ radius, both smooth dielectric (roughness 0, ior 1.5), in front of an emissive c
 behind and a floor, quads of black albedo, so the glass is all a path scatters off before it ends
 on an emitter or the sky: refraction errors move checker edges, and no diffuse bounce adds
 noise), 'path' integrator. The mesh is also rendered with every face wound the other way (vertex normals
-unchanged): the vertex normals say where its outside is, so the image must not change.
+unchanged): the outside of a closed mesh is the one its volume says (renderer/scene/orientation.py
+turns such a mesh the right way out when it is loaded), so the image must not change.
 
 Decision rule: tests/stats/image_tests.assert_agree (Mitsuba's per-pixel z-test at ALPHA = 0.01,
 Sidak-corrected over the pixels, 99.75 % of the pixel channels must pass; then the image means),
