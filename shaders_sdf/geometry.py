@@ -146,8 +146,15 @@ class SdfGeometry:
         p = ray.o + hit.t * ray.d
         width = ray.cone_width + ray.cone_spread * hit.t
         eps = self.threshold(width)
-        # The difference step must stay well above f32 resolution at |p| (~6e-8 |p|).
-        h = ti.max(0.5 * eps, 1e-5 * (1.0 + ti.max(ti.abs(p.x), ti.max(ti.abs(p.y), ti.abs(p.z)))))
+        # The normal is the gradient at p itself, by differences at the finest threshold's scale
+        # (not the footprint's: the march stops up to a footprint short of the surface, and a
+        # footprint-sized step from there reaches past a thin solid or blurs a curved one). For
+        # a distance field the gradient at p points at the nearest surface point q and is q's
+        # normal, so a ray refracted here and started from q (spawn) sees the surface its
+        # direction was refracted at; a blurred normal sent rays into glass beyond the critical
+        # angle of the true surface, trapping them by total internal reflection. The step must
+        # stay well above f32 resolution at |p| (~6e-8 |p|).
+        h = ti.max(0.5 * self.march_f[1], 1e-5 * (1.0 + ti.max(ti.abs(p.x), ti.max(ti.abs(p.y), ti.abs(p.z)))))
         # The side the ray travelled on: the outward normal must face against it from outside
         # and along it from inside.
         along = -ray.d if hit.inside == 0 else ray.d
@@ -169,21 +176,49 @@ class SdfGeometry:
         outward = direction.dot(surface.n_geo) > 0.0
         side = surface.n_geo if outward else -surface.n_geo
         wanted = 1.0 if outward else -1.0  # the sign of the SDF where the new ray must start
-        o = surface.p + side * (SPAWN_OFFSET * surface.eps)
+        # Into a solid (refraction, or a reflection inside it) the pixel footprint says how finely
+        # the *view* resolves surfaces, not how thick the solid is: a 2 mm glass plate seen with a
+        # 5 cm footprint would be jumped over by a footprint-sized offset, and the ray would leave
+        # with its entry's 1 / eta^2 but never its exit's. So a ray into a solid first tries to
+        # start from the hit point projected onto the surface (the march stopped up to one
+        # footprint short of it) and on by a fine clearance, and then marches with the finest
+        # threshold (a zero-width cone). Where that projection fails (near a silhouette the
+        # tilted normal does not lead to the surface), the footprint-sized offset is used.
+        fine = not outward
+        coarse_eps = surface.eps
+        fine_eps = ti.max(self.march_f[1], 1e-6 * (1.0 + ti.max(ti.abs(surface.p.x),
+                                                                ti.max(ti.abs(surface.p.y), ti.abs(surface.p.z)))))
+        eps = fine_eps if fine else coarse_eps
+        o = surface.p if fine else surface.p + side * (SPAWN_OFFSET * coarse_eps)
         # Near an edge the difference normal blends two faces, and the offset point can land on
         # the wrong side of the other face (a refracted ray starting outside the solid). Push on
         # along the side until the origin clears every surface by the margin the march needs.
         # (Where the ray runs nearly parallel to that other face no push can give it clearance:
         # it then starts within the threshold of that face, which it is about to cross anyway.)
-        for _ in range(SPAWN_PUSHES):
+        # One loop holds both attempts: every call site of the SDF compiles it in again.
+        pushes = 0
+        for _ in range(2 * SPAWN_PUSHES + 1):
             clearance = wanted * self.program.distance(o)
-            if clearance >= SPAWN_CLEARANCE * surface.eps:
+            if clearance >= SPAWN_CLEARANCE * eps:
                 break
-            o += side * (SPAWN_CLEARANCE * surface.eps - clearance)
+            if fine and pushes == SPAWN_PUSHES:
+                fine = False
+                eps = coarse_eps
+                o = surface.p + side * (SPAWN_OFFSET * coarse_eps)
+                pushes = 0
+                continue
+            if not fine and pushes == SPAWN_PUSHES:
+                break
+            # Aim past the required clearance, at the spawn offset: aiming at exactly the
+            # clearance leaves the next check to f32 rounding, and a sub-ulp shortfall can never
+            # be pushed away.
+            o += side * (SPAWN_OFFSET * eps - clearance)
+            pushes += 1
+        width = 0.0 if fine else surface.cone_width
         # The spawned ray keeps the footprint it arrived with but does not grow it further: a
         # threshold that grew along a grazing ray faster than the ray leaves a convex surface
         # would let the ray find its own surface again.
-        return Ray(o=o, d=direction, cone_width=surface.cone_width, cone_spread=0.0)
+        return Ray(o=o, d=direction, cone_width=width, cone_spread=0.0)
 
     # --- direct lighting ---------------------------------------------------------------------------
     def primitive_count(self) -> int:

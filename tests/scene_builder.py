@@ -133,6 +133,6 @@ translate = [0.0, 0.5, 0.0]
 def tiny_bench_toml(name: str, width: int = 32, height: int = 18, glass_ball: bool = False) -> str:
     """A white ball on a white plane under a sky (the ball glass if asked): the benchmarks' smoke
     tests render it in a fraction of a second."""
-    extra = '[materials.glass]\ntype = "dielectric"\n' if glass_ball else ""
+    extra = '[materials.glass]\ntype = "dielectric"\nroughness = 0.0\n' if glass_ball else ""
     return TINY_BENCH.format(name=name, width=width, height=height, extra_materials=extra,
                              ball="glass" if glass_ball else "white")

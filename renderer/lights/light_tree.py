@@ -713,15 +713,17 @@ def node_importance(p, n, lo, hi, axis, power, theta_o, theta_e):
         if d2 > half_diag2 * (1.0 + INSIDE_SLACK) and d2 > 0.0:
             to_p = v / ti.sqrt(d2)
             theta_b = ti.asin(ti.min(ti.sqrt(half_diag2 / d2), 1.0))
-        theta_w = ti.acos(ti.math.clamp(axis.dot(to_p), -1.0, 1.0))
+        # Angles from atan2(|cross|, dot), not acos(dot): acos amplifies a 1-ulp change of a
+        # cosine near 1 into ~3e-4 rad, so the same importance computed at two call sites
+        # (select and pmf) could disagree by 1e-4 relative.
+        theta_w = ti.atan2(axis.cross(to_p).norm(), axis.dot(to_p))
         theta_p = ti.max(theta_w - theta_o - theta_b, 0.0)
         if theta_p < theta_e + ANGLE_SLACK:
             cos_p = ti.max(ti.cos(theta_p), COS_FLOOR)
             cos_i = 1.0
             n2 = n.norm_sqr()
             if n2 > 0.0:
-                cos_n = ti.min(ti.abs(n.dot(to_p)) / ti.sqrt(n2), 1.0)
-                theta_i = ti.acos(cos_n)
+                theta_i = ti.atan2(n.cross(to_p).norm(), ti.abs(n.dot(to_p)))
                 cos_i = ti.max(ti.cos(ti.max(theta_i - theta_b, 0.0)), COS_FLOOR)
             result = power * cos_p * cos_i / ti.max(d2, D2_CLAMP * half_diag2, D2_FLOOR)
     return result

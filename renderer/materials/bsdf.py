@@ -1,7 +1,7 @@
 """The BSDF of every material kind, over the device material table.
 
 Kinds: null (an invisible boundary, e.g. of a medium), diffuse (Lambert), conductor (GGX; Fresnel from the colour at normal incidence and an edge
-tint), dielectric (smooth or rough glass) and principled (glTF metallic-roughness: a metal lobe, a
+tint, or exact from a complex index of refraction eta + i k), dielectric (smooth or rough glass) and principled (glTF metallic-roughness: a metal lobe, a
 transmissive dielectric lobe and a dielectric coat over a diffuse base, weighted by metallic and
 transmission, with base-colour, metallic-roughness, normal, emissive and transmission textures).
 
@@ -17,7 +17,10 @@ the whole BSDF over the mixture pdf (one-sample MIS over lobes), so `sample` and
 
 With `features.energy_compensation`, rough GGX reflection of conductors and of the principled
 metal lobe adds Kulla and Conty's multiple-scattering lobe (renderer/materials/energy.py), so
-rough metals no longer darken with roughness; the dielectric lobes stay single-scattering.
+rough metals no longer darken with roughness; rough dielectric interfaces (glass, the principled
+glass lobe) add the lobe of renderer/materials/dielectric_energy.py, so a white rough glass solid
+keeps all its light; and the principled model's diffuse base is layered under its coat so that
+the coat's reflection and the base's share add up to one for a white base.
 """
 import taichi as ti
 
@@ -27,7 +30,7 @@ from renderer.materials import microfacet as mf
 from renderer.materials.lobes import BsdfSample
 from renderer.materials.table import (CONDUCTOR, DIELECTRIC, DIFFUSE, NO_TEXTURE, NULL, PRINCIPLED, Material,
                                       alpha_of)
-from renderer.sampling.warps import cosine_hemisphere, orthonormal_basis, to_local, to_world
+from renderer.sampling.warps import INV_PI, cosine_hemisphere, orthonormal_basis, to_local, to_world
 
 vec3 = ti.math.vec3
 
@@ -47,13 +50,17 @@ class Bsdf:
         # Energy compensation is a compile-time switch; the albedo table exists only with it.
         self.compensate = features.energy_compensation
         self.energy = materials.ggx_albedo if self.compensate else None
+        # Rough glass and the principled model's dielectric parts (glass lobe, coat layering).
+        self.compensate_glass = self.compensate and (features.has_dielectric or features.has_principled)
+        self.glass_energy = materials.dielectric_albedo if self.compensate_glass else None
 
     @ti.func
     def shade(self, surface, wo):
         """The material at a surface point (textures applied) and the shading normal to use."""
         rec = self.materials.table[surface.material]
         mat = Material(kind=rec.kind, base_color=rec.base_color, alpha=alpha_of(rec.roughness), metallic=rec.metallic,
-                       transmission=rec.transmission, ior=rec.ior, emission=rec.emission, edge_tint=rec.edge_tint)
+                       transmission=rec.transmission, ior=rec.ior, emission=rec.emission, edge_tint=rec.edge_tint,
+                       complex_ior=rec.complex_ior, eta=rec.eta, k=rec.k, fresnel_avg=rec.fresnel_avg)
         n = surface.n_shading
         if ti.static(self.features.has_textures):
             tex = self.materials.textures
@@ -97,12 +104,12 @@ class Bsdf:
             if ti.static(self.features.has_conductor):
                 if mat.kind == CONDUCTOR:
                     if ti.static(not self.compensate):
-                        s = lobes.conductor_sample(mat.base_color, mat.edge_tint, mat.alpha, wo, u2)
+                        s = lobes.conductor_sample(mat, wo, u2)
                     else:
                         s = _compensated_conductor_sample(self.energy, mat, wo, u1, u2)
             if ti.static(self.features.has_dielectric):
                 if mat.kind == DIELECTRIC:
-                    s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
+                    s = self._dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
             if ti.static(self.features.has_principled):
                 if mat.kind == PRINCIPLED:
                     s = _principled_sample(self, mat, entering, wo, u1, u2)
@@ -130,15 +137,39 @@ class Bsdf:
             if ti.static(self.features.has_conductor):
                 if mat.kind == CONDUCTOR:
                     if ti.static(not self.compensate):
-                        value, pdf = lobes.conductor_eval(mat.base_color, mat.edge_tint, mat.alpha, wo, wi)
+                        value, pdf = lobes.conductor_eval(mat, wo, wi)
                     else:
                         value, pdf = _compensated_conductor_eval(self.energy, mat, wo, wi)
             if ti.static(self.features.has_dielectric):
                 if mat.kind == DIELECTRIC:
-                    value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
+                    value, pdf = self._dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
             if ti.static(self.features.has_principled):
                 if mat.kind == PRINCIPLED:
                     value, pdf = _principled_eval(self, mat, entering, wo, wi)
+        return value, pdf
+
+    # --- the dielectric interface, with multiple scattering where compensation is on ----------------
+    @ti.func
+    def _dielectric_sample(self, tint, alpha, eta, wo, u1, u2):
+        s = lobes.invalid_sample()
+        if ti.static(self.compensate_glass):
+            if alpha > 0.0:
+                s = self.glass_energy.sample(tint, alpha, eta, wo, u1, u2)
+            else:
+                s = lobes.dielectric_sample(tint, alpha, eta, wo, u1, u2)
+        else:
+            s = lobes.dielectric_sample(tint, alpha, eta, wo, u1, u2)
+        return s
+
+    @ti.func
+    def _dielectric_eval(self, tint, alpha, eta, wo, wi):
+        value = vec3(0.0)
+        pdf = 0.0
+        if ti.static(self.compensate_glass):
+            if alpha > 0.0:
+                value, pdf = self.glass_energy.eval(tint, alpha, eta, wo, wi)
+        else:
+            value, pdf = lobes.dielectric_eval(tint, alpha, eta, wo, wi)
         return value, pdf
 
     @ti.func
@@ -224,8 +255,8 @@ def _compensated_reflection_direction(energy, alpha, wo, u_choice, u2):
 @ti.func
 def _compensated_conductor_eval(energy, mat, wo, wi):
     h = ti.math.normalize(wo + wi)
-    fresnel = lobes.conductor_fresnel(wo.dot(h), mat.base_color, mat.edge_tint)
-    return _compensated_reflection_eval(energy, fresnel, lobes.conductor_fresnel_average(mat.base_color, mat.edge_tint),
+    fresnel = lobes.conductor_reflectance(mat, wo.dot(h))
+    return _compensated_reflection_eval(energy, fresnel, lobes.conductor_reflectance_average(mat),
                                         mat.alpha, wo, wi)
 
 
@@ -233,7 +264,7 @@ def _compensated_conductor_eval(energy, mat, wo, wi):
 def _compensated_conductor_sample(energy, mat, wo, u1, u2):
     s = lobes.invalid_sample()
     if mat.alpha == 0.0:  # a smooth mirror scatters once: nothing to compensate
-        s = lobes.conductor_sample(mat.base_color, mat.edge_tint, mat.alpha, wo, u2)
+        s = lobes.conductor_sample(mat, wo, u2)
     else:
         wi = _compensated_reflection_direction(energy, mat.alpha, wo, u1, u2)
         if wi.z > 0.0:
@@ -277,13 +308,36 @@ def _principled_eval(bsdf, mat, entering, wo, wi):
         else:
             f_metal, pdf_metal = _compensated_reflection_eval(bsdf.energy, fresnel_metal,
                                                               lobes.schlick_average(mat.base_color), mat.alpha, wo, wi)
-        f_glass, pdf_glass = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
+        f_glass, pdf_glass = bsdf._dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
         f_spec, pdf_spec = lobes.coat_specular_eval(mat.ior, mat.alpha, wo, wi)
         value = mat.metallic * f_metal + (1.0 - mat.metallic) * mat.transmission * f_glass + opaque * f_spec
         pdf = p.x * pdf_metal + p.y * pdf_glass + p.z * pdf_spec
-    f_diff, pdf_diff = lobes.coat_diffuse_eval(mat.base_color, mat.ior, wo, wi)
+    f_diff, pdf_diff = _coat_diffuse_eval(bsdf, mat, wo, wi)
     value += opaque * f_diff
     pdf += p.w * pdf_diff
+    return value, pdf
+
+
+@ti.func
+def _coat_diffuse_eval(bsdf, mat, wo, wi):
+    """The diffuse base under the dielectric coat. With compensation, an energy-conserving layering:
+    what the rough coat does not reflect (R_o from the dielectric table, the albedo of the coat's
+    own specular lobe) reaches the base on the way in and out,
+        base / pi (1 - R_o(mu_o)) (1 - R_o(mu_i)) / (1 - Ravg_o),
+    which is reciprocal and integrates to base (1 - R_o(mu_o)): a white base under a clear coat
+    returns everything the coat lets through. Without it, the smooth-Fresnel form of
+    lobes.coat_diffuse_eval (which loses the light the coat reflects back down)."""
+    value = vec3(0.0)
+    pdf = 0.0
+    if ti.static(bsdf.compensate_glass):
+        if wi.z > 0.0:
+            roughness = ti.sqrt(mat.alpha)
+            r_o, r_avg = bsdf.glass_energy.reflectance(wo.z, roughness, mat.ior)
+            r_i, _ = bsdf.glass_energy.reflectance(wi.z, roughness, mat.ior)
+            value = mat.base_color * ((1.0 - r_o) * (1.0 - r_i) / ti.max(1.0 - r_avg, 1e-6) * wi.z * INV_PI)
+            pdf = wi.z * INV_PI
+    else:
+        value, pdf = lobes.coat_diffuse_eval(mat.base_color, mat.ior, wo, wi)
     return value, pdf
 
 
@@ -306,14 +360,23 @@ def _principled_sample(bsdf, mat, entering, wo, u1, u2):
             if s.wi.z > 0.0:  # a reflection below the surface is a failed sample, as in conductor_sample
                 mixture = 1
     elif u1 < p.x + p.y:
-        g = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, (u1 - p.x) / p.y, u2)
+        u_glass = (u1 - p.x) / p.y
         if mat.alpha == 0.0:
-            s = g
+            s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u_glass, u2)
             s.weight *= (1.0 - mat.metallic) * mat.transmission / p.y
             s.pdf *= p.y
-        elif g.valid == 1:
-            s.wi = g.wi
-            mixture = 1
+        else:
+            wi = vec3(0.0, 0.0, 1.0)
+            valid = 0
+            if ti.static(bsdf.compensate_glass):
+                wi, valid = bsdf.glass_energy.direction(mat.base_color, mat.alpha, _eta(mat, entering), wo,
+                                                        u_glass, u2)
+            else:
+                g = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u_glass, u2)
+                wi = g.wi
+                valid = g.valid
+            s.wi = wi
+            mixture = valid
     elif u1 < p.x + p.y + p.z:
         if mat.alpha == 0.0:
             f_view, _ = mf.fresnel_dielectric(wo.z, mat.ior)

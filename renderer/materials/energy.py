@@ -40,22 +40,23 @@ def load_table() -> dict:
         raise RuntimeError(f"{TABLE_FILE}: cannot read the GGX albedo table ({error}); "
                            "run scripts/make_ggx_albedo_table.py") from None
     albedo = data["albedo"].astype(np.float64)
-    return {"albedo": albedo, "average": _cosine_average(albedo)}
+    return {"albedo": albedo, "average": cosine_average(albedo)}
 
 
-def _cosine_average(albedo: np.ndarray) -> np.ndarray:
-    """E_avg = 2 int_0^1 E(mu) mu dmu = 4 int_0^1 E(x^2) x^3 dx for E linear in x = sqrt(mu)
-    between nodes, as the lookup interpolates it: Gauss-Legendre with 3 points per segment is
-    exact for that degree-4 integrand, so E_avg agrees with the lookup to rounding."""
-    size = albedo.shape[1]
+def cosine_average(albedo: np.ndarray) -> np.ndarray:
+    """E_avg = 2 int_0^1 E(mu) mu dmu = 4 int_0^1 E(x^2) x^3 dx over the last axis (nodes uniform in
+    x = sqrt(mu)), for E linear in x between nodes, as the lookups interpolate it: Gauss-Legendre
+    with 3 points per segment is exact for that degree-4 integrand, so E_avg agrees with the lookup
+    to rounding."""
+    size = albedo.shape[-1]
     nodes, weights = np.polynomial.legendre.leggauss(3)
     h = 1.0 / (size - 1)
-    total = np.zeros(albedo.shape[0])
+    total = np.zeros(albedo.shape[:-1])
     for j in range(size - 1):
         x = j * h + 0.5 * h * (nodes + 1.0)
         t = (x - j * h) / h
-        e = albedo[:, j, None] * (1.0 - t) + albedo[:, j + 1, None] * t
-        total += 0.5 * h * np.sum(weights * e * 4.0 * x ** 3, axis=1)
+        e = albedo[..., j, None] * (1.0 - t) + albedo[..., j + 1, None] * t
+        total += 0.5 * h * np.sum(weights * e * 4.0 * x ** 3, axis=-1)
     return total
 
 

@@ -75,6 +75,30 @@ def conductor_fresnel_average(reflectivity, edge_tint):
     return ti.math.clamp(schlick_average(reflectivity) - a / 126.0, 0.0, 1.0)
 
 
+@ti.func
+def conductor_reflectance(mat, cos_i):
+    """The Fresnel of a conductor material at cos_i, by the row's switch: exact from its complex
+    index eta + i k (`complex_ior`), or from base_color and edge_tint (conductor_fresnel)."""
+    f = vec3(0.0)
+    if mat.complex_ior == 1:
+        f = mf.fresnel_conductor(cos_i, mat.eta, mat.k)
+    else:
+        f = conductor_fresnel(cos_i, mat.base_color, mat.edge_tint)
+    return f
+
+
+@ti.func
+def conductor_reflectance_average(mat):
+    """Cosine-weighted mean of conductor_reflectance: stored in the row for a complex index
+    (quadrature on the host), in closed form for base_color and edge_tint."""
+    f = vec3(0.0)
+    if mat.complex_ior == 1:
+        f = mat.fresnel_avg
+    else:
+        f = conductor_fresnel_average(mat.base_color, mat.edge_tint)
+    return f
+
+
 # --- GGX reflection (conductor, metal, dielectric coat) ------------------------------------------------
 @ti.func
 def ggx_reflection_eval(fresnel, alpha, wo, wi):
@@ -96,24 +120,26 @@ def ggx_reflection_direction(alpha, wo, u2):
 
 
 @ti.func
-def conductor_eval(reflectivity, edge_tint, alpha, wo, wi):
+def conductor_eval(mat, wo, wi):
+    """mat: a conductor Material (its alpha and Fresnel description)."""
     h = ti.math.normalize(wo + wi)
-    return ggx_reflection_eval(conductor_fresnel(wo.dot(h), reflectivity, edge_tint), alpha, wo, wi)
+    return ggx_reflection_eval(conductor_reflectance(mat, wo.dot(h)), mat.alpha, wo, wi)
 
 
 @ti.func
-def conductor_sample(reflectivity, edge_tint, alpha, wo, u2):
+def conductor_sample(mat, wo, u2):
     s = invalid_sample()
+    alpha = mat.alpha
     if alpha == 0.0:
-        s = BsdfSample(wi=vec3(-wo.x, -wo.y, wo.z), weight=conductor_fresnel(wo.z, reflectivity, edge_tint),
-                       pdf=1.0, delta=1, valid=1)
+        s = BsdfSample(wi=vec3(-wo.x, -wo.y, wo.z), weight=conductor_reflectance(mat, wo.z), pdf=1.0, delta=1,
+                       valid=1)
     else:
         h = mf.sample_visible_normal(wo, alpha, u2)
         wi = mf.reflect(wo, h)
         if wi.z > 0.0:
             cos_oh = wo.dot(h)
             # f cos / pdf with pdf = G1 D (wo.h) / (4 wo.z wo.h): D and the Jacobian cancel.
-            s = BsdfSample(wi=wi, weight=conductor_fresnel(cos_oh, reflectivity, edge_tint)
+            s = BsdfSample(wi=wi, weight=conductor_reflectance(mat, cos_oh)
                            * (mf.smith_g2(wo, wi, alpha) / mf.smith_g1(wo, alpha)),
                            pdf=mf.visible_normal_pdf(wo, h, alpha) / (4.0 * cos_oh), delta=0, valid=1)
     return s

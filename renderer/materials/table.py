@@ -6,6 +6,7 @@ Rows come from scene-file materials (`MaterialSpec`) and from model files (glTF 
 import numpy as np
 import taichi as ti
 
+from renderer.materials.conductor_ior import conductor_ior_row
 from renderer.materials.dispersion import dispersion_row
 from renderer.materials.texture_sampler import TextureTable
 from renderer.upload import upload_fields
@@ -29,14 +30,18 @@ MIN_ALPHA = 1e-4
 # textures = (base colour, metallic-roughness, normal, emissive), transmission_texture separately.
 # edge_tint: a conductor's grazing-angle tint (Hoffman's F82 model); unused by other kinds.
 # medium: index of the participating medium inside the material's surfaces, or NO_MEDIUM.
+# complex_ior = 1: a conductor whose Fresnel is exact from eta + i k, with its cosine-weighted
+# average fresnel_avg precomputed (renderer/materials/conductor_ior.py); 0: base_color/edge_tint.
 MaterialRecord = ti.types.struct(kind=ti.i32, base_color=vec3, roughness=ti.f32, metallic=ti.f32,
                                  transmission=ti.f32, ior=ti.f32, emission=vec3, edge_tint=vec3,
                                  normal_scale=ti.f32, textures=ti.math.ivec4, transmission_texture=ti.i32,
                                  medium=ti.i32, dispersion=ti.i32, dispersion_b=ti.math.vec4,
-                                 dispersion_c=ti.math.vec4)
+                                 dispersion_c=ti.math.vec4, complex_ior=ti.i32, eta=vec3, k=vec3,
+                                 fresnel_avg=vec3)
 # As shaded: a record with its textures applied at one surface point.
 Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=ti.f32, transmission=ti.f32,
-                           ior=ti.f32, emission=vec3, edge_tint=vec3)
+                           ior=ti.f32, emission=vec3, edge_tint=vec3, complex_ior=ti.i32, eta=vec3, k=vec3,
+                           fresnel_avg=vec3)
 
 
 def alpha_from_roughness(roughness):
@@ -61,7 +66,7 @@ class MaterialRows:
                               metallic=spec.metallic, transmission=spec.transmission, ior=spec.ior,
                               emission=spec.emission, edge_tint=spec.edge_tint, normal_scale=1.0,
                               textures=(NO_TEXTURE,) * 4, transmission_texture=NO_TEXTURE, medium=medium,
-                              **dispersion_row(spec)))
+                              **dispersion_row(spec), **conductor_ior_row(spec)))
         return len(self.rows) - 1
 
     def add_pbr(self, pbr, texture_id) -> int:
@@ -77,7 +82,8 @@ class MaterialRows:
                               textures=(tex(pbr.base_color_texture), tex(pbr.metallic_roughness_texture),
                                         tex(pbr.normal_texture), tex(pbr.emissive_texture)),
                               transmission_texture=tex(pbr.transmission_texture), medium=NO_MEDIUM,
-                              dispersion=0, dispersion_b=(0.0,) * 4, dispersion_c=(0.0,) * 4))
+                              dispersion=0, dispersion_b=(0.0,) * 4, dispersion_c=(0.0,) * 4,
+                              **conductor_ior_row()))
         return len(self.rows) - 1
 
     def arrays(self) -> dict:
@@ -94,7 +100,9 @@ class MaterialRows:
                 "textures": col("textures", np.int32, 4),
                 "transmission_texture": col("transmission_texture", np.int32),
                 "medium": col("medium", np.int32), "dispersion": col("dispersion", np.int32),
-                "dispersion_b": col("dispersion_b", np.float32, 4), "dispersion_c": col("dispersion_c", np.float32, 4)}
+                "dispersion_b": col("dispersion_b", np.float32, 4), "dispersion_c": col("dispersion_c", np.float32, 4),
+                "complex_ior": col("complex_ior", np.int32), "eta": col("eta", np.float32, 3),
+                "k": col("k", np.float32, 3), "fresnel_avg": col("fresnel_avg", np.float32, 3)}
 
     def uses(self) -> dict:
         """Which kinds and texture slots occur (for Features)."""
@@ -103,7 +111,8 @@ class MaterialRows:
         return {"kinds": kinds, "textures": any(slots) or any(r["transmission_texture"] != NO_TEXTURE for r in self.rows),
                 "normal_maps": slots[2], "emission": any(max(r["emission"]) > 0 for r in self.rows),
                 "media": any(r["medium"] != NO_MEDIUM for r in self.rows),
-                "dispersion": any(r["dispersion"] != 0 for r in self.rows)}
+                "dispersion": any(r["dispersion"] != 0 for r in self.rows),
+                "rough": any(r["kind"] in (CONDUCTOR, DIELECTRIC) and r["roughness"] > 0.0 for r in self.rows)}
 
 
 @ti.data_oriented
@@ -119,6 +128,7 @@ class MaterialTable:
             upload_fields([(self.table, arrays)])
         self.textures = textures or TextureTable(None, [])
         self._ggx_albedo = None
+        self._dielectric_albedo = None
 
     @property
     def ggx_albedo(self):
@@ -129,6 +139,16 @@ class MaterialTable:
 
             self._ggx_albedo = GgxAlbedo()
         return self._ggx_albedo
+
+    @property
+    def dielectric_albedo(self):
+        """The rough-dielectric energy tables (glass compensation, coat layering), uploaded on first
+        use like ggx_albedo."""
+        if self._dielectric_albedo is None:
+            from renderer.materials.dielectric_energy import DielectricAlbedo
+
+            self._dielectric_albedo = DielectricAlbedo()
+        return self._dielectric_albedo
 
     @classmethod
     def from_specs(cls, specs, medium_names: tuple[str, ...] = ()):

@@ -22,7 +22,8 @@ class Features:
     has_emission: bool = False
     has_textures: bool = False
     has_normal_maps: bool = False
-    # Kulla-Conty multiple scattering on rough GGX reflection (conductors, principled metal)
+    # Kulla-Conty multiple scattering: rough GGX reflection (conductors, principled metal), rough
+    # dielectric interfaces (glass, principled glass) and the principled coat's layering
     energy_compensation: bool = False
     has_null: bool = False  # invisible boundaries (material kind `null`)
     has_media: bool = False  # participating media: free-flight sampling, phase functions, transmittance
@@ -69,8 +70,10 @@ class Features:
 def features_from(geometry: str, material_uses: dict, environment: str, aperture: float,
                   sdf_nodes=(), mesh_kinds=frozenset(), energy_compensation: bool = True,
                   fog: str = "none") -> Features:
-    """material_uses: {"kinds": set of kind names, "textures", "normal_maps", "emission", "media": bool}.
-    energy_compensation: the scene's wish; compiled in only where GGX metals occur.
+    """material_uses: {"kinds": set of kind names, "textures", "normal_maps", "emission", "media": bool,
+    "rough": whether a conductor or dielectric has roughness > 0}.
+    energy_compensation: the scene's wish; compiled in only where a rough conductor or dielectric
+    occurs, or a principled material (whose coat layering it also provides).
     fog: the scene's fog model ("none", "medium" or "analytic")."""
     kinds = material_uses["kinds"]
     unknown = set(kinds) - set(MATERIAL_KINDS)
@@ -85,7 +88,7 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         has_emission=material_uses["emission"],
         has_textures=material_uses["textures"],
         has_normal_maps=material_uses["normal_maps"],
-        energy_compensation=energy_compensation and bool({"conductor", "principled"} & set(kinds)),
+        energy_compensation=energy_compensation and ("principled" in kinds or material_uses.get("rough", True)),
         has_null="null" in kinds,
         has_media=fog == "medium" or bool(material_uses.get("media", False)),
         analytic_fog=fog == "analytic",
@@ -106,7 +109,8 @@ def scene_features(scene: Scene, aperture: float | None = None) -> Features:
     nodes = [node for top in scene.sdf_objects for node in top.walk()]
     uses = {"kinds": {m.kind for m in used}, "textures": False, "normal_maps": False,
             "emission": any(m.is_emissive for m in used), "media": any(m.medium for m in used),
-            "dispersion": any(m.is_dispersive for m in used)}
+            "dispersion": any(m.is_dispersive for m in used),
+            "rough": any(m.kind in ("conductor", "dielectric") and m.roughness > 0.0 for m in used)}
     lens = scene.camera.aperture if aperture is None else aperture
     return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes,
                          energy_compensation=scene.render.energy_compensation, fog=scene.fog.model)

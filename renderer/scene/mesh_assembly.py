@@ -3,6 +3,8 @@ material rows and the texture atlas the device needs. Numpy only; the Renderer u
 """
 from __future__ import annotations
 
+import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,7 +13,9 @@ from renderer.geometry.bezier import bezier_fields
 from renderer.geometry.mesh_data import MeshData
 from renderer.materials.table import KIND_IDS, MaterialRows
 from renderer.scene.errors import SceneError
+from renderer.scene.mesh_loader import MeshWarning
 from renderer.scene.model import Scene
+from renderer.scene.orientation import rewind_to_normals
 from renderer.scene.textures import WRAP_CODES, TextureAtlas, pack_atlas
 
 KIND_NAMES = {v: k for k, v in KIND_IDS.items()}
@@ -97,9 +101,15 @@ class _Builder:
 
             mats = [self.rows.add_pbr(m, texture_id) for m in asset.materials]
         matrix = obj.matrix()
+        turned = 0
         for mesh in asset.meshes + flattened_instances(asset):
-            self.add_triangles(mesh.positions, mesh.indices, mesh.normals, mesh.uv0, mesh.uv1, mesh.tangents,
+            indices, count = rewind_to_normals(mesh.positions, mesh.indices, mesh.normals)
+            turned += count
+            self.add_triangles(mesh.positions, indices, mesh.normals, mesh.uv0, mesh.uv1, mesh.tangents,
                                matrix, mats[mesh.material])
+        if turned:
+            warnings.warn(f"{os.fspath(obj.file)}: {turned} triangles wound against their vertex normals were "
+                          "turned to face the way the normals do", MeshWarning, stacklevel=2)
 
     def add_object(self, obj, index):
         where = f"objects[{index}]"

@@ -67,7 +67,7 @@ class EnvironmentSpec:
     kind: str = "sky"  # "map" | "sky" | "constant"
     file: Optional[Path] = None  # resolved absolute path, for kind == "map"
     intensity: float = 1.0
-    rotation: float = 0.0  # degrees about +y
+    rotation: float = 0.0  # degrees about +y, right-handed (Mitsuba's to_world rotate([0, 1, 0], angle))
     color: Vec3 = (1.0, 1.0, 1.0)  # kind == "constant"
     zenith: Vec3 = (0.25, 0.45, 0.9)  # kind == "sky"
     horizon: Vec3 = (0.9, 0.9, 1.0)
@@ -88,10 +88,18 @@ class MaterialSpec:
     medium: str = ""  # the participating medium inside surfaces of this material ("" = none)
     abbe: float = 0.0  # dielectric dispersion: Abbe number of a Cauchy curve through ior (0 = none)
     glass: str = ""  # dielectric dispersion: a real glass's Sellmeier curve (overrides ior and abbe)
+    eta: Optional[Vec3] = None  # conductor only: real part of the complex index (RGB), with k
+    k: Optional[Vec3] = None  # conductor only: imaginary part (extinction), with eta
+    metal: str = ""  # conductor only: a named measured metal (its eta and k), e.g. "Au"
 
     @property
     def is_dispersive(self) -> bool:
         return self.kind == "dielectric" and (self.abbe > 0.0 or bool(self.glass))
+
+    @property
+    def has_complex_ior(self) -> bool:
+        """A conductor whose Fresnel comes from eta + i k (written, or a named metal's)."""
+        return self.kind == "conductor" and (bool(self.metal) or self.eta is not None)
 
     @property
     def is_emissive(self) -> bool:

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Optional
 
+from renderer.materials.metals import metal_names
+
 from .model import (
     ENVIRONMENT_KINDS,
     GEOMETRY_KINDS,
@@ -33,6 +35,9 @@ class _Required:
 
 
 REQUIRED = _Required()
+
+# Key of the set of written field names in the values a section's Rule checks (see Rule).
+WRITTEN = "<written>"
 
 # Value kinds a field can have. The loader converts raw TOML values according to these.
 VALUE_KINDS = {
@@ -133,7 +138,9 @@ class Field:
 @dataclass(frozen=True)
 class Rule:
     """A constraint between fields. `check` gets the converted values (defaults filled in)
-    and returns a problem description, or None when the values are fine."""
+    and returns a problem description, or None when the values are fine. In a section's rules the
+    values also hold, under WRITTEN, the names of the fields the file wrote (a default and the
+    same value written out are not the same thing when fields exclude each other)."""
 
     text: str
     check: Callable[[dict], Optional[str]]
@@ -239,6 +246,21 @@ def _check_profile(v: dict) -> Optional[str]:
     return profile_problem(v["profile"], v["degree"])
 
 
+def _check_conductor_fresnel(v: dict) -> Optional[str]:
+    if v["type"] != "conductor":
+        return None
+    if (v["eta"] is None) != (v["k"] is None):
+        given, missing = ("eta", "k") if v["k"] is None else ("k", "eta")
+        return f"`{given}` needs `{missing}` (the complex index eta + i k)"
+    descriptions = (("`metal`", ("metal",)), ("`eta`/`k`", ("eta", "k")),
+                    ("`base_color`/`edge_tint`", ("base_color", "edge_tint")))
+    given = [name for name, fields in descriptions if v[WRITTEN] & set(fields)]
+    if len(given) > 1:
+        return (f"{', '.join(given[:-1])} and {given[-1]} cannot be combined: each describes the "
+                "conductor's Fresnel (keep `metal`, or `eta` with `k`, or `base_color` with `edge_tint`)")
+    return None
+
+
 def _check_torus(v: dict) -> Optional[str]:
     if v["minor_radius"] >= v["major_radius"]:
         minor, major = format_number(v["minor_radius"]), format_number(v["major_radius"])
@@ -296,10 +318,13 @@ RENDER = Section(
         Field("sampler", "string", "independent", "Where random numbers come from: `independent` "
               "(hashed uniform numbers) or `sobol` (Owen-scrambled Sobol points, lower error at equal spp).",
               choices=("independent", "sobol")),
-        Field("energy_compensation", "bool", True, "Give rough metals back the light that single-"
-              "scattering microfacet models lose between microfacets (Kulla and Conty 2017): without "
-              "it a white metal of roughness 1 reflects 31% head-on. Only scenes with `conductor` or "
-              "`principled` materials compile it."),
+        Field("energy_compensation", "bool", True, "Give rough metals and rough glass back the light "
+              "that single-scattering microfacet models lose between microfacets (Kulla and Conty 2017): "
+              "without it a white metal of roughness 1 reflects 31% head-on, and a white glass ball of "
+              "roughness 0.5 in a white furnace looks 18% too dark. It also layers the `principled` "
+              "diffuse base under its coat so that nothing is lost between them. Mitsuba 3 and pbrt "
+              "have none of this: set it to false to compare rough materials with them. Only scenes "
+              "with `conductor`, `dielectric` or `principled` materials compile it."),
         Field("march", "table", None, "Sphere-tracing settings, see `[render.march]`.",
               in_model=False, default_doc="see below", allowed_doc="see below",
               geometries=("sdf",)),
@@ -343,7 +368,9 @@ ENVIRONMENT = Section(
               "relative path is relative to the scene file's folder.", only_for=_MAP,
               default_doc="required", allowed_doc="an existing `.exr` or `.hdr` file"),
         Field("intensity", "float", 1.0, "Multiplier on the emitted radiance.", NON_NEGATIVE),
-        Field("rotation", "float", 0.0, "Rotation about +y, degrees."),
+        Field("rotation", "float", 0.0, "Rotation of the map about +y, degrees, by the right-hand rule "
+              "(counter-clockwise seen from above): Mitsuba's `to_world` rotate([0, 1, 0], rotation). "
+              "The map itself is oriented as Mitsuba's `envmap` (see conventions.md)."),
         Field("color", "vec3", (1.0, 1.0, 1.0), "Uniform radiance, linear RGB.", NON_NEGATIVE,
               only_for=_CONSTANT),
         Field("zenith", "vec3", (0.25, 0.45, 0.9), "Sky radiance straight up, linear RGB.",
@@ -376,6 +403,18 @@ MATERIAL = Section(
               "Fresnel curve from `base_color` (reflectance at normal incidence) is scaled to "
               "`edge_tint` times Schlick's value at 82 degrees (Hoffman's F82 model). 1 is plain "
               "Schlick.", UNIT, only_for=("conductor",)),
+        Field("eta", "vec3", None, "A conductor's complex index of refraction eta + i k, real part, "
+              "per RGB channel (as Mitsuba's `conductor` `eta`): the Fresnel is then the exact one of "
+              "that index instead of `base_color` and `edge_tint`. Needs `k`.", Range(0.0, 100.0),
+              only_for=("conductor",), default_doc="none"),
+        Field("k", "vec3", None, "The imaginary part (extinction coefficient) of that index, per RGB "
+              "channel. Needs `eta`.", Range(0.0, 100.0), only_for=("conductor",), default_doc="none"),
+        Field("metal", "string", "", "A measured metal by name: its RGB `eta` and `k` as Mitsuba 3's "
+              "RGB variants derive them from its spectra (every Mitsuba preset, such as `Au`, `Ag`, "
+              "`Al`, `Cu`, `Cr`, `W`, `Ni_palik`, plus `Fe`, `Ni`, `Ti` from Johnson and Christy 1974 "
+              "and `Pt` from Rakic et al. 1998; renderer/materials/data/metals.csv lists them with "
+              "their sources).", only_for=("conductor",), choices=metal_names(), default_doc="none",
+              allowed_doc="a name in renderer/materials/data/metals.csv"),
         Field("metallic", "float", 0.0, "0 is a dielectric base, 1 a metal (glTF "
               "`metallicFactor`).", UNIT, only_for=_PRINCIPLED),
         Field("roughness", "float", 0.5, "Perceptual roughness; 0 is a perfect mirror.", UNIT),
@@ -398,6 +437,9 @@ MATERIAL = Section(
               "through a `null` surface) travel in it. Media do not nest.",
               default_doc="none", allowed_doc="a defined medium"),
     ),
+    rules=(Rule("A conductor's Fresnel comes from one description: `base_color` with `edge_tint`, or "
+                "`eta` with `k`, or `metal`; fields of two of them together are an error, and `eta` and "
+                "`k` come together.", _check_conductor_fresnel),),
 )
 
 MEDIUM = Section(
@@ -722,6 +764,10 @@ file and the place in it, for example:
 assets/scenes/x.toml: unknown material 'golde' in objects[2] (known: gold, floor)
 assets/scenes/x.toml: materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, emission, emission_strength)
 ```
+
+Coming from another renderer? [conventions.md](conventions.md) lists what to match to
+reproduce a Mitsuba 3 or pbrt scene: perceptual roughness, the Smith masking term, two-sided
+materials, the pixel filter, the environment map's orientation, energy compensation, metals.
 
 This document is generated from `renderer/scene/schema.py`; edit that file, then run
 `python -c "from renderer.scene.schema import write_markdown; write_markdown()"`.

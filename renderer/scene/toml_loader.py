@@ -292,7 +292,7 @@ def _read_section(raw: object, section: Section, where: str) -> dict:
         if "type" in table:
             kind = _convert(type_field, table["type"], f"{where}.type")
     values = _read_fields(table, section.fields, where, kind)
-    _apply_rules(section.rules, values, where)
+    _apply_rules(section.rules, {**values, schema.WRITTEN: frozenset(table)}, where)
     return values
 
 

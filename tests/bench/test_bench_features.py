@@ -84,8 +84,10 @@ def test_run_on_a_tiny_scene(tmp_path, capsys):
         assert b["finite"] and b["rejected"] == 0
     assert builds["own"]["vs_own"]["median"] == 1.0
     assert builds["own"]["cache_bytes"] > 0
-    # energy compensation has no GGX lobe to act on here: it compiles to the own build's code
-    assert builds["+energy_compensation"]["cache_bytes"] == 0
+    # Energy compensation forced on a scene whose only microfacet material is smooth glass: its
+    # code is compiled in (a new kernel in the cache) but never taken, so the image is the own
+    # build's, bit for bit
+    assert builds["+energy_compensation"]["cache_bytes"] > 0
     assert builds["+energy_compensation"]["identical_to_own"]
     assert builds["everything"]["cache_bytes"] > builds["own"]["cache_bytes"]
     (case,) = res["cases"]

@@ -146,6 +146,10 @@ def _cases():
         seed += 1
         cases.append(Case(f"principled-leaving-r{r}-m{m}-t{t}-cos0.5", principled(r, m, t), 0.5, leaving=True,
                           seed=seed))
+    # A conductor with an exact Fresnel from a complex index (a named metal): same lobe, other Fresnel.
+    seed += 1
+    cases.append(Case("conductor-metal-Au-r0.3-cos0.5", MaterialSpec(name="gold", kind="conductor", metal="Au",
+                                                                     roughness=0.3), 0.5, seed=seed))
     return cases
 
 

@@ -47,6 +47,7 @@ UNBIASED = [  # (name, spec, cos, leaving): E[weight] = integral of eval over th
                                             metallic=0.5, transmission=0.6), 0.5, False),
     ("principled-coat-glass", MaterialSpec(name="p", kind="principled", base_color=BASE, roughness=0.3,
                                            transmission=0.5), 0.05, False),
+    ("conductor-Cu-r0.4", MaterialSpec(name="c", kind="conductor", metal="Cu", roughness=0.4), 0.3, False),
 ]
 NUM_TESTS = len(FURNACE_ROUGHNESS) * len(FURNACE_COS) + 1 + len(SMOOTH_GLASS) + len(UNBIASED)
 N = 1_000_000
@@ -91,7 +92,9 @@ def random_frames(rng, n):
 CONSISTENCY = {
     "diffuse": [MaterialSpec(name="d", kind="diffuse", base_color=BASE)],
     "conductor": [MaterialSpec(name="c", kind="conductor", base_color=(0.95, 0.64, 0.54), roughness=r,
-                               edge_tint=(0.6, 0.8, 1.0)) for r in (0.1, 0.3, 0.6, 1.0)],
+                               edge_tint=(0.6, 0.8, 1.0)) for r in (0.1, 0.3, 0.6, 1.0)]
+                 + [MaterialSpec(name="c", kind="conductor", metal=m, roughness=r) for m, r in (("Au", 0.1), ("Al", 0.6))]
+                 + [MaterialSpec(name="c", kind="conductor", eta=(1.5, 0.2, 3.0), k=(0.0, 4.0, 60.0), roughness=0.3)],
     "dielectric": [MaterialSpec(name="g", kind="dielectric", base_color=TINT, roughness=r, ior=ior)
                    for r in (0.1, 0.3, 1.0) for ior in (1.5, 1.33)],
     "principled": [MaterialSpec(name="p", kind="principled", base_color=BASE, roughness=r, metallic=m, transmission=t)
@@ -155,6 +158,7 @@ RECIPROCAL = [
     MaterialSpec(name="d", kind="diffuse", base_color=BASE),
     MaterialSpec(name="c", kind="conductor", base_color=(0.95, 0.64, 0.54), roughness=0.3, edge_tint=(0.5, 0.7, 0.9)),
     MaterialSpec(name="c", kind="conductor", base_color=(0.95, 0.64, 0.54), roughness=1.0),
+    MaterialSpec(name="c", kind="conductor", metal="Cu", roughness=0.5),
     MaterialSpec(name="g", kind="dielectric", roughness=0.5),
     MaterialSpec(name="p", kind="principled", base_color=BASE, roughness=0.2),  # coat specular + coated diffuse
     MaterialSpec(name="p", kind="principled", base_color=BASE, roughness=0.7, metallic=0.3, transmission=0.4),
@@ -313,6 +317,8 @@ ROBUST = ([MaterialSpec(name="d", kind="diffuse", base_color=(1.0, 1.0, 1.0))]
           + [MaterialSpec(name="c", kind="conductor", base_color=(1.0, 0.7, 0.2), roughness=r,
                           edge_tint=(0.4, 0.6, 1.0))
              for r in (0.0, 0.01, 0.5, 1.0)]
+          + [MaterialSpec(name="c", kind="conductor", eta=eta, k=k, roughness=r)  # k = 0, eta = k = 0, large k
+             for r in (0.0, 0.5, 1.0) for eta, k in (((0.5, 0.0, 2.0), (0.0, 0.0, 99.0)),)]
           + [MaterialSpec(name="g", kind="dielectric", base_color=TINT, roughness=r, ior=ior)
              for r in (0.0, 0.01, 0.5, 1.0) for ior in (1.5, 1.01, 2.4)]
           + [MaterialSpec(name="p", kind="principled", base_color=BASE, roughness=r, metallic=m, transmission=t)

@@ -28,8 +28,9 @@ ALPHA = 0.01
 N = 1_000_000
 FURNACE_ROUGHNESS = (0.1, 0.3, 0.6, 1.0)
 FURNACE_COS = (1.0, 0.5, 0.1, 0.02)
-CHI2_CASES = [(kind, r, cos) for kind in ("conductor", "metal") for r in (0.2, 0.6, 1.0) for cos in (0.9, 0.3)]
-UNBIASED_CASES = [("conductor", 0.5, 0.7), ("metal", 0.8, 0.4)]
+CHI2_CASES = ([(kind, r, cos) for kind in ("conductor", "metal") for r in (0.2, 0.6, 1.0) for cos in (0.9, 0.3)]
+              + [("complex", 0.6, 0.3)])
+UNBIASED_CASES = [("conductor", 0.5, 0.7), ("metal", 0.8, 0.4), ("complex", 0.5, 0.7)]
 NUM_TESTS = len(FURNACE_ROUGHNESS) * len(FURNACE_COS) + len(CHI2_CASES) + len(UNBIASED_CASES)
 
 # The table's own accuracy at its nodes (a 1024^2 midpoint rule over the sampler's uniforms; the
@@ -45,7 +46,7 @@ def table():
 
 @pytest.fixture(scope="module")
 def bench():
-    return BsdfBench(capacity=16, features=dataclasses.replace(ALL_KINDS, energy_compensation=True))
+    return BsdfBench(capacity=32, features=dataclasses.replace(ALL_KINDS, energy_compensation=True))
 
 
 def white_conductor(roughness):
@@ -53,6 +54,8 @@ def white_conductor(roughness):
 
 
 def spec_of(kind, roughness):
+    if kind == "complex":  # exact Fresnel from a named metal's complex index; F_avg from the row
+        return MaterialSpec(name="copper", kind="conductor", metal="Cu", roughness=roughness)
     if kind == "conductor":
         return MaterialSpec(name="gold", kind="conductor", base_color=(1.0, 0.78, 0.34), roughness=roughness,
                             edge_tint=(0.9, 0.8, 0.6))
@@ -177,11 +180,31 @@ def test_compensation_never_creates_energy_for_coloured_metals(bench):
             assert (e_comp < 0.95).all() and (e_comp > e_single * 1.02).all(), (roughness, cos, e_comp, e_single)
 
 
-def test_only_scenes_with_rough_metals_compile_compensation():
+def test_complex_index_mirror_compensates_like_the_white_conductor(bench):
+    """eta = 0, k = 1 reflects everything (F = 1 exactly, and its stored F_avg is 1), so with the same
+    uniforms it must return exactly what the white base_color conductor returns: the
+    multiple-scattering lobe gets the row's F_avg (a missing one would drop the lobe)."""
+    for roughness in (0.4, 1.0):
+        mirror = MaterialSpec(name="mirror", kind="conductor", eta=(0.0, 0.0, 0.0), k=(1.0, 1.0, 1.0),
+                              roughness=roughness)
+        u = uniforms(100_000, 995)
+        a = bench.sample(bench.material(mirror), [0.0, 0.0, 1.0], direction(0.4), u)
+        b = bench.sample(bench.material(white_conductor(roughness)), [0.0, 0.0, 1.0], direction(0.4), u)
+        np.testing.assert_array_equal(a.valid, b.valid)
+        np.testing.assert_allclose(a.weight[a.valid], b.weight[b.valid], rtol=1e-6)
+        assert a.weight[a.valid].mean() > 0.99  # compensated: not the single-scattering loss
+
+
+def test_only_scenes_with_rough_microfacet_materials_compile_compensation():
+    """Rough conductors and dielectrics need it; principled materials always (their coat layering);
+    smooth glass, mirrors and diffuse surfaces never."""
     from renderer.scene.features import features_from
 
-    uses = lambda *kinds: {"kinds": set(kinds), "textures": False, "normal_maps": False, "emission": False}
-    assert features_from("mesh", uses("conductor"), "sky", 0.0).energy_compensation
-    assert features_from("sdf", uses("diffuse", "principled"), "sky", 0.0).energy_compensation
-    assert not features_from("mesh", uses("diffuse", "dielectric"), "sky", 0.0).energy_compensation
-    assert not features_from("mesh", uses("conductor"), "sky", 0.0, energy_compensation=False).energy_compensation
+    uses = lambda *kinds, rough: {"kinds": set(kinds), "textures": False, "normal_maps": False, "emission": False,
+                                  "rough": rough}
+    assert features_from("mesh", uses("conductor", rough=True), "sky", 0.0).energy_compensation
+    assert features_from("mesh", uses("diffuse", "dielectric", rough=True), "sky", 0.0).energy_compensation
+    assert features_from("sdf", uses("diffuse", "principled", rough=False), "sky", 0.0).energy_compensation
+    assert not features_from("mesh", uses("diffuse", "dielectric", "conductor", rough=False), "sky", 0.0).energy_compensation
+    assert not features_from("mesh", uses("conductor", rough=True), "sky", 0.0,
+                             energy_compensation=False).energy_compensation
