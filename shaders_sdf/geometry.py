@@ -169,7 +169,8 @@ class SdfGeometry:
             n = ti.math.normalize(n + (MIN_FACING_COSINE - c) * along)
         return Surface(p=p, n_geo=n, n_shading=n, uv=ti.math.vec2(0.0), uv1=ti.math.vec2(0.0),
                        tangent=ti.math.vec4(0.0), material=ti.cast(dmn.y, ti.i32), prim=ti.cast(dmn.z, ti.i32),
-                       front_face=1 - hit.inside, eps=eps, cone_width=width, cone_spread=ray.cone_spread)
+                       front_face=1 - hit.inside, eps=eps, cone_width=width, cone_spread=ray.cone_spread,
+                       color=ti.math.vec4(1.0))
 
     @ti.func
     def spawn(self, surface, direction):

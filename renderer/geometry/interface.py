@@ -37,9 +37,11 @@ Hit = ti.types.struct(hit=ti.i32, t=ti.f32, work=ti.i32, tests=ti.i32, inside=ti
 # which a spawned ray must not find this surface again.
 # uv / uv1: texture coordinate sets 0 and 1; tangent: xyz along +u and handedness w (0 when none).
 # prim: what was hit (global primitive id on meshes, node id on SDF scenes): the key of emitters.
+# color: the vertex colour at the point, linear RGBA (glTF COLOR_0, PLY colours), read only by
+# kernels compiled with Features.has_vertex_colors; geometry without colours sets (1, 1, 1, 1).
 Surface = ti.types.struct(p=vec3, n_geo=vec3, n_shading=vec3, uv=ti.math.vec2, uv1=ti.math.vec2,
                           tangent=ti.math.vec4, material=ti.i32, prim=ti.i32, front_face=ti.i32, eps=ti.f32,
-                          cone_width=ti.f32, cone_spread=ti.f32)
+                          cone_width=ti.f32, cone_spread=ti.f32, color=ti.math.vec4)
 
 # A point chosen on an emitter for direct lighting: position, outward normal, texture coordinates,
 # and the solid-angle density of choosing it as seen from the reference point (0 if impossible).

@@ -290,7 +290,7 @@ class MeshGeometry:
         ns = consistent_shading_normal(ns, n, -ray.d)
         return Surface(p=p, n_geo=n, n_shading=ns, uv=uv, uv1=uv1, tangent=tangent, material=self.prim_material[g],
                        prim=g, front_face=front, eps=0.0, cone_width=ray.cone_width + ray.cone_spread * hit.t,
-                       cone_spread=ray.cone_spread)
+                       cone_spread=ray.cone_spread, color=ti.math.vec4(1.0))
 
     @ti.func
     def spawn(self, surface, direction):

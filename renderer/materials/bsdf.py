@@ -56,12 +56,18 @@ class Bsdf:
 
     @ti.func
     def shade(self, surface, wo):
-        """The material at a surface point (textures applied) and the shading normal to use."""
+        """The material at a surface point (textures and vertex colours applied) and the shading
+        normal to use."""
         rec = self.materials.table[surface.material]
+        n = surface.n_shading
         mat = Material(kind=rec.kind, base_color=rec.base_color, alpha=alpha_of(rec.roughness), metallic=rec.metallic,
                        transmission=rec.transmission, ior=rec.ior, emission=rec.emission, edge_tint=rec.edge_tint,
-                       complex_ior=rec.complex_ior, eta=rec.eta, k=rec.k, fresnel_avg=rec.fresnel_avg)
-        n = surface.n_shading
+                       complex_ior=rec.complex_ior, eta=rec.eta, k=rec.k, fresnel_avg=rec.fresnel_avg, thin=rec.thin,
+                       clearcoat=rec.clearcoat, clearcoat_alpha=alpha_of(rec.clearcoat_roughness),
+                       sheen_color=rec.sheen_color, sheen_roughness=rec.sheen_roughness, specular=rec.specular,
+                       specular_color=rec.specular_color, coat_normal=n)
+        if ti.static(self.features.has_vertex_colors):
+            mat.base_color *= surface.color.xyz
         if ti.static(self.features.has_textures):
             tex = self.materials.textures
             if rec.textures[0] != NO_TEXTURE:
@@ -74,14 +80,30 @@ class Bsdf:
                 mat.emission *= tex.sample(rec.textures[3], surface.uv, surface.uv1).xyz
             if rec.transmission_texture != NO_TEXTURE:
                 mat.transmission *= tex.sample(rec.transmission_texture, surface.uv, surface.uv1).x
+            if ti.static(self.features.has_clearcoat):
+                if rec.layer_textures[0] != NO_TEXTURE:
+                    mat.clearcoat *= tex.sample(rec.layer_textures[0], surface.uv, surface.uv1).x
+                if rec.layer_textures[1] != NO_TEXTURE:
+                    mat.clearcoat_alpha = alpha_of(rec.clearcoat_roughness
+                                                   * tex.sample(rec.layer_textures[1], surface.uv, surface.uv1).y)
+            if ti.static(self.features.has_sheen):
+                if rec.layer_textures[2] != NO_TEXTURE:
+                    mat.sheen_color *= tex.sample(rec.layer_textures[2], surface.uv, surface.uv1).xyz
+                if rec.layer_textures[3] != NO_TEXTURE:
+                    mat.sheen_roughness *= tex.sample(rec.layer_textures[3], surface.uv, surface.uv1).w
+            if ti.static(self.features.has_specular):
+                if rec.layer_textures2[0] != NO_TEXTURE:
+                    mat.specular *= tex.sample(rec.layer_textures2[0], surface.uv, surface.uv1).w
+                if rec.layer_textures2[1] != NO_TEXTURE:
+                    mat.specular_color *= tex.sample(rec.layer_textures2[1], surface.uv, surface.uv1).xyz
             if ti.static(self.features.has_normal_maps):
-                if rec.textures[2] != NO_TEXTURE and surface.tangent.xyz.dot(surface.tangent.xyz) > 0.0:
-                    texel = tex.sample(rec.textures[2], surface.uv, surface.uv1).xyz * 2.0 - 1.0
-                    t = surface.tangent.xyz
-                    b = surface.tangent.w * n.cross(t)
-                    mapped = t * (texel.x * rec.normal_scale) + b * (texel.y * rec.normal_scale) + n * texel.z
-                    if mapped.dot(mapped) > 1e-12:
-                        n = consistent_shading_normal(ti.math.normalize(mapped), surface.n_geo, wo)
+                if rec.textures[2] != NO_TEXTURE:
+                    n = _normal_mapped(tex, rec.textures[2], rec.normal_scale, surface, n, wo)
+                mat.coat_normal = n
+                if ti.static(self.features.has_clearcoat):
+                    if rec.layer_textures2[2] != NO_TEXTURE:
+                        mat.coat_normal = _normal_mapped(tex, rec.layer_textures2[2], rec.clearcoat_normal_scale,
+                                                         surface, surface.n_shading, wo)
         return mat, n
 
     @ti.func
@@ -207,6 +229,21 @@ class Bsdf:
     def albedo(self, mat):
         """A display albedo for the debug view (not an integral of the BSDF)."""
         return mat.base_color
+
+
+@ti.func
+def _normal_mapped(tex, slot, scale, surface, n, wo):
+    """The shading normal a tangent-space normal map gives at the surface (n where the surface
+    has no tangents or the map's normal degenerates)."""
+    result = n
+    if surface.tangent.xyz.dot(surface.tangent.xyz) > 0.0:
+        texel = tex.sample(slot, surface.uv, surface.uv1).xyz * 2.0 - 1.0
+        t = surface.tangent.xyz
+        b = surface.tangent.w * n.cross(t)
+        mapped = t * (texel.x * scale) + b * (texel.y * scale) + n * texel.z
+        if mapped.dot(mapped) > 1e-12:
+            result = consistent_shading_normal(ti.math.normalize(mapped), surface.n_geo, wo)
+    return result
 
 
 @ti.func

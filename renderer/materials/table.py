@@ -32,16 +32,35 @@ MIN_ALPHA = 1e-4
 # medium: index of the participating medium inside the material's surfaces, or NO_MEDIUM.
 # complex_ior = 1: a conductor whose Fresnel is exact from eta + i k, with its cosine-weighted
 # average fresnel_avg precomputed (renderer/materials/conductor_ior.py); 0: base_color/edge_tint.
+# alpha_mode (ALPHA_OPAQUE / MASK / BLEND), alpha_cutoff and base_alpha: glTF coverage, tested
+# in traversal (base_alpha times the base-colour texture's alpha and the vertex colour's).
+# thin = 1: a thin-walled transmitter (a shell with no inside: glTF transmission without
+# KHR_materials_volume), whose transmission passes straight through instead of refracting.
+# Layers of the principled model (glTF KHR_materials_clearcoat / sheen / specular):
+# clearcoat weight and roughness; sheen colour and roughness; specular strength and colour,
+# scaling the dielectric base's Fresnel. layer_textures = (clearcoat, clearcoat roughness,
+# sheen colour, sheen roughness), layer_textures2 = (specular, specular colour, clearcoat
+# normal, unused).
 MaterialRecord = ti.types.struct(kind=ti.i32, base_color=vec3, roughness=ti.f32, metallic=ti.f32,
                                  transmission=ti.f32, ior=ti.f32, emission=vec3, edge_tint=vec3,
                                  normal_scale=ti.f32, textures=ti.math.ivec4, transmission_texture=ti.i32,
                                  medium=ti.i32, dispersion=ti.i32, dispersion_b=ti.math.vec4,
                                  dispersion_c=ti.math.vec4, complex_ior=ti.i32, eta=vec3, k=vec3,
-                                 fresnel_avg=vec3)
-# As shaded: a record with its textures applied at one surface point.
+                                 fresnel_avg=vec3, alpha_mode=ti.i32, alpha_cutoff=ti.f32, base_alpha=ti.f32,
+                                 thin=ti.i32, clearcoat=ti.f32, clearcoat_roughness=ti.f32, sheen_color=vec3,
+                                 sheen_roughness=ti.f32, specular=ti.f32, specular_color=vec3,
+                                 clearcoat_normal_scale=ti.f32, layer_textures=ti.math.ivec4,
+                                 layer_textures2=ti.math.ivec4)
+# As shaded: a record with its textures applied at one surface point. coat_normal: the clearcoat's
+# shading normal (its own normal map, else the base's normal).
 Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=ti.f32, transmission=ti.f32,
                            ior=ti.f32, emission=vec3, edge_tint=vec3, complex_ior=ti.i32, eta=vec3, k=vec3,
-                           fresnel_avg=vec3)
+                           fresnel_avg=vec3, thin=ti.i32, clearcoat=ti.f32, clearcoat_alpha=ti.f32,
+                           sheen_color=vec3, sheen_roughness=ti.f32, specular=ti.f32, specular_color=vec3,
+                           coat_normal=vec3)
+
+ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = 0, 1, 2
+ALPHA_MODE_IDS = {"OPAQUE": ALPHA_OPAQUE, "MASK": ALPHA_MASK, "BLEND": ALPHA_BLEND}
 
 
 def alpha_from_roughness(roughness):
@@ -66,14 +85,29 @@ class MaterialRows:
                               metallic=spec.metallic, transmission=spec.transmission, ior=spec.ior,
                               emission=spec.emission, edge_tint=spec.edge_tint, normal_scale=1.0,
                               textures=(NO_TEXTURE,) * 4, transmission_texture=NO_TEXTURE, medium=medium,
-                              **dispersion_row(spec), **conductor_ior_row(spec)))
+                              **dispersion_row(spec), **conductor_ior_row(spec), **_layers_row(spec)))
         return len(self.rows) - 1
 
-    def add_pbr(self, pbr, texture_id) -> int:
-        """A glTF material; texture_id maps its TextureRef to a texture-table index."""
+    def add_medium(self, name: str) -> int:
+        """Registers a medium that the scene's own list does not name (a model file's volume)."""
+        if name not in self.medium_ids:
+            self.medium_ids[name] = len(self.medium_ids)
+        return self.medium_ids[name]
+
+    def add_pbr(self, pbr, texture_id, medium: int = NO_MEDIUM) -> int:
+        """A glTF material; texture_id maps its TextureRef to a texture-table index; medium: the
+        medium inside (KHR_materials_volume), registered with add_medium."""
         def tex(ref):
             return NO_TEXTURE if ref is None else texture_id(ref)
 
+        layers = _layers_row(pbr)
+        layers["layer_textures"] = (tex(pbr.clearcoat_texture), tex(pbr.clearcoat_roughness_texture),
+                                    tex(pbr.sheen_color_texture), tex(pbr.sheen_roughness_texture))
+        layers["layer_textures2"] = (tex(pbr.specular_texture), tex(pbr.specular_color_texture),
+                                     tex(pbr.clearcoat_normal_texture), NO_TEXTURE)
+        layers.update(alpha_mode=ALPHA_MODE_IDS.get(pbr.alpha_mode, ALPHA_OPAQUE), alpha_cutoff=pbr.alpha_cutoff,
+                      base_alpha=pbr.base_color_factor[3],
+                      thin=int(pbr.transmission_factor > 0.0 and pbr.thin_walled))
         self.rows.append(dict(kind=PRINCIPLED, base_color=tuple(pbr.base_color_factor[:3]),
                               roughness=pbr.roughness_factor, metallic=pbr.metallic_factor,
                               transmission=pbr.transmission_factor, ior=max(pbr.ior, MIN_IOR),
@@ -81,38 +115,54 @@ class MaterialRows:
                               normal_scale=pbr.normal_scale,
                               textures=(tex(pbr.base_color_texture), tex(pbr.metallic_roughness_texture),
                                         tex(pbr.normal_texture), tex(pbr.emissive_texture)),
-                              transmission_texture=tex(pbr.transmission_texture), medium=NO_MEDIUM,
+                              transmission_texture=tex(pbr.transmission_texture), medium=medium,
                               dispersion=0, dispersion_b=(0.0,) * 4, dispersion_c=(0.0,) * 4,
-                              **conductor_ior_row()))
+                              **conductor_ior_row(), **layers))
         return len(self.rows) - 1
 
     def arrays(self) -> dict:
-        def col(name, dtype, width=None):
-            values = [r[name] for r in self.rows]
-            a = np.array(values, dtype)
-            return a.reshape(len(values), width) if width else a
-
-        return {"kind": col("kind", np.int32), "base_color": col("base_color", np.float32, 3),
-                "roughness": col("roughness", np.float32), "metallic": col("metallic", np.float32),
-                "transmission": col("transmission", np.float32), "ior": col("ior", np.float32),
-                "emission": col("emission", np.float32, 3), "edge_tint": col("edge_tint", np.float32, 3),
-                "normal_scale": col("normal_scale", np.float32),
-                "textures": col("textures", np.int32, 4),
-                "transmission_texture": col("transmission_texture", np.int32),
-                "medium": col("medium", np.int32), "dispersion": col("dispersion", np.int32),
-                "dispersion_b": col("dispersion_b", np.float32, 4), "dispersion_c": col("dispersion_c", np.float32, 4),
-                "complex_ior": col("complex_ior", np.int32), "eta": col("eta", np.float32, 3),
-                "k": col("k", np.float32, 3), "fresnel_avg": col("fresnel_avg", np.float32, 3)}
+        """One array per MaterialRecord member, its dtype and width read off the record."""
+        out = {}
+        for name, member in MaterialRecord.members.items():
+            width = getattr(member, "n", None)
+            dtype = np.int32 if (getattr(member, "dtype", member) == ti.i32) else np.float32
+            a = np.array([r[name] for r in self.rows], dtype)
+            out[name] = a.reshape(len(self.rows), width) if width else a
+        return out
 
     def uses(self) -> dict:
         """Which kinds and texture slots occur (for Features)."""
         kinds = {r["kind"] for r in self.rows}
         slots = [any(r["textures"][i] != NO_TEXTURE for r in self.rows) for i in range(4)]
-        return {"kinds": kinds, "textures": any(slots) or any(r["transmission_texture"] != NO_TEXTURE for r in self.rows),
+        layer_textures = any(t != NO_TEXTURE for r in self.rows for t in (*r["layer_textures"], *r["layer_textures2"]))
+        return {"kinds": kinds, "textures": (any(slots) or layer_textures
+                                             or any(r["transmission_texture"] != NO_TEXTURE for r in self.rows)),
                 "normal_maps": slots[2], "emission": any(max(r["emission"]) > 0 for r in self.rows),
                 "media": any(r["medium"] != NO_MEDIUM for r in self.rows),
                 "dispersion": any(r["dispersion"] != 0 for r in self.rows),
-                "rough": any(r["kind"] in (CONDUCTOR, DIELECTRIC) and r["roughness"] > 0.0 for r in self.rows)}
+                "rough": any(r["kind"] in (CONDUCTOR, DIELECTRIC) and r["roughness"] > 0.0 for r in self.rows),
+                "alpha": any(r["alpha_mode"] != ALPHA_OPAQUE for r in self.rows),
+                "thin": any(r["thin"] == 1 for r in self.rows),
+                "clearcoat": any(r["clearcoat"] > 0.0 for r in self.rows),
+                "sheen": any(max(r["sheen_color"]) > 0.0 for r in self.rows),
+                "specular": any(r["specular"] != 1.0 or min(r["specular_color"]) != 1.0
+                                or r["layer_textures2"][0] != NO_TEXTURE or r["layer_textures2"][1] != NO_TEXTURE
+                                for r in self.rows)}
+
+
+def _layers_row(m) -> dict:
+    """The coverage, thin-wall and layer columns of a scene-file material or a glTF material
+    (defaults: opaque, thick, no clearcoat or sheen, the plain dielectric specular)."""
+    g = lambda name, default: getattr(m, name, default)
+    return dict(alpha_mode=ALPHA_OPAQUE, alpha_cutoff=0.5, base_alpha=1.0, thin=int(g("thin", False)),
+                clearcoat=g("clearcoat_factor", g("clearcoat", 0.0)),
+                clearcoat_roughness=g("clearcoat_roughness_factor", g("clearcoat_roughness", 0.0)),
+                sheen_color=tuple(g("sheen_color_factor", g("sheen_color", (0.0, 0.0, 0.0)))),
+                sheen_roughness=g("sheen_roughness_factor", g("sheen_roughness", 0.0)),
+                specular=g("specular_factor", g("specular", 1.0)),
+                specular_color=tuple(g("specular_color_factor", g("specular_color", (1.0, 1.0, 1.0)))),
+                clearcoat_normal_scale=g("clearcoat_normal_scale", 1.0),
+                layer_textures=(NO_TEXTURE,) * 4, layer_textures2=(NO_TEXTURE,) * 4)
 
 
 @ti.data_oriented

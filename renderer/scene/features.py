@@ -29,6 +29,13 @@ class Features:
     has_media: bool = False  # participating media: free-flight sampling, phase functions, transmittance
     analytic_fog: bool = False  # the exponential-blend approximation on camera rays
     has_dispersion: bool = False  # dispersive dielectrics: spectral paths (one wavelength per path)
+    has_alpha: bool = False  # glTF MASK / BLEND coverage (and OBJ dissolve), tested in traversal
+    has_vertex_colors: bool = False  # per-vertex colours multiplying the base colour
+    has_instances: bool = False  # meshes placed many times, one copy of their triangles
+    has_thin: bool = False  # thin-walled transmission (glTF transmission without a volume)
+    has_clearcoat: bool = False  # principled clearcoat layer
+    has_sheen: bool = False  # principled sheen layer
+    has_specular: bool = False  # principled specular strength / colour other than the default
     environment: str = "sky"  # "map" | "sky" | "constant"
     depth_of_field: bool = False
     sdf_primitives: frozenset = frozenset()
@@ -42,7 +49,10 @@ class Features:
                  ("textures", self.has_textures), ("normal maps", self.has_normal_maps),
                  ("multiple scattering", self.energy_compensation), ("null surfaces", self.has_null),
                  ("media", self.has_media), ("analytic fog", self.analytic_fog),
-                 ("dispersion", self.has_dispersion),
+                 ("dispersion", self.has_dispersion), ("alpha", self.has_alpha),
+                 ("vertex colours", self.has_vertex_colors), ("instances", self.has_instances),
+                 ("thin walls", self.has_thin), ("clearcoat", self.has_clearcoat), ("sheen", self.has_sheen),
+                 ("specular", self.has_specular),
                  ("depth of field", self.depth_of_field))
         names = [name for name, on in flags if on]
         names.append(f"env:{self.environment}")
@@ -61,7 +71,8 @@ class Features:
         return replace(self, has_diffuse=True, has_conductor=True, has_dielectric=True, has_principled=True,
                        has_emission=True, has_textures=not sdf, has_normal_maps=not sdf, depth_of_field=True,
                        energy_compensation=True, has_null=True, has_media=True, analytic_fog=True,
-                       has_dispersion=True,
+                       has_dispersion=True, has_thin=True, has_clearcoat=True, has_sheen=True, has_specular=True,
+                       has_alpha=not sdf, has_vertex_colors=not sdf, has_instances=not sdf,
                        sdf_primitives=frozenset(SDF_PRIMITIVES) if sdf else frozenset(),
                        sdf_operators=frozenset(SDF_OPERATORS) if sdf else frozenset(),
                        mesh_primitives=frozenset() if sdf else frozenset(MESH_PRIMITIVES))
@@ -69,12 +80,13 @@ class Features:
 
 def features_from(geometry: str, material_uses: dict, environment: str, aperture: float,
                   sdf_nodes=(), mesh_kinds=frozenset(), energy_compensation: bool = True,
-                  fog: str = "none") -> Features:
+                  fog: str = "none", vertex_colors: bool = False, instances: bool = False) -> Features:
     """material_uses: {"kinds": set of kind names, "textures", "normal_maps", "emission", "media": bool,
     "rough": whether a conductor or dielectric has roughness > 0}.
     energy_compensation: the scene's wish; compiled in only where a rough conductor or dielectric
     occurs, or a principled material (whose coat layering it also provides).
-    fog: the scene's fog model ("none", "medium" or "analytic")."""
+    fog: the scene's fog model ("none", "medium" or "analytic").
+    vertex_colors, instances: whether the mesh data carries vertex colours / instanced meshes."""
     kinds = material_uses["kinds"]
     unknown = set(kinds) - set(MATERIAL_KINDS)
     if unknown:
@@ -93,6 +105,13 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         has_media=fog == "medium" or bool(material_uses.get("media", False)),
         analytic_fog=fog == "analytic",
         has_dispersion=bool(material_uses.get("dispersion", False)),
+        has_alpha=bool(material_uses.get("alpha", False)),
+        has_vertex_colors=vertex_colors,
+        has_instances=instances,
+        has_thin=bool(material_uses.get("thin", False)),
+        has_clearcoat=bool(material_uses.get("clearcoat", False)),
+        has_sheen=bool(material_uses.get("sheen", False)),
+        has_specular=bool(material_uses.get("specular", False)),
         environment=environment,
         depth_of_field=aperture > 0.0,
         sdf_primitives=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_PRIMITIVES),
