@@ -519,7 +519,10 @@ class SppmProgram(RenderProgram):
         else:
             factor = 0.0
         if ti.static(self.features.has_dielectric or self.features.has_principled):
-            if (mat.kind == DIELECTRIC or mat.kind == PRINCIPLED) and wo.dot(ng) * wi.dot(ng) < 0.0:
+            refracts = (mat.kind == DIELECTRIC or mat.kind == PRINCIPLED) and wo.dot(ng) * wi.dot(ng) < 0.0
+            if ti.static(self.features.has_thin):
+                refracts = refracts and mat.thin == 0  # a thin wall passes light on unscaled
+            if refracts:
                 eta = mat.ior if n.dot(wo) >= 0.0 else 1.0 / mat.ior
                 factor *= eta * eta
         return factor

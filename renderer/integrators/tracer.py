@@ -62,7 +62,11 @@ def _medium_beyond(ctx, s, wo, wi, current):
     surface; crossing inwards (from the side the outward normal faces) enters the material's
     medium, crossing outwards returns to the scene's."""
     medium = current
-    if s.eps >= 0.0 and wi.dot(s.n_geo) * wo.dot(s.n_geo) < 0.0:
+    crosses = s.eps >= 0.0 and wi.dot(s.n_geo) * wo.dot(s.n_geo) < 0.0
+    if ti.static(ctx.features.has_thin):
+        if ctx.bsdf.materials.table[s.material].thin == 1:
+            crosses = False  # a thin wall has no inside: the light stays in the medium it was in
+    if crosses:
         medium = ctx.media.outside()
         if wo.dot(s.n_geo) > 0.0:
             medium = ctx.bsdf.materials.table[s.material].medium

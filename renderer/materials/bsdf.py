@@ -1,43 +1,36 @@
 """The BSDF of every material kind, over the device material table.
 
-Kinds: null (an invisible boundary, e.g. of a medium), diffuse (Lambert), conductor (GGX; Fresnel from the colour at normal incidence and an edge
-tint, or exact from a complex index of refraction eta + i k), dielectric (smooth or rough glass) and principled (glTF metallic-roughness: a metal lobe, a
-transmissive dielectric lobe and a dielectric coat over a diffuse base, weighted by metallic and
-transmission, with base-colour, metallic-roughness, normal, emissive and transmission textures).
+Kinds: null (an invisible boundary, e.g. of a medium), diffuse (Lambert), conductor (GGX; Fresnel
+from the colour at normal incidence and an edge tint, or exact from a complex index of refraction
+eta + i k), dielectric (smooth or rough glass; `thin`: a thin wall that reflects or lets light
+straight through) and principled (glTF metallic-roughness with its clearcoat, sheen and specular
+layers: renderer/materials/principled.py).
 
-Only the kinds and texture slots `Features` calls for are compiled in (`ti.static`). Roughness 0 is
-an exact delta lobe, never a tiny GGX.
+Only the kinds, layers and texture slots `Features` calls for are compiled in (`ti.static`).
+Roughness 0 is an exact delta lobe, never a tiny GGX.
 
 World-space API (n: the outward shading normal; wo: towards where the path came from):
-  shade(surface, wo) -> (Material, n_shading)   textures and normal map applied
+  shade(surface, wo) -> (Material, n_shading)   textures, vertex colours and normal maps applied
   sample(mat, n, wo, u1, u2) -> BsdfSample      weight = f |cos| / pdf, pdf of the whole technique
   eval(mat, n, wo, wi) -> (f |cos|, pdf)        non-delta parts; pdf as `sample` would give wi
-The principled model samples one lobe chosen by its estimated albedo and weights the result by
-the whole BSDF over the mixture pdf (one-sample MIS over lobes), so `sample` and `eval` agree.
 
 With `features.energy_compensation`, rough GGX reflection of conductors and of the principled
 metal lobe adds Kulla and Conty's multiple-scattering lobe (renderer/materials/energy.py), so
 rough metals no longer darken with roughness; rough dielectric interfaces (glass, the principled
-glass lobe) add the lobe of renderer/materials/dielectric_energy.py, so a white rough glass solid
-keeps all its light; and the principled model's diffuse base is layered under its coat so that
-the coat's reflection and the base's share add up to one for a white base.
+glass lobe) add the lobe of renderer/materials/dielectric_energy.py, and rough thin walls the
+GGX one, so white rough glass keeps all its light.
 """
 import taichi as ti
 
 from renderer.geometry.shading import consistent_shading_normal
 from renderer.materials import lobes
-from renderer.materials import microfacet as mf
 from renderer.materials.lobes import BsdfSample
+from renderer.materials.principled import principled_eval, principled_has_smooth_part, principled_sample
 from renderer.materials.table import (CONDUCTOR, DIELECTRIC, DIFFUSE, NO_TEXTURE, NULL, PRINCIPLED, Material,
                                       alpha_of)
-from renderer.sampling.warps import INV_PI, cosine_hemisphere, orthonormal_basis, to_local, to_world
+from renderer.sampling.warps import cosine_hemisphere, orthonormal_basis, to_local, to_world
 
 vec3 = ti.math.vec3
-
-
-@ti.func
-def luminance(c):
-    return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 
 
 @ti.data_oriented
@@ -47,12 +40,15 @@ class Bsdf:
     def __init__(self, materials, features):
         self.materials = materials
         self.features = features
-        # Energy compensation is a compile-time switch; the albedo table exists only with it.
+        # Energy compensation is a compile-time switch; the albedo tables exist only where used.
         self.compensate = features.energy_compensation
         self.energy = materials.ggx_albedo if self.compensate else None
-        # Rough glass and the principled model's dielectric parts (glass lobe, coat layering).
+        # Rough glass (and the principled glass lobe) with its multiple-scattering lobe; the
+        # principled model's layering reads the same dielectric tables, compensated or not.
         self.compensate_glass = self.compensate and (features.has_dielectric or features.has_principled)
-        self.glass_energy = materials.dielectric_albedo if self.compensate_glass else None
+        self.dielectric_tables = (materials.dielectric_albedo if self.compensate_glass or features.has_principled
+                                  else None)
+        self.sheen_tables = materials.sheen_albedo if features.has_sheen else None
 
     @ti.func
     def shade(self, surface, wo):
@@ -131,10 +127,11 @@ class Bsdf:
                         s = _compensated_conductor_sample(self.energy, mat, wo, u1, u2)
             if ti.static(self.features.has_dielectric):
                 if mat.kind == DIELECTRIC:
-                    s = self._dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
+                    s = self.glass_sample(mat, entering, wo, u1, u2)
             if ti.static(self.features.has_principled):
                 if mat.kind == PRINCIPLED:
-                    s = _principled_sample(self, mat, entering, wo, u1, u2)
+                    mat.coat_normal = self._local_coat_normal(mat, t, b, n_f)
+                    s = principled_sample(self, mat, entering, wo, u1, u2)
             if ti.static(self.features.has_null):
                 if mat.kind == NULL:  # an invisible boundary: straight on, nothing changes
                     s = BsdfSample(wi=-wo, weight=vec3(1.0), pdf=1.0, delta=1, valid=1)
@@ -164,35 +161,141 @@ class Bsdf:
                         value, pdf = _compensated_conductor_eval(self.energy, mat, wo, wi)
             if ti.static(self.features.has_dielectric):
                 if mat.kind == DIELECTRIC:
-                    value, pdf = self._dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
+                    value, pdf = self.glass_eval(mat, entering, wo, wi)
             if ti.static(self.features.has_principled):
                 if mat.kind == PRINCIPLED:
-                    value, pdf = _principled_eval(self, mat, entering, wo, wi)
+                    mat.coat_normal = self._local_coat_normal(mat, t, b, n_f)
+                    value, pdf = principled_eval(self, mat, entering, wo, wi)
         return value, pdf
 
-    # --- the dielectric interface, with multiple scattering where compensation is on ----------------
+    # --- glass: thick (refracting) or thin-walled, with multiple scattering where compensation is on ---
     @ti.func
-    def _dielectric_sample(self, tint, alpha, eta, wo, u1, u2):
+    def glass_sample(self, mat, entering, wo, u1, u2):
+        """The dielectric (or the principled glass lobe) with tint mat.base_color."""
         s = lobes.invalid_sample()
-        if ti.static(self.compensate_glass):
-            if alpha > 0.0:
-                s = self.glass_energy.sample(tint, alpha, eta, wo, u1, u2)
+        thin = False
+        if ti.static(self.features.has_thin):
+            thin = mat.thin == 1
+        if thin:
+            if ti.static(self.features.has_thin):
+                s = self._thin_sample(mat, wo, u1, u2)
+        elif ti.static(self.compensate_glass):
+            if mat.alpha > 0.0:
+                s = self.dielectric_tables.sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
             else:
-                s = lobes.dielectric_sample(tint, alpha, eta, wo, u1, u2)
+                s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
         else:
-            s = lobes.dielectric_sample(tint, alpha, eta, wo, u1, u2)
+            s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
         return s
 
     @ti.func
-    def _dielectric_eval(self, tint, alpha, eta, wo, wi):
+    def glass_eval(self, mat, entering, wo, wi):
         value = vec3(0.0)
         pdf = 0.0
-        if ti.static(self.compensate_glass):
-            if alpha > 0.0:
-                value, pdf = self.glass_energy.eval(tint, alpha, eta, wo, wi)
+        thin = False
+        if ti.static(self.features.has_thin):
+            thin = mat.thin == 1
+        if thin:
+            if ti.static(self.features.has_thin):
+                value, pdf = self._thin_eval(mat, wo, wi)
+        elif ti.static(self.compensate_glass):
+            if mat.alpha > 0.0:
+                value, pdf = self.dielectric_tables.eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
         else:
-            value, pdf = lobes.dielectric_eval(tint, alpha, eta, wo, wi)
+            value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
         return value, pdf
+
+    @ti.func
+    def glass_direction(self, mat, entering, wo, u1, u2):
+        """(wi, valid): a direction as glass_sample draws it, for the principled mixture."""
+        s = self.glass_sample(mat, entering, wo, u1, u2)
+        return s.wi, s.valid
+
+    @ti.func
+    def _thin_sample(self, mat, wo, u1, u2):
+        s = lobes.invalid_sample()
+        if ti.static(self.compensate):
+            if mat.alpha > 0.0:
+                # u1 picks the multiple-scattering lobe with its energy share, then (its
+                # remainder) reflection or transmission within the chosen lobe.
+                wi = vec3(0.0)
+                valid = 1
+                share = self.energy.sampling_share(mat.alpha, wo)
+                if u1 < share:
+                    wi = cosine_hemisphere(u2)
+                    if u1 / share >= self._thin_reflect_share(mat):
+                        wi.z = -wi.z
+                else:
+                    single = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo,
+                                                          (u1 - share) / (1.0 - share), u2)
+                    wi = single.wi
+                    valid = single.valid
+                if valid == 1:
+                    value, pdf = self._thin_eval(mat, wo, wi)
+                    if pdf > 0.0:
+                        s = BsdfSample(wi=wi, weight=value / pdf, pdf=pdf, delta=0, valid=1)
+            else:
+                s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2)
+        else:
+            s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2)
+        return s
+
+    @ti.func
+    def _thin_eval(self, mat, wo, wi):
+        """The thin wall's single-scattering lobe plus, with compensation, Kulla and Conty's lobe:
+        per microfacet R + T = 1, so what the wall loses is a white GGX mirror's loss, 1 - E(mu_o),
+        returned by the symmetric lobe of energy.py split into reflection and transmission in the
+        slab's mean proportion."""
+        value, pdf = lobes.thin_dielectric_eval(mat.base_color, mat.alpha, mat.ior, wo, wi)
+        if ti.static(self.compensate):
+            if mat.alpha > 0.0:
+                r_share = self._thin_reflect_share(mat)
+                wr = vec3(wi.x, wi.y, ti.abs(wi.z))
+                v_ms, pdf_ms, share = self.energy.multiple_scattering(vec3(1.0), mat.alpha, wo, wr)
+                part = r_share if wi.z > 0.0 else 1.0 - r_share
+                tint = vec3(1.0) if wi.z > 0.0 else mat.base_color
+                value += tint * v_ms * part
+                pdf = (1.0 - share) * pdf + share * part * pdf_ms
+        return value, pdf
+
+    @ti.func
+    def _thin_reflect_share(self, mat):
+        """The share of the thin wall's multiple scattering that reflects: the slab reflectance at
+        the mean Fresnel reflectance of its interface (any constant keeps the lobe reciprocal and
+        its energy exact; this one follows the single-scattering split)."""
+        f_avg = self.dielectric_tables.smooth_reflectance_average(mat.ior)
+        return 2.0 * f_avg / (1.0 + f_avg)
+
+    # --- the principled model's helpers (renderer/materials/principled.py calls them) --------------
+    @ti.func
+    def metal_eval(self, fresnel, f_avg, alpha, wo, wi):
+        """A GGX metal lobe with Fresnel `fresnel` at the half vector (and its mean f_avg)."""
+        value = vec3(0.0)
+        pdf = 0.0
+        if ti.static(not self.compensate):
+            value, pdf = lobes.ggx_reflection_eval(fresnel, alpha, wo, wi)
+        else:
+            value, pdf = _compensated_reflection_eval(self.energy, fresnel, f_avg, alpha, wo, wi)
+        return value, pdf
+
+    @ti.func
+    def metal_direction(self, alpha, wo, u1, u2):
+        wi = vec3(0.0)
+        if ti.static(not self.compensate):
+            wi = lobes.ggx_reflection_direction(alpha, wo, u2)
+        else:
+            wi = _compensated_reflection_direction(self.energy, alpha, wo, u1, u2)
+        return wi
+
+    @ti.func
+    def _local_coat_normal(self, mat, t, b, n_f):
+        """The clearcoat's normal in the local frame, on wo's side ((0, 0, 1) without clearcoat)."""
+        c = vec3(0.0, 0.0, 1.0)
+        if ti.static(self.features.has_clearcoat):
+            c = to_local(mat.coat_normal, t, b, n_f)
+            if c.z < 0.0:
+                c = -c
+        return c
 
     @ti.func
     def sample_at(self, mat, n, ng, wo, u1, u2):
@@ -222,7 +325,8 @@ class Bsdf:
         elif mat.kind == NULL:
             smooth = False
         elif mat.kind == PRINCIPLED:
-            smooth = smooth or (mat.metallic < 1.0 and mat.transmission < 1.0)
+            if ti.static(self.features.has_principled):
+                smooth = principled_has_smooth_part(self, mat)
         return smooth
 
     @ti.func
@@ -308,125 +412,4 @@ def _compensated_conductor_sample(energy, mat, wo, u1, u2):
             value, pdf = _compensated_conductor_eval(energy, mat, wo, wi)
             if pdf > 0.0:
                 s = BsdfSample(wi=wi, weight=value / pdf, pdf=pdf, delta=0, valid=1)
-    return s
-
-
-# --- principled ---------------------------------------------------------------------------------------
-@ti.func
-def _principled_lobe_probabilities(mat, wo):
-    """Probabilities of (metal, glass, coat specular, coat diffuse), from each lobe's estimated
-    albedo at wo: the lobes that return the most light get the most samples."""
-    f_view, _ = mf.fresnel_dielectric(wo.z, mat.ior)
-    opaque = (1.0 - mat.metallic) * (1.0 - mat.transmission)
-    a_metal = mat.metallic * ti.max(luminance(mf.fresnel_schlick(mat.base_color, wo.z)), 0.05)
-    a_glass = (1.0 - mat.metallic) * mat.transmission
-    a_spec = opaque * f_view
-    a_diff = opaque * (1.0 - f_view) * ti.max(luminance(mat.base_color), 0.05)
-    total = a_metal + a_glass + a_spec + a_diff
-    p = ti.math.vec4(0.0, 0.0, 0.0, 1.0)
-    if total > 0.0:
-        p = ti.math.vec4(a_metal, a_glass, a_spec, a_diff) / total
-    return p
-
-
-@ti.func
-def _principled_eval(bsdf, mat, entering, wo, wi):
-    p = _principled_lobe_probabilities(mat, wo)
-    opaque = (1.0 - mat.metallic) * (1.0 - mat.transmission)
-    value = vec3(0.0)
-    pdf = 0.0
-    if mat.alpha > 0.0:
-        h = ti.math.normalize(wo + wi)
-        f_metal = vec3(0.0)
-        pdf_metal = 0.0
-        fresnel_metal = mf.fresnel_schlick(mat.base_color, ti.max(wo.dot(h), 0.0))
-        if ti.static(not bsdf.compensate):
-            f_metal, pdf_metal = lobes.ggx_reflection_eval(fresnel_metal, mat.alpha, wo, wi)
-        else:
-            f_metal, pdf_metal = _compensated_reflection_eval(bsdf.energy, fresnel_metal,
-                                                              lobes.schlick_average(mat.base_color), mat.alpha, wo, wi)
-        f_glass, pdf_glass = bsdf._dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
-        f_spec, pdf_spec = lobes.coat_specular_eval(mat.ior, mat.alpha, wo, wi)
-        value = mat.metallic * f_metal + (1.0 - mat.metallic) * mat.transmission * f_glass + opaque * f_spec
-        pdf = p.x * pdf_metal + p.y * pdf_glass + p.z * pdf_spec
-    f_diff, pdf_diff = _coat_diffuse_eval(bsdf, mat, wo, wi)
-    value += opaque * f_diff
-    pdf += p.w * pdf_diff
-    return value, pdf
-
-
-@ti.func
-def _coat_diffuse_eval(bsdf, mat, wo, wi):
-    """The diffuse base under the dielectric coat. With compensation, an energy-conserving layering:
-    what the rough coat does not reflect (R_o from the dielectric table, the albedo of the coat's
-    own specular lobe) reaches the base on the way in and out,
-        base / pi (1 - R_o(mu_o)) (1 - R_o(mu_i)) / (1 - Ravg_o),
-    which is reciprocal and integrates to base (1 - R_o(mu_o)): a white base under a clear coat
-    returns everything the coat lets through. Without it, the smooth-Fresnel form of
-    lobes.coat_diffuse_eval (which loses the light the coat reflects back down)."""
-    value = vec3(0.0)
-    pdf = 0.0
-    if ti.static(bsdf.compensate_glass):
-        if wi.z > 0.0:
-            roughness = ti.sqrt(mat.alpha)
-            r_o, r_avg = bsdf.glass_energy.reflectance(wo.z, roughness, mat.ior)
-            r_i, _ = bsdf.glass_energy.reflectance(wi.z, roughness, mat.ior)
-            value = mat.base_color * ((1.0 - r_o) * (1.0 - r_i) / ti.max(1.0 - r_avg, 1e-6) * wi.z * INV_PI)
-            pdf = wi.z * INV_PI
-    else:
-        value, pdf = lobes.coat_diffuse_eval(mat.base_color, mat.ior, wo, wi)
-    return value, pdf
-
-
-@ti.func
-def _principled_sample(bsdf, mat, entering, wo, u1, u2):
-    p = _principled_lobe_probabilities(mat, wo)
-    opaque = (1.0 - mat.metallic) * (1.0 - mat.transmission)
-    s = lobes.invalid_sample()
-    mixture = 0  # 1 when a non-delta direction was drawn: it is weighted by the whole mixture
-    # Pick a lobe with u1, then reuse u1's remainder inside the lobe (it stays uniform).
-    if u1 < p.x:
-        if mat.alpha == 0.0:
-            f = mf.fresnel_schlick(mat.base_color, wo.z)
-            s = BsdfSample(wi=vec3(-wo.x, -wo.y, wo.z), weight=f * (mat.metallic / p.x), pdf=p.x, delta=1, valid=1)
-        else:
-            if ti.static(not bsdf.compensate):
-                s.wi = lobes.ggx_reflection_direction(mat.alpha, wo, u2)
-            else:
-                s.wi = _compensated_reflection_direction(bsdf.energy, mat.alpha, wo, u1 / p.x, u2)
-            if s.wi.z > 0.0:  # a reflection below the surface is a failed sample, as in conductor_sample
-                mixture = 1
-    elif u1 < p.x + p.y:
-        u_glass = (u1 - p.x) / p.y
-        if mat.alpha == 0.0:
-            s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u_glass, u2)
-            s.weight *= (1.0 - mat.metallic) * mat.transmission / p.y
-            s.pdf *= p.y
-        else:
-            wi = vec3(0.0, 0.0, 1.0)
-            valid = 0
-            if ti.static(bsdf.compensate_glass):
-                wi, valid = bsdf.glass_energy.direction(mat.base_color, mat.alpha, _eta(mat, entering), wo,
-                                                        u_glass, u2)
-            else:
-                g = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u_glass, u2)
-                wi = g.wi
-                valid = g.valid
-            s.wi = wi
-            mixture = valid
-    elif u1 < p.x + p.y + p.z:
-        if mat.alpha == 0.0:
-            f_view, _ = mf.fresnel_dielectric(wo.z, mat.ior)
-            s = BsdfSample(wi=vec3(-wo.x, -wo.y, wo.z), weight=vec3(opaque * f_view / p.z), pdf=p.z, delta=1, valid=1)
-        else:
-            s.wi = lobes.ggx_reflection_direction(mat.alpha, wo, u2)
-            if s.wi.z > 0.0:  # a reflection below the surface is a failed sample, as in conductor_sample
-                mixture = 1
-    else:
-        s.wi = lobes.diffuse_sample(mat.base_color, wo, u2).wi
-        mixture = 1
-    if mixture == 1:
-        value, pdf = _principled_eval(bsdf, mat, entering, wo, s.wi)
-        if pdf > 0.0 and s.wi.z != 0.0:
-            s = BsdfSample(wi=s.wi, weight=value / pdf, pdf=pdf, delta=0, valid=1)
     return s

@@ -158,6 +158,11 @@ class DielectricAlbedo:
             total += w * self.reflect_field[i + di, k + dk, j + dj]
         return total, self._averages(roughness, ior).w
 
+    @ti.func
+    def smooth_reflectance_average(self, ior):
+        """The cosine-weighted mean Fresnel reflectance of a smooth interface seen from outside."""
+        return self._averages(0.0, ior).w
+
     # --- the multiple-scattering lobe -------------------------------------------------------------
     @ti.func
     def _shares(self, roughness, ior, side):

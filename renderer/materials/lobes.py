@@ -214,21 +214,76 @@ def dielectric_sample(tint, alpha, eta, wo, u1, u2):
     return s
 
 
-# --- Dielectric coat over a Lambertian base (the principled model's opaque part) ------------------------
+# --- Thin-walled dielectric (a shell with no inside) --------------------------------------------------
 @ti.func
-def coat_diffuse_eval(base, ior, wo, wi):
-    """The light the coat transmits on the way in and out, diffused by the base:
-    base / pi (1 - F(wo.z)) (1 - F(wi.z)): reciprocal, and never more than the coat lets through."""
+def thin_reflectance(cos_i, ior):
+    """A thin slab's reflectance with its internal reflections summed: F + (1 - F)^2 F / (1 - F^2)
+    = 2 F / (1 + F) (pbrt-v4's ThinDielectricBxDF), F the interface's Fresnel reflectance."""
+    f, _ = mf.fresnel_dielectric(ti.math.clamp(cos_i, 0.0, 1.0), ior)
+    return 2.0 * f / (1.0 + f)
+
+
+@ti.func
+def _mirrored(w):
+    return vec3(w.x, w.y, -w.z)
+
+
+@ti.func
+def thin_dielectric_eval(tint, alpha, ior, wo, wi):
+    """Rough thin wall: a GGX reflection lobe whose microfacets reflect with the slab's reflectance
+    R(wo.h) and pass the rest straight through, i.e. into the reflected direction mirrored to the
+    far side (no bending, no 1 / eta^2: the light leaves into the medium it came from).
+    R + T = 1 per microfacet, so the lobe's albedo is a white GGX mirror's."""
     value = vec3(0.0)
     pdf = 0.0
-    if wi.z > 0.0:
-        f_o, _ = mf.fresnel_dielectric(wo.z, ior)
-        f_i, _ = mf.fresnel_dielectric(wi.z, ior)
-        value = base * ((1.0 - f_o) * (1.0 - f_i) * wi.z * INV_PI)
-        pdf = wi.z * INV_PI
+    if alpha > 0.0 and wi.z != 0.0:
+        wr = vec3(wi.x, wi.y, ti.abs(wi.z))
+        h = ti.math.normalize(wo + wr)
+        cos_oh = wo.dot(h)
+        if cos_oh > 0.0:
+            r = thin_reflectance(cos_oh, ior)
+            f_cos = mf.ggx_d(h, alpha) * mf.smith_g2(wo, wr, alpha) / (4.0 * wo.z)
+            lobe_pdf = mf.visible_normal_pdf(wo, h, alpha) / (4.0 * cos_oh)
+            if wi.z > 0.0:
+                value = vec3(r * f_cos)
+                pdf = r * lobe_pdf
+            else:
+                value = tint * ((1.0 - r) * f_cos)
+                pdf = (1.0 - r) * lobe_pdf
     return value, pdf
 
 
+@ti.func
+def thin_dielectric_sample(tint, alpha, ior, wo, u1, u2):
+    """Reflect with the slab's reflectance, else pass straight through (smooth: along -wo)."""
+    s = BsdfSample(wi=vec3(0.0, 0.0, 1.0), weight=vec3(0.0), pdf=0.0, delta=1, valid=1)
+    h = vec3(0.0, 0.0, 1.0)
+    if alpha > 0.0:
+        h = mf.sample_visible_normal(wo, alpha, u2)
+        s.delta = 0
+    cos_oh = wo.dot(h)
+    r = thin_reflectance(cos_oh, ior)
+    wr = mf.reflect(wo, h)
+    if wr.z <= 0.0:
+        s.valid = 0
+    else:
+        g_ratio = 1.0
+        lobe_pdf = 1.0
+        if alpha > 0.0:
+            g_ratio = mf.smith_g2(wo, wr, alpha) / mf.smith_g1(wo, alpha)
+            lobe_pdf = mf.visible_normal_pdf(wo, h, alpha) / (4.0 * cos_oh)
+        if u1 < r:
+            s.wi = wr
+            s.weight = vec3(g_ratio)
+            s.pdf = r * lobe_pdf
+        else:
+            s.wi = _mirrored(wr)
+            s.weight = tint * g_ratio
+            s.pdf = (1.0 - r) * lobe_pdf
+    return s
+
+
+# --- The principled model's dielectric coat -------------------------------------------------------------
 @ti.func
 def coat_specular_eval(ior, alpha, wo, wi):
     h = ti.math.normalize(wo + wi)

@@ -179,6 +179,7 @@ class MaterialTable:
         self.textures = textures or TextureTable(None, [])
         self._ggx_albedo = None
         self._dielectric_albedo = None
+        self._sheen_albedo = None
 
     @property
     def ggx_albedo(self):
@@ -199,6 +200,15 @@ class MaterialTable:
 
             self._dielectric_albedo = DielectricAlbedo()
         return self._dielectric_albedo
+
+    @property
+    def sheen_albedo(self):
+        """The sheen lobe's albedo table (layering under a sheen), uploaded on first use."""
+        if self._sheen_albedo is None:
+            from renderer.materials.sheen import SheenAlbedo
+
+            self._sheen_albedo = SheenAlbedo()
+        return self._sheen_albedo
 
     @classmethod
     def from_specs(cls, specs, medium_names: tuple[str, ...] = ()):

@@ -91,6 +91,13 @@ class MaterialSpec:
     eta: Optional[Vec3] = None  # conductor only: real part of the complex index (RGB), with k
     k: Optional[Vec3] = None  # conductor only: imaginary part (extinction), with eta
     metal: str = ""  # conductor only: a named measured metal (its eta and k), e.g. "Au"
+    thin: bool = False  # dielectric / principled: a thin-walled shell, transmission passes straight through
+    clearcoat: float = 0.0  # principled layers (glTF clearcoat, sheen, specular extensions)
+    clearcoat_roughness: float = 0.0
+    sheen_color: Vec3 = (0.0, 0.0, 0.0)
+    sheen_roughness: float = 0.0
+    specular: float = 1.0
+    specular_color: Vec3 = (1.0, 1.0, 1.0)
 
     @property
     def is_dispersive(self) -> bool:

@@ -422,6 +422,26 @@ MATERIAL = Section(
               "(glTF `KHR_materials_transmission`).", UNIT, only_for=_PRINCIPLED),
         Field("ior", "float", 1.5, "Index of refraction.", Range(1.0, 4.0, lo_open=True),
               only_for=("dielectric", "principled")),
+        Field("thin", "bool", False, "A thin-walled transmitter: a shell with no inside (a soap "
+              "bubble, a window pane modelled as one surface, glTF transmission without "
+              "`KHR_materials_volume`). Light reflects off it or passes straight through; it is not "
+              "bent and does not travel inside.", only_for=("dielectric", "principled")),
+        Field("clearcoat", "float", 0.0, "Weight of a clear coat over the material (glTF "
+              "`KHR_materials_clearcoat`): a dielectric layer of index 1.5 whose reflection is added "
+              "on top, and what it does not reflect reaches the layers below.", UNIT,
+              only_for=_PRINCIPLED),
+        Field("clearcoat_roughness", "float", 0.0, "Perceptual roughness of the clear coat.", UNIT,
+              only_for=_PRINCIPLED),
+        Field("sheen_color", "vec3", (0.0, 0.0, 0.0), "Colour of a sheen layer (glTF "
+              "`KHR_materials_sheen`): the soft retro-reflection of velvet and cloth (Charlie "
+              "distribution). Black is no sheen.", UNIT, only_for=_PRINCIPLED),
+        Field("sheen_roughness", "float", 0.0, "Perceptual roughness of the sheen.", UNIT,
+              only_for=_PRINCIPLED),
+        Field("specular", "float", 1.0, "Strength of the dielectric base's specular reflection (glTF "
+              "`KHR_materials_specular` `specularFactor`); what it does not reflect goes to the "
+              "diffuse base.", UNIT, only_for=_PRINCIPLED),
+        Field("specular_color", "vec3", (1.0, 1.0, 1.0), "Colour of that specular reflection "
+              "(`specularColorFactor`).", UNIT, only_for=_PRINCIPLED),
         Field("emission", "vec3", (0.0, 0.0, 0.0), "Emitted radiance, linear RGB.", NON_NEGATIVE),
         Field("emission_strength", "float", 1.0, "Multiplier folded into `emission`.",
               NON_NEGATIVE, in_model=False),

@@ -64,6 +64,14 @@ MATERIALS = {
                           f'transmission = 1.0\nior = {IOR}'),
     "principled-rough": ('type = "principled"\nbase_color = [1.0, 1.0, 1.0]\nroughness = 0.6\nmetallic = 0.0\n'
                          f'transmission = 1.0\nior = {IOR}'),
+    "thin-smooth": 'type = "dielectric"\nbase_color = [1.0, 1.0, 1.0]\nroughness = 0.0\nthin = true',
+    "thin-rough": 'type = "dielectric"\nbase_color = [1.0, 1.0, 1.0]\nroughness = 0.6\nthin = true',
+    "principled-thin": ('type = "principled"\nbase_color = [1.0, 1.0, 1.0]\nroughness = 0.4\nmetallic = 0.0\n'
+                        'transmission = 1.0\nthin = true'),
+    # Layers over glass: a clear coat and a sheen over a rough glass lobe.
+    "principled-layered": ('type = "principled"\nbase_color = [1.0, 1.0, 1.0]\nroughness = 0.5\nmetallic = 0.0\n'
+                           f'transmission = 1.0\nior = {IOR}\nclearcoat = 1.0\nclearcoat_roughness = 0.2\n'
+                           'sheen_color = [1.0, 1.0, 1.0]\nsheen_roughness = 0.5'),
     # Half glass, half a white diffuse base under a clear coat: the layering must lose nothing either.
     "principled-half": ('type = "principled"\nbase_color = [1.0, 1.0, 1.0]\nroughness = 0.4\nmetallic = 0.0\n'
                         f'transmission = 0.5\nior = {IOR}'),
@@ -76,8 +84,11 @@ INTEGRATOR_CASES = [(m, i) for m in ("smooth", "rough0.3", "rough1.0", "principl
 SHAPE_CASES = [("analytic_sphere", False), ("analytic_sphere", True), ("mesh_ccw", False), ("mesh_cw", False),
                ("mesh_ccw", True), ("mesh_cw", True), ("sdf_sphere", False), ("sdf_sphere", True),
                ("thin_plate_mesh", False), ("thin_plate_sdf", False)]
-SPPM_CASES = ["smooth", "rough0.3"]
-NUM_TESTS = len(INTEGRATOR_CASES) + len(SHAPE_CASES) + len(SPPM_CASES)
+SPPM_CASES = ["smooth", "rough0.3", "thin-rough"]
+# Thin walls have no inside: the sphere's inside is the outside medium, radiance 1 on both sides.
+THIN_CASES = [(m, inside) for m in ("thin-smooth", "thin-rough", "principled-thin") for inside in (False, True)]
+LAYER_CASES = ["principled-layered"]
+NUM_TESTS = len(INTEGRATOR_CASES) + len(SHAPE_CASES) + len(SPPM_CASES) + len(THIN_CASES) + len(LAYER_CASES)
 LEVEL = sidak_alpha(ALPHA, NUM_TESTS)
 
 
@@ -166,3 +177,15 @@ def test_sppm_keeps_the_light(tmp_path, material):
     means = [render(scene, "sppm", spp=64, seed=seed).image()[..., 1].mean() for seed in range(1, SEEDS + 1)]
     t, p = stats.ttest_1samp(means, 1.0)
     assert p >= LEVEL, f"sppm {material}: image means {np.round(means, 5)}, t = {t:.2f}"
+
+
+@pytest.mark.parametrize("material,inside", THIN_CASES, ids=[f"{m}-{'inside' if i else 'outside'}" for m, i in THIN_CASES])
+def test_thin_walls_keep_the_light_from_both_sides(tmp_path, material, inside):
+    r = render(furnace_scene(tmp_path, "analytic_sphere", material, inside), "mis")
+    assert_furnace(r, 1.0, f"{material}, camera {'inside' if inside else 'outside'}")
+
+
+@pytest.mark.parametrize("material", LAYER_CASES)
+def test_layers_over_glass_keep_the_light(tmp_path, material):
+    r = render(furnace_scene(tmp_path, "analytic_sphere", material), "mis")
+    assert_furnace(r, 1.0, material)
