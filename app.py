@@ -151,13 +151,10 @@ def cmd_info(args) -> int:
         print(f"geometry:    sdf, {len(scene.sdf_objects)} top-level objects, "
               f"{sum(1 for o in scene.sdf_objects for _ in o.walk())} nodes")
     else:
-        from renderer.scene.features import features_from
         from renderer.scene.mesh_assembly import assemble
 
         mesh = assemble(scene)
-        features = features_from("mesh", mesh.material_uses(), scene.environment.kind, scene.camera.aperture,
-                                 mesh_kinds=mesh.data.kinds(), energy_compensation=r.energy_compensation,
-                                 fog=scene.fog.model)
+        features = mesh.features(scene)
         counts = ", ".join(f"{n} {k}s" for k, n in mesh.data.counts.items() if n)
         print(f"geometry:    mesh, {len(scene.mesh_objects)} objects: {counts}")
     own = ", ".join(f"{m.name} ({m.kind})" for m in scene.materials)

@@ -19,7 +19,7 @@ from renderer.materials.texture_sampler import TextureTable
 from renderer.media.table import MediaTable
 from renderer.program import RenderProgram
 from renderer.sampling.sampler import make_sampler
-from renderer.scene.features import Features, features_from, scene_features
+from renderer.scene.features import Features, scene_features
 from renderer.scene.model import Scene
 
 
@@ -31,6 +31,7 @@ class MeshOptions:
     traversal: str = "stack"
     triangle_test: str = "watertight"
     max_leaf_size: int = 4
+    instancing: bool = True  # False: every instance flattened into world triangles (a reference)
 
 
 def build_world(scene: Scene, mesh_options: MeshOptions):
@@ -41,20 +42,16 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
         return (SdfGeometry(scene, scene.material_index), MaterialTable.from_specs(scene.materials, scene.medium_names()),
                 scene_features(scene))
     if scene.geometry == "mesh":
-        from renderer.geometry.bvh_build import build_bvh
+        from renderer.geometry.instance_bvh import build_scene_bvh
         from renderer.geometry.mesh_geometry import MeshGeometry
         from renderer.scene.mesh_assembly import assemble
 
-        mesh = assemble(scene)
-        lo, hi = mesh.data.bounds()
-        bvh = build_bvh(lo, hi, 0.5 * (lo + hi), strategy=mesh_options.strategy,
-                        max_leaf_size=mesh_options.max_leaf_size)
-        geometry = MeshGeometry(mesh.data, bvh, mesh_options.traversal, mesh_options.triangle_test)
+        mesh = assemble(scene, instancing=mesh_options.instancing)
+        bvh = build_scene_bvh(mesh.data, strategy=mesh_options.strategy, max_leaf_size=mesh_options.max_leaf_size)
         materials = MaterialTable(mesh.rows, TextureTable(mesh.atlas, mesh.texture_slots))
-        features = features_from("mesh", mesh.material_uses(), scene.environment.kind, scene.camera.aperture,
-                                 mesh_kinds=mesh.data.kinds(),
-                                 energy_compensation=scene.render.energy_compensation, fog=scene.fog.model)
-        return geometry, materials, features
+        # The geometry tests alpha coverage during traversal: it reads the material table.
+        geometry = MeshGeometry(mesh.data, bvh, mesh_options.traversal, mesh_options.triangle_test, materials)
+        return geometry, materials, mesh.features(scene)
     raise ValueError(f"unknown geometry kind '{scene.geometry}'")
 
 

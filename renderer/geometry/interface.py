@@ -29,9 +29,11 @@ Ray = ti.types.struct(o=vec3, d=vec3, cone_width=ti.f32, cone_spread=ti.f32)
 # `work` counts the geometry's own effort for the debug views and benchmarks: march steps for SDF
 # scenes, node visits for BVH scenes; `tests` counts primitive tests (BVH only). `inside` is 1
 # when the ray reached the surface from inside a solid (it leaves it there).
-# `prim` and `bary` locate the hit on a mesh primitive (global id, two surface coordinates).
+# `prim` and `bary` locate the hit on a mesh primitive (global id, two surface coordinates);
+# `instance` is the mesh instance it belongs to (-1: a primitive placed in world space; read only
+# by geometry with instances).
 Hit = ti.types.struct(hit=ti.i32, t=ti.f32, work=ti.i32, tests=ti.i32, inside=ti.i32, prim=ti.i32,
-                      bary=ti.math.vec2)
+                      bary=ti.math.vec2, instance=ti.i32)
 
 # n_geo: outward geometric normal; n_shading: outward shading normal; eps: the distance within
 # which a spawned ray must not find this surface again.

@@ -1,7 +1,10 @@
-"""The primitives of a mesh scene as flat numpy arrays, world space, ready for the BVH and upload.
+"""The primitives of a mesh scene as flat numpy arrays, ready for the BVH and upload.
 
 Global primitive ids run over triangles first, then spheres, quads, discs and Bezier patches, in
-that order.
+that order. Everything is in world space except the triangles of instanced meshes: a mesh drawn
+many times is stored once in its own frame, as the LAST triangles of the triangle range (mesh by
+mesh, `instanced_meshes` says where each lies), and `instance_mesh` / `instance_to_world` place
+it; the world-level BVH holds the other primitives and one box per instance.
 """
 from __future__ import annotations
 
@@ -27,6 +30,7 @@ class MeshData:
     tri_uvs: np.ndarray | None = None  # (T, 3, 2) per-corner texture coordinates (set 0), or None
     tri_uvs1: np.ndarray | None = None  # (T, 3, 2) texture coordinate set 1, or None
     tri_tangents: np.ndarray | None = None  # (T, 3, 4) per-corner tangent xyz + handedness, or None
+    tri_colors: np.ndarray | None = None  # (T, 3, 4) per-corner linear RGBA vertex colours, or None
     tri_material: np.ndarray = field(default_factory=_i32)
     spheres: np.ndarray = field(default_factory=lambda: _f32((0, 4)))  # centre xyz, radius
     sphere_material: np.ndarray = field(default_factory=_i32)
@@ -44,6 +48,13 @@ class MeshData:
     bezier_patch_curve: np.ndarray = field(default_factory=_i32)
     bezier_patch_box: np.ndarray = field(default_factory=lambda: _f32((0, 2, 3)))  # object-space lo, hi
     bezier_material: np.ndarray = field(default_factory=_i32)
+    # Instancing: (K, 2) first triangle and triangle count of each mesh stored once in its own
+    # frame (the object-space triangles, contiguous at the end of the triangle range); per
+    # instance the mesh it draws (I,) and its object-to-world matrix (I, 3, 4), float64 (rows of
+    # a matrix acting on column vectors; never singular: assembly flattens those).
+    instanced_meshes: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int32))
+    instance_mesh: np.ndarray = field(default_factory=_i32)
+    instance_to_world: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 4)))
 
     @property
     def counts(self) -> dict[str, int]:
@@ -53,6 +64,20 @@ class MeshData:
     @property
     def primitive_count(self) -> int:
         return sum(self.counts.values())
+
+    @property
+    def has_instances(self) -> bool:
+        return len(self.instance_mesh) > 0
+
+    @property
+    def world_triangle_count(self) -> int:
+        """Triangles placed in world space (the first ones; the object-space ones follow)."""
+        return len(self.tri_vertices) - int(self.instanced_meshes[:, 1].sum())
+
+    def world_prims(self) -> np.ndarray:
+        """Global ids of the primitives placed in world space (all but the instanced meshes')."""
+        return np.concatenate([np.arange(self.world_triangle_count),
+                               np.arange(len(self.tri_vertices), self.primitive_count)]).astype(np.int64)
 
     def kinds(self) -> frozenset:
         return frozenset(k for k, n in self.counts.items() if n)
@@ -66,7 +91,8 @@ class MeshData:
                                self.disc_material, self.bezier_material]).astype(np.int32)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Per-primitive boxes (N, 3) lo and hi, in global id order (float64)."""
+        """Per-primitive boxes (N, 3) lo and hi, in global id order (float64); the triangles of
+        instanced meshes in their mesh's own frame."""
         los, his = [], []
         tv = self.tri_vertices.astype(np.float64)
         los.append(tv.min(axis=1))
@@ -102,8 +128,33 @@ class MeshData:
                 lo[rows], hi[rows] = world_boxes(box[rows], self.bezier_objects[o].astype(np.float64))
         return lo, hi
 
+    def instance_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World boxes (I, 3) lo and hi of the instances: their mesh's box, transformed."""
+        lo, hi = self.bounds()
+        mesh_lo = np.array([lo[a:a + n].min(axis=0) for a, n in self.instanced_meshes]).reshape(-1, 3)
+        mesh_hi = np.array([hi[a:a + n].max(axis=0) for a, n in self.instanced_meshes]).reshape(-1, 3)
+        return transformed_boxes(mesh_lo[self.instance_mesh], mesh_hi[self.instance_mesh], self.instance_to_world)
+
     def scene_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         lo, hi = self.bounds()
+        world = self.world_prims()
+        lo, hi = lo[world], hi[world]
+        if self.has_instances:
+            inst_lo, inst_hi = self.instance_bounds()
+            lo, hi = np.concatenate([lo, inst_lo]), np.concatenate([hi, inst_hi])
         if len(lo) == 0:
             return np.zeros(3), np.zeros(3)
         return lo.min(axis=0), hi.max(axis=0)
+
+
+def transformed_boxes(lo: np.ndarray, hi: np.ndarray, matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World boxes of object boxes (N, 3) under matrices (N, 3, 4): their eight corners
+    transformed, padded by a few f32 ulps of their size and place (a ray transformed into the
+    object's frame in f32 may find a point just outside the exact box)."""
+    corners = np.stack(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij"), axis=-1).reshape(8, 3)
+    pts = np.where(corners[None] == 1, hi[:, None, :], lo[:, None, :])  # (N, 8, 3)
+    world = np.einsum("nij,nkj->nki", matrices[:, :, :3], pts) + matrices[:, None, :, 3]
+    w_lo, w_hi = world.min(axis=1), world.max(axis=1)
+    pad = 4e-6 * (np.maximum(np.abs(w_lo), np.abs(w_hi)).max(axis=1, keepdims=True)
+                  + (w_hi - w_lo).max(axis=1, keepdims=True))
+    return w_lo - pad, w_hi + pad

@@ -6,21 +6,30 @@ Two traversals (a compile-time choice, benchmarked against each other):
                farther pushed with its entry distance and skipped on pop once a closer hit is known.
   "stackless": the depth-first next-pointer ("miss link") walk: no stack, no ordering.
 Two triangle tests: "watertight" (Woop et al. 2013, the default) and "moller" (Moller-Trumbore).
-Only the primitive kinds the scene has are compiled in.
+Only the primitive kinds the scene has are compiled in, and each of these only where the scene
+needs it: vertex colours, alpha coverage (renderer/geometry/coverage.py, which needs the material
+table) and instances (a two-level BVH, renderer/geometry/instance_bvh.py: on entering an instance
+node the ray moves into the instance's frame, its mesh's tree is walked in the same loop, and the
+world ray comes back on leaving it; renderer/geometry/instances.py).
 """
 import numpy as np
 import taichi as ti
 
+from renderer.geometry import coverage
 from renderer.geometry import emitter_shapes as shapes
 from renderer.geometry import intersect as isect
+from renderer.geometry.instance_bvh import INSTANCE_NODE, InstancedBVH
+from renderer.geometry.instances import InstanceTable
 from renderer.geometry.interface import INF, EmitterPoint, Hit, Ray, Surface
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.shading import consistent_shading_normal
+from renderer.materials.table import ALPHA_OPAQUE
 from renderer.sampling.warps import PI
 from renderer.upload import upload_fields
 
 vec3 = ti.math.vec3
 STACK_SIZE = 64  # deeper than any tree the builder makes (its depth is bounded well below this)
+RESUME_WORLD = -2  # the stack entry below an instance's nodes: the world ray comes back there
 TRAVERSALS = ("stack", "stackless")
 TRIANGLE_TESTS = ("watertight", "moller")
 
@@ -29,7 +38,9 @@ TRIANGLE_TESTS = ("watertight", "moller")
 class MeshGeometry:
     kind = "mesh"
 
-    def __init__(self, data: MeshData, bvh, traversal="stack", triangle_test="watertight"):
+    def __init__(self, data: MeshData, bvh, traversal="stack", triangle_test="watertight", materials=None):
+        """bvh: instance_bvh.build_scene_bvh's result for `data` (a FlatBVH where the data has no
+        instances). materials: the MaterialTable, needed where a material uses alpha coverage."""
         if traversal not in TRAVERSALS:
             raise ValueError(f"unknown traversal '{traversal}' (choose from {', '.join(TRAVERSALS)})")
         if triangle_test not in TRIANGLE_TESTS:
@@ -41,11 +52,23 @@ class MeshGeometry:
         self.has_uvs = data.tri_uvs is not None and len(data.tri_vertices) > 0
         self.has_uv1 = data.tri_uvs1 is not None and len(data.tri_vertices) > 0
         self.has_tangents = data.tri_tangents is not None and len(data.tri_vertices) > 0
-        self.node_total = len(bvh.node_count)
+        self.has_colors = data.tri_colors is not None and len(data.tri_vertices) > 0
+        self.materials = materials
+        self.has_alpha = materials is not None and bool(np.any(materials.arrays["alpha_mode"] != ALPHA_OPAQUE))
+        self.has_instances = data.has_instances
+        self.stack_size = STACK_SIZE
+        if self.has_instances:
+            if not isinstance(bvh, InstancedBVH):
+                raise ValueError("mesh data with instances needs the two-level BVH of build_scene_bvh")
+            self.stack_size = max(STACK_SIZE, bvh.stack_depth)
+        nodes = bvh.nodes if self.has_instances else bvh
+        self.node_total = len(nodes.node_count)
         self.data = data  # kept for emitter_info (the device has its own copy)
         uploads = []  # (field, array): copied in one launch (renderer.upload)
-        self._upload_bvh(bvh, uploads)
-        self._upload_primitives(data, bvh, uploads)
+        self._upload_bvh(nodes, uploads)
+        self._upload_primitives(data, nodes, uploads)
+        if self.has_instances:
+            self.instances = InstanceTable(bvh.mesh_root[data.instance_mesh], data.instance_to_world, uploads)
         upload_fields(uploads)
 
     # --- upload --------------------------------------------------------------------------------
@@ -80,6 +103,8 @@ class MeshGeometry:
             self.tri_uv1 = vec_field(t, data.tri_uvs1, 2, (3,))
         if self.has_tangents:
             self.tri_tangent = vec_field(t, data.tri_tangents, 4, (3,))
+        if self.has_colors:
+            self.tri_color = vec_field(t, data.tri_colors, 4, (3,))
         self.spheres = vec_field(len(data.spheres), data.spheres, 4)
         self.quads = vec_field(len(data.quads), data.quads, 3, (3,))
         discs = data.discs
@@ -97,11 +122,19 @@ class MeshGeometry:
             self.bezier = BezierPatches(data, uploads)
 
     def device_bytes(self) -> dict:
-        """Bytes on the device for the BVH and for the intersection data of triangles."""
+        """Bytes on the device: the BVH (every level), the triangles' intersection data, their
+        shading attributes (normals, texture coordinates, tangents, colours), the instance table,
+        and the total of these with the other primitives and the material ids."""
         nodes = self.node_total * (12 + 12 + 12)
         slots = self.slot_prim.shape[0] * 4
         triangles = self.tri_v.shape[0] * 36
-        return {"bvh": nodes + slots, "triangles": triangles}
+        attributes = sum(_field_bytes(getattr(self, name)) for name in ("tri_n", "tri_uv", "tri_uv1", "tri_tangent",
+                                                                        "tri_color") if hasattr(self, name))
+        instances = self.instances.device_bytes() if self.has_instances else 0
+        others = sum(_field_bytes(f) for f in (self.spheres, self.quads, self.discs_a, self.discs_n,
+                                               self.prim_material, self.range_end))
+        return {"bvh": nodes + slots, "triangles": triangles, "attributes": attributes, "instances": instances,
+                "total": nodes + slots + triangles + attributes + instances + others}
 
     # --- traversal -----------------------------------------------------------------------------
     @ti.func
@@ -132,59 +165,99 @@ class MeshGeometry:
         return hit, t, b1, b2
 
     @ti.func
-    def _leaf(self, node, o, d, k, s, hit: ti.template(), any_hit):
+    def _leaf(self, node, o, d, k, s, hit: ti.template(), any_hit, ray, instance):
+        """Test a leaf's primitives with the ray (o, d) of the current frame; `ray` is the world
+        ray and `instance` the instance whose frame o, d are in (-1: the world)."""
         link = self.node_link[node]
         for j in range(link[0], link[0] + link[1]):
             g = self.slot_prim[j]
             h, t, b1, b2 = self._test_prim(g, o, d, k, s, hit.t)
             hit.tests += 1
+            if ti.static(self.has_alpha):
+                if h == 1:
+                    h = coverage.covered(self, g, ti.math.vec2(b1, b2), ray.o, ray.d, instance)
             if h == 1:
                 hit.hit = 1
                 hit.t = t
                 hit.prim = g
                 hit.bary = ti.math.vec2(b1, b2)
+                if ti.static(self.has_instances):
+                    hit.instance = instance
                 if any_hit:
                     break
 
     @ti.func
-    def _traverse(self, ray, t_max, any_hit):
-        """Closest hit, or (any_hit: a constant or a per-ray value) the first hit found."""
-        hit = Hit(hit=0, t=t_max, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0))
-        o = ray.o
-        d = ray.d
+    def _ray_setup(self, d):
+        """The per-ray constants of the slab and triangle tests."""
         # A zero direction component would give 0 * inf = NaN in the slab test; a tiny stand-in
         # gives the same ordering with finite arithmetic.
         inv_d = 1.0 / ti.select(ti.abs(d) > 1e-30, d, 1e-30)
         k, s = isect.watertight_setup(d)
+        return inv_d, k, s
+
+    @ti.func
+    def _traverse(self, ray, t_max, any_hit):
+        """Closest hit, or (any_hit: a constant or a per-ray value) the first hit found."""
+        hit = Hit(hit=0, t=t_max, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0), instance=-1)
+        o = ray.o
+        d = ray.d
+        inv_d, k, s = self._ray_setup(d)
+        instance = -1  # the instance whose frame o, d are in; -1: the world
         if ti.static(self.traversal == "stackless"):
             node = 0
+            resume = 0  # the world node after the instance being walked
             while node < self.node_total:
                 hit.work += 1
                 link = self.node_link[node]
                 if isect.box_entry(o, inv_d, self.node_lo[node], self.node_hi[node], hit.t) <= hit.t:
                     if link[1] > 0:
-                        self._leaf(node, o, d, k, s, hit, any_hit)
+                        self._leaf(node, o, d, k, s, hit, any_hit, ray, instance)
                         if any_hit:
                             if hit.hit == 1:
                                 break
                         node = link[2]
                     else:
                         node = node + 1
+                        if ti.static(self.has_instances):
+                            if link[1] == INSTANCE_NODE:  # walk the mesh's tree in the instance's frame
+                                instance = link[0]
+                                o, d = self.instances.ray_to_object(instance, ray.o, ray.d)
+                                inv_d, k, s = self._ray_setup(d)
+                                resume = link[2]
+                                node = self.instances.root[instance]
                 else:
                     node = link[2]
+                if ti.static(self.has_instances):
+                    if node >= self.node_total and instance >= 0:  # the end of a mesh's tree
+                        instance = -1
+                        o = ray.o
+                        d = ray.d
+                        inv_d, k, s = self._ray_setup(d)
+                        node = resume
         else:
-            stack_node = ti.Vector([0] * STACK_SIZE, dt=ti.i32)
-            stack_t = ti.Vector([0.0] * STACK_SIZE, dt=ti.f32)
+            stack_node = ti.Vector([0] * self.stack_size, dt=ti.i32)
+            stack_t = ti.Vector([0.0] * self.stack_size, dt=ti.f32)
             sp = 0
             node = 0
             if isect.box_entry(o, inv_d, self.node_lo[0], self.node_hi[0], hit.t) > hit.t:
                 node = -1
             while node >= 0:
                 hit.work += 1
+                if ti.static(self.has_instances):
+                    if self.node_link[node][1] == INSTANCE_NODE:
+                        # Its box was hit: walk its mesh's tree in its frame, from below a marker
+                        # that brings the world ray back once that tree is done.
+                        instance = self.node_link[node][0]
+                        o, d = self.instances.ray_to_object(instance, ray.o, ray.d)
+                        inv_d, k, s = self._ray_setup(d)
+                        stack_node[sp] = RESUME_WORLD
+                        stack_t[sp] = -1.0
+                        sp += 1
+                        node = self.instances.root[instance]
                 link = self.node_link[node]
                 next_node = -1
                 if link[1] > 0:
-                    self._leaf(node, o, d, k, s, hit, any_hit)
+                    self._leaf(node, o, d, k, s, hit, any_hit, ray, instance)
                     if any_hit:
                         if hit.hit == 1:
                             break
@@ -208,6 +281,12 @@ class MeshGeometry:
                 # pop, skipping subtrees whose entry lies beyond the closest hit found since the push
                 while next_node < 0 and sp > 0:
                     sp -= 1
+                    if ti.static(self.has_instances):
+                        if stack_node[sp] == RESUME_WORLD:  # (its t of -1 keeps the pop going)
+                            instance = -1
+                            o = ray.o
+                            d = ray.d
+                            inv_d, k, s = self._ray_setup(d)
                     if stack_t[sp] <= hit.t:
                         next_node = stack_node[sp]
                 node = next_node
@@ -237,28 +316,48 @@ class MeshGeometry:
         uv = ti.math.vec2(0.0)
         uv1 = ti.math.vec2(0.0)
         tangent = ti.math.vec4(0.0)
+        color = ti.math.vec4(1.0)
         if ti.static("triangle" in self.kinds):
             if g < self.range_end[0]:
+                bary = hit.bary
+                b0 = 1.0 - bary.x - bary.y
                 v0, v1, v2 = self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2]
-                b0 = 1.0 - hit.bary.x - hit.bary.y
+                if ti.static(self.has_instances):
+                    if hit.instance >= 0:  # the corners in the world, where a world mesh has them
+                        v0 = self.instances.point_to_world(hit.instance, v0)
+                        v1 = self.instances.point_to_world(hit.instance, v1)
+                        v2 = self.instances.point_to_world(hit.instance, v2)
                 # From barycentrics, not o + t d: stays on the triangle's plane to f32 precision.
-                p = b0 * v0 + hit.bary.x * v1 + hit.bary.y * v2
+                p = b0 * v0 + bary.x * v1 + bary.y * v2
                 n = ti.math.normalize((v1 - v0).cross(v2 - v0))
+                if ti.static(self.has_instances):
+                    if hit.instance >= 0:
+                        if self.instances.mirrored(hit.instance):
+                            n = -n  # a mirror turns the winding; the front stays on the same side
                 ns = n
                 if ti.static(self.has_normals):
-                    interp = b0 * self.tri_n[g, 0] + hit.bary.x * self.tri_n[g, 1] + hit.bary.y * self.tri_n[g, 2]
+                    n0, n1, n2 = self._corner_normals(g, hit.instance)
+                    interp = b0 * n0 + bary.x * n1 + bary.y * n2
                     if interp.dot(interp) > 1e-12:  # zero-length normals fall back to the geometric one
                         ns = ti.math.normalize(interp)
-                if ti.static(self.has_uvs):
-                    uv = b0 * self.tri_uv[g, 0] + hit.bary.x * self.tri_uv[g, 1] + hit.bary.y * self.tri_uv[g, 2]
-                if ti.static(self.has_uv1):
-                    uv1 = b0 * self.tri_uv1[g, 0] + hit.bary.x * self.tri_uv1[g, 1] + hit.bary.y * self.tri_uv1[g, 2]
+                uv, uv1 = self.texture_coordinates(g, bary)
                 if ti.static(self.has_tangents):
-                    tg = b0 * self.tri_tangent[g, 0] + hit.bary.x * self.tri_tangent[g, 1] + hit.bary.y * self.tri_tangent[g, 2]
+                    t0, t1, t2 = self.tri_tangent[g, 0], self.tri_tangent[g, 1], self.tri_tangent[g, 2]
+                    if ti.static(self.has_instances):
+                        if hit.instance >= 0:
+                            n0, n1, n2 = vec3(0.0), vec3(0.0), vec3(0.0)
+                            if ti.static(self.has_normals):
+                                n0, n1, n2 = self._corner_normals(g, hit.instance)
+                            t0 = self.instances.tangent_to_world(hit.instance, t0, n0)
+                            t1 = self.instances.tangent_to_world(hit.instance, t1, n1)
+                            t2 = self.instances.tangent_to_world(hit.instance, t2, n2)
+                    tg = b0 * t0 + bary.x * t1 + bary.y * t2
                     # Gram-Schmidt against the shading normal; w keeps the handedness sign.
                     txyz = tg.xyz - ns.dot(tg.xyz) * ns
                     if txyz.dot(txyz) > 1e-12:
                         tangent = ti.math.vec4(ti.math.normalize(txyz), 1.0 if tg.w >= 0.0 else -1.0)
+                if ti.static(self.has_colors):
+                    color = self.corners(self.tri_color, g, bary)
         if ti.static("sphere" in self.kinds):
             if g >= self.range_end[0] and g < self.range_end[1]:
                 sp = self.spheres[g - self.range_end[0]]
@@ -290,7 +389,34 @@ class MeshGeometry:
         ns = consistent_shading_normal(ns, n, -ray.d)
         return Surface(p=p, n_geo=n, n_shading=ns, uv=uv, uv1=uv1, tangent=tangent, material=self.prim_material[g],
                        prim=g, front_face=front, eps=0.0, cone_width=ray.cone_width + ray.cone_spread * hit.t,
-                       cone_spread=ray.cone_spread, color=ti.math.vec4(1.0))
+                       cone_spread=ray.cone_spread, color=color)
+
+    @ti.func
+    def corners(self, f: ti.template(), g, bary):
+        """Per-corner attribute f of triangle g at barycentrics bary (of corners 1 and 2)."""
+        return (1.0 - bary.x - bary.y) * f[g, 0] + bary.x * f[g, 1] + bary.y * f[g, 2]
+
+    @ti.func
+    def texture_coordinates(self, g, bary):
+        """Texture coordinate sets 0 and 1 of triangle g at bary (zero where the mesh has none)."""
+        uv = ti.math.vec2(0.0)
+        uv1 = ti.math.vec2(0.0)
+        if ti.static(self.has_uvs):
+            uv = self.corners(self.tri_uv, g, bary)
+        if ti.static(self.has_uv1):
+            uv1 = self.corners(self.tri_uv1, g, bary)
+        return uv, uv1
+
+    @ti.func
+    def _corner_normals(self, g, instance):
+        """Triangle g's vertex normals in the world (instance: its instance, or -1)."""
+        n0, n1, n2 = self.tri_n[g, 0], self.tri_n[g, 1], self.tri_n[g, 2]
+        if ti.static(self.has_instances):
+            if instance >= 0:
+                n0 = self.instances.normal_to_world(instance, n0)
+                n1 = self.instances.normal_to_world(instance, n1)
+                n2 = self.instances.normal_to_world(instance, n2)
+        return n0, n1, n2
 
     @ti.func
     def spawn(self, surface, direction):
@@ -306,7 +432,7 @@ class MeshGeometry:
         """Every primitive with its material, area, bounds and emission cone (for light selection):
         flat shapes emit into the hemisphere of their normal (theta_o 0), spheres all around.
         Bezier patches are left out (their ids come last): an emissive Bezier surface shines where
-        paths hit it, but direct lighting does not sample it."""
+        paths hit it, but direct lighting does not sample it. So are instanced meshes (below)."""
         d = self.data
         lo, hi = d.bounds()
         n_sampled = d.primitive_count - d.counts["bezier"]
@@ -321,8 +447,13 @@ class MeshGeometry:
         axis = np.where(length > 0, cross / np.maximum(length, 1e-30), [0.0, 1.0, 0.0])
         theta_o = np.zeros(len(area))
         theta_o[d.counts["triangle"]:d.counts["triangle"] + d.counts["sphere"]] = np.pi
-        return {"prim": np.arange(len(area), dtype=np.int32), "material": d.materials()[:n_sampled], "area": area,
-                "lo": lo, "hi": hi, "axis": axis, "theta_o": theta_o, "theta_e": np.full(len(area), np.pi / 2)}
+        # Instanced meshes are not sampled: they are stored in their own frames, and assembly
+        # places emissive meshes in the world instead.
+        sampled = d.world_prims()
+        sampled = sampled[sampled < n_sampled]
+        return {"prim": sampled.astype(np.int32), "material": d.materials()[sampled], "area": area[sampled],
+                "lo": lo[sampled], "hi": hi[sampled], "axis": axis[sampled], "theta_o": theta_o[sampled],
+                "theta_e": np.full(len(sampled), np.pi / 2)}
 
     @ti.func
     def material_of(self, g):
@@ -407,3 +538,8 @@ class MeshGeometry:
             blocked = self.occluded(ray, t_max)
         return not blocked
 
+
+
+def _field_bytes(f) -> int:
+    """Bytes of a field of 4-byte scalars or vectors."""
+    return int(np.prod(f.shape)) * getattr(f, "n", 1) * 4

@@ -1,5 +1,11 @@
 """A mesh scene's objects, loaded and placed in world space: the flat primitive arrays, the
 material rows and the texture atlas the device needs. Numpy only; the Renderer uploads the result.
+
+A mesh a model file draws many times (glTF instancing) is kept once, in its own frame, with its
+instances' matrices (MeshData's instance fields), except where the device needs it in the world:
+an emissive mesh (light sampling picks points on world-space emitters), a singular placement (no
+inverse takes rays into its frame) and a mesh left with a single placement are flattened into
+world triangles.
 """
 from __future__ import annotations
 
@@ -13,6 +19,7 @@ from renderer.geometry.bezier import bezier_fields
 from renderer.geometry.mesh_data import MeshData
 from renderer.materials.table import KIND_IDS, MaterialRows
 from renderer.scene.errors import SceneError
+from renderer.scene.features import Features, features_from
 from renderer.scene.mesh_loader import MeshWarning
 from renderer.scene.model import Scene
 from renderer.scene.orientation import rewind_to_normals
@@ -33,31 +40,32 @@ class MeshScene:
         uses["kinds"] = {KIND_NAMES[k] for k in uses["kinds"]}
         return uses
 
+    def features(self, scene: Scene) -> Features:
+        """The Features of `scene`, of which this is the assembly (with the scene camera's lens)."""
+        return features_from("mesh", self.material_uses(), scene.environment.kind, scene.camera.aperture,
+                             mesh_kinds=self.data.kinds(), energy_compensation=scene.render.energy_compensation,
+                             fog=scene.fog.model, vertex_colors=self.data.tri_colors is not None,
+                             instances=self.data.has_instances)
 
-def flattened_instances(asset) -> list:
-    """Every instance of `asset.instanced` as a world-space mesh. Temporary: the device has no
-    instancing yet (a two-level BVH will take the instances as they are)."""
-    return [inst.placed(k) for inst in asset.instanced for k in range(inst.instance_count)]
+
+# A placement whose 3x3 part has |det| below this fraction of the product of its column lengths
+# flattens its mesh onto (nearly) a plane or a line: it has no usable inverse.
+SINGULAR_VOLUME = 1e-9
 
 
-class _Builder:
-    def __init__(self, scene: Scene):
-        self.scene = scene
-        self.rows = MaterialRows(scene.medium_names())
-        self.material_ids = {m.name: self.rows.add_spec(m) for m in scene.materials}
-        self.images: list[np.ndarray] = []
-        self.slots: list = []  # (image index, wrap_s, wrap_t, uv_set, matrix)
-        self.parts: dict[str, list] = {"tris": [], "normals": [], "uvs": [], "uvs1": [], "tangents": [],
-                                       "tri_mat": [], "spheres": [], "sphere_mat": [], "quads": [],
-                                       "quad_mat": [], "discs": [], "disc_mat": []}
-        self.beziers: list = []  # (cubic segments, matrix, material, spans, sectors) per object
+class _Triangles:
+    """Per-corner triangle arrays, appended mesh by mesh (None: the mesh lacks the attribute)."""
 
-    def material(self, name, where):
-        if name not in self.material_ids:
-            raise SceneError(self.scene.path, f"{where}: unknown material '{name}'")
-        return self.material_ids[name]
+    KEYS = ("tris", "normals", "uvs", "uvs1", "tangents", "colors", "tri_mat")
 
-    def add_triangles(self, positions, indices, normals, uv0, uv1, tangents, matrix, material):
+    def __init__(self):
+        self.parts = {key: [] for key in self.KEYS}
+
+    @property
+    def count(self) -> int:
+        return sum(len(t) for t in self.parts["tris"])
+
+    def add(self, positions, indices, normals, uv0, uv1, tangents, colors, matrix, material):
         """Local-frame vertex data placed with `matrix`; per-corner arrays appended."""
         m3 = matrix[:3, :3]
         det = np.linalg.det(m3)
@@ -77,6 +85,7 @@ class _Builder:
             self.parts["normals"].append(None)
         self.parts["uvs"].append(None if uv0 is None else uv0[idx].astype(np.float32))
         self.parts["uvs1"].append(None if uv1 is None else uv1[idx].astype(np.float32))
+        self.parts["colors"].append(None if colors is None else colors[idx].astype(np.float32))
         if tangents is not None:
             t = tangents[:, :3].astype(np.float64) @ m3.T
             t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-30)
@@ -85,6 +94,34 @@ class _Builder:
         else:
             self.parts["tangents"].append(None)
         self.parts["tri_mat"].append(np.full(len(idx), material, np.int32))
+
+
+def _singular(matrices: np.ndarray) -> np.ndarray:
+    m3 = matrices[:, :3, :3]
+    scale = np.prod(np.linalg.norm(m3, axis=1), axis=1)
+    return np.abs(np.linalg.det(m3)) <= SINGULAR_VOLUME * scale
+
+
+class _Builder:
+    def __init__(self, scene: Scene, instancing: bool):
+        self.scene = scene
+        self.instancing = instancing
+        self.rows = MaterialRows(scene.medium_names())
+        self.material_ids = {m.name: self.rows.add_spec(m) for m in scene.materials}
+        self.images: list[np.ndarray] = []
+        self.slots: list = []  # (image index, wrap_s, wrap_t, uv_set, matrix)
+        self.parts: dict[str, list] = {"spheres": [], "sphere_mat": [], "quads": [], "quad_mat": [], "discs": [],
+                                       "disc_mat": []}
+        self.world = _Triangles()  # triangles placed in world space
+        self.object = _Triangles()  # instanced meshes, each in its own frame
+        self.instanced: list = []  # (first triangle in self.object, count) per instanced mesh
+        self.instances: list = []  # (instanced mesh, (N, 3, 4) object-to-world matrices)
+        self.beziers: list = []  # (cubic segments, matrix, material, spans, sectors) per object
+
+    def material(self, name, where):
+        if name not in self.material_ids:
+            raise SceneError(self.scene.path, f"{where}: unknown material '{name}'")
+        return self.material_ids[name]
 
     def add_asset(self, obj, index):
         asset = self.scene.model_files.load(obj.file)
@@ -102,14 +139,33 @@ class _Builder:
             mats = [self.rows.add_pbr(m, texture_id) for m in asset.materials]
         matrix = obj.matrix()
         turned = 0
-        for mesh in asset.meshes + flattened_instances(asset):
-            indices, count = rewind_to_normals(mesh.positions, mesh.indices, mesh.normals)
-            turned += count
-            self.add_triangles(mesh.positions, indices, mesh.normals, mesh.uv0, mesh.uv1, mesh.tangents,
-                               matrix, mats[mesh.material])
+        for mesh in asset.meshes:
+            turned += self.add_mesh(self.world, mesh, matrix, mats[mesh.material])
+        for inst in asset.instanced:
+            material = mats[inst.mesh.material]
+            matrices = matrix @ inst.matrices  # the scene object's placement, then the file's
+            flat = _singular(matrices)
+            if (not self.instancing or max(self.rows.rows[material]["emission"]) > 0.0
+                    or np.count_nonzero(~flat) < 2):
+                flat[:] = True  # emitters stay where light sampling finds them; one placement is a world mesh
+            for k in np.flatnonzero(flat):
+                turned += self.add_mesh(self.world, inst.placed(k), matrix, material)
+            if not flat.all():
+                first = self.object.count
+                turned += self.add_mesh(self.object, inst.mesh, np.eye(4), material)
+                self.instanced.append((first, self.object.count - first))
+                self.instances.append((len(self.instanced) - 1, matrices[~flat, :3, :]))
         if turned:
             warnings.warn(f"{os.fspath(obj.file)}: {turned} triangles wound against their vertex normals were "
                           "turned to face the way the normals do", MeshWarning, stacklevel=2)
+
+    @staticmethod
+    def add_mesh(target: _Triangles, mesh, matrix, material) -> int:
+        """Adds a TriangleMesh placed with `matrix`; returns how many triangles were rewound."""
+        indices, count = rewind_to_normals(mesh.positions, mesh.indices, mesh.normals)
+        target.add(mesh.positions, indices, mesh.normals, mesh.uv0, mesh.uv1, mesh.tangents, mesh.colors, matrix,
+                   material)
+        return count
 
     def add_object(self, obj, index):
         where = f"objects[{index}]"
@@ -120,7 +176,7 @@ class _Builder:
             from renderer.scene.generators import generate
 
             positions, indices, normals = generate(obj.generator, dict(obj.params))
-            self.add_triangles(positions, indices, normals, None, None, None, matrix, self.material(obj.material, where))
+            self.world.add(positions, indices, normals, None, None, None, None, matrix, self.material(obj.material, where))
         elif obj.kind == "sphere":
             self.parts["spheres"].append([*obj.translate, obj.radius * obj.scale[0]])
             self.parts["sphere_mat"].append(self.material(obj.material, where))
@@ -149,30 +205,40 @@ class _Builder:
         else:
             raise SceneError(self.scene.path, f"{where}: unknown mesh object type '{obj.kind}'")
 
-    def per_corner(self, key, width):
-        """Concatenate a per-corner attribute, or None when no mesh has it (missing ones get zeros)."""
-        arrays = self.parts[key]
+    def per_corner(self, key, width, missing=0.0):
+        """Concatenate a per-corner attribute of the world triangles, then of the instanced meshes,
+        or None when no mesh has it (meshes without it get `missing`)."""
+        arrays = self.world.parts[key] + self.object.parts[key]
         if not any(a is not None for a in arrays):
             return None
-        filled = [a if a is not None else np.zeros((len(t), 3, width), np.float32)
-                  for a, t in zip(arrays, self.parts["tris"])]
-        return np.concatenate(filled) if filled else None
+        tris = self.world.parts["tris"] + self.object.parts["tris"]
+        return np.concatenate([a if a is not None else np.full((len(t), 3, width), missing, np.float32)
+                               for a, t in zip(arrays, tris)])
 
     def result(self) -> MeshScene:
         p = self.parts
-        tris = np.concatenate(p["tris"]) if p["tris"] else np.zeros((0, 3, 3), np.float32)
-        # Meshes without normals get zero normals, which the device reads as "use the geometric one".
-        normals = self.per_corner("normals", 3)
+        tris = self.world.parts["tris"] + self.object.parts["tris"]
+        materials = self.world.parts["tri_mat"] + self.object.parts["tri_mat"]
+        world = self.world.count
+        instance_mesh = [np.full(len(m), i, np.int32) for i, m in self.instances]
+        # Meshes without normals get zero normals, which the device reads as "use the geometric
+        # one"; meshes without colours get white (glTF: COLOR_0 multiplies the base colour).
         data = MeshData(
-            tri_vertices=tris, tri_normals=normals, tri_uvs=self.per_corner("uvs", 2),
+            tri_vertices=np.concatenate(tris) if tris else np.zeros((0, 3, 3), np.float32),
+            tri_normals=self.per_corner("normals", 3), tri_uvs=self.per_corner("uvs", 2),
             tri_uvs1=self.per_corner("uvs1", 2), tri_tangents=self.per_corner("tangents", 4),
-            tri_material=np.concatenate(p["tri_mat"]) if p["tri_mat"] else np.zeros(0, np.int32),
+            tri_colors=self.per_corner("colors", 4, missing=1.0),
+            tri_material=np.concatenate(materials) if materials else np.zeros(0, np.int32),
             spheres=np.array(p["spheres"], np.float32).reshape(-1, 4),
             sphere_material=np.array(p["sphere_mat"], np.int32),
             quads=np.array(p["quads"], np.float32).reshape(-1, 3, 3),
             quad_material=np.array(p["quad_mat"], np.int32),
             discs=np.array(p["discs"], np.float32).reshape(-1, 7),
             disc_material=np.array(p["disc_mat"], np.int32),
+            instanced_meshes=np.array([(world + first, n) for first, n in self.instanced], np.int32).reshape(-1, 2),
+            instance_mesh=np.concatenate(instance_mesh) if instance_mesh else np.zeros(0, np.int32),
+            instance_to_world=(np.concatenate([m for _, m in self.instances]) if self.instances
+                               else np.zeros((0, 3, 4))),
             **bezier_fields(self.beziers))
         atlas, slots = None, []
         if self.slots:
@@ -182,8 +248,9 @@ class _Builder:
         return MeshScene(data, self.rows, atlas, slots)
 
 
-def assemble(scene: Scene) -> MeshScene:
-    builder = _Builder(scene)
+def assemble(scene: Scene, instancing: bool = True) -> MeshScene:
+    """The scene's device arrays; instancing False flattens every instance into world triangles."""
+    builder = _Builder(scene, instancing)
     for i, obj in enumerate(scene.mesh_objects):
         builder.add_object(obj, i)
     result = builder.result()

@@ -26,6 +26,12 @@ compare what the loader returns with these exact values. Outputs, next to this s
   texture slot set, and a transmissive material without a volume (thin-walled).
 - imperfect.gltf: a texture whose file is missing, and extensionsUsed that the loader does not
   implement (KHR_materials_unlit, KHR_lights_punctual; not required).
+- cutout.gltf + cutout.png: a 2 m black quad facing +z whose base-colour alpha is a 4 x 4
+  checker of 0 and 1 (clamped at the edges), alphaMode MASK: the renderer's coverage tests.
+- colored_quads.gltf: three 2 m quads facing +z side by side: COLOR_0 linear in position on an
+  opaque material, COLOR_0 whose alpha runs from 0 to 1 across a MASK material, and no COLOR_0.
+- simple_instancing.gltf: a stand-in for Khronos' SimpleInstancing sample: one cube drawn 64
+  times by EXT_mesh_gpu_instancing (translations on a 4 x 4 x 4 grid, rotations, scales).
 """
 from __future__ import annotations
 
@@ -154,6 +160,47 @@ INSTANCE_TRANSLATIONS = np.array([[0, 0, 0], [5, 0, 0], [0, 0, -5]], dtype=np.fl
 INSTANCE_ROTATIONS = np.array([[0, 0, 0, 32767], [0, 23170, 0, 23170], [32767, 0, 0, 0]], dtype=np.int16)
 INSTANCE_SCALES = np.array([[1, 1, 1], [0.5, 2, 1], [-1, 1, 1]], dtype=np.float32)  # the last mirrors
 SINGLE_NODE = {"name": "single", "translation": [0.0, -4.0, 0.0]}
+
+# --- coverage (alpha MASK) and many instances --------------------------------------------------------
+
+CUTOUT = np.zeros((4, 4, 4), dtype=np.uint8)
+CUTOUT[..., 3] = 255 * ((np.arange(4)[:, None] + np.arange(4)[None, :]) % 2 == 0)  # opaque where row + col is even
+CUTOUT_POSITIONS = np.array([[-1, 1, 0], [1, 1, 0], [1, -1, 0], [-1, -1, 0]], dtype=np.float32)
+CUTOUT_MATERIAL = {"name": "cutout", "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": True,
+                   "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0,
+                                            "baseColorTexture": {"index": 0}}}
+
+CUBE_FACES = [(np.array(n, np.float32), np.array(u, np.float32), np.array(v, np.float32))
+              for n, u, v in (([1, 0, 0], [0, 1, 0], [0, 0, 1]), ([-1, 0, 0], [0, 0, 1], [0, 1, 0]),
+                              ([0, 1, 0], [0, 0, 1], [1, 0, 0]), ([0, -1, 0], [1, 0, 0], [0, 0, 1]),
+                              ([0, 0, 1], [1, 0, 0], [0, 1, 0]), ([0, 0, -1], [0, 1, 0], [1, 0, 0]))]
+COLORED_CENTRES = (-2.2, 0.0, 2.2)  # x of the three quads' centres
+COLORED_MATERIALS = [
+    {"name": "tinted", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.8, 0.7, 1.0], "metallicFactor": 0.0}},
+    {"name": "faded", "alphaMode": "MASK", "alphaCutoff": 0.5,
+     "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0}},
+    {"name": "plain", "pbrMetallicRoughness": {"baseColorFactor": [0.3, 0.6, 0.9, 1.0], "metallicFactor": 0.0}},
+]
+
+
+def tinted_color(lx, ly):
+    """COLOR_0 of the first quad at local coordinates (lx, ly) in [-1, 1]^2: linear in both."""
+    return np.stack([0.2 + 0.3 * lx, 0.3 + 0.2 * ly, 0.4 + 0.1 * lx + 0.1 * ly, np.ones_like(lx)], axis=-1)
+
+
+def faded_color(lx, ly):
+    """COLOR_0 of the second quad: white, alpha from 0 at its left edge to 1 at its right."""
+    return np.stack([np.ones_like(lx)] * 3 + [(lx + 1.0) / 2.0], axis=-1)
+
+
+GRID = np.arange(4, dtype=np.float32) * 2.5 - 3.75
+GRID_TRANSLATIONS = np.stack(np.meshgrid(GRID, GRID, GRID, indexing="ij"), axis=-1).reshape(-1, 3)
+GRID_ANGLES = np.arange(64, dtype=np.float32) * np.float32(0.1)
+GRID_ROTATIONS = np.stack([np.zeros(64), np.sin(GRID_ANGLES / 2), np.zeros(64), np.cos(GRID_ANGLES / 2)],
+                          axis=1).astype(np.float32)  # about +y
+GRID_SCALES = np.repeat((0.5 + 0.5 * (np.arange(64) % 3 == 0)).astype(np.float32)[:, None], 3, axis=1)
+GRID_MATERIAL = {"name": "cubes", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.5, 0.2, 1.0],
+                                                          "metallicFactor": 0.0, "roughnessFactor": 0.6}}
 
 # --- material layers --------------------------------------------------------------------------------
 
@@ -378,6 +425,75 @@ def instancing_document() -> dict:
     }
 
 
+def cutout_document() -> dict:
+    b = BufferBuilder()
+    quad = {"attributes": {"POSITION": b.accessor(CUTOUT_POSITIONS), "NORMAL": b.accessor(QUAD_NORMALS),
+                           "TEXCOORD_0": b.accessor(QUAD_UV0)},
+            "indices": b.accessor(QUAD_INDICES), "material": 0}
+    return {
+        "asset": {"version": "2.0", "generator": "Lantern tests/data/make_test_models.py"},
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "cutout", "mesh": 0}],
+        "meshes": [{"name": "cutout", "primitives": [quad]}],
+        "materials": [CUTOUT_MATERIAL],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"wrapS": 33071, "wrapT": 33071}],
+        "images": [{"uri": "cutout.png"}],
+        "accessors": b.accessors, "bufferViews": b.views, "buffers": data_uri_buffer(b),
+    }
+
+
+def colored_quads_document() -> dict:
+    b = BufferBuilder()
+    lx, ly = QUAD_POSITIONS[:, 0].astype(np.float64), QUAD_POSITIONS[:, 1].astype(np.float64)
+    normals, indices = b.accessor(QUAD_NORMALS), b.accessor(QUAD_INDICES)
+    primitives = []
+    for k, (cx, color) in enumerate(zip(COLORED_CENTRES, (tinted_color, faded_color, None))):
+        attributes = {"POSITION": b.accessor(QUAD_POSITIONS + np.float32([cx, 0.0, 0.0])), "NORMAL": normals}
+        if color is not None:
+            attributes["COLOR_0"] = b.accessor(color(lx, ly).astype(np.float32))
+        primitives.append({"attributes": attributes, "indices": indices, "material": k})
+    return {
+        "asset": {"version": "2.0", "generator": "Lantern tests/data/make_test_models.py"},
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "quads", "mesh": 0}],
+        "meshes": [{"name": "quads", "primitives": primitives}],
+        "materials": COLORED_MATERIALS,
+        "accessors": b.accessors, "bufferViews": b.views, "buffers": data_uri_buffer(b),
+    }
+
+
+def cube_arrays() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A unit cube centred on the origin: positions, normals (4 corners per face) and indices,
+    counter-clockwise seen from outside."""
+    positions, normals, indices = [], [], []
+    for n, u, v in CUBE_FACES:
+        base = len(positions)
+        positions += [0.5 * (n + su * u + sv * v) for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+        normals += [n] * 4
+        indices += [base, base + 1, base + 2, base, base + 2, base + 3]
+    return (np.array(positions, np.float32), np.array(normals, np.float32), np.array(indices, np.uint16))
+
+
+def simple_instancing_document() -> dict:
+    b = BufferBuilder()
+    positions, normals, indices = cube_arrays()
+    cube = {"attributes": {"POSITION": b.accessor(positions), "NORMAL": b.accessor(normals)},
+            "indices": b.accessor(indices), "material": 0}
+    gpu = {"EXT_mesh_gpu_instancing": {"attributes": {
+        "TRANSLATION": b.accessor(GRID_TRANSLATIONS), "ROTATION": b.accessor(GRID_ROTATIONS),
+        "SCALE": b.accessor(GRID_SCALES)}}}
+    return {
+        "asset": {"version": "2.0", "generator": "Lantern tests/data/make_test_models.py"},
+        "extensionsUsed": ["EXT_mesh_gpu_instancing"],
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "cubes", "mesh": 0, "extensions": gpu}],
+        "meshes": [{"name": "cube", "primitives": [cube]}],
+        "materials": [GRID_MATERIAL],
+        "accessors": b.accessors, "bufferViews": b.views, "buffers": data_uri_buffer(b),
+    }
+
+
 def layers_document() -> dict:
     b = BufferBuilder()
     uv = b.accessor(np.array([[0, 0], [1, 0], [0, 1]], dtype=np.float32))
@@ -505,7 +621,7 @@ def glb_bytes(doc: dict, binary: bytes) -> bytes:
 
 def main(out: Path = HERE) -> None:
     for name, pixels in (("checker.png", CHECKER), ("mr.png", MR), ("normal.png", NORMAL),
-                         ("alpha.png", ALPHA), ("layer.png", LAYER)):
+                         ("alpha.png", ALPHA), ("layer.png", LAYER), ("cutout.png", CUTOUT)):
         (out / name).write_bytes(png_bytes(pixels))
     (out / "rgb16.png").write_bytes(png16_bytes(RGB16))
 
@@ -524,7 +640,10 @@ def main(out: Path = HERE) -> None:
     for name, document in (("alpha_colors.gltf", alpha_colors_document()),
                            ("instancing.gltf", instancing_document()),
                            ("layers.gltf", layers_document()),
-                           ("imperfect.gltf", imperfect_document())):
+                           ("imperfect.gltf", imperfect_document()),
+                           ("cutout.gltf", cutout_document()),
+                           ("colored_quads.gltf", colored_quads_document()),
+                           ("simple_instancing.gltf", simple_instancing_document())):
         (out / name).write_text(json.dumps(document, indent=1) + "\n")
 
 

@@ -2,17 +2,17 @@
 import numpy as np
 import taichi as ti
 
-from renderer.geometry.bvh_build import build_bvh
+from renderer.geometry.instance_bvh import build_scene_bvh
 from renderer.geometry.interface import INF, Ray
 from renderer.geometry.intersect import watertight_setup
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.mesh_geometry import MeshGeometry
 
 
-def geometry_from(data: MeshData, strategy="sah", traversal="stack", triangle_test="watertight", leaf=4):
-    lo, hi = data.bounds()
-    bvh = build_bvh(lo, hi, 0.5 * (lo + hi), strategy=strategy, max_leaf_size=leaf)
-    return MeshGeometry(data, bvh, traversal=traversal, triangle_test=triangle_test)
+def geometry_from(data: MeshData, strategy="sah", traversal="stack", triangle_test="watertight", leaf=4,
+                  materials=None):
+    bvh = build_scene_bvh(data, strategy=strategy, max_leaf_size=leaf)
+    return MeshGeometry(data, bvh, traversal=traversal, triangle_test=triangle_test, materials=materials)
 
 
 def trimesh_data(mesh, material=0) -> MeshData:

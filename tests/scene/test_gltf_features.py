@@ -186,8 +186,9 @@ def test_gpu_instancing_errors_are_one_line(tmp_path):
     assert "\n" not in str(e.value)
 
 
-def test_assembly_flattens_instances_until_the_device_instances_them():
-    """Temporary: mesh_assembly draws every instance as world-space triangles."""
+def test_assembly_keeps_each_instanced_mesh_once():
+    """mesh_assembly stores an instanced mesh once in its own frame with one matrix per placement;
+    placing those triangles gives the loader's world-space instances."""
     from renderer.scene.catalog import load_any
     from renderer.scene.mesh_assembly import assemble
 
@@ -196,11 +197,24 @@ def test_assembly_flattens_instances_until_the_device_instances_them():
         scene = load_any(DATA / "instancing.gltf")
     asset = scene.model_files.load(DATA / "instancing.gltf")
     data = assemble(scene).data
-    assert len(data.tri_vertices) == asset.drawn_triangle_count
+    assert len(data.tri_vertices) == asset.triangle_count  # unique triangles only
+    assert len(data.instance_mesh) == sum(i.instance_count for i in asset.instanced)
+    drawn = [data.tri_vertices[:data.world_triangle_count].astype(np.float64)]
+    for mesh, m in zip(data.instance_mesh, data.instance_to_world):
+        first, count = data.instanced_meshes[mesh]
+        drawn.append(data.tri_vertices[first:first + count].astype(np.float64) @ m[:, :3].T + m[:, 3])
     placed = [asset.meshes[0]] + [i.placed(k) for i in asset.instanced for k in range(i.instance_count)]
     expected = np.concatenate([m.positions[m.indices] for m in placed])
-    np.testing.assert_allclose(np.sort(data.tri_vertices.reshape(-1, 9), axis=0),
-                               np.sort(expected.reshape(-1, 9), axis=0), atol=1e-5)
+    np.testing.assert_allclose(triangle_set(np.concatenate(drawn)), triangle_set(expected), atol=1e-5)
+
+
+def triangle_set(tris):
+    """(T, 9) triangles with their corners in lexicographic order, rows sorted: a mirrored
+    placement reverses the winding of placed() only, so compare corners as sets."""
+    t = np.round(np.asarray(tris, np.float64), 4) + 0.0
+    corners = np.take_along_axis(t, np.lexsort((t[..., 2], t[..., 1], t[..., 0]), axis=1)[..., None], axis=1)
+    rows = corners.reshape(-1, 9)
+    return rows[np.lexsort(rows.T[::-1])]
 
 
 # ---------------------------------------------------------------------------------------------

@@ -28,7 +28,7 @@ def test_info_on_an_instanced_model(capsys):
     assert "  triangles  9 unique, 21 drawn (20 by instances)" in out
     assert "  instances  5 of 2 meshes: 'shared box/0' x2, 'crowd box/0' x3" in out
     assert "  extensions EXT_mesh_gpu_instancing" in out
-    assert "  triangles  0.0 MB (21 triangles as uploaded)" in out  # flattened for now
+    assert "  triangles  0.0 MB (9 triangles as uploaded)" in out  # instanced meshes once
 
 
 def test_info_lists_layers_textures_and_ignored_extensions(capsys):
