@@ -626,9 +626,12 @@ def _instance_bounds(points: np.ndarray, matrices: Optional[np.ndarray]) -> np.n
     chunk = max(1, (1 << 22) // max(len(points), 1))  # bounded memory for many big instances
     for start in range(0, len(matrices), chunk):
         m = matrices[start:start + chunk]
-        world = np.einsum("nij,pj->npi", m[:, :3, :3], points) + m[:, None, :3, 3]
-        lo = np.minimum(lo, world.min(axis=(0, 1)))
-        hi = np.maximum(hi, world.max(axis=(0, 1)))
+        # Every matrix row against every point in one matrix product (BLAS; an einsum here took
+        # minutes for 10,000 instances of a 50,000-vertex mesh); the translation adds after the
+        # extremes (rounding is monotonic, so the result is the same).
+        along = (m[:, :3, :3].reshape(-1, 3) @ points.T).reshape(len(m), 3, -1)
+        lo = np.minimum(lo, (along.min(axis=2) + m[:, :3, 3]).min(axis=0))
+        hi = np.maximum(hi, (along.max(axis=2) + m[:, :3, 3]).max(axis=0))
     return np.stack([lo, hi])
 
 
