@@ -254,6 +254,7 @@ class MeshGeometry:
                         stack_t[sp] = -1.0
                         sp += 1
                         node = self.instances.root[instance]
+                        hit.work += 1  # the mesh's root: a visit of its own
                 link = self.node_link[node]
                 next_node = -1
                 if link[1] > 0:
