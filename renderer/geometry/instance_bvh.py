@@ -41,21 +41,20 @@ class InstancedBVH:
 def build_scene_bvh(data: MeshData, strategy: str = "sah", max_leaf_size: int = 4):
     """The BVH MeshGeometry takes for `data`: a FlatBVH without instances, else an InstancedBVH."""
     lo, hi = data.bounds()
+
+    def tree(box_lo, box_hi, **options):
+        options.setdefault("max_leaf_size", max_leaf_size)
+        return build_bvh(box_lo, box_hi, 0.5 * (box_lo + box_hi), strategy=strategy, **options)
+
     if not data.has_instances:
-        return build_bvh(lo, hi, 0.5 * (lo + hi), strategy=strategy, max_leaf_size=max_leaf_size)
+        return tree(lo, hi)
     world = data.world_prims()
-    inst_lo, inst_hi = data.instance_bounds()
     # One instance per leaf: a leaf is where the ray changes frames.
-    parts = [(build_bvh(inst_lo, inst_hi, 0.5 * (inst_lo + inst_hi), strategy=strategy, max_leaf_size=1,
-                        max_leaf_hard=1), None)]
+    parts = [(tree(*data.instance_bounds(), max_leaf_size=1, max_leaf_hard=1), None)]
     if len(world):
-        parts.insert(0, (build_bvh(lo[world], hi[world], 0.5 * (lo[world] + hi[world]), strategy=strategy,
-                                   max_leaf_size=max_leaf_size), world))
-    meshes = []
-    for first, count in data.instanced_meshes:
-        ids = np.arange(first, first + count)
-        meshes.append((build_bvh(lo[ids], hi[ids], 0.5 * (lo[ids] + hi[ids]), strategy=strategy,
-                                 max_leaf_size=max_leaf_size), ids))
+        parts.insert(0, (tree(lo[world], hi[world]), world))
+    meshes = [(tree(lo[first:first + count], hi[first:first + count]), np.arange(first, first + count))
+              for first, count in data.instanced_meshes]
     return _concatenate(parts, meshes)
 
 
@@ -84,7 +83,8 @@ def _concatenate(world_parts, meshes) -> InstancedBVH:
         slots += tree.num_prims
     if joined:
         (w, _), (t, _) = world_parts
-        root = FlatBVH(node_lo=np.minimum(w.node_lo[:1], t.node_lo[:1]), node_hi=np.maximum(w.node_hi[:1], t.node_hi[:1]),
+        root = FlatBVH(node_lo=np.minimum(w.node_lo[:1], t.node_lo[:1]),
+                       node_hi=np.maximum(w.node_hi[:1], t.node_hi[:1]),
                        node_a=np.array([1 + w.num_nodes], np.int32), node_count=np.zeros(1, np.int32),
                        node_skip=np.array([total], np.int32), node_axis=np.zeros(1, np.int8),
                        prim_order=np.zeros(0, np.int32))

@@ -467,8 +467,7 @@ class MeshGeometry:
             if g < self.range_end[0]:
                 result = shapes.triangle_sample(self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2], ref, u)
                 if ti.static(self.has_uvs):
-                    b = result.uv
-                    result.uv = (1.0 - b.x - b.y) * self.tri_uv[g, 0] + b.x * self.tri_uv[g, 1] + b.y * self.tri_uv[g, 2]
+                    result.uv = self.corners(self.tri_uv, g, result.uv)  # uv held the barycentrics
         if ti.static("sphere" in self.kinds):
             if g >= self.range_end[0] and g < self.range_end[1]:
                 sp = self.spheres[g - self.range_end[0]]

@@ -176,7 +176,8 @@ class _Builder:
             from renderer.scene.generators import generate
 
             positions, indices, normals = generate(obj.generator, dict(obj.params))
-            self.world.add(positions, indices, normals, None, None, None, None, matrix, self.material(obj.material, where))
+            self.world.add(positions, indices, normals, None, None, None, None, matrix,
+                           self.material(obj.material, where))
         elif obj.kind == "sphere":
             self.parts["spheres"].append([*obj.translate, obj.radius * obj.scale[0]])
             self.parts["sphere_mat"].append(self.material(obj.material, where))
