@@ -12,7 +12,9 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
+import signal
 import sys
 import warnings
 from pathlib import Path
@@ -30,17 +32,58 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+# What the kernels take: sample indices and depths are i32 arguments, seeds u32.
+I32_MAX = 2**31 - 1
+U32_MAX = 2**32 - 1
+# --exposure scales by 2^EV in float32: beyond this range the scale is 0 or infinite.
+EXPOSURE_EV_RANGE = (-126.0, 127.0)
+
+
+class OneLineErrorParser(argparse.ArgumentParser):
+    """Usage mistakes as one line, `error: <problem>`, exit status 2 (argparse would add its usage text)."""
+
+    def error(self, message):
+        self.exit(2, f"error: {message}\n")
+
+
+def _number(text: str, kind: type):
+    try:
+        value = kind(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not {'an integer' if kind is int else 'a number'}") from None
+    if kind is float and not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
     return value
 
 
-def _max_depth(text: str) -> int:
-    value = int(text)
-    if value == 0 or value < -1:
-        raise argparse.ArgumentTypeError("max depth is -1 (unlimited) or at least 1")
+def _render_setting(name: str, upper: int):
+    """An integer option checked as the scene file checks render.<name> (renderer/scene/schema.py),
+    and against `upper`, the most the kernels take."""
+    def parse(text: str) -> int:
+        from renderer.scene.schema import RENDER
+
+        allowed = RENDER.field(name).range
+        value = _number(text, int)
+        if value not in allowed or value > upper:
+            raise argparse.ArgumentTypeError(f"must be {allowed} (as render.{name} in a scene file) and at most "
+                                             f"{upper}, got {value}")
+        return value
+
+    return parse
+
+
+def _positive_seconds(text: str) -> float:
+    value = _number(text, float)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text}")
+    return value
+
+
+def _exposure(text: str) -> float:
+    value = _number(text, float)
+    low, high = EXPOSURE_EV_RANGE
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f"must be within [{low:g}, {high:g}] EV, got {text}")
     return value
 
 
@@ -49,7 +92,9 @@ def build_parser() -> argparse.ArgumentParser:
     from renderer.bench import BENCHMARKS
     from renderer.tonemap import TONEMAPPERS
 
-    parser = argparse.ArgumentParser(prog="app.py", description="Lantern path tracer")
+    from renderer.render_command import DEFAULT_CHECKPOINT_EVERY
+
+    parser = OneLineErrorParser(prog="app.py", description="Lantern path tracer")
     sub = parser.add_subparsers(dest="command")
 
     view = sub.add_parser("view", help="open the interactive viewer")
@@ -62,21 +107,32 @@ def build_parser() -> argparse.ArgumentParser:
                       help="kernel optimisation: compile (fast compiling, the default) or run (every optimisation: a few %% faster, compiles several times longer)")
 
     render = sub.add_parser("render", help="render headless to a file")
-    render.add_argument("scene", help="scene name, scene file (.toml) or model file (.glb .gltf .obj .ply .stl)")
+    render.add_argument("scene", nargs="?",
+                        help="scene name, scene file (.toml) or model file (.glb .gltf .obj .ply .stl); "
+                             "with --resume, the checkpoint's scene by default")
     budget = render.add_mutually_exclusive_group()
-    budget.add_argument("--spp", type=_positive_int, help="samples per pixel (default: the scene's)")
-    budget.add_argument("--time", type=float, dest="seconds", help="render for this many seconds (after compiling)")
+    budget.add_argument("--spp", type=_render_setting("spp", I32_MAX), help="samples per pixel (default: the scene's)")
+    budget.add_argument("--time", type=_positive_seconds, dest="seconds",
+                        help="render for this many seconds (after compiling)")
     render.add_argument("--size", type=_size, help="image size WxH (default: the scene's)")
     render.add_argument("--integrator", help="integrator name (see `list`)")
     render.add_argument("--out", type=Path, help="output .png (tone-mapped) or .exr (linear float32)")
     render.add_argument("--variance", type=Path, help="also write the variance of each pixel's mean to this .exr")
-    render.add_argument("--max-depth", type=_max_depth, help="1 = emitters seen directly, 2 = direct light...")
-    render.add_argument("--seed", type=int, help="random seed (same seed, same image)")
-    render.add_argument("--arch", choices=ARCHES, default="auto")
-    render.add_argument("--exposure", type=float, default=0.0, help="exposure in EV stops (PNG only)")
+    render.add_argument("--max-depth", type=_render_setting("max_depth", I32_MAX),
+                        help="1 = emitters seen directly, 2 = direct light..., -1 = unlimited")
+    render.add_argument("--seed", type=_render_setting("seed", U32_MAX), help="random seed (same seed, same image)")
+    render.add_argument("--arch", choices=ARCHES, help="back-end (default auto; on --resume, the checkpoint's)")
+    render.add_argument("--exposure", type=_exposure, help="exposure in EV stops (PNG only; default 0)")
     render.add_argument("--tonemapper", choices=TONEMAPPERS, help="PNG tone mapper (default aces)")
-    render.add_argument("--optimize", choices=OPTIMIZE_FOR, default="compile",
+    render.add_argument("--optimize", choices=OPTIMIZE_FOR,
                         help="kernel optimisation: compile (fast compiling, the default) or run (every optimisation: a few %% faster, compiles several times longer)")
+    render.add_argument("--checkpoint", type=Path,
+                        help="save the film here every --checkpoint-every seconds and when stopped (default: "
+                             "OUT.ckpt for renders expected to take over a minute, removed when they complete)")
+    render.add_argument("--checkpoint-every", type=_positive_seconds, default=DEFAULT_CHECKPOINT_EVERY,
+                        metavar="SECONDS", help=f"seconds between checkpoints (default {DEFAULT_CHECKPOINT_EVERY:g})")
+    render.add_argument("--resume", type=Path, metavar="CHECKPOINT",
+                        help="continue a checkpointed render (its scene and options unless given)")
 
     sub.add_parser("list", help="list scenes and integrators")
     info = sub.add_parser("info", help="describe a scene")
@@ -94,32 +150,11 @@ def has_display() -> bool:
 
 
 def cmd_render(args) -> int:
-    from renderer.arch import init_taichi
-    from renderer.headless import (RenderJob, check_output_path, check_variance_path, display_tonemapper,
-                                   progress_bar, render, save, save_variance)
-    from renderer.scene.catalog import load_any, resolve_scene
+    from renderer.interrupts import StopRequests
+    from renderer.render_command import run_render
 
-    scene = load_any(resolve_scene(args.scene))
-    integrator = args.integrator or scene.render.integrator
-    out = args.out or ROOT / "out" / f"{scene.name}_{integrator}.png"
-    check_output_path(out)
-    if args.variance is not None:
-        check_variance_path(args.variance)
-    if args.seconds is not None and args.seconds <= 0:
-        raise ValueError("--time must be positive")
-    used = init_taichi(args.arch, optimize=args.optimize)
-    job = RenderJob(spp=args.spp, seconds=args.seconds, size=args.size, integrator=integrator,
-                    max_depth=args.max_depth, seed=args.seed)
-    print(f"rendering {scene.name} with {integrator} on {used}", file=sys.stderr)
-    result = render(scene, job, progress=progress_bar())
-    print(file=sys.stderr)
-    save(result, out, args.exposure, display_tonemapper(integrator, args.tonemapper))
-    rejected = f", {result.rejected} non-finite samples dropped" if result.rejected else ""
-    print(f"{out}  ({result.spp} spp in {result.seconds:.1f} s{rejected})")
-    if args.variance is not None:
-        save_variance(result, args.variance)
-        print(f"{args.variance}  (variance of each pixel's mean)")
-    return 0
+    with StopRequests() as stop:
+        return run_render(args, stop)
 
 
 def cmd_list(_args) -> int:
@@ -197,8 +232,13 @@ def main(argv: list[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning
     from renderer.scene.errors import SceneError
 
+    from renderer.interrupts import Interrupted, exit_code
+
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as stopped:  # a usage error (already said in one line) or --help
+        return stopped.code
     if args.command is None:
         if has_display():
             args = parser.parse_args(["view"])
@@ -211,6 +251,12 @@ def main(argv: list[str] | None = None) -> int:
     except (SceneError, ValueError, RuntimeError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
+    except Interrupted as stopped:  # a stop signal before there was anything to save
+        print(f"\n{stopped}", file=sys.stderr)
+        return exit_code(stopped.signum)
+    except KeyboardInterrupt:
+        print("\ninterrupted", file=sys.stderr)
+        return exit_code(signal.SIGINT)
 
 
 if __name__ == "__main__":

@@ -9,6 +9,7 @@ so a viewer can render at a lower internal resolution into the same (max-size) f
 """
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import taichi as ti
@@ -33,6 +34,40 @@ def is_finite_f32(value):
 @ti.func
 def is_finite_vec3(value):
     return is_finite_f32(value[0]) and is_finite_f32(value[1]) and is_finite_f32(value[2])
+
+
+@dataclass
+class FilmState:
+    """A film's accumulation of its active region, bit for bit (numpy, row 0 = top).
+
+    Restoring it and adding samples gives the same float32 values as never having stopped: the
+    Welford update of a pixel depends only on its own (mean, m2, count) and the new sample.
+    """
+
+    mean: np.ndarray  # float32 (height, width, 3)
+    m2: np.ndarray  # float32 (height, width, 3): Welford's sum of squared deviations
+    count: np.ndarray  # int32 (height, width): accepted samples
+    rejected: np.ndarray  # int32 (height, width): non-finite samples dropped
+
+    ARRAYS = (("mean", np.float32, 3), ("m2", np.float32, 3), ("count", np.int32, 0), ("rejected", np.int32, 0))
+
+    @property
+    def size(self) -> tuple[int, int]:
+        height, width = self.count.shape
+        return width, height
+
+    def problem(self) -> str | None:
+        """What is wrong with the arrays' types or shapes (None: a valid state)."""
+        if np.ndim(self.count) != 2:
+            return f"sample counts have shape {np.shape(self.count)}, expected (height, width)"
+        height, width = self.count.shape
+        for name, dtype, channels in self.ARRAYS:
+            array = getattr(self, name)
+            shape = (height, width, channels) if channels else (height, width)
+            if not isinstance(array, np.ndarray) or array.dtype != dtype or array.shape != shape:
+                return (f"'{name}' is {getattr(array, 'dtype', type(array).__name__)} {np.shape(array)}, "
+                        f"expected {np.dtype(dtype)} {shape}")
+        return None
 
 
 @ti.data_oriented
@@ -72,6 +107,33 @@ class Film:
             self.m2[x, y] = ti.math.vec3(0.0)
             self.count[x, y] = 0
             self.rejected[x, y] = 0
+
+    def state(self) -> FilmState:
+        """The exact accumulation of the active region (what a checkpoint keeps)."""
+        m2 = np.empty((self.height, self.width, 3), dtype=np.float32)
+        self._copy_vec3(self.m2, m2, self.width, self.height)
+        return FilmState(self.mean_image(), m2, self.sample_counts(), self.rejected_counts())
+
+    def restore(self, state: FilmState) -> None:
+        """Make `state` the film's accumulation, its size the active region; adding samples then
+        continues exactly where the film that produced it stopped."""
+        problem = state.problem()
+        if problem:
+            raise ValueError(f"film state: {problem}")
+        self.reset(*state.size)
+        self._load_state(state.mean, state.m2, state.count, state.rejected, self.width, self.height)
+
+    @ti.kernel
+    def _load_state(self, mean: ti.types.ndarray(), m2: ti.types.ndarray(), count: ti.types.ndarray(),
+                    rejected: ti.types.ndarray(), width: ti.i32, height: ti.i32):
+        # One kernel for the four fields (from_numpy would compile one per field).
+        for x, y in ti.ndrange(width, height):
+            row = height - 1 - y
+            for c in ti.static(range(3)):
+                self.mean[x, y][c] = mean[row, x, c]
+                self.m2[x, y][c] = m2[row, x, c]
+            self.count[x, y] = count[row, x]
+            self.rejected[x, y] = rejected[row, x]
 
     @ti.func
     def add_sample(self, x: ti.i32, y: ti.i32, value: ti.math.vec3):

@@ -1,24 +1,39 @@
-"""Headless rendering to a file, with a progress bar: what `app.py render` runs."""
+"""Headless rendering to a file, with a progress bar: the render loop of `app.py render`.
+
+Passes are short (about CHUNK_SECONDS each, never less than one sample per pixel), so a stop
+request, a checkpoint or a --time budget is honoured within about that long. Continuing from a
+checkpoint restores the film's exact float32 state and the sample index, so the image is the one
+an uninterrupted render gives, bit for bit.
+"""
 from __future__ import annotations
 
+import math
+import os
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
 from renderer.camera import CameraFrame
+from renderer.film import Film, FilmState
 from renderer.image_io import write_exr, write_png
 from renderer.integrators import make_integrator
 from renderer.renderer import Renderer
 from renderer.scene.model import Scene
 from renderer.tonemap import tonemap_array
+from renderer.version import lantern_version
 
 OUTPUT_EXTENSIONS = (".png", ".exr")
 # Aim each kernel launch at about this long: long enough to amortise launch overhead, short
-# enough for a live progress bar and a --time budget overshoot of at most this much.
+# enough for a live progress bar, a prompt stop on Ctrl-C and a --time overshoot of at most this.
 CHUNK_SECONDS = 0.5
+# A pass grows at most this much over the last: a single fast measurement cannot make it long.
+CHUNK_GROWTH = 4
+# Sample indices are 32-bit signed kernel arguments: a render stops at this many samples per pixel.
+MAX_SPP = 2**31 - 1
 
 
 @dataclass
@@ -32,74 +47,160 @@ class RenderJob:
     exposure: float = 0.0
     tonemapper: str | None = None
 
+    def resolved(self, scene: Scene) -> "RenderJob":
+        """The job with the scene's settings where it names none (except a budget: spp or time)."""
+        settings = scene.render
+        return replace(self, size=self.size or (settings.width, settings.height),
+                       integrator=self.integrator or settings.integrator,
+                       max_depth=settings.max_depth if self.max_depth is None else self.max_depth,
+                       seed=settings.seed if self.seed is None else self.seed,
+                       spp=self.spp if self.spp is not None or self.seconds is not None else settings.spp)
+
+
+@dataclass
+class Resume:
+    """Where a checkpointed render stopped."""
+
+    state: FilmState
+    spp_done: int
+    seconds_rendered: float
+
+
+class Checkpoints(Protocol):
+    """What the render loop tells the checkpoint policy (renderer/render_command.py) after a pass."""
+
+    def after_pass(self, film: Film, spp_done: int, seconds_rendered: float, expected_seconds: float) -> None: ...
+
 
 @dataclass
 class RenderResult:
     image: np.ndarray  # linear (H, W, 3)
     spp: int
-    seconds: float
+    seconds: float  # wall time of this run, compilation included
     rejected: int
     integrator: str
     # per pixel and channel, the variance of the mean (s^2 / n; +inf where unknown: fewer than 2
     # samples, or an integrator whose image is not a mean of independent samples, such as sppm)
     variance: np.ndarray | None = None
+    interrupted: bool = False  # stopped by a request before its budget was spent
+    seconds_rendered: float = 0.0  # rendering time the --time budget counts, over every run
+    film: Film | None = None  # the film, for a final checkpoint
+
+
+def check_writable(path: Path) -> None:
+    """Raise ValueError("<path>: <problem>") unless a file can be written at `path`: it is not a
+    directory, and its directory exists or can be created, and lets us create files."""
+    if path.is_dir():
+        raise ValueError(f"{path}: is a directory")
+    existing = path.parent
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise ValueError(f"{path}: cannot create its directory ({existing} is not a directory)")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise ValueError(f"{path}: cannot write in {existing} (permission denied)")
 
 
 def check_output_path(out: Path) -> None:
     if out.suffix.lower() not in OUTPUT_EXTENSIONS:
         raise ValueError(f"{out}: unsupported output extension '{out.suffix}' (use .png or .exr)")
+    check_writable(out)
 
 
 def check_variance_path(out: Path) -> None:
     if out.suffix.lower() != ".exr":
         raise ValueError(f"{out}: unsupported variance extension '{out.suffix}' (the variance is linear "
                          "float data: use .exr)")
+    check_writable(out)
 
 
-def render(scene: Scene, job: RenderJob, progress=None) -> RenderResult:
-    settings = scene.render
-    width, height = job.size or (settings.width, settings.height)
-    integrator = job.integrator or settings.integrator
+def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: Checkpoints | None = None,
+           resume: Resume | None = None) -> RenderResult:
+    """Render `job` (resolved against the scene). `stop`: a StopRequests (renderer/interrupts.py),
+    asked at every pass boundary; `checkpoints`: told after every pass; `resume`: continue there."""
+    job = job.resolved(scene)
+    width, height = job.size
+    integrator = job.integrator
     make_integrator(integrator)  # a clear error before any compilation
-    target_spp = job.spp if job.spp is not None else (None if job.seconds is not None else settings.spp)
+    target_spp = job.spp
     renderer = Renderer(scene, (width, height))
+    seconds_before = 0.0
+    if resume is not None:
+        renderer.film.restore(resume.state)
+        renderer.samples_done = resume.spp_done
+        seconds_before = resume.seconds_rendered
     camera = CameraFrame.from_spec(scene.camera)
+    if stop is not None:
+        stop.defer()  # from here on there is an image to save: a signal stops at the next pass
     start = time.perf_counter()
     budget_start = None  # a --time budget counts rendering only, from the end of the first pass
-    chunk = 1
+    seconds_per_spp = None  # measured on passes after the first (which includes compilation)
+    n = 1
+    interrupted = False
+
+    def rendered() -> float:
+        return seconds_before + (time.perf_counter() - budget_start if budget_start is not None else 0.0)
+
     while True:
         done = renderer.samples_done
+        if stop is not None and stop.requested:
+            interrupted = True
+            break
         if target_spp is not None and done >= target_spp:
             break
-        if target_spp is None and budget_start is not None and time.perf_counter() - budget_start >= job.seconds:
+        if target_spp is None and (rendered() >= job.seconds or done >= MAX_SPP):
             break
-        n = chunk if target_spp is None else min(chunk, target_spp - done)
+        n = pass_spp(seconds_per_spp, n, (target_spp or MAX_SPP) - done,
+                     None if target_spp is not None else job.seconds - rendered())
         t0 = time.perf_counter()
         renderer.render(camera, n, integrator, job.max_depth, job.seed)
         elapsed = time.perf_counter() - t0
-        if done > 0:  # the first launch includes compilation: do not size chunks from it
-            chunk = max(1, min(chunk * 4, int(n * CHUNK_SECONDS / max(elapsed, 1e-6))))
-        elif budget_start is None:
+        if budget_start is None:
             budget_start = time.perf_counter()
-        if progress:
-            progress(renderer.samples_done, target_spp, time.perf_counter() - (budget_start or start),
-                     width * height, job.seconds)
+        else:
+            seconds_per_spp = elapsed / n
+        if checkpoints is not None and seconds_per_spp is not None:
+            remaining = ((target_spp - renderer.samples_done) * seconds_per_spp if target_spp is not None
+                         else job.seconds - rendered())
+            checkpoints.after_pass(renderer.film, renderer.samples_done, rendered(), rendered() + remaining)
+        if progress and seconds_per_spp is not None:  # the compiling pass says nothing of the rate
+            progress(renderer.samples_done, target_spp, rendered(), width * height, job.seconds)
     total = time.perf_counter() - start
     return RenderResult(renderer.image(), renderer.samples_done, total, renderer.film.stats()["rejected"], integrator,
-                        renderer.film.variance_of_mean_image())
+                        renderer.film.variance_of_mean_image(), interrupted, rendered(), renderer.film)
 
 
-def save(result: RenderResult, out: Path, exposure: float = 0.0, tonemapper: str = "aces") -> None:
+def pass_spp(seconds_per_spp: float | None, previous: int, spp_left: int, seconds_left: float | None) -> int:
+    """Samples per pixel of the next pass: about CHUNK_SECONDS of work at the measured rate, at
+    most CHUNK_GROWTH times the previous pass, never past the spp target or the time budget."""
+    if seconds_per_spp is None:
+        return 1  # the first pass compiles; its time says nothing about the rate
+    n = min(previous * CHUNK_GROWTH, int(CHUNK_SECONDS / max(seconds_per_spp, 1e-9)))
+    if seconds_left is not None:
+        n = min(n, math.ceil(max(seconds_left, 0.0) / max(seconds_per_spp, 1e-9)))
+    return max(1, min(n, spp_left))
+
+
+def image_metadata(scene: Scene, job: RenderJob, result: RenderResult) -> dict[str, str]:
+    """What the image files say about how they were made (PNG text chunks, EXR attributes)."""
+    job = job.resolved(scene)
+    return {"Software": f"Lantern {lantern_version()}", "scene": scene.name, "integrator": result.integrator,
+            "spp": str(result.spp), "seed": str(job.seed), "max_depth": str(job.max_depth),
+            "status": "interrupted" if result.interrupted else "complete"}
+
+
+def save(result: RenderResult, out: Path, exposure: float = 0.0, tonemapper: str = "aces",
+         metadata: dict[str, str] | None = None) -> None:
     if out.suffix.lower() == ".exr":
-        write_exr(out, result.image)
+        write_exr(out, result.image, metadata)
     else:
-        write_png(out, tonemap_array(result.image, exposure, tonemapper))
+        write_png(out, tonemap_array(result.image, exposure, tonemapper), metadata)
 
 
-def save_variance(result: RenderResult, out: Path) -> None:
+def save_variance(result: RenderResult, out: Path, metadata: dict[str, str] | None = None) -> None:
     """The variance of each pixel's mean (linear EXR, per channel): with the mean image, what a z-test
     of the render against a reference needs, z = (mean - reference) / sqrt(variance + reference's)."""
-    write_exr(out, result.variance)
+    write_exr(out, result.variance, {**(metadata or {}), "content": "variance of each pixel's mean"})
 
 
 def display_tonemapper(integrator: str, requested: str | None) -> str:

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from renderer.atomic_write import atomic_output
 from renderer.scene.errors import SceneError
 
 ENVIRONMENT_EXTENSIONS = (".exr", ".hdr")
@@ -67,29 +68,36 @@ def read_exr(path: str | os.PathLike) -> np.ndarray:
     return _read_exr_rgb(path)
 
 
-def write_exr(path: str | os.PathLike, rgb: np.ndarray) -> None:
-    """Write linear float RGB (H, W, 3), row 0 = top, as a float32 ZIP-compressed EXR."""
+def write_exr(path: str | os.PathLike, rgb: np.ndarray, metadata: dict[str, str] | None = None) -> None:
+    """Write linear float RGB (H, W, 3), row 0 = top, as a float32 ZIP-compressed EXR; `metadata`
+    becomes string attributes of the header. Atomic: a kill leaves the previous file whole."""
     import OpenEXR
 
     pixels = np.ascontiguousarray(_check_rgb_shape(rgb), dtype=np.float32)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with OpenEXR.File(header, {"RGB": pixels}) as exr:
-        exr.write(str(path))
+    header = {**_text_metadata(metadata), "compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with atomic_output(path) as temporary, OpenEXR.File(header, {"RGB": pixels}) as exr:
+        exr.write(str(temporary))
 
 
-def write_png(path: str | os.PathLike, rgb: np.ndarray) -> None:
-    """Write display-referred RGB (H, W, 3): uint8 as is, floats in [0, 1] (clipped) quantised."""
+def write_png(path: str | os.PathLike, rgb: np.ndarray, metadata: dict[str, str] | None = None) -> None:
+    """Write display-referred RGB (H, W, 3): uint8 as is, floats in [0, 1] (clipped) quantised;
+    `metadata` becomes tEXt chunks. Atomic: a kill leaves the previous file whole."""
     import imageio.v3 as iio
+    from PIL.PngImagePlugin import PngInfo
 
     rgb = _check_rgb_shape(rgb)
     if rgb.dtype != np.uint8:
         rgb = np.clip(np.nan_to_num(rgb.astype(np.float32), nan=0.0), 0.0, 1.0)
         rgb = np.floor(rgb * 255.0 + 0.5).astype(np.uint8)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    iio.imwrite(path, rgb, extension=".png")
+    text = PngInfo()
+    for key, value in _text_metadata(metadata).items():
+        text.add_text(key, value)
+    with atomic_output(path) as temporary:
+        iio.imwrite(temporary, rgb, extension=".png", pnginfo=text)
+
+
+def _text_metadata(metadata: dict[str, str] | None) -> dict[str, str]:
+    return {str(key): str(value) for key, value in (metadata or {}).items()}
 
 
 def _check_rgb_shape(rgb: np.ndarray) -> np.ndarray:

@@ -1,4 +1,5 @@
 """The command line as a user meets it: one-line errors for bad input, list and info."""
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -143,3 +144,129 @@ def test_variance_must_be_an_exr(tmp_path, capsys):
     code, _, err = run_main(["render", "showcase", "--out", str(tmp_path / "a.exr"),
                              "--variance", str(tmp_path / "v.png")], capsys)
     assert code == 2 and "v.png" in one_line_error(err) and "'.png'" in one_line_error(err)
+
+
+# --- checks before any rendering: output paths, numbers, checkpoints ------------------------------
+
+@pytest.fixture
+def no_rendering(monkeypatch):
+    """Fails the test if the command gets as far as starting Taichi (everything below must be
+    refused before that, so no kernel compiles)."""
+    import renderer.arch
+
+    def started(*args, **kwargs):
+        raise AssertionError("Taichi was started: the input should have been refused before")
+
+    monkeypatch.setattr(renderer.arch, "init_taichi", started)
+
+
+@pytest.mark.parametrize("option, make, expected", [
+    ("--out", lambda d: d / "folder.png", "is a directory"),
+    ("--out", lambda d: d / "file.txt" / "a.png", "not a directory"),
+    ("--out", lambda d: d / "file.txt" / "sub" / "a.png", "not a directory"),
+    ("--out", lambda d: d / "a.tiff", "unsupported output extension '.tiff'"),
+    ("--variance", lambda d: d / "file.txt" / "v.exr", "not a directory"),
+    ("--variance", lambda d: d / "v.png", "unsupported variance extension"),
+    ("--checkpoint", lambda d: d / "folder.ckpt", "is a directory"),
+    ("--checkpoint", lambda d: d / "a.png", "ends in .ckpt"),
+    ("--checkpoint", lambda d: d / "file.txt" / "a.ckpt", "not a directory"),
+])
+def test_bad_output_paths_are_refused_before_rendering(tmp_path, capsys, no_rendering, option, make, expected):
+    (tmp_path / "file.txt").write_text("a file, not a folder")
+    (tmp_path / "folder.png").mkdir()
+    (tmp_path / "folder.ckpt").mkdir()
+    path = make(tmp_path)
+    args = ["render", "showcase", "--out", str(tmp_path / "ok.png"), option, str(path)]
+    code, _, err = run_main(args, capsys)
+    line = one_line_error(err)
+    assert code == 2 and str(path) in line and expected in line
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write into any folder")
+def test_an_unwritable_output_folder_is_refused_before_rendering(tmp_path, capsys, no_rendering):
+    locked = tmp_path / "locked"
+    locked.mkdir(mode=0o500)
+    code, _, err = run_main(["render", "showcase", "--out", str(locked / "new" / "a.png")], capsys)
+    assert code == 2 and "permission denied" in one_line_error(err)
+
+
+def test_the_same_file_for_two_outputs_is_refused(tmp_path, capsys, no_rendering):
+    out = str(tmp_path / "a.exr")
+    code, _, err = run_main(["render", "showcase", "--out", out, "--variance", out], capsys)
+    assert code == 2 and "must be different files" in one_line_error(err)
+
+
+@pytest.mark.parametrize("option, value, expected", [
+    ("--time", "nan", "finite"), ("--time", "inf", "finite"), ("--time", "-1", "positive"), ("--time", "0", "positive"),
+    ("--exposure", "nan", "finite"), ("--exposure", "inf", "finite"), ("--exposure", "-inf", "finite"),
+    ("--exposure", "200", "within [-126, 127]"),
+    ("--seed", "-1", ">= 0"), ("--seed", str(2**32), "at most 4294967295"), ("--seed", "1.5", "not an integer"),
+    ("--spp", "0", ">= 1"), ("--spp", str(2**31), "at most 2147483647"), ("--spp", "many", "not an integer"),
+    ("--max-depth", "0", "-1 or >= 1"), ("--max-depth", "-2", "-1 or >= 1"),
+    ("--checkpoint-every", "0", "positive"), ("--checkpoint-every", "nan", "finite"),
+    ("--size", "0x10", "out of range"),
+])
+def test_bad_numbers_are_one_line_errors_before_rendering(tmp_path, capsys, no_rendering, option, value, expected):
+    # option=value: argparse takes a lone "-inf" for an option name
+    code, _, err = run_main(["render", "showcase", f"{option}={value}", "--out", str(tmp_path / "a.png")], capsys)
+    line = one_line_error(err)
+    assert code == 2 and option in line and expected in line, line
+
+
+def test_good_numbers_at_the_edges_of_their_ranges_are_accepted():
+    parse = app.build_parser().parse_args
+    args = parse(["render", "s", "--seed", str(2**32 - 1), "--spp", "1", "--max-depth", "-1", "--exposure", "-126"])
+    assert (args.seed, args.spp, args.max_depth, args.exposure) == (2**32 - 1, 1, -1, -126.0)
+    args = parse(["render", "s", "--time", "0.001", "--seed", "0", "--max-depth", "1"])
+    assert (args.seconds, args.seed, args.max_depth) == (0.001, 0, 1)
+
+
+def _checkpoint_for(tmp_path, **overrides):
+    from renderer.checkpoint import save_checkpoint
+    from tests.checkpoint_helpers import film_state, header_for
+
+    scene = tmp_path / "s.toml"
+    scene.write_text(furnace_toml(env=0.8, albedo=0.6, max_depth=3))
+    path = tmp_path / "run.ckpt"
+    save_checkpoint(path, header_for(scene, **overrides), film_state(24, 16, 2.0))
+    return scene, path
+
+
+@pytest.mark.parametrize("extra, expected", [
+    (["OTHER"], "is not the checkpoint's"),
+    (["--size", "32x16"], "size 32x16 differs from the checkpoint's 24x16"),
+    (["--integrator", "nee"], "integrator nee differs from the checkpoint's path"),
+    (["--seed", "9"], "seed 9 differs from the checkpoint's 0"),
+    (["--max-depth", "5"], "max depth 5 differs from the checkpoint's 3"),
+])
+def test_a_foreign_checkpoint_is_refused(tmp_path, capsys, no_rendering, extra, expected):
+    scene, path = _checkpoint_for(tmp_path)
+    other = tmp_path / "other.toml"
+    other.write_text(furnace_toml(env=0.3, albedo=0.6, max_depth=3))
+    extra = [str(other) if a == "OTHER" else a for a in extra]
+    code, _, err = run_main(["render", *extra, "--resume", str(path), "--out", str(tmp_path / "a.exr")], capsys)
+    line = one_line_error(err)
+    assert code == 2 and line.startswith(f"error: {path}: cannot continue") and expected in line, line
+
+
+def test_a_checkpoint_of_another_version_or_a_changed_scene_is_refused(tmp_path, capsys, no_rendering):
+    scene, path = _checkpoint_for(tmp_path, lantern_version="0.0.1")
+    code, _, err = run_main(["render", "--resume", str(path)], capsys)
+    assert code == 2 and "written by Lantern 0.0.1" in one_line_error(err)
+    scene, path = _checkpoint_for(tmp_path)
+    scene.write_text(scene.read_text().replace("fov = 50", "fov = 51"))
+    code, _, err = run_main(["render", "--resume", str(path)], capsys)
+    assert code == 2 and "has changed since the checkpoint" in one_line_error(err)
+
+
+def test_resume_needs_a_target_beyond_the_checkpoint_and_a_film_integrator(tmp_path, capsys, no_rendering):
+    scene, path = _checkpoint_for(tmp_path, spp_done=50)
+    code, _, err = run_main(["render", "--resume", str(path), "--spp", "49"], capsys)
+    assert code == 2 and "already has 50 spp" in one_line_error(err)
+    code, _, err = run_main(["render", str(scene), "--integrator", "sppm", "--checkpoint", str(tmp_path / "p.ckpt")],
+                            capsys)
+    assert code == 2 and "sppm renders cannot be checkpointed" in one_line_error(err)
+    code, _, err = run_main(["render", "--resume", str(tmp_path / "missing.ckpt")], capsys)
+    assert code == 2 and "missing.ckpt: checkpoint not found" in one_line_error(err)
+    code, _, err = run_main(["render"], capsys)
+    assert code == 2 and "--resume" in one_line_error(err)

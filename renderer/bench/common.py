@@ -21,6 +21,8 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
+from renderer.atomic_write import atomic_output, write_text_atomic
+
 REL_MSE_EPS = 1e-2
 
 
@@ -200,8 +202,7 @@ def _jsonable(value):
 
 def write_json(path: Path, data: dict) -> Path:
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(_jsonable(data), indent=2) + "\n", encoding="utf-8")
+    write_text_atomic(path, json.dumps(_jsonable(data), indent=2) + "\n")
     return path
 
 
@@ -257,9 +258,9 @@ def pyplot():
 
 def save_figure(fig, path: Path) -> Path:
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic_output(path) as temporary:
+        fig.savefig(temporary, dpi=110, format=path.suffix.lstrip(".") or None)
     pyplot().close(fig)
     return path
 

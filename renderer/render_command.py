@@ -1,0 +1,230 @@
+"""`app.py render`: options to files, with checkpoints, resumption and a clean stop on a signal.
+
+Everything that can be checked is checked before Taichi starts: output paths (writable, not a
+directory, a known extension), the checkpoint to resume (readable, same Lantern, same scene
+files, compatible options). A stop signal during rendering ends the render at a pass boundary;
+the image so far is written with its real spp, and the exit status is 128 + the signal's number.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from renderer.checkpoint import CHECKPOINT_EXTENSION, CheckpointHeader, load_checkpoint, read_header, \
+    save_checkpoint, scene_fingerprint
+from renderer.film import Film
+from renderer.headless import (Checkpoints, RenderJob, RenderResult, Resume, check_output_path, check_variance_path,
+                               check_writable, display_tonemapper, image_metadata, progress_bar, render, save,
+                               save_variance)
+from renderer.interrupts import StopRequests
+from renderer.scene.errors import SceneError
+from renderer.scene.model import Scene
+from renderer.version import lantern_version
+
+DEFAULT_OUT_DIR = Path(__file__).resolve().parents[1] / "out"
+# Renders expected to take longer than this get a checkpoint beside --out even without --checkpoint.
+LONG_RENDER_SECONDS = 60.0
+DEFAULT_CHECKPOINT_EVERY = 30.0
+CPU_ARCHES = ("x64", "arm64")  # what Taichi calls its CPU back-ends
+
+
+class CheckpointPolicy(Checkpoints):
+    """Saves the film every `every` seconds of wall time. An automatic checkpoint (no --checkpoint)
+    starts only once the render is expected to take longer than LONG_RENDER_SECONDS, and is
+    removed when the render completes: it exists to survive an interruption."""
+
+    def __init__(self, path: Path, every: float, header: CheckpointHeader, active: bool, stream=sys.stderr):
+        self.path = path
+        self.every = every
+        self.automatic = header.automatic
+        self.header = header
+        self.active = active  # False: automatic, and not (yet) a long render
+        self.stream = stream
+        self.last_save = time.monotonic()
+
+    def after_pass(self, film: Film, spp_done: int, seconds_rendered: float, expected_seconds: float) -> None:
+        if not self.active:
+            if expected_seconds <= LONG_RENDER_SECONDS:
+                return
+            self.active = True
+            self.last_save = time.monotonic()
+            self._say(f"a long render (about {expected_seconds:.0f} s): checkpointing to {self.path} every "
+                      f"{self.every:g} s; continue an interrupted render with: "
+                      f"python app.py render --resume {self.path}")
+        if time.monotonic() - self.last_save >= self.every:
+            self.save(film, spp_done, seconds_rendered)
+
+    def save(self, film: Film, spp_done: int, seconds_rendered: float) -> None:
+        save_checkpoint(self.path, replace(self.header, spp_done=spp_done, seconds_rendered=seconds_rendered),
+                        film.state())
+        self.last_save = time.monotonic()
+
+    def finish(self, result: RenderResult) -> str | None:
+        """The final save (or, for a completed automatic checkpoint, its removal); what was done."""
+        if not self.active:
+            return None
+        if self.automatic and not result.interrupted:
+            self.path.unlink(missing_ok=True)
+            return None
+        self.save(result.film, result.spp, result.seconds_rendered)
+        return f"{self.path}  (checkpoint at {result.spp} spp; continue with: python app.py render --resume {self.path})"
+
+    def _say(self, message: str) -> None:
+        self.stream.write(f"\n{message}\n")
+        self.stream.flush()
+
+
+@dataclass
+class RenderPlan:
+    """Everything `render` will do, decided and checked before Taichi starts."""
+
+    scene: Scene
+    job: RenderJob
+    out: Path
+    variance: Path | None
+    arch: str
+    optimize: str
+    checkpoints: CheckpointPolicy | None
+    resume: Resume | None
+    previous: CheckpointHeader | None  # the header of the checkpoint continued
+
+
+def run_render(args, stop: StopRequests) -> int:
+    """The render command. `args`: app.py's parsed `render` options; returns the exit status."""
+    plan = plan_render(args)
+    from renderer.arch import init_taichi
+
+    used = init_taichi(plan.arch, optimize=plan.optimize)
+    if plan.checkpoints is not None:
+        plan.checkpoints.header = replace(plan.checkpoints.header, arch=_arch_name(used))
+    if plan.previous is not None:
+        for name, value in (("arch", _arch_name(used)), ("optimize", plan.optimize)):
+            if value != getattr(plan.previous, name):
+                print(f"warning: {name} {value} differs from the checkpoint's {getattr(plan.previous, name)}: the "
+                      "result will not be bit-identical to an uninterrupted render", file=sys.stderr)
+    begun = f", continuing at {plan.resume.spp_done} spp" if plan.resume else ""
+    print(f"rendering {plan.scene.name} with {plan.job.integrator} on {used}{begun}", file=sys.stderr)
+    result = render(plan.scene, plan.job, progress=progress_bar(), stop=stop, checkpoints=plan.checkpoints,
+                    resume=plan.resume)
+    print(file=sys.stderr)
+    if result.spp == 0:
+        print("interrupted before the first pass: nothing written", file=sys.stderr)
+    else:
+        write_outputs(plan, result)
+    return stop.exit_code or 0
+
+
+def plan_render(args) -> RenderPlan:
+    """Read and check the options, the scene and the checkpoint to continue (one-line errors)."""
+    from renderer.scene.catalog import load_any, resolve_scene
+
+    for path, check in ((args.out, check_output_path), (args.variance, check_variance_path),
+                        (args.checkpoint, check_checkpoint_path)):
+        if path is not None:
+            check(path)  # the paths given: before reading anything
+    previous = read_header(args.resume) if args.resume is not None else None
+    if args.scene is None and previous is None:
+        raise ValueError("render: give a SCENE, or --resume CHECKPOINT")
+    scene = load_any(resolve_scene(args.scene if args.scene is not None else previous.scene))
+    job = _job(args, scene, previous)
+    out = args.out or (Path(previous.out) if previous else DEFAULT_OUT_DIR / f"{scene.name}_{job.integrator}.png")
+    variance = args.variance or (Path(previous.variance) if previous and previous.variance else None)
+    check_output_path(out)
+    if variance is not None:
+        check_variance_path(variance)
+    arch = args.arch or (previous.arch if previous else "auto")
+    optimize = args.optimize or (previous.optimize if previous else "compile")
+    header = _header(scene, job, out, variance, arch, optimize)
+    if previous is not None:
+        problems = previous.mismatches(header)
+        if problems:
+            raise SceneError(args.resume, "cannot continue this render: " + "; ".join(problems))
+        if job.spp is not None and job.spp < previous.spp_done:
+            raise ValueError(f"--spp {job.spp}: the checkpoint {args.resume} already has {previous.spp_done} spp")
+    checkpoints = _checkpoint_policy(args, job, out, header, previous)
+    distinct = [p.resolve() for p in (out, variance, checkpoints.path if checkpoints else None) if p is not None]
+    if len(set(distinct)) != len(distinct):
+        raise ValueError(f"{out}: --out, --variance and --checkpoint must be different files")
+    resume = None
+    if previous is not None:
+        _, state = load_checkpoint(args.resume)
+        resume = Resume(state, previous.spp_done, previous.seconds_rendered)
+    return RenderPlan(scene, job, out, variance, arch, optimize, checkpoints, resume, previous)
+
+
+def write_outputs(plan: RenderPlan, result: RenderResult) -> None:
+    """The image (its spp and status in its metadata), the variance, the last checkpoint; a line each."""
+    metadata = image_metadata(plan.scene, plan.job, result)
+    save(result, plan.out, plan.job.exposure, display_tonemapper(plan.job.integrator, plan.job.tonemapper), metadata)
+    rejected = f", {result.rejected} non-finite samples dropped" if result.rejected else ""
+    stopped = ", interrupted" if result.interrupted else ""
+    print(f"{plan.out}  ({result.spp} spp in {result.seconds:.1f} s{rejected}{stopped})")
+    if plan.variance is not None:
+        save_variance(result, plan.variance, metadata)
+        print(f"{plan.variance}  (variance of each pixel's mean)")
+    if plan.checkpoints is not None:
+        written = plan.checkpoints.finish(result)
+        if written:
+            print(written)
+
+
+def check_checkpoint_path(path: Path) -> None:
+    if path.suffix.lower() != CHECKPOINT_EXTENSION:
+        # A fixed extension keeps a slip of the keyboard from replacing an image with a checkpoint.
+        raise ValueError(f"{path}: a checkpoint file name ends in {CHECKPOINT_EXTENSION}, not '{path.suffix}'")
+    check_writable(path)
+
+
+def _job(args, scene, previous: CheckpointHeader | None) -> RenderJob:
+    """The command line's job; on --resume, the checkpoint's settings where the line names none."""
+    spp, seconds = args.spp, args.seconds
+    if previous is not None and spp is None and seconds is None:
+        spp, seconds = previous.spp_target, previous.seconds_budget
+    exposure = args.exposure if args.exposure is not None else (previous.exposure if previous else 0.0)
+    job = RenderJob(spp=spp, seconds=seconds, size=args.size, integrator=args.integrator, max_depth=args.max_depth,
+                    seed=args.seed, exposure=exposure, tonemapper=args.tonemapper)
+    if previous is not None:
+        job = replace(job, size=job.size or (previous.width, previous.height),
+                      integrator=job.integrator or previous.integrator,
+                      max_depth=previous.max_depth if job.max_depth is None else job.max_depth,
+                      seed=previous.seed if job.seed is None else job.seed,
+                      tonemapper=job.tonemapper or previous.tonemapper)
+    return job.resolved(scene)
+
+
+def _header(scene, job: RenderJob, out: Path, variance: Path | None, arch: str, optimize: str) -> CheckpointHeader:
+    width, height = job.size
+    return CheckpointHeader(
+        lantern_version=lantern_version(), scene=str(Path(scene.path).resolve()), scene_hash=scene_fingerprint(scene),
+        width=width, height=height, integrator=job.integrator, sampler=scene.render.sampler, seed=job.seed,
+        max_depth=job.max_depth, spp_done=0, spp_target=job.spp, seconds_budget=job.seconds, seconds_rendered=0.0,
+        arch=arch, optimize=optimize, out=str(out.resolve()), variance=str(variance.resolve()) if variance else None,
+        exposure=job.exposure, tonemapper=job.tonemapper, automatic=False)
+
+
+def _checkpoint_policy(args, job: RenderJob, out: Path, header: CheckpointHeader,
+                       previous: CheckpointHeader | None) -> CheckpointPolicy | None:
+    from renderer.integrators import make_integrator
+
+    explicit = args.checkpoint is not None or previous is not None
+    # An integrator with programs of its own (sppm) keeps device state beyond the film.
+    if hasattr(make_integrator(job.integrator), "make_program"):
+        if explicit:
+            raise ValueError(f"{args.checkpoint or args.resume}: {job.integrator} renders cannot be checkpointed "
+                             "(its photon statistics live outside the film)")
+        return None
+    if args.checkpoint is not None:
+        return CheckpointPolicy(args.checkpoint, args.checkpoint_every, header, active=True)
+    if previous is not None:  # the checkpoint continued is kept up to date (and stays automatic or not)
+        return CheckpointPolicy(args.resume, args.checkpoint_every, replace(header, automatic=previous.automatic),
+                                active=True)
+    path = out.with_name(out.name + CHECKPOINT_EXTENSION)
+    check_writable(path)  # beside --out, whose directory has just been checked
+    return CheckpointPolicy(path, args.checkpoint_every, replace(header, automatic=True), active=False)
+
+
+def _arch_name(used: str) -> str:
+    """Taichi's name of the back-end in use as an --arch choice."""
+    return "cpu" if used in CPU_ARCHES else used

@@ -1,0 +1,152 @@
+"""Checkpoints: the film's exact state round-trips, a continued render is bit for bit the render that
+never stopped, and damaged or foreign checkpoints are refused in one line."""
+import numpy as np
+import pytest
+
+from renderer.checkpoint import load_checkpoint, read_header, save_checkpoint, scene_fingerprint, scene_files
+from renderer.film import FilmState
+from renderer.headless import RenderJob, Resume, pass_spp, render
+from renderer.scene import SceneError, load_scene
+from tests.checkpoint_helpers import film_state, header_for
+from tests.scene_builder import furnace_toml
+
+ARRAYS = [name for name, _, _ in FilmState.ARRAYS]
+
+
+@pytest.fixture
+def scene_path(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(furnace_toml(env=0.8, albedo=0.6, max_depth=3))
+    return path
+
+
+def assert_same_state(a: FilmState, b: FilmState):
+    for name in ARRAYS:
+        x, y = getattr(a, name), getattr(b, name)
+        assert x.dtype == y.dtype and x.shape == y.shape, name
+        np.testing.assert_array_equal(x, y, err_msg=name)  # NaN == NaN; float32 bit patterns of finite values
+
+
+class StopAfter:
+    """A stop request after `passes` render passes (what a signal does, without the signal)."""
+
+    def __init__(self, passes: int):
+        self.passes = passes
+        self.asked = 0
+
+    def defer(self):
+        pass
+
+    @property
+    def requested(self) -> bool:
+        self.asked += 1
+        return self.asked > self.passes
+
+
+def test_checkpoint_round_trip_is_exact(tmp_path, scene_path):
+    rng = np.random.default_rng(3)
+    state = FilmState(rng.normal(size=(16, 24, 3)).astype(np.float32),
+                      rng.exponential(size=(16, 24, 3)).astype(np.float32),
+                      rng.integers(0, 1000, size=(16, 24), dtype=np.int32),
+                      rng.integers(0, 3, size=(16, 24), dtype=np.int32))
+    state.m2[0, 0] = np.inf  # sppm-like unknown variance survives too
+    header = header_for(scene_path, spp_done=123, seconds_budget=None)
+    save_checkpoint(tmp_path / "a.ckpt", header, state)
+    loaded_header, loaded = load_checkpoint(tmp_path / "a.ckpt")
+    assert loaded_header == header == read_header(tmp_path / "a.ckpt")
+    assert_same_state(loaded, state)
+
+
+def test_continuing_a_stopped_render_is_bit_identical(scene_path):
+    """Stopped after a few passes, saved, restored into a new Renderer and continued to 300 spp: the
+    same film (mean, m2, counts, rejected) and image as 300 spp in one go, with another pass split."""
+    scene = load_scene(scene_path)
+    job = RenderJob(spp=300, size=(24, 16), integrator="path", seed=11)
+    whole = render(scene, job)
+    part = render(scene, job, stop=StopAfter(3))
+    assert part.interrupted and 0 < part.spp < 300
+    state = part.film.state()
+    continued = render(scene, job, resume=Resume(state, part.spp, part.seconds_rendered))
+    assert continued.spp == whole.spp == 300 and not continued.interrupted
+    assert_same_state(continued.film.state(), whole.film.state())
+    np.testing.assert_array_equal(continued.image, whole.image)
+    np.testing.assert_array_equal(continued.variance, whole.variance)
+
+
+def test_restore_refuses_a_state_of_other_types(scene_path):
+    from renderer.film import Film
+
+    film = Film(8, 4)
+    good = film_state(8, 4, 2.0)
+    film.restore(good)
+    assert (film.sample_counts() == 2).all() and (film.mean_image() == 2.0).all()
+    bad = FilmState(good.mean.astype(np.float64), good.m2, good.count, good.rejected)
+    with pytest.raises(ValueError, match="'mean' is float64"):
+        film.restore(bad)
+    with pytest.raises(ValueError, match="active size"):
+        film.restore(film_state(9, 4, 1.0))
+
+
+@pytest.mark.parametrize("damage, expected", [
+    (lambda p: p.write_bytes(b"not a zip at all"), "not a Lantern checkpoint"),
+    (lambda p: p.write_bytes(p.read_bytes()[: len(p.read_bytes()) // 2]), "checkpoint"),
+    (lambda p: p.unlink(), "checkpoint not found"),
+])
+def test_damaged_checkpoints_are_one_line_errors(tmp_path, scene_path, damage, expected):
+    path = tmp_path / "a.ckpt"
+    save_checkpoint(path, header_for(scene_path), film_state(24, 16, 1.0))
+    damage(path)
+    with pytest.raises(SceneError) as error:
+        load_checkpoint(path)
+    message = str(error.value)
+    assert message.startswith(f"{path}: ") and expected in message and "\n" not in message
+
+
+def test_a_header_of_another_format_or_size_is_refused(tmp_path, scene_path):
+    path = tmp_path / "a.ckpt"
+    save_checkpoint(path, header_for(scene_path, format=7), film_state(24, 16, 1.0))
+    with pytest.raises(SceneError, match="format 7"):
+        read_header(path)
+    save_checkpoint(path, header_for(scene_path, width=30), film_state(24, 16, 1.0))
+    with pytest.raises(SceneError, match="film 24x16, header 30x16"):
+        load_checkpoint(path)
+
+
+def test_mismatches_name_what_differs(tmp_path, scene_path):
+    mine = header_for(scene_path)
+    assert mine.mismatches(header_for(scene_path, out="elsewhere.png", exposure=2.0, spp_target=99)) == []
+    other_scene = tmp_path / "t.toml"
+    other_scene.write_text(furnace_toml(env=0.7, albedo=0.6, max_depth=3))
+    problems = mine.mismatches(header_for(other_scene, width=32, integrator="nee", seed=4, lantern_version="9.9"))
+    text = "; ".join(problems)
+    assert len(problems) == 5, text
+    for part in ("Lantern 0.", "is not the checkpoint's", "size 32x16 differs", "integrator nee differs",
+                 "seed 4 differs"):
+        assert part in text
+
+
+def test_scene_fingerprint_follows_every_file_the_scene_reads(tmp_path):
+    import shutil
+
+    from renderer.scene.catalog import resolve_scene
+
+    folder = tmp_path / "copy"
+    shutil.copytree(resolve_scene("bunnies").parent.parent, folder)  # the shipped assets (2 MB)
+    scene = load_scene(folder / "scenes" / "bunnies.toml")
+    files = scene_files(scene)
+    assert files == [(folder / name).resolve() for name in ("scenes/bunnies.toml", "envmaps/sky.exr",
+                                                             "models/bunny.glb")]
+    before = scene_fingerprint(scene)
+    assert scene_fingerprint(load_scene(folder / "scenes" / "bunnies.toml")) == before
+    with open(files[-1], "ab") as f:  # a model file changes, the scene file does not
+        f.write(b"\n")
+    assert scene_fingerprint(scene) != before
+
+
+def test_pass_size_follows_time_not_only_samples():
+    assert pass_spp(None, 64, 1000, None) == 1  # the compiling pass
+    assert pass_spp(0.001, 1, 10_000, None) == 4  # grows at most 4x
+    assert pass_spp(0.001, 1000, 10_000, None) == 500  # about half a second
+    assert pass_spp(2.0, 1000, 10_000, None) == 1  # never less than 1 spp
+    assert pass_spp(0.001, 1000, 30, None) == 30  # not past the target
+    assert pass_spp(0.001, 1000, 10_000, 0.05) == 50  # not past the time budget
