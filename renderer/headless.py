@@ -143,12 +143,12 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
 
     while True:
         done = renderer.samples_done
-        if stop is not None and stop.requested:
-            interrupted = True
-            break
         if target_spp is not None and done >= target_spp:
             break
         if target_spp is None and (rendered() >= job.seconds or done >= MAX_SPP):
+            break
+        if stop is not None and stop.requested:  # (a request during the last pass stops nothing)
+            interrupted = True
             break
         n = pass_spp(seconds_per_spp, n, (target_spp or MAX_SPP) - done,
                      None if target_spp is not None else job.seconds - rendered())

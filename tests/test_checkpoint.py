@@ -150,3 +150,44 @@ def test_pass_size_follows_time_not_only_samples():
     assert pass_spp(2.0, 1000, 10_000, None) == 1  # never less than 1 spp
     assert pass_spp(0.001, 1000, 30, None) == 30  # not past the target
     assert pass_spp(0.001, 1000, 10_000, 0.05) == 50  # not past the time budget
+
+
+class FakeFilm:
+    """What CheckpointPolicy reads of a film."""
+
+    def state(self) -> FilmState:
+        return film_state(24, 16, 3.0)
+
+
+def test_automatic_checkpoint_starts_with_a_long_render_and_goes_when_it_completes(tmp_path, scene_path,
+                                                                                     monkeypatch):
+    import io
+
+    import renderer.render_command as command
+    from renderer.headless import RenderResult
+
+    clock = [1000.0]
+    monkeypatch.setattr(command.time, "monotonic", lambda: clock[0])
+    path = tmp_path / "out.png.ckpt"
+    said = io.StringIO()
+    policy = command.CheckpointPolicy(path, 30.0, header_for(scene_path, automatic=True), active=False, stream=said)
+    policy.after_pass(FakeFilm(), 10, 5.0, expected_seconds=command.LONG_RENDER_SECONDS)  # not long: nothing
+    assert not policy.active and not path.exists() and said.getvalue() == ""
+    policy.after_pass(FakeFilm(), 20, 6.0, expected_seconds=300.0)
+    assert policy.active and f"checkpointing to {path} every 30 s" in said.getvalue() and not path.exists()
+    clock[0] += 29.0
+    policy.after_pass(FakeFilm(), 30, 35.0, expected_seconds=300.0)
+    assert not path.exists()
+    clock[0] += 1.0
+    policy.after_pass(FakeFilm(), 40, 36.0, expected_seconds=300.0)
+    assert read_header(path).spp_done == 40 and read_header(path).seconds_rendered == 36.0
+
+    result = RenderResult(np.zeros((16, 24, 3), np.float32), 50, 40.0, 0, "path", film=FakeFilm(),
+                          seconds_rendered=40.0, interrupted=True)
+    assert "checkpoint at 50 spp" in policy.finish(result)
+    assert read_header(path).spp_done == 50  # kept, to be continued
+    result.interrupted = False
+    assert policy.finish(result) is None and not path.exists()  # complete: an automatic one goes
+
+    explicit = command.CheckpointPolicy(path, 30.0, header_for(scene_path), active=True, stream=said)
+    assert "checkpoint at 50 spp" in explicit.finish(result) and read_header(path).spp_done == 50  # kept

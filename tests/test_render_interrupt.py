@@ -150,3 +150,23 @@ def test_stop_requests_defer_then_quit(capsys):
         time.sleep(0.01)
         assert quits == [143]
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+
+
+@pytest.mark.vulkan
+def test_resume_is_bit_identical_on_vulkan(tmp_path, scene):
+    """The film's state loads through an ndarray kernel valid on GPU back-ends: a render continued
+    on Vulkan (the checkpoint's back-end, by default) equals the uninterrupted Vulkan render."""
+    from tests.test_vulkan import vulkan_available
+
+    if not vulkan_available():
+        pytest.skip("no Vulkan driver (install libvulkan1 mesa-vulkan-drivers)")
+    on_vulkan = [a if a != "cpu" else "vulkan" for a in SMALL]
+    reference, part, final = tmp_path / "whole.exr", tmp_path / "part.exr", tmp_path / "final.exr"
+    checkpoint = tmp_path / "part.ckpt"
+    for args in ((scene, "--spp", 40, "--out", reference, *on_vulkan),
+                 (scene, "--spp", 15, "--out", part, "--checkpoint", checkpoint, *on_vulkan),
+                 ("--resume", checkpoint, "--spp", 40, "--out", final)):
+        child = render_child(*args)
+        assert child.finish(timeout=600) == 0, child.stderr
+    assert read_header(checkpoint).arch == "vulkan" and read_header(checkpoint).spp_done == 40
+    np.testing.assert_array_equal(read_exr(final), read_exr(reference))
