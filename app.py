@@ -87,6 +87,15 @@ def _exposure(text: str) -> float:
     return value
 
 
+def _add_input_options(command: argparse.ArgumentParser) -> None:
+    """What a command that reads scenes and models may be allowed (renderer/scene/load_options.py)."""
+    command.add_argument("--memory-limit", metavar="SIZE",
+                         help="most memory input files may ask for, e.g. 8G (default: $LANTERN_MEMORY_LIMIT, "
+                              "else half of the physical memory)")
+    command.add_argument("--allow-outside-files", action="store_true",
+                         help="let a model file read files outside its own folder")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from renderer.arch import ARCHES, OPTIMIZE_FOR
     from renderer.bench import BENCHMARKS
@@ -105,6 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--frames", type=int, default=None, help="quit after this many frames")
     view.add_argument("--optimize", choices=OPTIMIZE_FOR, default="compile",
                       help="kernel optimisation: compile (fast compiling, the default) or run (every optimisation: a few %% faster, compiles several times longer)")
+    _add_input_options(view)
 
     render = sub.add_parser("render", help="render headless to a file")
     render.add_argument("scene", nargs="?",
@@ -133,10 +143,12 @@ def build_parser() -> argparse.ArgumentParser:
                         metavar="SECONDS", help=f"seconds between checkpoints (default {DEFAULT_CHECKPOINT_EVERY:g})")
     render.add_argument("--resume", type=Path, metavar="CHECKPOINT",
                         help="continue a checkpointed render (its scene and options unless given)")
+    _add_input_options(render)
 
     sub.add_parser("list", help="list scenes and integrators")
     info = sub.add_parser("info", help="describe a scene")
     info.add_argument("scene")
+    _add_input_options(info)
 
     bench = sub.add_parser("bench", help="run a benchmark")
     bench.add_argument("name", choices=sorted(BENCHMARKS))
@@ -174,8 +186,9 @@ def cmd_list(_args) -> int:
 
 def cmd_info(args) -> int:
     from renderer.scene.catalog import load_any, resolve_scene
+    from renderer.scene.load_options import options_from_arguments
 
-    scene = load_any(resolve_scene(args.scene))
+    scene = load_any(resolve_scene(args.scene), options_from_arguments(args))
     r = scene.render
     print(f"scene:       {scene.name}  ({scene.path})")
     print(f"description: {scene.description}")
@@ -212,9 +225,14 @@ def cmd_view(args) -> int:
     from renderer.scene.catalog import DEFAULT_SCENE, resolve_scene
     from viewer.window import run_viewer
 
+    from renderer.scene.limits import check_film
+    from renderer.scene.load_options import options_from_arguments
+
     path = resolve_scene(args.scene or DEFAULT_SCENE)
+    options = options_from_arguments(args)
+    check_film(path, *args.size, options.budget, "--size")
     init_taichi(args.arch, optimize=args.optimize)
-    return run_viewer(path, size=args.size, integrator=args.integrator, max_frames=args.frames)
+    return run_viewer(path, size=args.size, integrator=args.integrator, max_frames=args.frames, load_options=options)
 
 
 def cmd_bench(args) -> int:

@@ -6,37 +6,50 @@ except for PNG, which holds display-referred values.
 """
 from __future__ import annotations
 
+import math
 import os
+import re
 import warnings
 from pathlib import Path
+from typing import Optional
 
 import numpy as np
 
 from renderer.atomic_write import atomic_output
 from renderer.scene.errors import SceneError
+from renderer.scene.limits import MemoryBudget
 
 ENVIRONMENT_EXTENSIONS = (".exr", ".hdr")
+# Bytes per pixel while an environment map is read, checked against the memory budget from the
+# header's size before any pixel is decoded: the decoder's channels (up to 4 of float32), the
+# RGB image (float32) and its flipped or stacked copy, and the finiteness and sign masks.
+_EXR_BYTES_PER_CHANNEL = 4
+_READ_BYTES_PER_PIXEL = 2 * 3 * 4 + 2 * 3
+_RADIANCE_HEADER_LIMIT = 1 << 16  # bytes searched for the end of a Radiance header
 
 
 class NegativePixelsWarning(UserWarning):
     """An environment map had negative values (lossy-compression ringing); they were clamped to 0."""
 
 
-def read_environment(path: str | os.PathLike) -> np.ndarray:
+def read_environment(path: str | os.PathLike, budget: Optional[MemoryBudget] = None) -> np.ndarray:
     """Load an .exr or .hdr environment map as float32 (H, W, 3), row 0 = top.
 
-    Raises SceneError for a missing, unsupported, unreadable or non-finite map. Negative values
-    are clamped to 0 with a NegativePixelsWarning: a light source cannot emit negative radiance.
+    Raises SceneError for a missing, unsupported, unreadable or non-finite map, and for one whose
+    header declares more pixels than `budget` (default: `MemoryBudget.from_settings()`) allows,
+    before anything is decoded. Negative values are clamped to 0 with a NegativePixelsWarning: a
+    light source cannot emit negative radiance.
     """
     name = path  # errors show the path exactly as the caller gave it
     path = Path(path)
     if not path.is_file():
         raise SceneError(name, "environment map not found")
+    budget = budget or MemoryBudget.from_settings()
     extension = path.suffix.lower()
     if extension == ".exr":
-        image = _read_exr_rgb(name)
+        image = _read_exr_rgb(name, budget)
     elif extension == ".hdr":
-        image = _read_radiance_hdr(name)
+        image = _read_radiance_hdr(name, budget)
     else:
         raise SceneError(
             name,
@@ -61,11 +74,12 @@ def read_environment(path: str | os.PathLike) -> np.ndarray:
     return image
 
 
-def read_exr(path: str | os.PathLike) -> np.ndarray:
-    """Read an EXR as float32 (H, W, 3), row 0 = top, values untouched (no clamping)."""
+def read_exr(path: str | os.PathLike, budget: Optional[MemoryBudget] = None) -> np.ndarray:
+    """Read an EXR as float32 (H, W, 3), row 0 = top, values untouched (no clamping); refused
+    like `read_environment` when its header asks for more than `budget`."""
     if not Path(path).is_file():
         raise SceneError(path, "file not found")
-    return _read_exr_rgb(path)
+    return _read_exr_rgb(path, budget or MemoryBudget.from_settings())
 
 
 def write_exr(path: str | os.PathLike, rgb: np.ndarray, metadata: dict[str, str] | None = None) -> None:
@@ -107,9 +121,26 @@ def _check_rgb_shape(rgb: np.ndarray) -> np.ndarray:
     return rgb
 
 
-def _read_exr_rgb(path: str | os.PathLike) -> np.ndarray:
+def _check_pixels(path, budget: MemoryBudget, width: int, height: int, what: str,
+                  bytes_per_pixel: int) -> None:
+    if width < 1 or height < 1:
+        raise SceneError(path, f"{what} header declares an empty image ({width}x{height})")
+    budget.check(path, f"reading this {width}x{height} {what}", width * height * bytes_per_pixel)
+
+
+def _read_exr_rgb(path: str | os.PathLike, budget: MemoryBudget) -> np.ndarray:
     import OpenEXR
 
+    try:
+        with OpenEXR.File(os.fspath(path), header_only=True) as exr:
+            header = exr.header()  # valid while the file is open
+            low, high = (np.asarray(corner, dtype=np.int64) for corner in header["dataWindow"])
+            channel_count = len(header["channels"])
+    except Exception as error:  # the binding raises plain Exceptions/RuntimeErrors on bad files
+        raise SceneError(path, f"cannot read EXR header ({_one_line(error)})") from None
+    width, height = (int(v) for v in high - low + 1)
+    _check_pixels(path, budget, width, height, "EXR",
+                  channel_count * _EXR_BYTES_PER_CHANNEL + _READ_BYTES_PER_PIXEL)
     try:
         # Separate channels so R/G/B in mixed half/float types or with alpha all read the same way.
         with OpenEXR.File(os.fspath(path), separate_channels=True) as exr:
@@ -130,14 +161,54 @@ def _read_exr_rgb(path: str | os.PathLike) -> np.ndarray:
     return image
 
 
-def _read_radiance_hdr(path: str | os.PathLike) -> np.ndarray:
+def _radiance_size(path: str | os.PathLike) -> tuple[int, int, int]:
+    """(width, height, bytes of pixel data) of a Radiance file, from its header alone."""
+    with open(path, "rb") as f:
+        head = f.read(_RADIANCE_HEADER_LIMIT)
+        total = os.fstat(f.fileno()).st_size
+    if not head.startswith((b"#?RADIANCE", b"#?RGBE")):
+        raise SceneError(path, "cannot read Radiance HDR file (no '#?RADIANCE' signature)")
+    end = head.find(b"\n\n")
+    if end < 0:
+        raise SceneError(path, "cannot read Radiance HDR file (no end of header in its first 64 KiB)")
+    line_end = head.find(b"\n", end + 2)
+    resolution = head[end + 2:line_end if line_end >= 0 else len(head)].decode("latin-1").strip()
+    # OpenCV reads the standard orientation only: rows top to bottom, columns left to right.
+    match = re.fullmatch(r"-Y (\d{1,10}) \+X (\d{1,10})", resolution)
+    if match is None:
+        raise SceneError(path, f"cannot read Radiance HDR file (resolution line '{resolution[:40]}'; "
+                               "expected '-Y height +X width')")
+    height, width = int(match.group(1)), int(match.group(2))
+    return width, height, total - (line_end + 1 if line_end >= 0 else len(head))
+
+
+def _radiance_min_bytes(width: int, height: int) -> int:
+    """The fewest bytes of pixel data a Radiance reader accepts for this size: per scanline, flat
+    RGBE (4 bytes a pixel) or, for widths 8..32767, run-length encoding (a 4-byte marker, then
+    each of the 4 components in runs of at most 127 bytes, 2 bytes a run)."""
+    flat = 4 * width
+    if 8 <= width <= 0x7FFF:
+        return height * min(flat, 4 + 4 * 2 * math.ceil(width / 127))
+    return height * flat
+
+
+def _read_radiance_hdr(path: str | os.PathLike, budget: MemoryBudget) -> np.ndarray:
     import cv2
 
+    width, height, data_bytes = _radiance_size(path)
+    needed = _radiance_min_bytes(width, height)
+    if data_bytes < needed:
+        raise SceneError(path, f"cannot read Radiance HDR file (truncated: its header declares "
+                               f"{width}x{height} pixels, at least {needed} bytes of pixel data, and "
+                               f"{data_bytes} follow)")
+    _check_pixels(path, budget, width, height, "Radiance HDR map", _READ_BYTES_PER_PIXEL)
     # OpenCV logs its own multi-line error for corrupt files; our SceneError says it in one line.
     previous_level = cv2.utils.logging.getLogLevel()
     cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
     try:
         bgr = cv2.imread(os.fspath(path), cv2.IMREAD_ANYDEPTH | cv2.IMREAD_COLOR)
+    except cv2.error as error:  # e.g. more pixels than OpenCV's own limit (CV_IO_MAX_IMAGE_PIXELS)
+        raise SceneError(path, f"cannot read Radiance HDR file ({_one_line(error)})") from None
     finally:
         cv2.utils.logging.setLogLevel(previous_level)
     if bgr is None or bgr.ndim != 3 or bgr.shape[2] != 3 or bgr.size == 0:

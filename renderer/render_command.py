@@ -119,6 +119,8 @@ def run_render(args, stop: StopRequests) -> int:
 def plan_render(args) -> RenderPlan:
     """Read and check the options, the scene and the checkpoint to continue (one-line errors)."""
     from renderer.scene.catalog import load_any, resolve_scene
+    from renderer.scene.limits import check_film
+    from renderer.scene.load_options import options_from_arguments
 
     for path, check in ((args.out, check_output_path), (args.variance, check_variance_path),
                         (args.checkpoint, check_checkpoint_path)):
@@ -127,8 +129,11 @@ def plan_render(args) -> RenderPlan:
     previous = read_header(args.resume) if args.resume is not None else None
     if args.scene is None and previous is None:
         raise ValueError("render: give a SCENE, or --resume CHECKPOINT")
-    scene = load_any(resolve_scene(args.scene if args.scene is not None else previous.scene))
+    scene = load_any(resolve_scene(args.scene if args.scene is not None else previous.scene),
+                     options_from_arguments(args))
     job = _job(args, scene, previous)
+    check_film(scene.path, *job.size, scene.model_files.options.budget,
+               "--size" if args.size else "the scene's render.width x height")
     out = args.out or (Path(previous.out) if previous else DEFAULT_OUT_DIR / f"{scene.name}_{job.integrator}.png")
     variance = args.variance or (Path(previous.variance) if previous and previous.variance else None)
     check_output_path(out)

@@ -60,7 +60,8 @@ class Renderer:
                  mesh_options: MeshOptions = MeshOptions()):
         self.scene = scene
         width, height = max_size or (scene.render.width, scene.render.height)
-        image = read_environment(scene.environment.file) if scene.environment.kind == "map" else None
+        image = (read_environment(scene.environment.file, scene.model_files.options.budget)
+                 if scene.environment.kind == "map" else None)
         self.environment = Environment(scene.environment, image)
         self.geometry, self.materials, self._features = build_world(scene, mesh_options)
         self.media = MediaTable(scene)

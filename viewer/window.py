@@ -121,8 +121,9 @@ class ViewerApp:
     def __init__(self, scene_path, size: tuple[int, int] = DEFAULT_SIZE, integrator: Optional[str] = None,
                  show_window: bool = True, screenshot_folder=None, target_seconds: float = DEFAULT_TARGET_SECONDS,
                  settle_seconds: float = SETTLE_SECONDS, scenes: Optional[list] = None,
-                 clock: Callable[[], float] = time.perf_counter):
+                 clock: Callable[[], float] = time.perf_counter, load_options=None):
         self.size = (int(size[0]), int(size[1]))
+        self.load_options = load_options  # memory budget and model-folder rule (None: defaults)
         self.show_window = show_window
         self.clock = clock
         self.screenshot_folder = screenshot_dir(screenshot_folder)
@@ -179,7 +180,7 @@ class ViewerApp:
         """The cached Renderer of a scene file, built (loaded and uploaded) on first use."""
         path = Path(path).resolve()
         if path not in self.renderers:
-            self.renderers[path] = Renderer(load_any(path), max_size=self.size)
+            self.renderers[path] = Renderer(load_any(path, self.load_options), max_size=self.size)
         return self.renderers[path]
 
     def select_scene(self, path) -> None:
@@ -414,7 +415,7 @@ def _one_line(error: BaseException) -> str:
 
 
 def run_viewer(path, size: tuple[int, int] = DEFAULT_SIZE, integrator: Optional[str] = None,
-               max_frames: Optional[int] = None, screenshot_folder=None) -> int:
+               max_frames: Optional[int] = None, screenshot_folder=None, load_options=None) -> int:
     """Open the viewer on a scene file; returns the process exit code.
 
     Screenshots go to `screenshot_folder`, else $LANTERN_SCREENSHOT_DIR, else <repo>/screenshots.
@@ -423,5 +424,6 @@ def run_viewer(path, size: tuple[int, int] = DEFAULT_SIZE, integrator: Optional[
         # GLFW would print "cannot initialize GLFW" and exit the process; say what to do instead.
         raise RuntimeError("the viewer needs a display (DISPLAY is not set): use `app.py render`, "
                            "or run it under Xvfb")
-    app = ViewerApp(path, size=size, integrator=integrator, screenshot_folder=screenshot_folder)
+    app = ViewerApp(path, size=size, integrator=integrator, screenshot_folder=screenshot_folder,
+                    load_options=load_options)
     return app.run(max_frames)

@@ -2,6 +2,8 @@
 from pathlib import Path
 
 from renderer.scene.errors import SceneError
+from renderer.scene.load_options import LoadOptions
+from renderer.scene.references import missing_file_problem
 
 ASSETS = Path(__file__).resolve().parents[2] / "assets"
 SCENES_DIR = ASSETS / "scenes"
@@ -21,17 +23,18 @@ def scene_names() -> list[str]:
     return [p.stem for p in scene_files()]
 
 
-def load_any(path):
-    """A scene file (.toml) or a model file (glTF/GLB, OBJ, PLY, STL) as a Scene."""
+def load_any(path, options: LoadOptions | None = None):
+    """A scene file (.toml) or a model file (glTF/GLB, OBJ, PLY, STL) as a Scene, read under
+    `options` (memory budget, files outside a model's folder; default LoadOptions())."""
     from renderer.scene.mesh_loader import MESH_EXTENSIONS
 
     if Path(path).suffix.lower() in MESH_EXTENSIONS:
         from renderer.scene.model_scene import scene_for_model
 
-        return scene_for_model(path)
+        return scene_for_model(path, options)
     from renderer.scene.toml_loader import load_scene
 
-    return load_scene(path)
+    return load_scene(path, options)
 
 
 def resolve_scene(argument: str) -> Path:
@@ -39,7 +42,7 @@ def resolve_scene(argument: str) -> Path:
     path = Path(argument)
     if path.suffix or path.exists() or "/" in argument:
         if not path.exists():
-            raise SceneError(argument, "file not found")
+            raise SceneError(argument, missing_file_problem(path))
         return path
     for candidate in scene_files():
         if candidate.stem == argument:

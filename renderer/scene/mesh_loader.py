@@ -89,6 +89,8 @@ from urllib.parse import unquote
 import numpy as np
 
 from renderer.scene.errors import SceneError
+from renderer.scene.limits import MemoryLedger
+from renderer.scene.load_options import LoadOptions
 from renderer.scene.mesh_model import (
     InstancedMesh,
     MeshAsset,
@@ -99,6 +101,7 @@ from renderer.scene.mesh_model import (
     normal_matrix,
     uv_transform_matrix,
 )
+from renderer.scene.references import missing_file_problem, resolve_reference
 from renderer.scene.srgb import srgb_to_linear
 
 PathLike = Union[str, os.PathLike]
@@ -122,6 +125,17 @@ SUPPORTED_GLTF_EXTENSIONS = frozenset({
 
 DEGENERATE_RELATIVE_AREA = 1e-12  # see the module docs ("Checks")
 
+# Memory the readers need beyond what the file declares (renderer.scene.limits), upper bounds of
+# what tests/scene/test_input_limits.py measures with tracemalloc: building one mesh (world
+# positions, attributes and degenerate-triangle tests in float64) per vertex and per triangle,
+# generating its tangents (for a normal map) per vertex and per triangle, and trimesh's parsing
+# of OBJ / PLY / STL per byte of the file.
+MESH_BUILD_BYTES_PER_VERTEX = 400
+MESH_BUILD_BYTES_PER_TRIANGLE = 400
+TANGENT_BYTES_PER_VERTEX = 250
+TANGENT_BYTES_PER_TRIANGLE = 500
+TRIMESH_PARSE_BYTES_PER_BYTE = 20
+
 
 class MeshWarning(UserWarning):
     """Something in a model file was repaired or skipped; the model still loads."""
@@ -135,12 +149,18 @@ class DegenerateTrianglesWarning(MeshWarning):
 # public helpers
 
 
-def load_mesh_asset(path: PathLike) -> MeshAsset:
-    """Load a .gltf, .glb, .obj, .ply or .stl model. See the module docs for what is read."""
+def load_mesh_asset(path: PathLike, options: Optional[LoadOptions] = None,
+                    ledger: Optional[MemoryLedger] = None) -> MeshAsset:
+    """Load a .gltf, .glb, .obj, .ply or .stl model. See the module docs for what is read.
+
+    `options`: the memory budget and whether references may leave the model's folder (default:
+    `LoadOptions()`); `ledger`: where the scene adds up what its files were charged (default: a
+    new one over the options' budget)."""
     name = path  # errors show the path exactly as the caller gave it
     file = Path(path)
     if not file.is_file():
-        raise SceneError(name, "model file not found")
+        problem = missing_file_problem(file)
+        raise SceneError(name, "model file not found" if problem == "file not found" else problem)
     extension = file.suffix.lower()
     if extension not in MESH_EXTENSIONS:
         raise SceneError(
@@ -148,8 +168,10 @@ def load_mesh_asset(path: PathLike) -> MeshAsset:
             f"unsupported model format '{file.suffix or '(none)'}' "
             f"(expected one of {', '.join(MESH_EXTENSIONS)})",
         )
-    builder = _AssetBuilder(name, file)
+    options = options or LoadOptions()
+    builder = _AssetBuilder(name, file, options, ledger or MemoryLedger(options.budget))
     try:
+        builder.charge_file(file, "the file")
         if extension in (".gltf", ".glb"):
             _GltfReader(builder).read()
         elif extension == ".obj":
@@ -158,12 +180,13 @@ def load_mesh_asset(path: PathLike) -> MeshAsset:
             _load_ply(builder)
         else:
             _load_stl(builder)
+        return builder.finish()
     except SceneError:
         raise
-    except (ValueError, KeyError, IndexError, TypeError, struct.error, OSError, AttributeError) as e:
+    except Exception as e:  # noqa: BLE001 - the readers (ours, trimesh, numpy) raise many types
+        # for bad data; every one is a problem with this file, said in one line
         detail = f"{type(e).__name__}: {e}" if str(e) else type(e).__name__
         raise SceneError(name, f"cannot read {extension[1:].upper()} file ({detail})") from e
-    return builder.finish()
 
 
 def frame_camera(bounds, fov_deg: float, aspect: float = 1.0,
@@ -309,9 +332,35 @@ def _rgba(channels: np.ndarray, opaque) -> np.ndarray:
     return out
 
 
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+# Bytes per pixel while decoding (the decoder's own buffer and every numpy copy below, which
+# tests/scene/test_input_limits.py checks against tracemalloc) and once decoded (RGBA texels).
+_DECODE_PEAK = {"png16": 48, "grey16": 30, "float": 24, "8bit": 12}
+_DECODED = {"png16": 8, "grey16": 8, "float": 16, "8bit": 4}
+# A decoded image lives on in the scene's texture atlas and in the device's copy of that atlas.
+IMAGE_COPIES = 3
+
+
 def _is_16_bit_png(data: bytes) -> bool:
     # PNG signature, then the IHDR chunk: bit depth is byte 24 of the file.
-    return data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 25 and data[24] == 16
+    return data[:8] == _PNG_SIGNATURE and len(data) > 25 and data[24] == 16
+
+
+def _image_header(data: bytes) -> tuple[int, int, str]:
+    """(width, height, decoding) from an image's header alone, before anything is decoded;
+    decoding is a key of _DECODED."""
+    if data[:8] == _PNG_SIGNATURE and len(data) >= 25:
+        width, height = struct.unpack_from(">II", data, 16)  # IHDR
+        return width, height, "png16" if data[24] == 16 else "8bit"
+    from PIL import Image
+
+    with warnings.catch_warnings():  # the budget decides, not Pillow's fixed warning threshold
+        warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+        with Image.open(io.BytesIO(data)) as im:  # lazy: reads the header
+            width, height = im.size
+            mode = im.mode
+    decoding = "grey16" if mode.startswith("I;16") or mode == "I" else "float" if mode == "F" else "8bit"
+    return width, height, decoding
 
 
 def _decode_image(data: bytes) -> np.ndarray:
@@ -332,7 +381,14 @@ def _decode_image(data: bytes) -> np.ndarray:
         return _rgba(unit, 1.0).astype(np.float16)
     from PIL import Image
 
-    with Image.open(io.BytesIO(data)) as im:
+    # The budget decided on the header's size; Pillow's own fixed threshold would only warn here.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+        return _decode_with_pillow(Image.open(io.BytesIO(data)))
+
+
+def _decode_with_pillow(opened) -> np.ndarray:
+    with opened as im:
         im.load()
         if im.mode.startswith("I;16") or im.mode == "I":
             grey = np.clip(np.asarray(im).astype(np.float64) / 65535.0, 0.0, 1.0)
@@ -355,12 +411,16 @@ class _MissingTexture(Exception):
         self.file_name = file_name
 
 
-def _file_reader(target: Path, shown_name: str) -> Callable[[], bytes]:
-    """Reads a texture file, or raises _MissingTexture(shown_name) if it does not exist."""
+def _file_reader(builder: "_AssetBuilder", reference: str, what: str,
+                 base: Optional[Path] = None) -> Callable[[], bytes]:
+    """Reads a texture file the model names as `reference`, or raises _MissingTexture(reference)
+    if it does not exist; a reference outside the model's folder is refused (SceneError)."""
 
     def load() -> bytes:
+        target = builder.reference(reference, what, base)
         if not target.is_file():
-            raise _MissingTexture(shown_name)
+            raise _MissingTexture(reference)
+        builder.check_peak(f"{what} '{reference}'", target.stat().st_size)
         return target.read_bytes()
 
     return load
@@ -371,9 +431,11 @@ def _file_reader(target: Path, shown_name: str) -> Callable[[], bytes]:
 
 
 class _AssetBuilder:
-    def __init__(self, name: PathLike, file: Path):
+    def __init__(self, name: PathLike, file: Path, options: LoadOptions, ledger: MemoryLedger):
         self.name = name
         self.file = file
+        self.options = options
+        self.ledger = ledger
         self.materials: list[PbrMaterial] = []
         self.meshes: list[TriangleMesh] = []
         self.instanced: list[InstancedMesh] = []
@@ -390,6 +452,24 @@ class _AssetBuilder:
     def error(self, message: str) -> SceneError:
         return SceneError(self.name, message)
 
+    def charge(self, what: str, nbytes: int) -> None:
+        """Book memory that stays allocated while the scene loads (renderer.scene.limits)."""
+        self.ledger.charge(self.name, what, nbytes)
+
+    def check_peak(self, what: str, nbytes: int) -> None:
+        """Refuse a passing allocation that would not fit beside what is booked."""
+        self.ledger.check_peak(self.name, what, nbytes)
+
+    def charge_file(self, path: Path, what: str) -> None:
+        """Book the bytes of a file about to be read whole."""
+        self.charge(f"{what} ({path.name})", path.stat().st_size)
+
+    def reference(self, reference: str, what: str, base: Optional[Path] = None) -> Path:
+        """The file a reference of this model names (relative to `base`, by default the model's
+        folder), refused when it lies outside the model's folder and that is not allowed."""
+        return resolve_reference(self.file, self.name, reference, what,
+                                 self.options.allow_outside_files, base)
+
     def warn(self, message: str) -> None:
         warnings.warn(f"{os.fspath(self.name)}: {message}", MeshWarning, stacklevel=4)
 
@@ -398,6 +478,14 @@ class _AssetBuilder:
         Raises _MissingTexture when its file is missing."""
         if key not in self._decoded:
             data = load()
+            try:
+                width, height, decoding = _image_header(data)
+            except Exception as e:  # Pillow raises many types for bad data
+                raise self.error(f"cannot decode image {label} ({type(e).__name__}: {e})") from e
+            pixels = width * height
+            self.charge(f"image {label} ({width}x{height})", pixels * _DECODED[decoding] * IMAGE_COPIES)
+            self.check_peak(f"decoding image {label} ({width}x{height})",
+                            pixels * _DECODE_PEAK[decoding] + len(data))
             try:
                 self._decoded[key] = _decode_image(data)
             except Exception as e:  # Pillow raises many types for bad data
@@ -449,6 +537,7 @@ class _AssetBuilder:
         p = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
         tri = np.asarray(indices).reshape(-1, 3)
         count = len(p)
+        self.check_build(where, count, len(tri), material, normals is None)
         bad = int(np.count_nonzero(~np.isfinite(p).all(axis=1)))
         if bad:
             raise self.error(f"{where}: {bad} vertex positions are not finite (NaN or infinity)")
@@ -569,6 +658,18 @@ class _AssetBuilder:
             name=name,
         )
 
+    def check_build(self, where: str, vertices: int, triangles: int, material: int,
+                    no_normals: bool) -> None:
+        """Refuse a mesh whose building (`_build_mesh`) would pass the budget: an upper bound
+        from the module's constants."""
+        spec = self.materials[material]
+        normal_map = spec.normal_texture or spec.clearcoat_normal_texture
+        split = 3 * triangles if normal_map is not None and no_normals else vertices  # flat shading
+        total = split * MESH_BUILD_BYTES_PER_VERTEX + triangles * MESH_BUILD_BYTES_PER_TRIANGLE
+        if normal_map is not None:
+            total += split * TANGENT_BYTES_PER_VERTEX + triangles * TANGENT_BYTES_PER_TRIANGLE
+        self.check_peak(f"{where} ({vertices} vertices, {triangles} triangles)", total)
+
     def _tangents_for(self, where, positions, normals, uvs, tri, ref: TextureRef) -> np.ndarray:
         uv = uvs[ref.uv_set]
         if uv is None:
@@ -656,8 +757,15 @@ def _floats_of(values) -> tuple[float, ...]:
     return tuple(float(v) for v in values)
 
 
+def _count(raw, what: str, builder: _AssetBuilder) -> int:
+    """A count from the JSON: a non-negative integer (JSON booleans and fractions are not)."""
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)) or raw != int(raw) or raw < 0:
+        raise builder.error(f"{what} {raw!r} is not a non-negative integer")
+    return int(raw)
+
+
 def _read_uri(builder: _AssetBuilder, uri: str, what: str) -> bytes:
-    """Bytes of a data: URI or of a file relative to the model."""
+    """Bytes of a data: URI or of a file relative to the model (inside its folder)."""
     if uri.startswith("data:"):
         head, _, payload = uri.partition(",")
         try:
@@ -667,9 +775,10 @@ def _read_uri(builder: _AssetBuilder, uri: str, what: str) -> bytes:
         except Exception as e:
             raise builder.error(f"{what}: bad data URI ({e})") from e
     relative = unquote(uri)
-    target = builder.file.parent / relative
+    target = builder.reference(relative, what)
     if not target.is_file():
         raise builder.error(f"{what} file '{relative}' not found")
+    builder.charge_file(target, what)
     return target.read_bytes()
 
 
@@ -778,6 +887,9 @@ class _GltfReader:
         data, start, length, stride = self._view(view_index, what)
         element = dtype.itemsize * width
         stride = int(stride) if stride else element
+        if stride < element:
+            raise self.b.error(f"{what}: bufferViews[{view_index}] byteStride {stride} is shorter "
+                               f"than one element ({element} bytes)")
         if count == 0:
             return np.zeros((0, width), dtype=dtype)
         end = offset + stride * (count - 1) + element
@@ -798,14 +910,18 @@ class _GltfReader:
             raise self.b.error(f"{name} has an unknown componentType or type")
         dtype = np.dtype(_COMPONENT_DTYPES[ctype])
         width = _TYPE_SIZES[a["type"]]
-        count = int(a.get("count", 0))
+        count = _count(a.get("count", 0), f"{name} count", self.b)
+        # Decoded values are float64 or int64 by the time they are used: 8 bytes per component.
+        self.b.charge(f"{name} ({count} {a['type']} values)", count * width * 8)
         if "bufferView" in a:
             out = self._strided(a["bufferView"], int(a.get("byteOffset", 0)), dtype, count, width, name)
-        else:
-            out = np.zeros((count, width), dtype=dtype)
+        else:  # all zeros; float ones in the float64 they end up as, without a copy
+            out = np.zeros((count, width), dtype=np.float64 if ctype == 5126 else dtype)
         sparse = a.get("sparse")
         if sparse:
-            n = int(sparse["count"])
+            n = _count(sparse["count"], f"{name} sparse count", self.b)
+            if n > count:
+                raise self.b.error(f"{name}: sparse count {n} is larger than the accessor's {count}")
             si, sv = sparse["indices"], sparse["values"]
             if si.get("componentType") not in (5121, 5123, 5125):
                 raise self.b.error(f"{name}: bad sparse index componentType")
@@ -838,7 +954,7 @@ class _GltfReader:
                 uri = str(image["uri"])
                 if uri.startswith("data:"):
                     return _read_uri(self.b, uri, f"images[{index}]")
-                return _file_reader(self.b.file.parent / unquote(uri), unquote(uri))()
+                return _file_reader(self.b, unquote(uri), f"images[{index}]")()
             raise self.b.error(f"images[{index}] has neither a uri nor a bufferView")
 
         return load
@@ -1007,12 +1123,17 @@ class _GltfReader:
         else:  # no scene: every node that is nobody's child is a root
             children = {c for n in nodes for c in n.get("children", [])}
             roots = [i for i in range(len(nodes)) if i not in children]
-        stack = [(r, np.eye(4), frozenset()) for r in reversed(roots)]
+        stack = [(r, np.eye(4)) for r in reversed(roots)]
         placements: dict[int, list] = {}  # mesh -> (node, (k, 4, 4) matrices, gpu instancing)
+        # glTF's hierarchy is a forest: a node reached twice closes a cycle or has two parents
+        # (which would place its subtree once per path: exponentially many times in a few bytes).
+        reached: set = set()
         while stack:
-            index, parent, ancestors = stack.pop()
-            if index in ancestors:
-                raise self.b.error(f"the node hierarchy has a cycle through nodes[{index}]")
+            index, parent = stack.pop()
+            if index in reached:
+                raise self.b.error(f"nodes[{index}] is reached twice: the node hierarchy has a cycle "
+                                   "or a node with two parents (glTF requires a tree)")
+            reached.add(index)
             node = self._item("nodes", index, "the scene")
             world = parent @ self._local_matrix(node)
             if "mesh" in node:
@@ -1020,9 +1141,8 @@ class _GltfReader:
                 gpu = "EXT_mesh_gpu_instancing" in node.get("extensions", {})
                 matrices = self._instance_matrices(node, index, world) if gpu else world[None]
                 placements.setdefault(node["mesh"], []).append((index, matrices, gpu))
-            below = ancestors | {index}
             for child in reversed(node.get("children", [])):
-                stack.append((child, world, below))
+                stack.append((child, world))
         # A mesh placed once is baked into world space; a mesh placed more often, or by
         # EXT_mesh_gpu_instancing, is kept once with its matrices (mesh_model, "Instances").
         for mesh_index, places in placements.items():
@@ -1072,6 +1192,16 @@ class _GltfReader:
             attributes = prim.get("attributes", {})
             if "POSITION" not in attributes:
                 raise self.b.error(f"{where} has no POSITION attribute")
+            material = prim.get("material")
+            if material is None:
+                material = self._default_material()
+            elif not 0 <= int(material) < len(self.doc.get("materials", [])):
+                raise self.b.error(f"{where} refers to materials[{material}], which does not exist")
+            # What building this primitive will take, from the declared counts, before any is read.
+            vertices = self._declared_count(attributes["POSITION"], where)
+            corners = self._declared_count(prim["indices"], where) if "indices" in prim else vertices
+            self.b.check_build(where, vertices, corners // 3 if mode == _TRIANGLES else max(corners - 2, 0),
+                               int(material), "NORMAL" not in attributes)
             positions = self.accessor(attributes["POSITION"], where)
             if positions.shape[1] != 3:
                 raise self.b.error(f"{where}: POSITION is not VEC3")
@@ -1093,11 +1223,6 @@ class _GltfReader:
             colors = optional("COLOR_0", (3, 4))
             if colors is not None:
                 colors = self._unit_colors(attributes["COLOR_0"], colors)
-            material = prim.get("material")
-            if material is None:
-                material = self._default_material()
-            elif not 0 <= int(material) < len(self.doc.get("materials", [])):
-                raise self.b.error(f"{where} refers to materials[{material}], which does not exist")
             data = dict(material=int(material), normals=optional("NORMAL", (3,)),
                         uv0=optional("TEXCOORD_0", (2,)), uv1=optional("TEXCOORD_1", (2,)),
                         tangents=optional("TANGENT", (4,)), colors=colors)
@@ -1106,6 +1231,10 @@ class _GltfReader:
                                 name=f"{node_name}/{mesh_name}/{p}", **data)
             else:
                 self.b.add_instanced(where, positions, tri, matrices, name=f"{mesh_name}/{p}", **data)
+
+    def _declared_count(self, index, what: str) -> int:
+        """The count an accessor declares (nothing read yet)."""
+        return _count(self._item("accessors", index, what).get("count", 0), f"accessors[{index}] count", self.b)
 
     def _unit_colors(self, accessor_index: int, colors: np.ndarray) -> np.ndarray:
         """COLOR_0 as linear RGBA: glTF requires integer colours to be normalized (k / 255,
@@ -1254,15 +1383,16 @@ def _obj_material(b: _AssetBuilder, name: str, entries: dict, directory: Path) -
         file_name, options = _parse_map_statement(args)
         if not file_name:
             return None
-        target = directory / file_name
+        what = f"material '{name}' {key}"
+        target = b.reference(file_name, what, directory)
         offset = _floats(options.get("-o"), 2) or (0.0, 0.0)
         scale = _floats(options.get("-s"), 2) or (1.0, 1.0)
         # MTL -o/-s act on v-up coordinates; in the stored v-down frame v' = s v + (1 - s - o).
         matrix = ((scale[0], 0.0, offset[0]), (0.0, scale[1], 1.0 - scale[1] - offset[1]),
                   (0.0, 0.0, 1.0))
         wrap = "clamp" if options.get("-clamp", ["off"])[0].lower() == "on" else "repeat"
-        index = b.image(("file", str(target.resolve())), srgb, f"'{file_name}'",
-                        _file_reader(target, file_name), f"material '{name}' {key}")
+        index = b.image(("file", str(target)), srgb, f"'{file_name}'",
+                        _file_reader(b, file_name, what, directory), what)
         if index is None:
             return None  # missing: the material keeps its factors (warned at the end)
         return TextureRef(texture=index, uv_set=0, wrap_s=wrap, wrap_t=wrap,
@@ -1274,10 +1404,11 @@ def _obj_material(b: _AssetBuilder, name: str, entries: dict, directory: Path) -
         for key in ("map_bump", "bump"):
             if entries.get(key):
                 file_name, options = _parse_map_statement(entries[key])
-                target = directory / file_name
-                image_key = ("file", str(target.resolve()))
+                what = f"material '{name}' {key}"
+                image_key = ("file", str(b.reference(file_name, what, directory)))
                 try:
-                    raw = b.decoded_image(image_key, f"'{file_name}'", _file_reader(target, file_name))
+                    raw = b.decoded_image(image_key, f"'{file_name}'",
+                                          _file_reader(b, file_name, what, directory))
                 except _MissingTexture:
                     b.note_missing(image_key, file_name, f"material '{name}' {key}")
                     break
@@ -1336,6 +1467,7 @@ def _load_obj(b: _AssetBuilder) -> None:
     from trimesh.exchange.obj import load_obj
 
     text = _read_text(b.file)
+    b.check_peak("parsing the OBJ file", b.file.stat().st_size * TRIMESH_PARSE_BYTES_PER_BYTE)
     libraries = []
     for match in re.finditer(r"^[ \t]*mtllib[ \t]+(.+?)[ \t]*$", text, flags=re.MULTILINE):
         value = match.group(1).replace("\\", "/")
@@ -1343,9 +1475,10 @@ def _load_obj(b: _AssetBuilder) -> None:
         libraries.extend([value] if whole.is_file() else value.split())
     mtl: dict[str, dict] = {}
     for library in libraries:
-        target = b.file.parent / library
+        target = b.reference(library, "material library")
         if not target.is_file():
             raise b.error(f"material library '{library}' not found")
+        b.charge_file(target, "material library")
         for name, entries in _parse_mtl(_read_text(target)).items():
             mtl.setdefault(name, (entries, target.parent))
     index = {}
@@ -1422,6 +1555,7 @@ def _color_array(values, count: int) -> Optional[np.ndarray]:
 def _load_ply(b: _AssetBuilder) -> None:
     from trimesh.exchange.ply import load_ply
 
+    b.check_peak("parsing the PLY file", b.file.stat().st_size * TRIMESH_PARSE_BYTES_PER_BYTE)
     with open(b.file, "rb") as f:
         kwargs = load_ply(f, fix_texture=True, skip_materials=True)
     faces = kwargs.get("faces")
@@ -1439,9 +1573,9 @@ def _load_ply(b: _AssetBuilder) -> None:
         uv[:, 1] = 1.0 - uv[:, 1]  # PLY texture coordinates are v-up, as OBJ
         texture_file = _ply_texture_file(b.file)
         if texture_file:
-            target = b.file.parent / texture_file
-            index = b.image(("file", str(target.resolve())), True, f"'{texture_file}'",
-                            _file_reader(target, texture_file), "base colour")
+            what = "TextureFile"
+            index = b.image(("file", str(b.reference(texture_file, what))), True, f"'{texture_file}'",
+                            _file_reader(b, texture_file, what), "base colour")
             if index is not None:
                 b.materials[material] = dataclasses.replace(
                     b.materials[material], base_color_texture=TextureRef(texture=index),
@@ -1453,6 +1587,15 @@ def _load_ply(b: _AssetBuilder) -> None:
 def _load_stl(b: _AssetBuilder) -> None:
     from trimesh.exchange.stl import load_stl
 
+    size = b.file.stat().st_size
+    with open(b.file, "rb") as f:
+        head = f.read(84)
+    if len(head) == 84 and not head.startswith(b"solid"):  # binary: 84-byte header, 50 bytes a triangle
+        declared = struct.unpack_from("<I", head, 80)[0]
+        if size != 84 + 50 * declared:
+            raise b.error(f"binary STL declares {declared} triangles ({84 + 50 * declared} bytes) "
+                          f"but the file holds {size} bytes (truncated or damaged)")
+    b.check_peak("parsing the STL file", size * TRIMESH_PARSE_BYTES_PER_BYTE)
     with open(b.file, "rb") as f:
         kwargs = load_stl(f)
     faces = kwargs.get("faces")

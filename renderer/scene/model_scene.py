@@ -2,6 +2,7 @@
 default HDR environment. What `app.py view model.glb` and `render model.obj` open."""
 from pathlib import Path
 
+from renderer.scene.load_options import LoadOptions
 from renderer.scene.mesh_loader import frame_camera
 from renderer.scene.model import CameraSpec, EnvironmentSpec, MeshObject, RenderSettings, Scene
 from renderer.scene.model_files import ModelFiles
@@ -13,9 +14,9 @@ FOV = 40.0
 SIZE = (640, 360)
 
 
-def scene_for_model(path) -> Scene:
+def scene_for_model(path, options: LoadOptions | None = None) -> Scene:
     path = Path(path)
-    files = ModelFiles()  # the scene keeps the parsed file: assembly reads it from there
+    files = ModelFiles(options)  # the scene keeps the parsed file: assembly reads it from there
     asset = files.load(path)  # one-line SceneError for a bad file, before anything else
     position, target = frame_camera(asset.bounds, FOV, aspect=SIZE[0] / SIZE[1])
     distance = sum((a - b) ** 2 for a, b in zip(position, target)) ** 0.5

@@ -103,6 +103,17 @@ NON_NEGATIVE = Range(0.0)
 UNIT = Range(0.0, 1.0)
 AT_LEAST_ONE = Range(1)
 
+# Limits that keep a scene file from asking for more than a machine has (the memory a scene's
+# files may take is budgeted separately: renderer/scene/limits.py).
+MAX_IMAGE_SIDE = 16384  # pixels, as the command line's --size
+FILM_SIDE = Range(1, MAX_IMAGE_SIDE)
+# Operators may nest this deep (a top-level object is level 1). Each level of an operator tree
+# is a func that Taichi inlines recursively in Python while compiling: a chain of 22 levels
+# exhausts Python's recursion limit in the path tracer's kernel, 20 compile in every integrator.
+MAX_SDF_DEPTH = 16
+# Every number ends up as a 32-bit float on the device; larger magnitudes would become infinity.
+F32_MAX = 3.4028234663852886e38
+
 
 @dataclass(frozen=True)
 class Field:
@@ -306,8 +317,8 @@ RENDER = Section(
     "render",
     "Image size, sampling and integrator. Every field is optional.",
     (
-        Field("width", "int", 640, "Image width, pixels.", AT_LEAST_ONE),
-        Field("height", "int", 360, "Image height, pixels.", AT_LEAST_ONE),
+        Field("width", "int", 640, "Image width, pixels.", FILM_SIDE),
+        Field("height", "int", 360, "Image height, pixels.", FILM_SIDE),
         Field("spp", "int", 64, "Samples per pixel.", AT_LEAST_ONE),
         Field("max_depth", "int", 8, "Longest path, in segments: 1 shows emitters seen directly, "
               "2 adds direct light, and so on. -1 means unlimited (Russian roulette ends paths).",

@@ -14,6 +14,7 @@ from typing import Optional
 
 from . import schema
 from .errors import SceneError
+from .load_options import LoadOptions
 from .model import (
     MESH_OBJECT_KINDS,
     CameraSpec,
@@ -28,7 +29,13 @@ from .model import (
     SdfNode,
     Transform,
 )
+from .model_files import ModelFiles
+from .references import missing_file_problem
 from .schema import Field, MeshKind, NodeKind, Section, format_number
+
+# Python objects of a parsed TOML file per byte of its text (a file of empty inline tables comes
+# to ~60; tests/scene/test_input_limits.py measures it): checked against the memory budget first.
+TOML_PARSE_BYTES_PER_BYTE = 100
 
 
 class _Invalid(Exception):
@@ -43,11 +50,13 @@ class _Invalid(Exception):
         return f"{self.where}: {self.message}" if self.where else self.message
 
 
-def load_scene(path: str | os.PathLike) -> Scene:
-    """Read and validate a scene file. Raises SceneError (one line) on any problem."""
-    data = _read_toml(path)
+def load_scene(path: str | os.PathLike, options: Optional[LoadOptions] = None) -> Scene:
+    """Read and validate a scene file. Raises SceneError (one line) on any problem.
+    `options`: the memory budget and rules its model files are read under (default LoadOptions())."""
+    options = options or LoadOptions()
+    data = _read_toml(path, options)
     try:
-        return _build_scene(data, Path(path))
+        return _build_scene(data, Path(path), ModelFiles(options))
     except _Invalid as problem:
         raise SceneError(path, problem.text()) from None
 
@@ -59,15 +68,17 @@ def _extension_text(suffix: str) -> str:
     return f"extension '{suffix}'" if suffix else "file without an extension"
 
 
-def _read_toml(path: str | os.PathLike) -> dict:
+def _read_toml(path: str | os.PathLike, options: LoadOptions) -> dict:
     file = Path(path)
     if not file.exists():
-        raise SceneError(path, "file not found")
+        raise SceneError(path, missing_file_problem(file))
     if file.is_dir():
         raise SceneError(path, "is a directory, not a scene file")
     if file.suffix.lower() not in schema.SCENE_EXTENSIONS:
         raise SceneError(path, f"unsupported scene {_extension_text(file.suffix)} (expected .toml)")
     try:
+        size = file.stat().st_size
+        options.budget.check(path, f"parsing this {size}-byte scene file", size * TOML_PARSE_BYTES_PER_BYTE)
         raw = file.read_bytes()
     except OSError as err:
         raise SceneError(path, f"cannot read file: {err.strerror or err}") from None
@@ -79,6 +90,8 @@ def _read_toml(path: str | os.PathLike) -> dict:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise SceneError(path, f"invalid TOML: {err}") from None
+    except RecursionError:  # the parser recurses once per level of inline tables and arrays
+        raise SceneError(path, "invalid TOML: arrays or inline tables nested too deeply to read") from None
 
 
 # --- raw values ------------------------------------------------------------------------------
@@ -112,7 +125,14 @@ def _number(raw: object, where: str) -> float:
     value = float(raw)
     if not math.isfinite(value):
         raise _Invalid(where, f"{raw!r} is not a finite number")
+    _check_f32(value, where)
     return value
+
+
+def _check_f32(value: float, where: str) -> None:
+    if abs(value) > schema.F32_MAX:
+        raise _Invalid(where, f"{format_number(value)} is beyond the 32-bit float range "
+                              f"(magnitudes up to {schema.F32_MAX:.4g})")
 
 
 def _integer(raw: object, where: str) -> int:
@@ -338,8 +358,11 @@ def _resolve_file(file: str, scene_path: Path, where: str, what: str,
     if suffix.lower() not in extensions:
         raise _Invalid(f"{where}.file", f"unsupported {what} {_extension_text(suffix)} "
                                         f"(expected {_or_list(extensions)})")
-    resolved = (scene_path.parent / file).resolve()
     noun = what.split()[-1]  # "environment map" -> "map", "model" -> "model"
+    try:
+        resolved = (scene_path.parent / file).resolve()
+    except RuntimeError:  # Python's report of a symlink loop
+        raise _Invalid(where, f"{noun} file {file} is a symlink loop") from None
     if not resolved.exists():
         raise _Invalid(where, f"missing {noun} file {file} (looked for {resolved})")
     if not resolved.is_file():
@@ -359,8 +382,9 @@ def _read_material(name: str, raw: object) -> MaterialSpec:
     where = f"materials.{name}"
     values = _read_section(raw, schema.MATERIAL, where)
     emission = tuple(c * values["emission_strength"] for c in values["emission"])
-    if not all(math.isfinite(c) for c in emission):
-        raise _Invalid(where, "emission * emission_strength is too large to represent")
+    if not all(math.isfinite(c) and c <= schema.F32_MAX for c in emission):
+        raise _Invalid(where, f"emission * emission_strength = {format_number(max(emission))} is beyond "
+                              f"the 32-bit float range (up to {schema.F32_MAX:.4g})")
     values["emission"] = emission
     return MaterialSpec(name=name, **_model_kwargs(schema.MATERIAL, values))
 
@@ -428,19 +452,24 @@ def _node_fields(kind: NodeKind, top_level: bool) -> tuple[Field, ...]:
     return common + kind.params
 
 
-def _read_children(kind: NodeKind, raw: object, where: str) -> tuple[SdfNode, ...]:
+def _read_children(kind: NodeKind, raw: object, where: str, depth: int) -> tuple[SdfNode, ...]:
     children = [] if raw is None else _tables(raw, f"{where}.children")
     count = len(children)
     too_many = kind.max_children is not None and count > kind.max_children
     if count < kind.min_children or too_many:
         raise _Invalid(where, f"'{kind.name}' needs {kind.children_text()}, got {count}")
-    return tuple(_read_node(child, f"{where}.children[{i}]", top_level=False)
+    return tuple(_read_node(child, f"{where}.children[{i}]", top_level=False, depth=depth + 1)
                  for i, child in enumerate(children))
 
 
-def _read_node(raw: object, where: str, top_level: bool) -> SdfNode:
+def _read_node(raw: object, where: str, top_level: bool, depth: int = 1) -> SdfNode:
+    """One SDF node and its subtree; `depth` counts the levels down to it (1 at top level)."""
     table = _table(raw, where)
     kind = _node_kind(table, where)
+    if depth > schema.MAX_SDF_DEPTH:
+        # where names every level above; show its start and end
+        place = where if len(where) <= 120 else f"{where[:40]}...{where[-60:]}"
+        raise _Invalid(place, f"operators nest deeper than {schema.MAX_SDF_DEPTH} levels")
     # Two common mistakes get a specific message rather than "unknown field".
     if "children" in table and not kind.is_operator:
         raise _Invalid(where, f"primitive '{kind.name}' cannot have children")
@@ -453,7 +482,7 @@ def _read_node(raw: object, where: str, top_level: bool) -> SdfNode:
     return SdfNode(
         kind=kind.name,
         params=tuple(sorted(params.items())),
-        children=_read_children(kind, values["children"], where) if kind.is_operator else (),
+        children=_read_children(kind, values["children"], where, depth) if kind.is_operator else (),
         transform=Transform(values["translate"], values["rotate"], values["scale"]),
         material=values["material"] if top_level else None,
     )
@@ -578,7 +607,7 @@ _GEOMETRY_READERS = {"sdf": _read_sdf_objects, "mesh": _read_mesh_objects}
 # --- the scene -------------------------------------------------------------------------------
 
 
-def _build_scene(data: dict, path: Path) -> Scene:
+def _build_scene(data: dict, path: Path, model_files: ModelFiles) -> Scene:
     _check_top_level(data)
     header = _read_section(data["scene"], schema.SCENE, "scene")
     camera = _read_section(data.get("camera"), schema.CAMERA, "camera")
@@ -601,5 +630,6 @@ def _build_scene(data: dict, path: Path) -> Scene:
         media=media,
         fog=fog,
         description=header["description"],
+        model_files=model_files,
         **geometry,
     )

@@ -341,9 +341,9 @@ def test_a_model_scene_is_parsed_once(monkeypatch):
     calls = []
     real = mesh_loader.load_mesh_asset
 
-    def counting(path):
+    def counting(path, *options):
         calls.append(Path(path))
-        return real(path)
+        return real(path, *options)
 
     monkeypatch.setattr(mesh_loader, "load_mesh_asset", counting)
     with warnings.catch_warnings():
