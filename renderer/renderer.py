@@ -48,7 +48,7 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
 
         mesh = assemble(scene, instancing=mesh_options.instancing)
         bvh = build_scene_bvh(mesh.data, strategy=mesh_options.strategy, max_leaf_size=mesh_options.max_leaf_size)
-        materials = MaterialTable(mesh.rows, TextureTable(mesh.atlas, mesh.texture_slots))
+        materials = MaterialTable(mesh.rows, TextureTable(mesh.atlas, mesh.texture_slots), mesh.volume_media)
         # The geometry tests alpha coverage during traversal: it reads the material table.
         geometry = MeshGeometry(mesh.data, bvh, mesh_options.traversal, mesh_options.triangle_test, materials)
         return geometry, materials, mesh.features(scene)
@@ -64,7 +64,7 @@ class Renderer:
                  if scene.environment.kind == "map" else None)
         self.environment = Environment(scene.environment, image)
         self.geometry, self.materials, self._features = build_world(scene, mesh_options)
-        self.media = MediaTable(scene)
+        self.media = MediaTable(scene, self.materials.volume_media)
         self._env_image = image
         self._lights = None
         self.film = Film(width, height)

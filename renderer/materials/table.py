@@ -169,8 +169,11 @@ def _layers_row(m) -> dict:
 class MaterialTable:
     """All of a scene's materials in one struct field, indexed by material id, and its textures."""
 
-    def __init__(self, rows: MaterialRows, textures: TextureTable | None = None):
+    def __init__(self, rows: MaterialRows, textures: TextureTable | None = None, volume_media: tuple = ()):
         arrays = rows.arrays()
+        # Media that model files' materials fill their interiors with (glTF volumes): the media
+        # table numbers them after the scene's own.
+        self.volume_media = tuple(volume_media)
         self.arrays = arrays  # kept: direct lighting reads emission per material
         self.count = len(arrays["kind"])
         self.table = MaterialRecord.field(shape=max(1, self.count))

@@ -15,8 +15,9 @@ MediumRecord = ti.types.struct(sigma_a=vec3, sigma_s=vec3, g=ti.f32)
 
 @ti.data_oriented
 class MediaTable:
-    def __init__(self, scene):
-        media = scene.media
+    def __init__(self, scene, volume_media: tuple = ()):
+        """volume_media: media of model files' materials (glTF volumes), numbered after the scene's."""
+        media = tuple(scene.media) + tuple(volume_media)
         self.table = MediumRecord.field(shape=max(1, len(media)))
         if media:
             upload_fields([(self.table, {"sigma_a": np.array([m.sigma_a for m in media], np.float32),

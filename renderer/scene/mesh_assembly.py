@@ -17,15 +17,18 @@ import numpy as np
 
 from renderer.geometry.bezier import bezier_fields
 from renderer.geometry.mesh_data import MeshData
-from renderer.materials.table import KIND_IDS, MaterialRows
+from renderer.materials.table import KIND_IDS, NO_MEDIUM, MaterialRows
 from renderer.scene.errors import SceneError
 from renderer.scene.features import Features, features_from
 from renderer.scene.mesh_loader import MeshWarning
-from renderer.scene.model import Scene
+from renderer.scene.model import MediumSpec, Scene
 from renderer.scene.orientation import rewind_to_normals
 from renderer.scene.textures import WRAP_CODES, TextureAtlas, pack_atlas
 
 KIND_NAMES = {v: k for k, v in KIND_IDS.items()}
+# An attenuation colour of 0 would absorb infinitely: 1e-4 is gone after one attenuation distance
+# to the eye already, and keeps sigma_a finite (9.2 / distance).
+MIN_ATTENUATION = 1e-4
 
 
 @dataclass
@@ -34,6 +37,7 @@ class MeshScene:
     rows: MaterialRows
     atlas: TextureAtlas | None
     texture_slots: list  # (rect, wrap_s, wrap_t, uv_set, matrix) per texture slot
+    volume_media: tuple = ()  # MediumSpec of model files' volumes, numbered after the scene's media
 
     def material_uses(self) -> dict:
         uses = self.rows.uses()
@@ -110,6 +114,7 @@ class _Builder:
         self.material_ids = {m.name: self.rows.add_spec(m) for m in scene.materials}
         self.images: list[np.ndarray] = []
         self.slots: list = []  # (image index, wrap_s, wrap_t, uv_set, matrix)
+        self.volume_media: list[MediumSpec] = []  # model files' absorbing interiors, after the scene's media
         self.parts: dict[str, list] = {"spheres": [], "sphere_mat": [], "quads": [], "quad_mat": [], "discs": [],
                                        "disc_mat": []}
         self.world = _Triangles()  # triangles placed in world space
@@ -117,6 +122,20 @@ class _Builder:
         self.instanced: list = []  # (first triangle in self.object, count) per instanced mesh
         self.instances: list = []  # (instanced mesh, (N, 3, 4) object-to-world matrices)
         self.beziers: list = []  # (cubic segments, matrix, material, spans, sectors) per object
+
+    def volume_medium(self, material, file) -> int:
+        """The medium inside a transmissive glTF material with KHR_materials_volume: absorption
+        that leaves `attenuation_color` after `attenuation_distance` (Beer's law, sigma_a =
+        -ln(colour) / distance per channel; no scattering), or NO_MEDIUM."""
+        colour = np.clip(np.asarray(material.attenuation_color, np.float64), MIN_ATTENUATION, 1.0)
+        if (material.transmission_factor <= 0.0 or material.thin_walled
+                or not np.isfinite(material.attenuation_distance) or material.attenuation_distance <= 0.0
+                or np.all(colour >= 1.0)):
+            return NO_MEDIUM
+        sigma_a = tuple(float(v) for v in -np.log(colour) / material.attenuation_distance)
+        name = f"{os.fspath(file)}#{material.name}"
+        self.volume_media.append(MediumSpec(name, sigma_a=sigma_a, sigma_s=(0.0, 0.0, 0.0), g=0.0))
+        return self.rows.add_medium(name)
 
     def material(self, name, where):
         if name not in self.material_ids:
@@ -136,7 +155,7 @@ class _Builder:
                                    ref.uv_set, ref.matrix))
                 return len(self.slots) - 1
 
-            mats = [self.rows.add_pbr(m, texture_id) for m in asset.materials]
+            mats = [self.rows.add_pbr(m, texture_id, self.volume_medium(m, obj.file)) for m in asset.materials]
         matrix = obj.matrix()
         turned = 0
         for mesh in asset.meshes:
@@ -246,7 +265,7 @@ class _Builder:
             packed = pack_atlas(self.images)
             atlas = packed
             slots = [(packed.rects[img], ws, wt, uv_set, matrix) for img, ws, wt, uv_set, matrix in self.slots]
-        return MeshScene(data, self.rows, atlas, slots)
+        return MeshScene(data, self.rows, atlas, slots, tuple(self.volume_media))
 
 
 def assemble(scene: Scene, instancing: bool = True) -> MeshScene:
