@@ -1,28 +1,54 @@
 #!/usr/bin/env bash
 # Installs what Lantern needs on a Debian machine with Python 3.10/3.11:
-#  - Debian: the Vulkan loader and software driver (for the window and the Vulkan test), Xvfb and
-#    xdotool (for the end-to-end viewer test), when missing and when apt-get can be used;
+#  - Debian: the Vulkan loader and software driver (for the window and the Vulkan test), Xvfb,
+#    xdotool and ImageMagick (the end-to-end viewer test drives the window with xdotool and grabs
+#    the screen with ImageMagick's `import`), when missing and when apt-get can be used;
 #  - Python: a virtual environment in .venv with the project and its test extras.
-# Safe to run again; it only installs what is missing.
+# Safe to run again; it only installs what is missing. A failing apt-get (no network, a lock held
+# by another apt) only skips the Debian packages, with a note of what that costs: the Python
+# environment is created either way, and headless CPU rendering needs nothing from apt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PY=${PYTHON:-python3}
-need_apt=()
-for pkg in libvulkan1 mesa-vulkan-drivers xvfb xdotool; do
-  dpkg -s "$pkg" >/dev/null 2>&1 || need_apt+=("$pkg")
-done
-if [ ${#need_apt[@]} -gt 0 ]; then
-  if command -v apt-get >/dev/null 2>&1 && { [ "$(id -u)" = 0 ] || command -v sudo >/dev/null 2>&1; }; then
-    SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"
-    echo "setup: installing Debian packages: ${need_apt[*]}"
-    $SUDO apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${need_apt[@]}" >/dev/null
-  else
-    echo "setup: cannot install ${need_apt[*]} (no apt-get or no root): the window, the Vulkan test and" \
-         "the end-to-end viewer test will be skipped; headless CPU rendering still works." >&2
+APT_LOCK_WAIT=${APT_LOCK_WAIT:-60}  # seconds to wait for another apt to release its lock
+
+skipped() {  # the packages not installed, and which tests will be skipped without them
+  local uses=()
+  case " $* " in *" libvulkan1 "*|*" mesa-vulkan-drivers "*) uses+=("the window and the Vulkan test");; esac
+  case " $* " in *" xvfb "*|*" xdotool "*|*" imagemagick "*) uses+=("the end-to-end viewer test");; esac
+  local IFS=";"
+  echo "setup: skipped installing $* (without them: ${uses[*]} will be skipped);" \
+       "headless CPU rendering still works." >&2
+}
+
+install_debian_packages() {
+  local need=()
+  for pkg in libvulkan1 mesa-vulkan-drivers xvfb xdotool imagemagick; do
+    dpkg -s "$pkg" >/dev/null 2>&1 || need+=("$pkg")
+  done
+  [ ${#need[@]} -eq 0 ] && return 0
+  if ! command -v apt-get >/dev/null 2>&1; then
+    echo "setup: no apt-get on this machine." >&2; skipped "${need[*]}"; return 0
   fi
-fi
+  local sudo=""
+  if [ "$(id -u)" != 0 ]; then
+    if command -v sudo >/dev/null 2>&1; then sudo="sudo"; else
+      echo "setup: not root and no sudo." >&2; skipped "${need[*]}"; return 0
+    fi
+  fi
+  local apt=($sudo env DEBIAN_FRONTEND=noninteractive apt-get -o "DPkg::Lock::Timeout=$APT_LOCK_WAIT" -qq)
+  echo "setup: installing Debian packages: ${need[*]}"
+  local log
+  log=$(mktemp)
+  if ! "${apt[@]}" update >"$log" 2>&1 || ! "${apt[@]}" install -y "${need[@]}" >>"$log" 2>&1; then
+    echo "setup: apt-get failed: $(grep -E '^(E|W):' "$log" | head -n 2 | tr '\n' ' ')" >&2
+    skipped "${need[*]}"
+  fi
+  rm -f "$log"
+}
+
+install_debian_packages
 
 if [ ! -x .venv/bin/python ]; then
   "$PY" -m venv .venv
