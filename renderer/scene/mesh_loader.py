@@ -58,7 +58,16 @@ Checks (all formats)
 SceneError: missing file, unsupported extension, unreadable or truncated data, no triangles at
 all, non-finite positions / UVs / colours, vertex indices out of range, a missing buffer or
 material library file, an image that does not decode, a required glTF extension we do not
-implement.
+implement, a glTF node reached twice (a cycle, or a node with two parents), and any other
+failure inside a reader (trimesh's included), always in one line naming the model file.
+Memory: what the file declares is charged to the scene's `MemoryLedger` (renderer.scene.limits)
+before it is allocated: the file itself, external buffers, each accessor's count (8 bytes a
+component, with or without a bufferView, sparse ones too), each mesh build (MESH_BUILD_* and
+TANGENT_* bytes per vertex and triangle), trimesh's parsing (TRIMESH_PARSE_BYTES_PER_BYTE) and each
+image from its header (its texels kept IMAGE_COPIES times, its decoding's peak); what would pass
+the budget is refused, naming what, how much and the limit.
+References: glTF URIs, OBJ `mtllib` and texture maps and a PLY `TextureFile` are resolved with
+symlinks followed and must lie inside the model's folder, unless `LoadOptions.allow_outside_files`.
 Warning (`MeshWarning`, one line naming the model file): a missing texture file (one warning per
 file, naming the materials that use it; they keep their factors alone, as other viewers do),
 glTF extensions used but not implemented.
