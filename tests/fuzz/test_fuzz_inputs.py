@@ -70,7 +70,7 @@ def run_worker(workspace: Path, first: int, deadline: float, render_seconds: flo
             current, next_case = None, message["case"] + 1
 
 
-def test_damaged_inputs_load_render_or_are_refused_in_one_line(tmp_path):
+def test_damaged_inputs_load_render_or_are_refused_in_one_line(tmp_path, record_property):
     workspace = make_workspace(tmp_path / "workspace")
     start = time.time()
     deadline = start + SECONDS
@@ -79,10 +79,11 @@ def test_damaged_inputs_load_render_or_are_refused_in_one_line(tmp_path):
     while time.time() < deadline - 5:  # time for one more worker to start and run cases
         case = run_worker(workspace, case, deadline, SECONDS * RENDER_SECONDS, reports)
     counts = Counter(r["outcome"] for r in reports)
-    print(f"\nfuzz: {len(reports)} cases in {time.time() - start:.0f} s: "
-          + ", ".join(f"{n} {outcome}" for outcome, n in counts.most_common()))
     worst = max((r.get("grew_mb", 0) for r in reports), default=0)
-    print(f"fuzz: largest resident growth while loading {worst} MiB (budget {BUDGET >> 20} MiB)")
+    summary = (f"fuzz: {len(reports)} cases in {time.time() - start:.0f} s: "
+               + ", ".join(f"{n} {outcome}" for outcome, n in counts.most_common())
+               + f"; largest resident growth while loading {worst} MiB (budget {BUDGET >> 20} MiB)")
+    record_property("fuzz", summary)  # shown at the end of the run (tests/fuzz/conftest.py)
     failures = [r for r in reports if r["outcome"] not in CLEAN]
     assert not failures, "\n".join(f"{r.get('label', r['case'])}: {r['outcome']}: {r.get('detail')}"
                                    for r in failures[:10])
