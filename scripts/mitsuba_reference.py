@@ -1,6 +1,12 @@
-"""Render the reference images of the Cornell box with Mitsuba 3, an independent renderer.
+"""Render reference images with Mitsuba 3, an independent renderer: its Cornell box, or (--scene
+glass) the smooth glass of tests/data/glass_reference.toml under an environment map.
 
-    .venv/bin/python scripts/mitsuba_reference.py [--size 64] [--passes 64] [--spp 1024] [--threads N]
+    .venv/bin/python scripts/mitsuba_reference.py [--scene cornell|glass] [--size 64] [--passes 64]
+                                                  [--spp 1024] [--threads N]
+
+The glass files (tests/data/glass_mitsuba_mean.exr, glass_mitsuba_var.exr) were made by
+
+    python scripts/mitsuba_reference.py --scene glass --size 48 --passes 32 --spp 1024 --threads 2
 
 Mitsuba's `mi.cornell_box()` (the scene assets/scenes/cornell_box.toml reproduces value for value)
 is rendered with its `path` integrator, max_depth 8 as in cornell_box(), at --size x --size
@@ -42,16 +48,30 @@ if str(ROOT) not in sys.path:  # run as a plain script from anywhere
 
 from renderer.bench import mitsuba_side  # noqa: E402  (imports mitsuba lazily)
 
-MEAN_FILE = ROOT / "tests" / "data" / "cornell_mitsuba_mean.exr"
-VAR_FILE = ROOT / "tests" / "data" / "cornell_mitsuba_var.exr"
+DATA = ROOT / "tests" / "data"
+# scene name -> (file name stem, what the headers say, how to load it at a size)
+SCENES = {
+    "cornell": ("cornell_mitsuba", "Mitsuba 3 mi.cornell_box(), path integrator, max_depth 8, box filter",
+                lambda size: mitsuba_side.load_cornell_box(size, size)),
+    "glass": ("glass_mitsuba", "Mitsuba 3, tests/data/glass_reference.toml value for value, path integrator, "
+              "max_depth 16, box filter", None),
+}
 
 
-def render_reference(size: int, passes: int, spp: int, threads: int | None, seed: int = 0):
+def _load(name: str, size: int):
+    if name == "glass":
+        import mitsuba as mi
+
+        return mi.load_dict(mitsuba_side.glass_scene_dict(size, size))
+    return SCENES[name][2](size)
+
+
+def render_reference(size: int, passes: int, spp: int, threads: int | None, seed: int = 0, scene_name="cornell"):
     """(mean, variance of the mean), float64 (size, size, 3), and the seconds spent rendering."""
     if passes < 2:
         raise ValueError("at least 2 passes are needed to estimate the variance")
     mitsuba_side.set_threads(threads)
-    scene = mitsuba_side.load_cornell_box(size, size)
+    scene = _load(scene_name, size)
     # Welford over the pass means, in float64.
     mean = np.zeros((size, size, 3))
     m2 = np.zeros((size, size, 3))
@@ -85,7 +105,9 @@ def main(argv=None) -> int:
     parser.add_argument("--passes", type=int, default=64, help="independent renders (seeds 0..passes-1)")
     parser.add_argument("--spp", type=int, default=1024, help="samples per pixel of each pass")
     parser.add_argument("--threads", type=int, default=None, help="Mitsuba worker threads (default: all)")
-    parser.add_argument("--out-dir", type=Path, default=MEAN_FILE.parent)
+    parser.add_argument("--out-dir", type=Path, default=DATA)
+    parser.add_argument("--scene", choices=sorted(SCENES), default="cornell",
+                        help="cornell: mi.cornell_box(); glass: tests/data/glass_reference.toml")
     args = parser.parse_args(argv)
 
     info = mitsuba_side.availability()
@@ -94,13 +116,15 @@ def main(argv=None) -> int:
         return 1
     print(f"Mitsuba {info['version']}, variant {info['variant']}" + (f" ({info['note']})" if info["note"] else ""))
 
-    mean, variance_of_mean, seconds = render_reference(args.size, args.passes, args.spp, args.threads)
+    mean, variance_of_mean, seconds = render_reference(args.size, args.passes, args.spp, args.threads,
+                                                       scene_name=args.scene)
+    stem, description, _ = SCENES[args.scene]
     attributes = {
-        "lanternReference": "Mitsuba 3 mi.cornell_box(), path integrator, max_depth 8, box filter",
+        "lanternReference": description,
         "mitsubaVersion": info["version"], "mitsubaVariant": info["variant"],
         "passes": args.passes, "sppPerPass": args.spp, "sppTotal": args.passes * args.spp,
     }
-    mean_file, var_file = args.out_dir / MEAN_FILE.name, args.out_dir / VAR_FILE.name
+    mean_file, var_file = args.out_dir / f"{stem}_mean.exr", args.out_dir / f"{stem}_var.exr"
     write_exr(mean_file, mean, {**attributes, "content": "per-pixel mean"})
     write_exr(var_file, variance_of_mean, {**attributes, "content": "per-pixel variance of the mean"})
     total = args.passes * args.spp

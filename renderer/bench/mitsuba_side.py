@@ -1,4 +1,5 @@
-"""Mitsuba 3 as an independent renderer: its Cornell box, rendered for reference images and timing.
+"""Mitsuba 3 as an independent renderer: its Cornell box and a glass scene, rendered for reference
+images and timing.
 
 Mitsuba is optional (`pip install -e .[reference]`). Nothing here imports it at module import time;
 the first call that needs it does, and fails with `MitsubaUnavailable` and a message saying what
@@ -122,6 +123,35 @@ def load_cornell_box(width: int = 256, height: int = 256, max_depth: int = 8, rf
                      sampler: str | None = None):
     mi, _, _ = _import_mitsuba()
     return mi.load_dict(cornell_box_dict(width, height, max_depth, rfilter, sampler))
+
+
+GLASS_SCENE = Path(__file__).resolve().parents[2] / "tests" / "data" / "glass_reference.toml"
+
+
+def glass_scene_dict(width: int = 48, height: int = 48, max_depth: int = 16) -> dict:
+    """tests/data/glass_reference.toml, value for value: smooth glass (an analytic sphere and a
+    flat-shaded triangle ball, tests/data/glass_ball.obj) on a diffuse floor under venice.exr.
+    Conventions matched (docs/conventions.md): vertical field of view, box filter, the envmap's
+    identity orientation, a rectangle turned to face +y as Lantern's quad."""
+    mi, _, _ = _import_mitsuba()
+    T = mi.ScalarTransform4f
+    root = GLASS_SCENE.parent
+    glass = {"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0}
+    return {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": int(max_depth)},
+        "sensor": {"type": "perspective", "fov": 30.0, "fov_axis": "y",
+                   "to_world": T().look_at(origin=[0.0, 0.9, 3.2], target=[0.0, 0.45, 0.0], up=[0.0, 1.0, 0.0]),
+                   "film": {"type": "hdrfilm", "width": int(width), "height": int(height),
+                            "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": 16}},
+        "environment": {"type": "envmap", "filename": str(root.parents[1] / "assets" / "envmaps" / "venice.exr")},
+        "floor": {"type": "rectangle", "to_world": T().rotate([1.0, 0.0, 0.0], -90.0).scale([2.0, 2.0, 1.0]),
+                  "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.6, 0.4, 0.3]}}},
+        "sphere": {"type": "sphere", "center": [-0.45, 0.4, 0.0], "radius": 0.4, "bsdf": glass},
+        "ball": {"type": "obj", "filename": str(root / "glass_ball.obj"), "face_normals": True,
+                 "to_world": T().translate([0.45, 0.4, 0.0]), "bsdf": glass},
+    }
 
 
 def render_scene(scene, spp: int, seed: int = 0) -> np.ndarray:
