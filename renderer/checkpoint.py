@@ -25,7 +25,7 @@ import numpy as np
 from renderer.atomic_write import atomic_output
 from renderer.film import FilmState
 from renderer.scene.errors import SceneError
-from renderer.scene.model import Scene
+from renderer.scene.description import Scene
 
 FORMAT = 1  # the layout of the archive; a reader refuses others
 CHECKPOINT_EXTENSION = ".ckpt"

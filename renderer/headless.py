@@ -22,7 +22,7 @@ from renderer.film import Film, FilmState
 from renderer.image_io import write_exr, write_png
 from renderer.integrators import make_integrator
 from renderer.renderer import Renderer
-from renderer.scene.model import Scene
+from renderer.scene.description import Scene
 from renderer.tonemap import tonemap_array
 from renderer.version import lantern_version
 

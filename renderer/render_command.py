@@ -20,7 +20,7 @@ from renderer.headless import (Checkpoints, RenderJob, RenderResult, Resume, che
                                save_variance)
 from renderer.interrupts import StopRequests
 from renderer.scene.errors import SceneError
-from renderer.scene.model import Scene
+from renderer.scene.description import Scene
 from renderer.version import lantern_version
 
 DEFAULT_OUT_DIR = Path(__file__).resolve().parents[1] / "out"

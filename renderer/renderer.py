@@ -20,7 +20,7 @@ from renderer.media.table import MediaTable
 from renderer.program import RenderProgram
 from renderer.sampling.sampler import make_sampler
 from renderer.scene.features import Features, scene_features
-from renderer.scene.model import Scene
+from renderer.scene.description import Scene
 
 
 @dataclass(frozen=True)

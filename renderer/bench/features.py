@@ -170,14 +170,14 @@ def short(effect: str) -> str:
 # --- scene variants (task 3) ------------------------------------------------------------------
 
 def _without_media(scene):
-    from renderer.scene.model import FogSpec
+    from renderer.scene.description import FogSpec
 
     return replace(scene, fog=FogSpec(), materials=tuple(replace(m, medium="") for m in scene.materials))
 
 
 def _analytic_fog(scene):
     """No media; the fog as the exponential-blend approximation of the scene's fog medium."""
-    from renderer.scene.model import FogSpec
+    from renderer.scene.description import FogSpec
 
     density = 0.1
     if scene.fog.model == "medium":

@@ -14,7 +14,7 @@ lights) returning a RenderProgram subclass whose render() runs its own passes, a
 `noise_estimate = False` when its film holds an estimate rather than a mean of samples.
 """
 from renderer.integrators.debug import AlbedoView, BvhView, DepthView, NormalsView, StepsView
-from renderer.integrators.direct import MultipleImportanceSampling, NextEventEstimation
+from renderer.integrators.nee_mis import MultipleImportanceSampling, NextEventEstimation
 from renderer.integrators.path import PathTracer
 from renderer.integrators.sppm import StochasticProgressivePhotonMapping
 

@@ -10,7 +10,7 @@ One call of `Renderer.render(camera, spp, integrator="sppm")` runs `spp` iterati
   2. a hash grid over the VPs (renderer/integrators/photon_grid.py), cells as large as the largest
      search radius, rebuilt on the device;
   3. a photon pass: `photons` photons (default: one per pixel of the image) leave the emitters
-     (renderer/lights/emission.py; most of them aimed at the region the camera sees) and follow BSDF samples with Russian roulette. At every hit
+     (renderer/lights/photon_emission.py; most of them aimed at the region the camera sees) and follow BSDF samples with Russian roulette. At every hit
      after the first (the first one is direct light, which the camera pass took), on a surface
      that can hold VPs (diffuse or rough), every VP within its own radius of the hit receives
      phi += beta * f(wo_vp, wi) and M += 1 (atomics);
@@ -68,7 +68,7 @@ import taichi as ti
 from renderer.camera import generate_ray
 from renderer.film import is_finite_vec3
 from renderer.geometry.interface import INF, Hit, Ray, Surface
-from renderer.integrators.direct_light import emission_weight, environment_weight, sample_direct
+from renderer.integrators.light_sampling import emission_weight, environment_weight, sample_direct
 from renderer.integrators.photon_grid import PhotonGrid, bucket_of, cell_of, table_size_for
 from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
 from renderer.materials.table import DIELECTRIC, DIFFUSE, PRINCIPLED, Material
@@ -83,7 +83,7 @@ vec3 = ti.math.vec3
 PHOTON_STREAM = 0x80000000
 # A pass's initial radii lie within [1/CLAMP, CLAMP] times the geometric mean of its footprint radii.
 RADIUS_CLAMP = 4.0
-# The photons' target region (renderer/lights/emission.py, aiming) is the bounding sphere of the
+# The photons' target region (renderer/lights/photon_emission.py, aiming) is the bounding sphere of the
 # camera and the visible points up to this many times the geometric mean of their distances
 # (footprints are proportional to distance); on SDF scenes, which have no finite bounds, it is also
 # the sphere the environment's photons enter through. A floor running to the horizon would
@@ -603,7 +603,7 @@ class StochasticProgressivePhotonMapping:
 
 
 def _emission_for(renderer, lights):
-    from renderer.lights.emission import Emission
+    from renderer.lights.photon_emission import Emission
 
     bounds = None
     data = getattr(renderer.geometry, "data", None)

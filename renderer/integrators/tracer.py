@@ -31,7 +31,7 @@ set of four: simpler, at the price of more colour noise behind dispersive glass.
 import taichi as ti
 
 from renderer.geometry.interface import INF, MEDIUM_POINT, Hit, Surface
-from renderer.integrators.direct_light import emission_weight, environment_weight, power_heuristic, sample_direct
+from renderer.integrators.light_sampling import emission_weight, environment_weight, power_heuristic, sample_direct
 from renderer.materials import dispersion
 from renderer.materials.table import NO_MEDIUM, NULL
 from renderer.media import homogeneous, phase

@@ -1,6 +1,6 @@
 """Scene description: the plain-data model, the TOML loader and its error type."""
 from .errors import SceneError
-from .model import (
+from .description import (
     ENVIRONMENT_KINDS,
     GEOMETRY_KINDS,
     MATERIAL_KINDS,

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 
-from renderer.scene.model import MATERIAL_KINDS, SDF_OPERATORS, SDF_PRIMITIVES, Scene
+from renderer.scene.description import MATERIAL_KINDS, SDF_OPERATORS, SDF_PRIMITIVES, Scene
 
 MESH_PRIMITIVES = ("triangle", "sphere", "quad", "disc", "bezier")
 

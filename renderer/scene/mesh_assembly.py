@@ -21,7 +21,7 @@ from renderer.materials.table import KIND_IDS, NO_MEDIUM, MaterialRows
 from renderer.scene.errors import SceneError
 from renderer.scene.features import Features, features_from
 from renderer.scene.mesh_loader import MeshWarning
-from renderer.scene.model import MediumSpec, Scene
+from renderer.scene.description import MediumSpec, Scene
 from renderer.scene.orientation import rewind_to_normals
 from renderer.scene.textures import WRAP_CODES, TextureAtlas, pack_atlas
 

@@ -64,7 +64,7 @@ from typing import Optional
 
 import numpy as np
 
-from renderer.scene.model import MaterialSpec
+from renderer.scene.description import MaterialSpec
 from renderer.scene.srgb import SRGB8_TO_LINEAR, srgb_to_linear
 
 WRAP_MODES = ("repeat", "clamp", "mirror")

@@ -4,7 +4,7 @@ from pathlib import Path
 
 from renderer.scene.load_options import LoadOptions
 from renderer.scene.mesh_loader import frame_camera
-from renderer.scene.model import CameraSpec, EnvironmentSpec, MeshObject, RenderSettings, Scene
+from renderer.scene.description import CameraSpec, EnvironmentSpec, MeshObject, RenderSettings, Scene
 from renderer.scene.model_files import ModelFiles
 
 ASSETS = Path(__file__).resolve().parents[2] / "assets"

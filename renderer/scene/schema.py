@@ -6,7 +6,7 @@ Regenerate the document with:
 
     python -c "from renderer.scene.schema import write_markdown; write_markdown()"
 
-Defaults here must equal the dataclass defaults in model.py; a test checks that too.
+Defaults here must equal the dataclass defaults in description.py; a test checks that too.
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from typing import Callable, Optional
 
 from renderer.materials.metals import metal_names
 
-from .model import (
+from .description import (
     ENVIRONMENT_KINDS,
     GEOMETRY_KINDS,
     FOG_MODELS,

@@ -15,7 +15,7 @@ from typing import Optional
 from . import schema
 from .errors import SceneError
 from .load_options import LoadOptions
-from .model import (
+from .description import (
     MESH_OBJECT_KINDS,
     CameraSpec,
     EnvironmentSpec,

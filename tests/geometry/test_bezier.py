@@ -10,7 +10,7 @@ import pytest
 
 from renderer.geometry import bezier as bz
 from renderer.geometry.mesh_data import MeshData
-from renderer.scene.model import Transform
+from renderer.scene.description import Transform
 from tests.geometry.mesh_helpers import RayShooter, geometry_from
 from tests.geometry.mesh_helpers import SurfaceProbe as Probe  # shared with the hit-point tests
 

@@ -59,7 +59,7 @@ from matplotlib.path import Path as Polygon
 from renderer.geometry import bezier as bz
 from renderer.geometry.bezier_device import RELATIVE_EPS
 from renderer.geometry.mesh_data import MeshData
-from renderer.scene.model import Transform
+from renderer.scene.description import Transform
 from tests.geometry.hit_bounds import (U, interior_barycentrics, point_triangle_distance, tilted, triangle_shape,
                                        triangle_tolerance, unit)
 from tests.geometry.mesh_helpers import SurfaceProbe, geometry_from

@@ -14,7 +14,7 @@ import pytest
 
 from renderer.lights.env_sampling import FLOOR, EnvironmentSampler
 from renderer.lights.environment import Environment
-from renderer.scene.model import EnvironmentSpec
+from renderer.scene.description import EnvironmentSpec
 
 H, W = 8, 16
 ROW, COL = 1, 3

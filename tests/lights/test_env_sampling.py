@@ -16,7 +16,7 @@ from scipy import stats
 from renderer.image_io import read_environment
 from renderer.lights.env_sampling import FLOOR, EnvironmentSampler, texel_bounds
 from renderer.lights.environment import Environment
-from renderer.scene.model import EnvironmentSpec
+from renderer.scene.description import EnvironmentSpec
 from tests.stats.chi2 import ENV_FRAME, chi2_test, integrate_pdf, sidak_alpha
 
 ALPHA = 0.01

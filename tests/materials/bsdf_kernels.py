@@ -21,7 +21,7 @@ from renderer.geometry.interface import Surface
 from renderer.materials.bsdf import Bsdf
 from renderer.materials.table import MaterialRows, MaterialTable
 from renderer.scene.features import Features
-from renderer.scene.model import MaterialSpec
+from renderer.scene.description import MaterialSpec
 
 vec3 = ti.math.vec3
 ALL_KINDS = Features(has_diffuse=True, has_conductor=True, has_dielectric=True, has_principled=True)

@@ -50,7 +50,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from renderer.scene.model import MaterialSpec
+from renderer.scene.description import MaterialSpec
 from tests.materials.bsdf_kernels import BsdfBench, chi2_adaptive, direction, frame_about, uniforms
 from tests.stats.chi2 import sidak_alpha
 

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from renderer.scene.model import MaterialSpec
+from renderer.scene.description import MaterialSpec
 from tests.materials.bsdf_kernels import BsdfBench, cell_probabilities, direction, frame_about, uniforms
 from tests.materials.ggx_reference import ggx_albedo_reference
 from tests.stats.chi2 import sidak_alpha

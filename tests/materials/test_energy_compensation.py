@@ -18,7 +18,7 @@ import pytest
 from scipy import stats
 
 from renderer.materials import energy
-from renderer.scene.model import MaterialSpec
+from renderer.scene.description import MaterialSpec
 from tests.materials.bsdf_kernels import (ALL_KINDS, BsdfBench, cell_probabilities, chi2_adaptive, direction,
                                           frame_about, uniforms)
 from tests.materials.ggx_reference import ggx_albedo_reference

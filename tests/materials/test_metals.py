@@ -13,7 +13,7 @@ import pytest
 from renderer.materials.conductor_ior import conductor_ior_row, fresnel_average, fresnel_conductor_np
 from renderer.materials.metals import metal_ior, metal_names, metal_source
 from renderer.scene import schema
-from renderer.scene.model import MaterialSpec
+from renderer.scene.description import MaterialSpec
 
 MITSUBA = {
     "Au": ((0.14303597807884216, 0.3753070831298828, 1.4420453310012817),

@@ -20,7 +20,7 @@ import pytest
 from scipy import stats
 
 from renderer.materials import sheen
-from renderer.scene.model import MaterialSpec
+from renderer.scene.description import MaterialSpec
 from tests.materials.bsdf_kernels import (ALL_KINDS, BsdfBench, cell_probabilities, chi2_adaptive, direction,
                                           frame_about, uniforms)
 from tests.stats.chi2 import sidak_alpha

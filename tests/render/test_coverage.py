@@ -15,7 +15,7 @@ from scipy import stats
 
 from renderer.camera import CameraFrame
 from renderer.renderer import Renderer
-from renderer.scene.model import CameraSpec, EnvironmentSpec, MaterialSpec, MeshObject, RenderSettings, Scene
+from renderer.scene.description import CameraSpec, EnvironmentSpec, MaterialSpec, MeshObject, RenderSettings, Scene
 from tests.data import make_test_models as models
 from tests.stats.image_tests import ALPHA, mean_z, pixel_z_test
 

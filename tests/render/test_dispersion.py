@@ -19,7 +19,7 @@ from renderer.materials import dispersion, lobes
 from renderer.materials.table import MaterialTable
 from renderer.renderer import Renderer
 from renderer.scene.features import scene_features
-from renderer.scene.model import MaterialSpec
+from renderer.scene.description import MaterialSpec
 from renderer.spectral.ior import LINE_C, LINE_D, LINE_F, SELLMEIER_PRESETS
 from tests.stats.image_tests import assert_agree
 from tests.scene_builder import scene_from_toml

@@ -13,7 +13,7 @@ import trimesh
 from renderer.camera import CameraFrame
 from renderer.renderer import MeshOptions, Renderer
 from renderer.scene.catalog import load_any
-from renderer.scene.model import CameraSpec, EnvironmentSpec, MaterialSpec, MeshObject, RenderSettings, Scene
+from renderer.scene.description import CameraSpec, EnvironmentSpec, MaterialSpec, MeshObject, RenderSettings, Scene
 from tests.data import make_test_models as models
 from tests.stats.image_tests import assert_agree
 

@@ -6,7 +6,7 @@ import trimesh
 
 from renderer.camera import CameraFrame
 from renderer.renderer import Renderer
-from renderer.scene.model import CameraSpec, EnvironmentSpec, MaterialSpec, MeshObject, RenderSettings, Scene
+from renderer.scene.description import CameraSpec, EnvironmentSpec, MaterialSpec, MeshObject, RenderSettings, Scene
 
 
 def furnace_scene(tmp_path, subdivisions=1):

@@ -4,7 +4,7 @@ edge-on has an infinite (or f32-overflowing) solid-angle density. inf/inf once t
 import numpy as np
 import taichi as ti
 
-from renderer.integrators.direct_light import power_heuristic
+from renderer.integrators.light_sampling import power_heuristic
 
 
 @ti.kernel

@@ -7,7 +7,7 @@ import pytest
 
 from renderer.scene import SceneError, load_scene, schema
 from renderer.scene.mesh_assembly import assemble
-from renderer.scene.model import CameraSpec, EnvironmentSpec, MaterialSpec, MeshObject, RenderSettings, Scene
+from renderer.scene.description import CameraSpec, EnvironmentSpec, MaterialSpec, MeshObject, RenderSettings, Scene
 
 HEADER = '[scene]\ngeometry = "mesh"\n\n[materials.m]\n\n'
 BEZIER = '[[objects]]\ntype = "bezier"\nmaterial = "m"\n'

@@ -9,7 +9,7 @@ import taichi as ti
 
 from renderer.geometry.interface import Ray
 from renderer.materials import microfacet as mf
-from renderer.scene.model import (
+from renderer.scene.description import (
     CameraSpec,
     EnvironmentSpec,
     MarchSettings,

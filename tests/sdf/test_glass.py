@@ -25,7 +25,7 @@ import taichi as ti
 
 from renderer.geometry.interface import INF, Ray
 from renderer.materials import microfacet as mf
-from renderer.scene.model import MaterialSpec
+from renderer.scene.description import MaterialSpec
 from sdf_helpers import make_geometry, node
 
 vec3 = ti.math.vec3

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from renderer.camera import CameraFrame
-from renderer.scene.model import MarchSettings
+from renderer.scene.description import MarchSettings
 from renderer.scene.toml_loader import load_scene
 from sdf_helpers import (
     first_crossing,

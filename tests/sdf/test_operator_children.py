@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from renderer.scene import schema
-from renderer.scene.model import MaterialSpec
+from renderer.scene.description import MaterialSpec
 from sdf_helpers import make_geometry, make_scene, node, ref_node, ref_scene, sdf, sdf_material
 
 TOL = 2e-6  # one f32 distance evaluation at |p| <= 3 (tests/sdf/test_primitives.py)

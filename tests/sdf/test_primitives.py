@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from renderer.scene.model import MaterialSpec
+from renderer.scene.description import MaterialSpec
 from sdf_helpers import (
     PRIMITIVE_PARAMS,
     PRIMITIVES,
