@@ -14,13 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 import taichi as ti
 
-LUMINANCE_WEIGHTS = (0.2126, 0.7152, 0.0722)  # Rec.709
+from renderer.luminance import luminance
+
 NOISE_LUMINANCE_FLOOR = 1e-3  # relative error of near-black pixels would blow up without it
-
-
-@ti.func
-def luminance(rgb):
-    return LUMINANCE_WEIGHTS[0] * rgb[0] + LUMINANCE_WEIGHTS[1] * rgb[1] + LUMINANCE_WEIGHTS[2] * rgb[2]
 
 
 @ti.func

@@ -37,7 +37,7 @@ class MeshOptions:
 def build_world(scene: Scene, mesh_options: MeshOptions):
     """(geometry, material table, Features with the scene camera's lens) for any scene kind."""
     if scene.geometry == "sdf":
-        from shaders_sdf.geometry import SdfGeometry
+        from renderer.sdf.geometry import SdfGeometry
 
         return (SdfGeometry(scene, scene.material_index), MaterialTable.from_specs(scene.materials, scene.medium_names()),
                 scene_features(scene))

@@ -9,6 +9,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.film import is_finite_f32
+from renderer.luminance import LUMINANCE_WEIGHTS, luminance
 
 TONEMAPPERS = ("aces", "reinhard", "none")
 
@@ -26,7 +27,6 @@ ACES_OUTPUT = np.array(
     [[1.60475, -0.53108, -0.07367], [-0.10208, 1.10813, -0.00605], [-0.00327, -0.07276, 1.07602]],
     dtype=np.float32,
 )
-LUMINANCE_WEIGHTS = (0.2126, 0.7152, 0.0722)  # Rec.709
 
 # Plain nested lists: the Taichi funcs build compile-time constant matrices from them.
 _ACES_INPUT_ROWS = ACES_INPUT.tolist()
@@ -76,9 +76,8 @@ def aces_fitted(rgb):
 
 @ti.func
 def reinhard_luminance(rgb):
-    luminance = LUMINANCE_WEIGHTS[0] * rgb[0] + LUMINANCE_WEIGHTS[1] * rgb[1] + LUMINANCE_WEIGHTS[2] * rgb[2]
     # L -> L / (1 + L), applied as a common scale so hue is kept.
-    return ti.math.clamp(rgb / (1.0 + luminance), 0.0, 1.0)
+    return ti.math.clamp(rgb / (1.0 + luminance(rgb)), 0.0, 1.0)
 
 
 @ti.func

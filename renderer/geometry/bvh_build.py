@@ -78,6 +78,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from renderer.geometry.box_rounding import round_out_f32
+
 __all__ = ["FlatBVH", "build_bvh", "sah_cost", "C_TRAV", "C_ISECT", "STRATEGIES"]
 
 # SAH cost constants. A node visit is one ray/box slab test; a primitive test (ray/triangle,
@@ -149,32 +151,6 @@ class FlatBVH:
 # input preparation
 
 
-def _to_f32_down(x: np.ndarray) -> np.ndarray:
-    """Round to f32 towards -inf (exact for f32 input)."""
-    if x.dtype == np.float32:
-        return np.ascontiguousarray(x)
-    x64 = x.astype(np.float64)
-    with np.errstate(over="ignore"):
-        y = x64.astype(np.float32)
-    bad = y.astype(np.float64) > x64
-    if bad.any():
-        y[bad] = np.nextafter(y[bad], np.float32(-np.inf))
-    return y
-
-
-def _to_f32_up(x: np.ndarray) -> np.ndarray:
-    """Round to f32 towards +inf (exact for f32 input)."""
-    if x.dtype == np.float32:
-        return np.ascontiguousarray(x)
-    x64 = x.astype(np.float64)
-    with np.errstate(over="ignore"):
-        y = x64.astype(np.float32)
-    bad = y.astype(np.float64) < x64
-    if bad.any():
-        y[bad] = np.nextafter(y[bad], np.float32(np.inf))
-    return y
-
-
 def _scattered_order(n: int) -> np.ndarray:
     """A fixed permutation of range(n) that sends neighbours far apart: i -> i * s mod n with a
     stride s near n / golden ratio, coprime to n."""
@@ -211,8 +187,7 @@ def _prepare(lo, hi, centroids):
             raise ValueError(f"{name} contains NaN or infinite values")
     if (lo > hi).any():
         raise ValueError("some primitive boxes have lo > hi")
-    lo32 = _to_f32_down(lo)
-    hi32 = _to_f32_up(hi)
+    lo32, hi32 = round_out_f32(lo, hi)
     with np.errstate(over="ignore"):
         c32 = c.astype(np.float32)
     if not np.isfinite(c32).all() or not np.isfinite(lo32).all() or not np.isfinite(hi32).all():

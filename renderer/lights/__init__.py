@@ -1,1 +1,10 @@
-"""Emitters: the environment (map, sky or constant) and, later, area lights and light selection."""
+"""Lights: every emitter of a scene, for direct lighting and for photon emission.
+
+lights.py             `Lights`: a light sample at a point and its densities (environment or an
+                      emissive primitive), and the emitter table (power per emissive primitive)
+environment.py        the environment's radiance (map, sky or constant colour)
+env_sampling.py       importance sampling of an environment map
+light_select.py       choosing one emissive primitive: uniform, by power (alias table) or the tree
+light_tree_build.py   the light tree's build (numpy); light_tree.py its device traversal
+photon_emission.py    where photons start (SPPM's light paths)
+"""

@@ -53,10 +53,12 @@ import numpy as np
 import taichi as ti
 
 from renderer.lights.environment import row_edges
+from renderer.luminance import LUMINANCE_WEIGHTS
+from renderer.sampling.cdf import cdf_interval
 from renderer.sampling.warps import PI
 from renderer.upload import upload_fields
 
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec.709 luminance weights
+LUMINANCE = np.array(LUMINANCE_WEIGHTS)
 FLOOR = 1e-3  # see the module doc: keeps every float32 CDF interval wider than 2^-22
 ONE_MINUS_EPSILON = 0.99999994  # largest float32 below 1: u = 1.0 would index past the last texel
 
@@ -180,26 +182,10 @@ class EnvironmentSampler:
         ux = ti.math.clamp(u.x, 0.0, ONE_MINUS_EPSILON)
         uy = ti.math.clamp(u.y, 0.0, ONE_MINUS_EPSILON)
         # row: largest i with marginal_cdf[i] <= ux (zero-width rows cannot be chosen)
-        lo = 0
-        hi = self.height
-        while hi - lo > 1:
-            mid = (lo + hi) >> 1
-            if self.marginal_cdf[mid] <= ux:
-                lo = mid
-            else:
-                hi = mid
-        i = lo
+        i = cdf_interval(self.marginal_cdf, 0, self.height, ux)
         c0 = self.marginal_cdf[i]
         fv = ti.math.clamp((ux - c0) / (self.marginal_cdf[i + 1] - c0), 0.0, 1.0)
-        lo = 0
-        hi = self.width
-        while hi - lo > 1:
-            mid = (lo + hi) >> 1
-            if self.conditional_cdf[i, mid] <= uy:
-                lo = mid
-            else:
-                hi = mid
-        j = lo
+        j = cdf_interval(self.conditional_cdf, i, self.width, uy)
         c0 = self.conditional_cdf[i, j]
         fu = ti.math.clamp((uy - c0) / (self.conditional_cdf[i, j + 1] - c0), 0.0, 1.0)
 

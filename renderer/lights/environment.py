@@ -17,8 +17,6 @@ import taichi as ti
 from renderer.sampling.warps import PI
 from renderer.upload import upload_fields
 
-KINDS = ("map", "sky", "constant")
-
 
 def row_edges(height: int) -> np.ndarray:
     """Polar angles (height + 1,) bounding each map row's share of the sphere: halfway between row

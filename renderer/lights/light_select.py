@@ -24,14 +24,15 @@ Kinds
     few emitters the tree's per-sample cost (two importance evaluations per level) buys little,
     with many the 1/d^2 falloff makes power alone a poor guide.
 
-All selectors take the emitters as a ``renderer.lights.light_tree.EmitterBounds``.
+All selectors take the emitters as a ``renderer.lights.light_tree_build.EmitterBounds``.
 """
 from __future__ import annotations
 
 import numpy as np
 import taichi as ti
 
-from renderer.lights.light_tree import EmitterBounds, LightTree, triangle_emitters
+from renderer.lights.light_tree import LightTree
+from renderer.lights.light_tree_build import EmitterBounds, triangle_emitters
 from renderer.upload import upload_fields
 
 __all__ = ["SELECTOR_KINDS", "AUTO_TREE_MIN", "UniformSelector", "PowerSelector", "LightTree",

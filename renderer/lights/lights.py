@@ -14,8 +14,11 @@ import math
 import numpy as np
 import taichi as ti
 
-from renderer.film import LUMINANCE_WEIGHTS
 from renderer.geometry.interface import INF, Surface
+from renderer.lights.env_sampling import EnvironmentSampler
+from renderer.lights.light_select import make_light_selector
+from renderer.lights.light_tree_build import EmitterBounds
+from renderer.luminance import LUMINANCE_WEIGHTS
 from renderer.sampling.warps import PI
 from renderer.upload import upload_fields
 
@@ -46,6 +49,21 @@ def emitted_radiance(ctx, geometry, g, p, n, uv, w):
                       cone_width=0.0, cone_spread=0.0)
     mat, _ = ctx.bsdf.shade(surface, w)
     return mat.emission
+
+
+@ti.func
+def choose_environment(has_env: ti.template(), share, u):
+    """Whether a light (or photon) comes from the environment, chosen with probability `share`,
+    and u remapped to [0, 1) within the chosen side so it can still pick among the emitters."""
+    use_env = False
+    v = u
+    if ti.static(has_env):
+        if v < share:
+            use_env = True
+            v = v / share
+        else:
+            v = (v - share) / (1.0 - share)
+    return use_env, v
 
 
 @ti.func
@@ -88,17 +106,12 @@ class Lights:
         lookup = np.full(prim_total, -1, np.int32)
         if self.has_area:
             lookup[emitters["prim"]] = np.arange(self.count, dtype=np.int32)
-            from renderer.lights.light_select import make_light_selector
-            from renderer.lights.light_tree import EmitterBounds
-
             bounds = EmitterBounds(lo=emitters["lo"], hi=emitters["hi"], power=emitters["power"], axis=emitters["axis"],
                                    theta_o=emitters["theta_o"], theta_e=emitters["theta_e"])
             self.selector = make_light_selector(selector_kind, bounds)
         upload_fields([(self.prim_emitter, lookup)]
                       + ([(self.emitter_prim, np.asarray(emitters["prim"], np.int32))] if self.has_area else []))
         if self.has_env and self.env_is_map:
-            from renderer.lights.env_sampling import EnvironmentSampler
-
             self.env_sampler = EnvironmentSampler(env_image, environment)
 
     @ti.func
@@ -106,14 +119,7 @@ class Lights:
         result = LightSample(wi=vec3(0.0, 0.0, 1.0), dist=INF, radiance=vec3(0.0), pdf=0.0, p=ref, n=vec3(0.0, 0.0, 1.0),
                              is_env=0)
         share = self.env_share[None]
-        use_env = False
-        u = u_select
-        if ti.static(self.has_env):
-            if u < share:
-                use_env = True
-                u = u / share
-            else:
-                u = (u - share) / (1.0 - share)
+        use_env, u = choose_environment(self.has_env, share, u_select)
         if use_env:
             if ti.static(self.has_env):
                 d, pdf, radiance = environment_direction(self, u_point)

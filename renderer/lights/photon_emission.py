@@ -45,9 +45,10 @@ import math
 import numpy as np
 import taichi as ti
 
-from renderer.film import LUMINANCE_WEIGHTS
 from renderer.geometry.interface import Surface
-from renderer.lights.lights import emitted_radiance, environment_direction, environment_emits
+from renderer.lights.lights import choose_environment, emitted_radiance, environment_direction, environment_emits
+from renderer.luminance import LUMINANCE_WEIGHTS
+from renderer.sampling.cdf import cdf_interval
 from renderer.sampling.warps import PI, concentric_disk, cosine_hemisphere, orthonormal_basis, to_world
 from renderer.upload import upload_fields
 
@@ -172,16 +173,11 @@ class Emission:
 
     @ti.func
     def _select(self, u):
-        """The emitter whose CDF interval holds u (binary search), and its probability."""
-        lo = 0
-        hi = self.count
-        while hi - lo > 1:
-            mid = (lo + hi) >> 1
-            if self.cdf[mid] <= u:
-                lo = mid
-            else:
-                hi = mid
-        return lo, self.cdf[lo + 1] - self.cdf[lo]
+        """The emitter whose CDF interval holds u, and its probability. (Not the power selector's
+        alias table: that maps u to other emitters, so the photons, and SPPM's images, would
+        change.)"""
+        e = cdf_interval(self.cdf, 0, self.count, u)
+        return e, self.cdf[e + 1] - self.cdf[e]
 
     @ti.func
     def _line_enters(self, sphere, o, d):
@@ -204,14 +200,7 @@ class Emission:
         result = EmittedPhoton(o=vec3(0.0), d=vec3(0.0, 1.0, 0.0), beta=vec3(0.0), surface=none, from_env=0, valid=0)
         p_env = self.env_probability()
         target = self.target[None]
-        use_env = False
-        u = u_select
-        if ti.static(self.has_env):
-            if u < p_env:
-                use_env = True
-                u = u / p_env
-            else:
-                u = (u - p_env) / (1.0 - p_env)
+        use_env, u = choose_environment(self.has_env, p_env, u_select)
         if use_env:
             if ti.static(self.has_env):
                 w, pdf_dir, radiance = environment_direction(self.lights, u_point)

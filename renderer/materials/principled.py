@@ -28,6 +28,7 @@ agree. All vectors are local (z = the shading normal on wo's side); mat.coat_nor
 """
 import taichi as ti
 
+from renderer.luminance import luminance
 from renderer.materials import lobes
 from renderer.materials import microfacet as mf
 from renderer.materials.lobes import BsdfSample
@@ -36,11 +37,6 @@ from renderer.sampling.warps import INV_PI, cosine_hemisphere, orthonormal_basis
 
 vec3 = ti.math.vec3
 COAT_IOR = 1.5  # KHR_materials_clearcoat fixes the coat's index
-
-
-@ti.func
-def luminance(c):
-    return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 
 
 @ti.func

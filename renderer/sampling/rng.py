@@ -5,6 +5,10 @@ scheduling, and any sample of any pixel can be recomputed in isolation (the test
 """
 import taichi as ti
 
+# Where one camera sample's numbers come from: every sampler starts from these (its `start`) and
+# draws each dimension from them (`key` is `sample_key` of the other three, for hashed samplers).
+SampleState = ti.types.struct(pixel=ti.u32, index=ti.u32, seed=ti.u32, key=ti.u32)
+
 # 1 / 2^24: the top 24 bits of a hash give a float in [0, 1) whose every value is exactly
 # representable in f32, so the result can never round up to 1.0.
 _INV_2_24 = 1.0 / 16777216.0

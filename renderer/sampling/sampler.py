@@ -13,9 +13,9 @@ Which sampler is compiled in is a per-program choice (`SAMPLERS`).
 """
 import taichi as ti
 
-from renderer.sampling.rng import pcg_hash, sample_key, uniform
-
-SampleState = ti.types.struct(pixel=ti.u32, index=ti.u32, seed=ti.u32, key=ti.u32)
+from renderer.sampling.names import SAMPLERS
+from renderer.sampling.rng import SampleState, pcg_hash, sample_key, uniform
+from renderer.sampling.sobol import SobolSampler
 
 
 @ti.data_oriented
@@ -43,12 +43,8 @@ def make_sampler(name: str):
     if name == "independent":
         return IndependentSampler()
     if name == "sobol":
-        from renderer.sampling.sobol import SobolSampler
-
         return SobolSampler()
     raise ValueError(f"unknown sampler '{name}' (choose from {', '.join(SAMPLERS)})")
 
-
-SAMPLERS = ("independent", "sobol")
 
 __all__ = ["SampleState", "IndependentSampler", "make_sampler", "SAMPLERS", "pcg_hash"]

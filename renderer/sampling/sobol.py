@@ -37,8 +37,7 @@ kernels against bit for bit.
 import numpy as np
 import taichi as ti
 
-from renderer.sampling.rng import pcg_hash
-from renderer.sampling.sampler import SampleState
+from renderer.sampling.rng import SampleState, pcg_hash
 
 _INV_2_24 = 1.0 / 16777216.0
 

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from renderer.materials.metals import metal_names
+from renderer.sampling.names import SAMPLERS
 
 from .description import (
     ENVIRONMENT_KINDS,
@@ -328,7 +329,7 @@ RENDER = Section(
         Field("seed", "int", 0, "Random seed; the same seed gives the same image.", NON_NEGATIVE),
         Field("sampler", "string", "independent", "Where random numbers come from: `independent` "
               "(hashed uniform numbers) or `sobol` (Owen-scrambled Sobol points, lower error at equal spp).",
-              choices=("independent", "sobol")),
+              choices=SAMPLERS),
         Field("energy_compensation", "bool", True, "Give rough metals and rough glass back the light "
               "that single-scattering microfacet models lose between microfacets (Kulla and Conty 2017): "
               "without it a white metal of roughness 1 reflects 31% head-on, and a white glass ball of "

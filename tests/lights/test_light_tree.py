@@ -1,5 +1,5 @@
-"""Many-light selection: the light tree (renderer/lights/light_tree.py) and the uniform and power
-selectors (renderer/lights/light_select.py).
+"""Many-light selection: the light tree (renderer/lights/light_tree_build.py, light_tree.py) and the
+uniform and power selectors (renderer/lights/light_select.py).
 
 Statistical tests use fixed seeds and a family-wise significance ALPHA = 0.01, split over the
 tests of a family with Sidak's correction (1 - (1 - ALPHA)^(1 / number of tests)).
@@ -16,8 +16,9 @@ from scipy import stats
 from renderer.lights.light_select import (AUTO_TREE_MIN, SELECTOR_KINDS, PowerSelector,
                                           UniformSelector, alias_table, make_light_selector,
                                           resolve_kind)
-from renderer.lights.light_tree import (EmitterBounds, LightTree, build_light_tree, cone_union,
-                                        orientation_measure, triangle_emitters)
+from renderer.lights.light_tree import LightTree
+from renderer.lights.light_tree_build import (EmitterBounds, build_light_tree, cone_union, orientation_measure,
+                                              triangle_emitters)
 from renderer.scene.generators import generate
 
 ALPHA = 0.01

@@ -40,7 +40,7 @@ from scipy import stats
 from scipy.ndimage import maximum_filter
 
 from renderer.camera import CameraFrame
-from renderer.film import LUMINANCE_WEIGHTS
+from renderer.luminance import LUMINANCE_WEIGHTS
 from renderer.integrators.sppm import PHOTON_STREAM
 from renderer.renderer import Renderer
 from renderer.sampling import dims

@@ -19,7 +19,7 @@ import taichi as ti
 
 from renderer.geometry.interface import INF
 from renderer.upload import upload_fields
-from shaders_sdf.primitives import PRIMITIVE_FUNCS, pack_parameters
+from renderer.sdf.primitives import PRIMITIVE_FUNCS, pack_parameters
 
 vec3 = ti.math.vec3
 

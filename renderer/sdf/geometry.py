@@ -16,7 +16,7 @@ import taichi as ti
 from renderer.geometry import emitter_shapes
 from renderer.geometry.interface import INF, Hit, Ray, Surface
 from renderer.upload import upload_fields
-from shaders_sdf.scene_sdf import SdfProgram
+from renderer.sdf.scene_sdf import SdfProgram
 
 vec3 = ti.math.vec3
 
