@@ -1,4 +1,5 @@
-"""Scene description: the plain-data model, the TOML loader and its error type."""
+"""Scenes as plain data: the description (description.py: dataclasses), its file format (schema.py)
+and TOML loader, the catalogue of shipped scenes, and model files opened as scenes."""
 from .errors import SceneError
 from .description import (
     ENVIRONMENT_KINDS,

@@ -7,9 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 
+from renderer.geometry.mesh_data import KINDS as MESH_PRIMITIVES
 from renderer.scene.description import MATERIAL_KINDS, SDF_OPERATORS, SDF_PRIMITIVES, Scene
-
-MESH_PRIMITIVES = ("triangle", "sphere", "quad", "disc", "bezier")
 
 
 @dataclass(frozen=True)
