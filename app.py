@@ -199,7 +199,7 @@ def cmd_info(args) -> int:
         print(f"geometry:    sdf, {len(scene.sdf_objects)} top-level objects, "
               f"{sum(1 for o in scene.sdf_objects for _ in o.walk())} nodes")
     else:
-        from renderer.scene.mesh_assembly import assemble
+        from renderer.mesh_world import prepare_mesh_scene as assemble
 
         mesh = assemble(scene)
         features = mesh.features(scene)

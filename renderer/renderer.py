@@ -44,7 +44,7 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
     if scene.geometry == "mesh":
         from renderer.geometry.instance_bvh import build_scene_bvh
         from renderer.geometry.mesh_geometry import MeshGeometry
-        from renderer.scene.mesh_assembly import assemble
+        from renderer.mesh_world import prepare_mesh_scene as assemble
 
         mesh = assemble(scene, instancing=mesh_options.instancing)
         bvh = build_scene_bvh(mesh.data, strategy=mesh_options.strategy, max_leaf_size=mesh_options.max_leaf_size)

@@ -87,7 +87,7 @@ class MeshSpec:
     def load(self) -> np.ndarray:
         """Triangle corners (T, 3, 3) float32, world space."""
         if self.kind == "model":
-            from renderer.scene.mesh_loader import load_mesh_asset
+            from renderer.scene.model_formats import load_mesh_asset
 
             asset = load_mesh_asset(dict(self.params).get("path", BUNNY))
             return np.concatenate([np.asarray(m.positions, np.float32)[np.asarray(m.indices)]
@@ -153,7 +153,7 @@ def camera_rays(lo, hi, width: int, height: int, fov_deg: float = 40.0,
     [lo, hi] from `direction`. margin 1 fits the box's bounding sphere in the view, which leaves
     most pixels empty; 0.6 is a closer view where most rays hit (about 60 % on the bunny and
     the terrains), as in a rendered frame."""
-    from renderer.scene.mesh_loader import frame_camera
+    from renderer.scene.framing import frame_camera
 
     position, look_at = frame_camera(np.stack([lo, hi]), fov_deg, width / height, direction, margin=margin)
     eye = np.asarray(position, np.float64)

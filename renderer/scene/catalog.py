@@ -26,7 +26,7 @@ def scene_names() -> list[str]:
 def load_any(path, options: LoadOptions | None = None):
     """A scene file (.toml) or a model file (glTF/GLB, OBJ, PLY, STL) as a Scene, read under
     `options` (memory budget, files outside a model's folder; default LoadOptions())."""
-    from renderer.scene.mesh_loader import MESH_EXTENSIONS
+    from renderer.scene.model_formats import MESH_EXTENSIONS
 
     if Path(path).suffix.lower() in MESH_EXTENSIONS:
         from renderer.scene.model_scene import scene_for_model

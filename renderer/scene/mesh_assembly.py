@@ -1,64 +1,88 @@
-"""A mesh scene's objects, loaded and placed in world space: the flat primitive arrays, the
-material rows and the texture atlas the device needs. Numpy only; the Renderer uploads the result.
+"""A mesh scene's objects, loaded and placed in world space, as plain data: the flat primitive
+arrays, the materials in the order the device numbers them, and the model files' images.
+Numpy only; renderer/mesh_world.py turns the result into the device's material rows and texture
+pages.
 
 A mesh a model file draws many times (glTF instancing) is kept once, in its own frame, with its
 instances' matrices (MeshData's instance fields), except where the device needs it in the world:
 an emissive mesh (light sampling picks points on world-space emitters), a singular placement (no
 inverse takes rays into its frame) and a mesh left with a single placement are flattened into
-world triangles.
+world triangles. Every placement goes through `mesh_model.place_mesh`.
 """
 from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Optional, Union
 
 import numpy as np
 
-from renderer.geometry.bezier import bezier_fields
+from renderer.geometry.bezier import bezier_fields, cubic_segments, profile_problem
 from renderer.geometry.mesh_data import MeshData
-from renderer.materials.table import KIND_IDS, NO_MEDIUM, MaterialRows
+from renderer.scene.description import MaterialSpec, MediumSpec, Scene
 from renderer.scene.errors import SceneError
-from renderer.scene.features import Features, features_from
-from renderer.scene.mesh_loader import MeshWarning
-from renderer.scene.description import MediumSpec, Scene
+from renderer.scene.generators import generate
+from renderer.scene.mesh_model import PbrMaterial, TextureImage, TriangleMesh, place_mesh
+from renderer.scene.model_formats import MeshWarning
 from renderer.scene.orientation import rewind_to_normals
-from renderer.scene.textures import WRAP_CODES, TextureAtlas, pack_atlas
 
-KIND_NAMES = {v: k for k, v in KIND_IDS.items()}
 # An attenuation colour of 0 would absorb infinitely: 1e-4 is gone after one attenuation distance
 # to the eye already, and keeps sigma_a finite (9.2 / distance).
 MIN_ATTENUATION = 1e-4
-
-
-@dataclass
-class MeshScene:
-    data: MeshData
-    rows: MaterialRows
-    atlas: TextureAtlas | None
-    texture_slots: list  # (rect, wrap_s, wrap_t, uv_set, matrix) per texture slot
-    volume_media: tuple = ()  # MediumSpec of model files' volumes, numbered after the scene's media
-
-    def material_uses(self) -> dict:
-        uses = self.rows.uses()
-        uses["kinds"] = {KIND_NAMES[k] for k in uses["kinds"]}
-        return uses
-
-    def features(self, scene: Scene) -> Features:
-        """The Features of `scene`, of which this is the assembly (with the scene camera's lens)."""
-        return features_from("mesh", self.material_uses(), scene.environment.kind, scene.camera.aperture,
-                             mesh_kinds=self.data.kinds(), energy_compensation=scene.render.energy_compensation,
-                             fog=scene.fog.model, vertex_colors=self.data.tri_colors is not None,
-                             instances=self.data.has_instances)
-
-
 # A placement whose 3x3 part has |det| below this fraction of the product of its column lengths
 # flattens its mesh onto (nearly) a plane or a line: it has no usable inverse.
 SINGULAR_VOLUME = 1e-9
 
 
+@dataclass(frozen=True)
+class ModelMaterial:
+    """A model file's material as one object of the scene uses it: the glTF material, where the
+    file's images start in `MeshAssembly.images` (its TextureRefs count from there), and the
+    absorbing medium inside it (KHR_materials_volume), or None."""
+
+    pbr: PbrMaterial
+    first_image: int
+    medium: Optional[MediumSpec] = None
+
+
+@dataclass
+class MeshAssembly:
+    """data: the primitives, their material ids indexing `materials`; materials: the scene
+    file's materials (all of them, first), then each model object's materials; images: every
+    model object's images, in that order; volume_media: the model materials' media, numbered
+    after the scene's own."""
+
+    data: MeshData
+    materials: tuple[Union[MaterialSpec, ModelMaterial], ...]
+    images: list[TextureImage]
+
+    @property
+    def volume_media(self) -> tuple[MediumSpec, ...]:
+        return tuple(m.medium for m in self.materials if isinstance(m, ModelMaterial) and m.medium is not None)
+
+
+def volume_medium(material: PbrMaterial, file) -> Optional[MediumSpec]:
+    """The medium inside a transmissive glTF material with KHR_materials_volume: absorption that
+    leaves `attenuation_color` after `attenuation_distance` (Beer's law, sigma_a = -ln(colour) /
+    distance per channel; no scattering), named after the file and the material; or None."""
+    colour = np.clip(np.asarray(material.attenuation_color, np.float64), MIN_ATTENUATION, 1.0)
+    if (material.transmission_factor <= 0.0 or material.thin_walled
+            or not np.isfinite(material.attenuation_distance) or material.attenuation_distance <= 0.0
+            or np.all(colour >= 1.0)):
+        return None
+    sigma_a = tuple(float(v) for v in -np.log(colour) / material.attenuation_distance)
+    return MediumSpec(f"{os.fspath(file)}#{material.name}", sigma_a=sigma_a, sigma_s=(0.0, 0.0, 0.0), g=0.0)
+
+
+def _emissive(material: Union[MaterialSpec, ModelMaterial]) -> bool:
+    emission = material.pbr.emissive_factor if isinstance(material, ModelMaterial) else material.emission
+    return max(emission) > 0.0
+
+
 class _Triangles:
-    """Per-corner triangle arrays, appended mesh by mesh (None: the mesh lacks the attribute)."""
+    """Per-corner triangle arrays of placed meshes, appended mesh by mesh (None: the mesh lacks
+    the attribute)."""
 
     KEYS = ("tris", "normals", "uvs", "uvs1", "tangents", "colors", "tri_mat")
 
@@ -69,34 +93,11 @@ class _Triangles:
     def count(self) -> int:
         return sum(len(t) for t in self.parts["tris"])
 
-    def add(self, positions, indices, normals, uv0, uv1, tangents, colors, matrix, material):
-        """Local-frame vertex data placed with `matrix`; per-corner arrays appended."""
-        m3 = matrix[:3, :3]
-        det = np.linalg.det(m3)
-        p = positions.astype(np.float64) @ m3.T + matrix[:3, 3]
-        idx = indices
-        if det < 0:  # a mirroring transform reverses the winding; keep front faces counter-clockwise
-            idx = indices[:, [0, 2, 1]]
-        self.parts["tris"].append(p[idx].astype(np.float32))
-        if normals is not None:
-            # Normals transform with the inverse transpose (which also turns them correctly under
-            # a mirroring transform).
-            inv_t = np.linalg.inv(m3).T if abs(det) > 1e-30 else m3
-            n = normals.astype(np.float64) @ inv_t.T
-            n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
-            self.parts["normals"].append(n[idx].astype(np.float32))
-        else:
-            self.parts["normals"].append(None)
-        self.parts["uvs"].append(None if uv0 is None else uv0[idx].astype(np.float32))
-        self.parts["uvs1"].append(None if uv1 is None else uv1[idx].astype(np.float32))
-        self.parts["colors"].append(None if colors is None else colors[idx].astype(np.float32))
-        if tangents is not None:
-            t = tangents[:, :3].astype(np.float64) @ m3.T
-            t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-30)
-            w = tangents[:, 3:4] * np.sign(det if det != 0 else 1.0)
-            self.parts["tangents"].append(np.concatenate([t, w], axis=1)[idx].astype(np.float32))
-        else:
-            self.parts["tangents"].append(None)
+    def add(self, mesh: TriangleMesh, material: int) -> None:
+        idx = mesh.indices
+        for key, values in (("tris", mesh.positions), ("normals", mesh.normals), ("uvs", mesh.uv0),
+                            ("uvs1", mesh.uv1), ("tangents", mesh.tangents), ("colors", mesh.colors)):
+            self.parts[key].append(None if values is None else values[idx].astype(np.float32))
         self.parts["tri_mat"].append(np.full(len(idx), material, np.int32))
 
 
@@ -106,15 +107,13 @@ def _singular(matrices: np.ndarray) -> np.ndarray:
     return np.abs(np.linalg.det(m3)) <= SINGULAR_VOLUME * scale
 
 
-class _Builder:
+class _Assembler:
     def __init__(self, scene: Scene, instancing: bool):
         self.scene = scene
         self.instancing = instancing
-        self.rows = MaterialRows(scene.medium_names())
-        self.material_ids = {m.name: self.rows.add_spec(m) for m in scene.materials}
-        self.images: list[np.ndarray] = []
-        self.slots: list = []  # (image index, wrap_s, wrap_t, uv_set, matrix)
-        self.volume_media: list[MediumSpec] = []  # model files' absorbing interiors, after the scene's media
+        self.materials: list = list(scene.materials)
+        self.material_ids = {m.name: i for i, m in enumerate(scene.materials)}
+        self.images: list[TextureImage] = []
         self.parts: dict[str, list] = {"spheres": [], "sphere_mat": [], "quads": [], "quad_mat": [], "discs": [],
                                        "disc_mat": []}
         self.world = _Triangles()  # triangles placed in world space
@@ -122,20 +121,6 @@ class _Builder:
         self.instanced: list = []  # (first triangle in self.object, count) per instanced mesh
         self.instances: list = []  # (instanced mesh, (N, 3, 4) object-to-world matrices)
         self.beziers: list = []  # (cubic segments, matrix, material, spans, sectors) per object
-
-    def volume_medium(self, material, file) -> int:
-        """The medium inside a transmissive glTF material with KHR_materials_volume: absorption
-        that leaves `attenuation_color` after `attenuation_distance` (Beer's law, sigma_a =
-        -ln(colour) / distance per channel; no scattering), or NO_MEDIUM."""
-        colour = np.clip(np.asarray(material.attenuation_color, np.float64), MIN_ATTENUATION, 1.0)
-        if (material.transmission_factor <= 0.0 or material.thin_walled
-                or not np.isfinite(material.attenuation_distance) or material.attenuation_distance <= 0.0
-                or np.all(colour >= 1.0)):
-            return NO_MEDIUM
-        sigma_a = tuple(float(v) for v in -np.log(colour) / material.attenuation_distance)
-        name = f"{os.fspath(file)}#{material.name}"
-        self.volume_media.append(MediumSpec(name, sigma_a=sigma_a, sigma_s=(0.0, 0.0, 0.0), g=0.0))
-        return self.rows.add_medium(name)
 
     def material(self, name, where):
         if name not in self.material_ids:
@@ -149,13 +134,10 @@ class _Builder:
         else:
             first_image = len(self.images)
             self.images.extend(asset.images)
-
-            def texture_id(ref):
-                self.slots.append((first_image + ref.texture, WRAP_CODES[ref.wrap_s], WRAP_CODES[ref.wrap_t],
-                                   ref.uv_set, ref.matrix))
-                return len(self.slots) - 1
-
-            mats = [self.rows.add_pbr(m, texture_id, self.volume_medium(m, obj.file)) for m in asset.materials]
+            mats = []
+            for m in asset.materials:
+                self.materials.append(ModelMaterial(m, first_image, volume_medium(m, obj.file)))
+                mats.append(len(self.materials) - 1)
         matrix = obj.matrix()
         turned = 0
         for mesh in asset.meshes:
@@ -164,8 +146,7 @@ class _Builder:
             material = mats[inst.mesh.material]
             matrices = matrix @ inst.matrices  # the scene object's placement, then the file's
             flat = _singular(matrices)
-            if (not self.instancing or max(self.rows.rows[material]["emission"]) > 0.0
-                    or np.count_nonzero(~flat) < 2):
+            if not self.instancing or _emissive(self.materials[material]) or np.count_nonzero(~flat) < 2:
                 flat[:] = True  # emitters stay where light sampling finds them; one placement is a world mesh
             for k in np.flatnonzero(flat):
                 turned += self.add_mesh(self.world, inst.placed(k), matrix, material)
@@ -179,11 +160,10 @@ class _Builder:
                           "turned to face the way the normals do", MeshWarning, stacklevel=2)
 
     @staticmethod
-    def add_mesh(target: _Triangles, mesh, matrix, material) -> int:
+    def add_mesh(target: _Triangles, mesh: TriangleMesh, matrix, material) -> int:
         """Adds a TriangleMesh placed with `matrix`; returns how many triangles were rewound."""
         indices, count = rewind_to_normals(mesh.positions, mesh.indices, mesh.normals)
-        target.add(mesh.positions, indices, mesh.normals, mesh.uv0, mesh.uv1, mesh.tangents, mesh.colors, matrix,
-                   material)
+        target.add(place_mesh(replace(mesh, indices=indices), matrix), material)
         return count
 
     def add_object(self, obj, index):
@@ -192,10 +172,8 @@ class _Builder:
         if obj.kind == "mesh":
             self.add_asset(obj, index)
         elif obj.kind == "generated":
-            from renderer.scene.generators import generate
-
             positions, indices, normals = generate(obj.generator, dict(obj.params))
-            self.world.add(positions, indices, normals, None, None, None, None, matrix,
+            self.world.add(place_mesh(TriangleMesh(positions, indices, normals=normals), matrix),
                            self.material(obj.material, where))
         elif obj.kind == "sphere":
             self.parts["spheres"].append([*obj.translate, obj.radius * obj.scale[0]])
@@ -214,8 +192,6 @@ class _Builder:
             self.parts["quads"].append([corner[:3], edge_u, edge_v])
             self.parts["quad_mat"].append(self.material(obj.material, where))
         elif obj.kind == "bezier":
-            from renderer.geometry.bezier import cubic_segments, profile_problem
-
             # The loader has checked scene files; scenes built in code are checked here.
             problem = profile_problem(obj.profile, obj.degree)
             if problem:
@@ -235,7 +211,7 @@ class _Builder:
         return np.concatenate([a if a is not None else np.full((len(t), 3, width), missing, np.float32)
                                for a, t in zip(arrays, tris)])
 
-    def result(self) -> MeshScene:
+    def result(self) -> MeshAssembly:
         p = self.parts
         tris = self.world.parts["tris"] + self.object.parts["tris"]
         materials = self.world.parts["tri_mat"] + self.object.parts["tri_mat"]
@@ -260,20 +236,16 @@ class _Builder:
             instance_to_world=(np.concatenate([m for _, m in self.instances]) if self.instances
                                else np.zeros((0, 3, 4))),
             **bezier_fields(self.beziers))
-        atlas, slots = None, []
-        if self.slots:
-            packed = pack_atlas(self.images)
-            atlas = packed
-            slots = [(packed.rects[img], ws, wt, uv_set, matrix) for img, ws, wt, uv_set, matrix in self.slots]
-        return MeshScene(data, self.rows, atlas, slots, tuple(self.volume_media))
+        return MeshAssembly(data, tuple(self.materials), self.images)
 
 
-def assemble(scene: Scene, instancing: bool = True) -> MeshScene:
-    """The scene's device arrays; instancing False flattens every instance into world triangles."""
-    builder = _Builder(scene, instancing)
+def assemble(scene: Scene, instancing: bool = True) -> MeshAssembly:
+    """The scene's primitives and materials; instancing False flattens every instance into world
+    triangles."""
+    assembler = _Assembler(scene, instancing)
     for i, obj in enumerate(scene.mesh_objects):
-        builder.add_object(obj, i)
-    result = builder.result()
+        assembler.add_object(obj, i)
+    result = assembler.result()
     if result.data.primitive_count == 0:
         raise SceneError(scene.path, "the scene has no primitives")
     return result

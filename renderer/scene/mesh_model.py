@@ -1,4 +1,4 @@
-"""Plain-data triangle meshes, PBR materials and textures, as `mesh_loader` produces them.
+"""Plain-data triangle meshes, PBR materials and textures, as `renderer.scene.model_formats` produces them.
 
 Everything is numpy and dataclasses (no Taichi): the renderer uploads these arrays, the BVH builder
 reads `positions` and `indices`, and the texture atlas (`renderer.scene.textures`) packs `images`.
@@ -49,10 +49,11 @@ with M = matrices[k] acting on column vectors (p_world = M @ [p, 1]):
   - normals: cofactor(M[:3, :3]) @ n, normalised (cofactor = det * inverse transpose, so a zero
     scale still gives the flattened plane's normal); the geometric normal cross(b - a, c - a)
     transforms the same way;
-  - tangents: M[:3, :3] @ t.xyz, re-orthogonalised against the normal; w times sign(det M);
+  - tangents: M[:3, :3] @ t.xyz, normalised (still orthogonal to the normal); w times sign(det M);
   - mirrored instances (det M < 0): the stored winding is then clockwise seen from the front,
     i.e. the front side flips; a consumer reverses the winding (or flips the side it reports).
-`InstancedMesh.placed(k)` does exactly this and returns a world-space `TriangleMesh`.
+`place_mesh` does exactly this and returns a world-space `TriangleMesh` (`InstancedMesh.placed(k)`
+for instance k); mesh_assembly places scene objects with it too.
 Every matrix is finite; `MeshAsset.bounds` include every instance.
 """
 from __future__ import annotations
@@ -64,7 +65,6 @@ from typing import Optional
 
 import numpy as np
 
-from renderer.scene.description import MaterialSpec
 from renderer.scene.srgb import SRGB8_TO_LINEAR, srgb_to_linear
 
 WRAP_MODES = ("repeat", "clamp", "mirror")
@@ -268,29 +268,6 @@ class PbrMaterial:
     def is_emissive(self) -> bool:
         return max(self.emissive_factor) > 0.0
 
-    def approximate_spec(self) -> MaterialSpec:
-        """The closest of the renderer's three simple kinds, ignoring textures.
-
-        transmission >= 0.5 -> dielectric (tint = base colour), else metallic >= 0.5 -> conductor
-        (F0 = base colour), else diffuse (albedo = base colour). Roughness and emission carry over.
-        Meant for renderers that do not (yet) evaluate the full metallic-roughness model.
-        """
-        rgb = tuple(float(c) for c in self.base_color_factor[:3])
-        if self.transmission_factor >= 0.5:
-            kind = "dielectric"
-        elif self.metallic_factor >= 0.5:
-            kind = "conductor"
-        else:
-            kind = "diffuse"
-        return MaterialSpec(
-            name=self.name,
-            kind=kind,
-            base_color=rgb,
-            roughness=float(min(max(self.roughness_factor, 0.0), 1.0)),
-            ior=float(self.ior),
-            emission=tuple(float(c) for c in self.emissive_factor),
-        )
-
 
 @dataclass
 class TriangleMesh:
@@ -362,28 +339,51 @@ class InstancedMesh:
 
     def placed(self, k: int) -> TriangleMesh:
         """Instance k as a world-space mesh, following the conventions of world meshes."""
-        m = np.asarray(self.matrices[k], dtype=np.float64)
-        m3 = m[:3, :3]
-        mirrored = np.linalg.det(m3) < 0.0
-        src = self.mesh
-        positions = src.positions.astype(np.float64) @ m3.T + m[:3, 3]
-        normals = tangents = None
-        if src.normals is not None:
-            n = src.normals.astype(np.float64) @ normal_matrix(m3).T
-            normals = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
-        if src.tangents is not None:
-            t = src.tangents[:, :3].astype(np.float64) @ m3.T
-            if normals is not None:
-                t -= normals * np.einsum("ij,ij->i", normals, t)[:, None]
-            t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-30)
-            w = src.tangents[:, 3:4] * (-1.0 if mirrored else 1.0)
-            tangents = np.concatenate([t, w], axis=1)
-        f32 = (lambda a: None if a is None else np.ascontiguousarray(a, dtype=np.float32))
-        return TriangleMesh(
-            positions=f32(positions),
-            indices=np.ascontiguousarray(src.indices[:, [0, 2, 1]] if mirrored else src.indices),
-            material=src.material, normals=f32(normals), uv0=src.uv0, uv1=src.uv1,
-            tangents=f32(tangents), colors=src.colors, name=f"{src.name}#{k}")
+        return place_mesh(self.mesh, self.matrices[k], name=f"{self.mesh.name}#{k}")
+
+
+def place_mesh(mesh: TriangleMesh, matrix, name: Optional[str] = None) -> TriangleMesh:
+    """`mesh` placed with the object-to-world `matrix` (4x4, acting on column vectors): the one
+    function that moves triangles, for instances and for scene objects alike (module docs,
+    "Instances"). Positions by the matrix; normals by its cofactor matrix (`normal_matrix`, so
+    a flattening matrix still gives the plane's normal), unit length; tangents by its 3x3 part,
+    unit length (they stay orthogonal to the normals: M t . cofactor(M) n = det(M) t . n), their
+    handedness flipped, and the winding reversed, under a mirroring matrix. Float64 arithmetic,
+    float32 results; UVs and colours are shared with `mesh`."""
+    m = np.asarray(matrix, dtype=np.float64)
+    m3 = m[:3, :3]
+    mirrored = np.linalg.det(m3) < 0.0
+    positions = placed_points(mesh.positions, m)
+    normals = tangents = None
+    if mesh.normals is not None:
+        n = placed_normals(mesh.normals, m3)
+        normals = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+    if mesh.tangents is not None:
+        t = mesh.tangents[:, :3].astype(np.float64) @ m3.T
+        t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-30)
+        w = mesh.tangents[:, 3:4] * (-1.0 if mirrored else 1.0)
+        tangents = np.concatenate([t, w], axis=1)
+    return TriangleMesh(
+        positions=as_float32(positions),
+        indices=np.ascontiguousarray(mesh.indices[:, [0, 2, 1]] if mirrored else mesh.indices),
+        material=mesh.material, normals=as_float32(normals), uv0=mesh.uv0, uv1=mesh.uv1,
+        tangents=as_float32(tangents), colors=mesh.colors, name=mesh.name if name is None else name)
+
+
+def placed_points(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """(P, 3) points under a 4x4 matrix, in float64."""
+    return points.astype(np.float64) @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def placed_normals(normals: np.ndarray, m3: np.ndarray) -> np.ndarray:
+    """(P, 3) normals under the 3x3 part `m3` of a placement, by its cofactor matrix, in float64
+    and not normalised (the loader repairs the ones that come out zero)."""
+    return normals.astype(np.float64) @ normal_matrix(m3).T
+
+
+def as_float32(a: Optional[np.ndarray]) -> Optional[np.ndarray]:
+    """A contiguous float32 copy of an optional attribute array (None stays None)."""
+    return None if a is None else np.ascontiguousarray(a, dtype=np.float32)
 
 
 @dataclass

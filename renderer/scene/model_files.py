@@ -1,7 +1,7 @@
 """The model files one scene reads, each parsed once, under the scene's load options.
 
 A `Scene` carries a `ModelFiles`: the code that frames a model's camera (model_scene) and the code
-that assembles the device arrays (mesh_assembly) both ask it for the same file and get the same
+that assembles the scene's primitives (mesh_assembly) both ask it for the same file and get the same
 `MeshAsset`, so a model is read and decoded once per run. It belongs to its scene, not to the
 process: nothing is shared between scenes, and it goes away with the scene. Its `ledger` adds up
 the memory every model of the scene was charged (renderer.scene.limits), and its `options`
@@ -15,6 +15,7 @@ from typing import Optional
 
 from renderer.scene.limits import MemoryLedger
 from renderer.scene.load_options import LoadOptions
+from renderer.scene.model_formats import load_mesh_asset
 from renderer.scene.references import real_path
 
 
@@ -28,8 +29,6 @@ class ModelFiles:
         """The `MeshAsset` of a model file, parsed on first use (errors name `path` as given)."""
         key = real_path(Path(path), path)
         if key not in self._assets:
-            from renderer.scene.mesh_loader import load_mesh_asset  # the loader imports the model
-
             self._assets[key] = load_mesh_asset(path, self.options, self.ledger)
         return self._assets[key]
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import fields
 
-from renderer.scene.mesh_loader import SUPPORTED_GLTF_EXTENSIONS
+from renderer.scene.model_formats.gltf import SUPPORTED_GLTF_EXTENSIONS
 from renderer.scene.mesh_model import MeshAsset, PbrMaterial
 
 # BVH layout on the device (renderer/geometry/mesh_geometry.py): per node lo, hi (3 x f32 each)
@@ -90,7 +90,7 @@ def model_lines(asset: MeshAsset, name: str) -> list[str]:
 
 
 def device_lines(mesh_scene) -> list[str]:
-    """Device memory of an assembled `MeshScene`: texture pages, triangle arrays, BVH bound."""
+    """Device memory of a `MeshScene` (renderer/mesh_world.py): texture pages, triangle arrays, BVH bound."""
     data = mesh_scene.data
     textures = mesh_scene.atlas.nbytes if mesh_scene.atlas is not None else 0
     triangles = sum(getattr(data, f.name).nbytes for f in fields(data)

@@ -3,7 +3,7 @@ default HDR environment. What `app.py view model.glb` and `render model.obj` ope
 from pathlib import Path
 
 from renderer.scene.load_options import LoadOptions
-from renderer.scene.mesh_loader import frame_camera
+from renderer.scene.framing import frame_camera
 from renderer.scene.description import CameraSpec, EnvironmentSpec, MeshObject, RenderSettings, Scene
 from renderer.scene.model_files import ModelFiles
 

@@ -588,7 +588,7 @@ NODE_KINDS = {k.name: k for k in PRIMITIVES + OPERATORS}
 
 # --- mesh scenes -----------------------------------------------------------------------------
 
-# Model file formats `load_mesh_asset` reads (renderer.scene.mesh_loader.MESH_EXTENSIONS; a test
+# Model file formats `load_mesh_asset` reads (renderer.scene.model_formats.MESH_EXTENSIONS; a test
 # keeps the two equal). The scene loader checks the extension and that the file exists; the file
 # itself is read when the scene is prepared for rendering.
 MESH_FILE_EXTENSIONS = (".gltf", ".glb", ".obj", ".ply", ".stl")

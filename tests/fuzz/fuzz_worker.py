@@ -59,9 +59,9 @@ def run_case(case, options, render_allowed: bool) -> dict:
             warnings.simplefilter("ignore")
             scene = load_any(case.path, options)
             if scene.geometry == "mesh" and case.seed.render:
-                from renderer.scene.mesh_assembly import assemble
+                from renderer.mesh_world import prepare_mesh_scene
 
-                assemble(scene)
+                prepare_mesh_scene(scene)
             grew = _status_kib("VmHWM") * 1024 - before
             report["grew_mb"] = round(grew / 2 ** 20, 1)
             if grew > options.budget.limit + MEMORY_SLACK:

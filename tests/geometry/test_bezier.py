@@ -387,11 +387,11 @@ def goblet():
 
 
 def test_goblet_scene_loads(goblet):
-    from renderer.scene.mesh_assembly import assemble
+    from renderer.mesh_world import prepare_mesh_scene
 
     kinds = [o.kind for o in goblet.mesh_objects]
     assert kinds.count("bezier") == 2 and "disc" in kinds
-    mesh = assemble(goblet)
+    mesh = prepare_mesh_scene(goblet)
     assert mesh.data.counts["bezier"] > 100
     assert {"dielectric", "conductor", "diffuse"} <= mesh.material_uses()["kinds"]
     # The goblet is a closed solid: its profile starts where the disc under its foot ends.

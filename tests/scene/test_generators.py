@@ -13,7 +13,8 @@ import pytest
 
 from renderer.scene import load_scene, schema
 from renderer.scene.generators import generate, grid_indices, triangle_count, value_noise
-from renderer.scene.mesh_loader import load_mesh_asset, srgb_to_linear
+from renderer.scene.model_formats import load_mesh_asset
+from renderer.scene.srgb import srgb_to_linear
 from renderer.scene.mesh_model import uv_transform_matrix
 
 REPO = Path(__file__).resolve().parents[2]

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from renderer.scene.errors import SceneError
-from renderer.scene.mesh_loader import MeshWarning, load_mesh_asset, srgb_to_linear
+from renderer.scene.model_formats import MeshWarning, load_mesh_asset
+from renderer.scene.srgb import srgb_to_linear
 from renderer.scene.textures import STORE_HALF, STORE_RGBA8, pack_atlas
 from tests.data import make_test_models as mtm
 
@@ -334,18 +335,18 @@ def test_supported_extensions_do_not_warn():
 
 
 def test_a_model_scene_is_parsed_once(monkeypatch):
-    import renderer.scene.mesh_loader as mesh_loader
+    import renderer.scene.model_files as model_files
     from renderer.scene.catalog import load_any
     from renderer.scene.mesh_assembly import assemble
 
     calls = []
-    real = mesh_loader.load_mesh_asset
+    real = model_files.load_mesh_asset
 
     def counting(path, *options):
         calls.append(Path(path))
         return real(path, *options)
 
-    monkeypatch.setattr(mesh_loader, "load_mesh_asset", counting)
+    monkeypatch.setattr(model_files, "load_mesh_asset", counting)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         scene = load_any(DATA / "textured_quad.gltf")  # frames the camera on the parsed asset

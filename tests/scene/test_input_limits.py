@@ -24,7 +24,7 @@ from renderer.scene import limits
 from renderer.scene.errors import SceneError
 from renderer.scene.limits import MemoryBudget, MemoryLedger, check_film, parse_size
 from renderer.scene.load_options import LoadOptions
-from renderer.scene.mesh_loader import load_mesh_asset
+from renderer.scene.model_formats import load_mesh_asset
 from tests.scene import hostile_inputs as h
 
 MIB = 1 << 20
@@ -146,10 +146,11 @@ def test_accessors_are_charged_together(tmp_path):
 def _load_accessors(path, budget):
     """Decode every accessor of a glTF through the loader's own reader (without the check of the
     mesh build, which would refuse this file first)."""
-    from renderer.scene import mesh_loader
+    from renderer.scene.model_formats.builder import AssetBuilder
+    from renderer.scene.model_formats.gltf import GltfReader
 
-    builder = mesh_loader._AssetBuilder(path, Path(path), LoadOptions(budget), MemoryLedger(budget))
-    reader = mesh_loader._GltfReader(builder)
+    builder = AssetBuilder(path, Path(path), LoadOptions(budget), MemoryLedger(budget))
+    reader = GltfReader(builder)
     reader.doc = json.loads(Path(path).read_text())
     for i in range(len(reader.doc["accessors"])):
         reader.accessor(i, "test")

@@ -27,7 +27,7 @@ from renderer.scene import (
     load_scene,
 )
 from renderer.scene import schema
-from renderer.scene.mesh_loader import MESH_EXTENSIONS
+from renderer.scene.model_formats import MESH_EXTENSIONS
 from renderer.scene.description import MESH_GENERATORS, MESH_OBJECT_KINDS, MeshObject
 
 REPO = Path(__file__).resolve().parents[2]

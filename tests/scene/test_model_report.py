@@ -8,7 +8,7 @@ import pytest
 
 import app
 from renderer.scene.catalog import load_any
-from renderer.scene.mesh_assembly import assemble
+from renderer.mesh_world import prepare_mesh_scene
 from renderer.scene.model_report import BVH_NODE_BYTES, BVH_SLOT_BYTES, device_lines, model_lines
 from renderer.scene.textures import pack_atlas
 
@@ -52,7 +52,7 @@ def test_device_memory_lines_add_up():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         scene = load_any(DATA / "textured_quad.gltf")
-    mesh = assemble(scene)
+    mesh = prepare_mesh_scene(scene)
     asset = scene.model_files.load(DATA / "textured_quad.gltf")
     lines = device_lines(mesh)
     assert lines[1] == f"  textures   {pack_atlas(asset.images).nbytes / 1e6:.1f} MB"

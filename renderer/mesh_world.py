@@ -1,0 +1,67 @@
+"""A mesh scene's assembly made ready for the device: material rows, texture slots and pages, and
+the Features it compiles with. The Renderer's world building (renderer/renderer.py, build_world)
+uploads the result; `info` reports its device memory.
+
+The scene layer (renderer/scene/mesh_assembly.py) places the primitives and lists the materials in
+the order their ids count; here each becomes a row of the material table in that same order, a
+model file's texture references become texture slots over the packed pages, and its volume
+medium is numbered after the scene's own media.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from renderer.geometry.mesh_data import MeshData
+from renderer.materials.table import KIND_IDS, NO_MEDIUM, MaterialRows
+from renderer.scene.description import Scene
+from renderer.scene.features import Features, features_from
+from renderer.scene.mesh_assembly import ModelMaterial, assemble
+from renderer.scene.textures import WRAP_CODES, TextureAtlas, pack_atlas
+
+KIND_NAMES = {v: k for k, v in KIND_IDS.items()}
+
+
+@dataclass
+class MeshScene:
+    data: MeshData
+    rows: MaterialRows
+    atlas: TextureAtlas | None
+    texture_slots: list  # (rect, wrap_s, wrap_t, uv_set, matrix) per texture slot
+    volume_media: tuple = ()  # MediumSpec of model files' volumes, numbered after the scene's media
+
+    def material_uses(self) -> dict:
+        uses = self.rows.uses()
+        uses["kinds"] = {KIND_NAMES[k] for k in uses["kinds"]}
+        return uses
+
+    def features(self, scene: Scene) -> Features:
+        """The Features of `scene`, of which this is the assembly (with the scene camera's lens)."""
+        return features_from("mesh", self.material_uses(), scene.environment.kind, scene.camera.aperture,
+                             mesh_kinds=self.data.kinds(), energy_compensation=scene.render.energy_compensation,
+                             fog=scene.fog.model, vertex_colors=self.data.tri_colors is not None,
+                             instances=self.data.has_instances)
+
+
+def prepare_mesh_scene(scene: Scene, instancing: bool = True) -> MeshScene:
+    """The scene assembled (instancing False flattens every instance into world triangles), its
+    materials as device rows and its model files' textures as slots over packed pages."""
+    assembly = assemble(scene, instancing)
+    rows = MaterialRows(scene.medium_names())
+    slots: list = []  # (image index, wrap_s, wrap_t, uv_set, matrix)
+    for material in assembly.materials:
+        if not isinstance(material, ModelMaterial):
+            rows.add_spec(material)
+            continue
+
+        def texture_id(ref, first_image=material.first_image):
+            slots.append((first_image + ref.texture, WRAP_CODES[ref.wrap_s], WRAP_CODES[ref.wrap_t], ref.uv_set,
+                          ref.matrix))
+            return len(slots) - 1
+
+        medium = NO_MEDIUM if material.medium is None else rows.add_medium(material.medium.name)
+        rows.add_pbr(material.pbr, texture_id, medium)
+    atlas, texture_slots = None, []
+    if slots:
+        atlas = pack_atlas(assembly.images)
+        texture_slots = [(atlas.rects[image], ws, wt, uv_set, matrix) for image, ws, wt, uv_set, matrix in slots]
+    return MeshScene(assembly.data, rows, atlas, texture_slots, assembly.volume_media)
