@@ -1,8 +1,8 @@
 """Write assets/models/textured_sphere.glb: a textured sphere on a tiled floor, as one GLB file.
 
-Every texture is procedural and the file is written with the standard library (json, struct for
-the GLB container) plus numpy for the arrays and Pillow for the PNGs, so the asset can be rebuilt
-anywhere the project runs:
+Every texture is procedural and the file is written by the project's glTF writer
+(renderer/scene/model_formats/gltf_writing.py: buffer, accessors, PNGs, the GLB container), so the
+asset can be rebuilt anywhere the project runs:
 
     .venv/bin/python scripts/make_textured_gltf.py [output.glb]
 
@@ -27,14 +27,12 @@ what this script wrote.
 """
 from __future__ import annotations
 
-import io
-import json
-import struct
 import sys
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
+
+from renderer.scene.model_formats.gltf_writing import BufferBuilder, glb_bytes, png_bytes
 
 REPO = Path(__file__).resolve().parents[1]
 OUT = REPO / "assets" / "models" / "textured_sphere.glb"
@@ -50,8 +48,6 @@ SPHERE_NORMAL_SCALE = 1.0
 FLOOR_NORMAL_SCALE = 0.6
 
 # glTF enums
-FLOAT, UNSIGNED_INT = 5126, 5125
-ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 LINEAR, LINEAR_MIPMAP_LINEAR = 9729, 9987
 REPEAT, CLAMP_TO_EDGE = 10497, 33071
 
@@ -207,51 +203,15 @@ IMAGES = (  # (name, function, colour data in sRGB?)
 )
 
 
-def png_bytes(pixels: np.ndarray) -> bytes:
-    out = io.BytesIO()
-    Image.fromarray(pixels).save(out, format="PNG", optimize=True)
-    return out.getvalue()
-
-
 # --- the glTF document -----------------------------------------------------------------------
 
 
-class _Buffer:
-    def __init__(self):
-        self.data = bytearray()
-        self.views: list[dict] = []
-        self.accessors: list[dict] = []
-
-    def view(self, blob: bytes, target: int | None = None) -> int:
-        self.data += b"\0" * (-len(self.data) % 4)  # 4-byte alignment for every view
-        view = {"buffer": 0, "byteOffset": len(self.data), "byteLength": len(blob)}
-        if target is not None:
-            view["target"] = target
-        self.data += blob
-        self.views.append(view)
-        return len(self.views) - 1
-
-    def accessor(self, array: np.ndarray, minmax: bool = False) -> int:
-        array = np.ascontiguousarray(array)
-        indices = array.dtype == np.uint32
-        flat = array.reshape(-1) if indices else array
-        kind = "SCALAR" if indices else {2: "VEC2", 3: "VEC3", 4: "VEC4"}[array.shape[1]]
-        accessor = {"bufferView": self.view(flat.tobytes(), ELEMENT_ARRAY_BUFFER if indices else ARRAY_BUFFER),
-                    "componentType": UNSIGNED_INT if indices else FLOAT,
-                    "count": int(len(flat)), "type": kind}
-        if minmax:
-            accessor["min"] = [float(x) for x in array.min(axis=0)]
-            accessor["max"] = [float(x) for x in array.max(axis=0)]
-        self.accessors.append(accessor)
-        return len(self.accessors) - 1
-
-
-def _primitive(buf: _Buffer, mesh: dict[str, np.ndarray], material: int) -> dict:
-    return {"attributes": {"POSITION": buf.accessor(mesh["positions"], minmax=True),
-                           "NORMAL": buf.accessor(mesh["normals"]),
+def _primitive(buf: BufferBuilder, mesh: dict[str, np.ndarray], material: int) -> dict:
+    return {"attributes": {"POSITION": buf.accessor(mesh["positions"], bounds=True),
+                           "NORMAL": buf.accessor(mesh["normals"], bounds=False),
                            "TANGENT": buf.accessor(mesh["tangents"]),
                            "TEXCOORD_0": buf.accessor(mesh["uvs"])},
-            "indices": buf.accessor(mesh["indices"]), "material": material, "mode": 4}
+            "indices": buf.accessor(mesh["indices"].reshape(-1)), "material": material, "mode": 4}
 
 
 def _texture_info(texture: int, transform: bool, **extra) -> dict:
@@ -265,10 +225,10 @@ def build() -> tuple[dict, bytes]:
     sphere, floor = sphere_mesh(), floor_mesh()
     check_frames(sphere)
     check_frames(floor)
-    buf = _Buffer()
+    buf = BufferBuilder()
     meshes = [{"name": "sphere", "primitives": [_primitive(buf, sphere, 0)]},
               {"name": "floor", "primitives": [_primitive(buf, floor, 1)]}]
-    images = [{"name": name, "mimeType": "image/png", "bufferView": buf.view(png_bytes(make()))}
+    images = [{"name": name, "mimeType": "image/png", "bufferView": buf.view(png_bytes(make(), optimize=True))}
               for name, make, _ in IMAGES]
     # textures: 0-2 sphere (sampler 0), 3-5 floor (sampler 1); the normal map image is shared.
     textures = [{"sampler": 0, "source": 0}, {"sampler": 0, "source": 1}, {"sampler": 0, "source": 2},
@@ -303,17 +263,6 @@ def build() -> tuple[dict, bytes]:
         "buffers": [{"byteLength": len(buf.data)}],
     }
     return doc, bytes(buf.data)
-
-
-def glb_bytes(doc: dict, binary: bytes) -> bytes:
-    """The GLB container: header, JSON chunk (space padded), BIN chunk (zero padded)."""
-    text = json.dumps(doc, separators=(",", ":")).encode("utf-8")
-    text += b" " * (-len(text) % 4)
-    binary += b"\0" * (-len(binary) % 4)
-    length = 12 + 8 + len(text) + 8 + len(binary)
-    return (struct.pack("<III", 0x46546C67, 2, length)  # "glTF", version 2
-            + struct.pack("<II", len(text), 0x4E4F534A) + text  # "JSON"
-            + struct.pack("<II", len(binary), 0x004E4942) + binary)  # "BIN\0"
 
 
 def main(argv: list[str]) -> int:

@@ -35,14 +35,19 @@ compare what the loader returns with these exact values. Outputs, next to this s
 """
 from __future__ import annotations
 
-import base64
 import json
 import math
-import struct
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
+
+from renderer.scene.model_formats.gltf_writing import (
+    BufferBuilder,
+    data_uri_buffer,
+    glb_bytes,
+    png16_bytes,
+    png_bytes,
+)
 
 HERE = Path(__file__).resolve().parent
 
@@ -312,66 +317,6 @@ end_header
 """
 
 
-class BufferBuilder:
-    """Accumulates binary data into one glTF buffer with 4-byte aligned buffer views."""
-
-    def __init__(self):
-        self.data = bytearray()
-        self.views: list[dict] = []
-        self.accessors: list[dict] = []
-
-    def view(self, blob: bytes, target: int | None = None) -> int:
-        self.data += b"\0" * (-len(self.data) % 4)
-        view = {"buffer": 0, "byteOffset": len(self.data), "byteLength": len(blob)}
-        if target is not None:
-            view["target"] = target
-        self.data += blob
-        self.views.append(view)
-        return len(self.views) - 1
-
-    def accessor(self, array: np.ndarray, normalized: bool = False, sparse: dict | None = None,
-                 with_view: bool = True) -> int:
-        array = np.ascontiguousarray(array)
-        component = {np.dtype(np.float32): 5126, np.dtype(np.uint8): 5121, np.dtype(np.int16): 5122,
-                     np.dtype(np.uint16): 5123, np.dtype(np.uint32): 5125}[array.dtype]
-        kind = {1: "SCALAR", 2: "VEC2", 3: "VEC3", 4: "VEC4"}[1 if array.ndim == 1 else array.shape[1]]
-        index_data = array.ndim == 1
-        accessor = {"componentType": component, "count": int(len(array)), "type": kind}
-        if with_view:
-            accessor["bufferView"] = self.view(array.tobytes(), 34963 if index_data else 34962)
-        if normalized:
-            accessor["normalized"] = True
-        if kind == "VEC3" and component == 5126:  # POSITION needs min / max
-            accessor["min"] = [float(v) for v in array.min(axis=0)]
-            accessor["max"] = [float(v) for v in array.max(axis=0)]
-        if sparse:
-            accessor["sparse"] = sparse
-        self.accessors.append(accessor)
-        return len(self.accessors) - 1
-
-
-def png_bytes(pixels: np.ndarray) -> bytes:
-    import io
-
-    out = io.BytesIO()
-    Image.fromarray(pixels).save(out, format="PNG")
-    return out.getvalue()
-
-
-def png16_bytes(pixels: np.ndarray) -> bytes:
-    """A 16-bit-per-channel RGB PNG (Pillow writes only 8-bit colour PNGs; OpenCV writes these)."""
-    import cv2
-
-    ok, data = cv2.imencode(".png", np.ascontiguousarray(pixels[:, :, ::-1]))  # OpenCV is BGR
-    assert ok
-    return data.tobytes()
-
-
-def data_uri_buffer(b: BufferBuilder) -> list[dict]:
-    return [{"byteLength": len(b.data), "uri": "data:application/octet-stream;base64,"
-             + base64.b64encode(bytes(b.data)).decode("ascii")}]
-
-
 def triangle_primitive(b: BufferBuilder, material: int | None = None, **attributes) -> dict:
     """The unit triangle TRI_POSITIONS with extra attributes (name -> accessor index)."""
     primitive = {"attributes": {"POSITION": b.accessor(TRI_POSITIONS), **attributes},
@@ -603,20 +548,8 @@ def two_nodes_document() -> dict:
         "materials": [PAIR_MATERIAL],
         "accessors": b.accessors,
         "bufferViews": b.views,
-        "buffers": [{"byteLength": len(b.data),
-                     "uri": "data:application/octet-stream;base64,"
-                            + base64.b64encode(bytes(b.data)).decode("ascii")}],
+        "buffers": data_uri_buffer(b),
     }
-
-
-def glb_bytes(doc: dict, binary: bytes) -> bytes:
-    text = json.dumps(doc, separators=(",", ":")).encode("utf-8")
-    text += b" " * (-len(text) % 4)
-    binary += b"\0" * (-len(binary) % 4)
-    length = 12 + 8 + len(text) + 8 + len(binary)
-    return (struct.pack("<III", 0x46546C67, 2, length)
-            + struct.pack("<II", len(text), 0x4E4F534A) + text
-            + struct.pack("<II", len(binary), 0x004E4942) + binary)
 
 
 def main(out: Path = HERE) -> None:

@@ -2,16 +2,15 @@
 geometric normals, texel values), a one-line error's check and a minimal glTF writer."""
 from __future__ import annotations
 
-import base64
 import json
 import math
 from pathlib import Path
 
 import numpy as np
 
+from renderer.scene.model_formats.gltf_writing import BufferBuilder, data_uri_buffer
 from renderer.scene.srgb import srgb_to_linear
 from renderer.scene.textures import as_rgba
-from tests.data import make_test_models as mtm
 
 REPO = Path(__file__).resolve().parents[2]
 DATA = REPO / "tests" / "data"
@@ -50,12 +49,10 @@ def one_line_error(excinfo, path) -> str:
 
 
 def write_gltf(path: Path, positions, indices, extra_doc=None) -> Path:
-    b = mtm.BufferBuilder()
-    position_accessor = b.accessor(np.asarray(positions, dtype=np.float32))
+    b = BufferBuilder()
+    # no min / max: they would hold NaN for the bad-input cases
+    position_accessor = b.accessor(np.asarray(positions, dtype=np.float32), bounds=False)
     index_accessor = b.accessor(np.asarray(indices, dtype=np.uint16))
-    for accessor in b.accessors:  # min / max would hold NaN for the bad-input cases
-        accessor.pop("min", None)
-        accessor.pop("max", None)
     doc = {
         "asset": {"version": "2.0"},
         "scenes": [{"nodes": [0]}],
@@ -64,8 +61,7 @@ def write_gltf(path: Path, positions, indices, extra_doc=None) -> Path:
             {"attributes": {"POSITION": position_accessor}, "indices": index_accessor}]}],
         "accessors": b.accessors,
         "bufferViews": b.views,
-        "buffers": [{"byteLength": len(b.data), "uri": "data:application/octet-stream;base64,"
-                     + base64.b64encode(bytes(b.data)).decode()}],
+        "buffers": data_uri_buffer(b),
     }
     doc.update(extra_doc or {})
     path.write_text(json.dumps(doc))

@@ -10,6 +10,7 @@ ones and instanced ones), PBR materials and images at their own precision (conve
 - image_decoding.py: texture images decoded at their own precision, their sizes from headers
 - normals.py, tangents.py: vertex normals and tangents generated where a file lacks them
 - mesh_warnings.py: the warnings a model that still loads can raise
+- gltf_writing.py: the other direction, glTF written by the project's model generators
 
 Checks (all formats)
 --------------------
