@@ -236,9 +236,9 @@ def cmd_view(args) -> int:
 
 
 def cmd_bench(args) -> int:
-    from renderer.bench import BENCHMARKS
+    from renderer.bench import run_benchmark
 
-    return BENCHMARKS[args.name](quick=args.quick, out_dir=args.out_dir)
+    return run_benchmark(args.name, quick=args.quick, out_dir=args.out_dir)
 
 
 def _one_line_warning(message, category, filename, lineno, line=None):

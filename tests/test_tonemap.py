@@ -52,9 +52,19 @@ def pointwise_display(film: ti.template(), out: ti.template(), scale: ti.f32, ma
         out[x, y] = display_value(ti.math.clamp(sanitize_radiance(film.mean[x, y]) * scale, 0.0, 1.0e6), mapper)
 
 
+def srgb_encoded(linear):
+    """The sRGB encoding by its definition (IEC 61966-2-1), in float64: 12.92 x up to 0.0031308,
+    1.055 x^(1/2.4) - 0.055 above."""
+    x = np.asarray(linear, np.float64)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.maximum(x, 0.0031308) ** (1.0 / 2.4) - 0.055)
+
+
+SRGB_HALF = float(srgb_encoded(0.5))  # 0.7353569831: a display value of 0.5 linear
+
+
 def test_srgb_oetf_known_values():
     linear = np.array([0.0, 0.001, 0.0031308, 0.18, 0.5, 1.0], dtype=np.float32)
-    expected = np.array([0.0, 0.01292, 0.040449936, 0.4613561295, 0.7353569831, 1.0], dtype=np.float32)
+    expected = srgb_encoded(linear).astype(np.float32)  # 0, 0.01292, 0.040449936, 0.4613561295, SRGB_HALF, 1
     out = np.zeros_like(linear)
     oetf_kernel(linear, out)
     np.testing.assert_allclose(out, expected, atol=2e-6)
@@ -76,15 +86,15 @@ def test_aces_grey_ramp_is_monotonic_from_black_to_white():
 def test_none_clamps_and_reinhard_halves_luminance_one():
     image = np.array([[[2.0, -1.0, 0.5], [1.0, 1.0, 1.0]]], dtype=np.float32)
     none = kernel_display(image, 0.0, "none")[0]
-    np.testing.assert_allclose(none[0], [1.0, 0.0, 0.7353569831], atol=2e-6)
+    np.testing.assert_allclose(none[0], [1.0, 0.0, SRGB_HALF], atol=2e-6)
     reinhard = kernel_display(image, 0.0, "reinhard")[0]
-    np.testing.assert_allclose(reinhard[1], 0.7353569831, atol=2e-6)  # L=1 -> 1/(1+1)
+    np.testing.assert_allclose(reinhard[1], SRGB_HALF, atol=2e-6)  # L=1 -> 1/(1+1)
 
 
 def test_exposure_is_in_stops():
     assert exposure_scale(1.0) == 2.0 and exposure_scale(-2.0) == 0.25
     image = np.full((1, 1, 3), 0.125, dtype=np.float32)
-    np.testing.assert_allclose(kernel_display(image, 2.0, "none"), 0.7353569831, atol=2e-6)
+    np.testing.assert_allclose(kernel_display(image, 2.0, "none"), SRGB_HALF, atol=2e-6)  # 0.125 x 2^2
 
 
 def test_kernel_and_numpy_agree_and_output_is_finite():

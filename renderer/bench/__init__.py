@@ -1,41 +1,17 @@
-"""Benchmarks behind "what accuracy costs in time": each prints a table and writes JSON + plots."""
+"""Benchmarks behind "what accuracy costs in time": each prints a table and writes JSON + plots.
+
+The package owns the benchmarks (one module with a `run(quick, out_dir)` entry per name below),
+their shared measurement and report helpers (common.py), the independent renderers they measure
+against (embree_side.py, mitsuba_side.py) and the ray kernels the BVH benchmark and the geometry
+tests share (ray_batch.py). A benchmark module is imported only when it runs: most of them start
+Taichi and compile kernels.
+"""
+from importlib import import_module
+
+BENCHMARKS = {name: f"renderer.bench.{name}" for name in ("sdf", "startup", "bvh", "integrators", "features",
+                                                          "photons")}
 
 
-def _sdf(**kw):
-    from renderer.bench.sdf import run
-
-    return run(**kw)
-
-
-def _startup(**kw):
-    from renderer.bench.startup import run
-
-    return run(**kw)
-
-
-def _bvh(**kw):
-    from renderer.bench.bvh import run
-
-    return run(**kw)
-
-
-def _integrators(**kw):
-    from renderer.bench.integrators import run
-
-    return run(**kw)
-
-
-def _features(**kw):
-    from renderer.bench.features import run
-
-    return run(**kw)
-
-
-def _photons(**kw):
-    from renderer.bench.photons import run
-
-    return run(**kw)
-
-
-BENCHMARKS = {"sdf": _sdf, "startup": _startup, "bvh": _bvh, "integrators": _integrators, "features": _features,
-              "photons": _photons}
+def run_benchmark(name: str, **options) -> int:
+    """Run benchmark `name` (a key of BENCHMARKS) with its run() options; its exit status."""
+    return import_module(BENCHMARKS[name]).run(**options)

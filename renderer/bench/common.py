@@ -12,10 +12,12 @@ import json
 import math
 import os
 import platform
+import shlex
 import statistics
 import sys
 import time
 from dataclasses import dataclass, field
+from datetime import datetime, timezone
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
@@ -246,6 +248,17 @@ def machine_info() -> dict:
     return info
 
 
+def report_header(benchmark: str, quick: bool, load_before: list[float] | None, **fields) -> dict:
+    """The opening entries of every benchmark's JSON report: which benchmark, when (UTC), the
+    command line that ran it, the machine, then the benchmark's own `fields` (its configuration,
+    back-end, ...) and the load averages before the run and now: timings are only as quiet as
+    the machine."""
+    return {"benchmark": benchmark, "quick": quick,
+            "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+            "command": shlex.join([Path(sys.executable).name, *sys.argv]), "machine": machine_info(), **fields,
+            "load_average": {"before": load_before, "after": load_average()}}
+
+
 def pyplot():
     """matplotlib.pyplot on the Agg back-end (no display needed)."""
     import matplotlib
@@ -344,6 +357,14 @@ def time_interleaved(calls: dict, runs: int = 3, warmup: int = 1,
             if after is not None:
                 after(name)
     return {name: Timing(times[name], warm[name]) for name in calls}
+
+
+STARTED = time.perf_counter()  # when the benchmarks were imported: the clock of log()'s lines
+
+
+def log(message: str) -> None:
+    """A progress line on stderr, stamped with the seconds since the benchmarks were imported."""
+    print(f"{time.perf_counter() - STARTED:6.1f} s  {message}", file=sys.stderr, flush=True)
 
 
 def describe_error(error: BaseException) -> str:

@@ -56,7 +56,6 @@ them cold again); --quick ~3 minutes warm.
 from __future__ import annotations
 
 import math
-import sys
 import time
 import traceback
 from dataclasses import asdict, dataclass, replace
@@ -70,16 +69,17 @@ from renderer.bench.common import (
     image_errors,
     load_average,
     load_named_scene,
-    machine_info,
+    log,
     print_table,
     pyplot,
     rel_mse,
+    report_header,
     rmse,
     save_figure,
+    speed_runtime,
     time_interleaved,
     verdict,
     write_json,
-    speed_runtime,
 )
 
 INTEGRATORS = ("path", "nee", "mis")
@@ -119,13 +119,6 @@ FULL = IntegratorBenchConfig()
 QUICK = IntegratorBenchConfig(square_size=(64, 64), wide_size=(96, 54), budget_s=2.0, reference_s=8.0,
                               reference_launch_s=2.0, mitsuba_reference_spp=1024, mitsuba_pass_spp=256,
                               mitsuba_target_spp=32, mitsuba_curve_max_spp=256, mitsuba_target_renders=8)
-
-_T0 = time.perf_counter()
-
-
-def log(message: str) -> None:
-    print(f"{time.perf_counter() - _T0:6.1f} s  {message}", file=sys.stderr, flush=True)
-
 
 def _sync() -> None:
     import taichi as ti
@@ -691,12 +684,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
     plots = write_plots(results, mitsuba, out_dir, config)
     total = time.perf_counter() - t_start
     report = {
-        "benchmark": "integrators",
-        "quick": quick,
-        "arch": arch,
-        "machine": machine_info(),
-        "config": asdict(config),
-        "load_average": {"before": load_before, "after": load_average()},
+        **report_header("integrators", quick, load_before, arch=arch, config=asdict(config)),
         "notes": ("Error vs reference: RMSE and relMSE = mean((x-ref)^2/(ref^2+1e-2)); rel_mse_trimmed leaves out the "
                   "0.1% pixels of largest error. Reference: mis, independent sampler, its own seed; its noise floor "
                   "is mean(film variance of the mean). Curves: one seed for every integrator and sampler, launches "

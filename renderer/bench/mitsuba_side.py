@@ -18,6 +18,7 @@ area, as Lantern's film computes it.
 """
 from __future__ import annotations
 
+import functools
 import os
 import time
 from pathlib import Path
@@ -42,13 +43,9 @@ class MitsubaRender(NamedTuple):
     samples_per_second: float  # width * height * spp / seconds (camera samples, not rays)
 
 
-_state: dict = {}
-
-
+@functools.cache  # a failure is not cached: the next call tries again
 def _import_mitsuba():
     """Import mitsuba once, set its variant, and return (mi, variant, note)."""
-    if "mi" in _state:
-        return _state["mi"], _state["variant"], _state["note"]
     if "DRJIT_LIBLLVM_PATH" not in os.environ and Path(DEFAULT_LIBLLVM).is_file():
         os.environ["DRJIT_LIBLLVM_PATH"] = DEFAULT_LIBLLVM
     try:
@@ -73,7 +70,6 @@ def _import_mitsuba():
         variant = FALLBACK_VARIANT
         note = (note or "no LLVM variant") + (f"; using {FALLBACK_VARIANT} (no JIT, much slower); set "
                                               f"DRJIT_LIBLLVM_PATH to a libLLVM (e.g. {DEFAULT_LIBLLVM})")
-    _state.update(mi=mi, variant=variant, note=note)
     return mi, variant, note
 
 

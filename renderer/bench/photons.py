@@ -31,9 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
-from renderer.bench.common import (REL_MSE_EPS, describe_error, load_average, load_named_scene, machine_info, print_table,
-                                   pyplot, rel_mse, rmse, save_figure, speed_runtime, verdict, write_json)
-from renderer.bench.integrators import log, noise_floor, progressive, value_at
+from renderer.bench.common import (REL_MSE_EPS, describe_error, load_average, load_named_scene, log, print_table, pyplot,
+                                   rel_mse, report_header, rmse, save_figure, speed_runtime, verdict, write_json)
+from renderer.bench.integrators import noise_floor, progressive, value_at
 
 INTEGRATORS = ("mis", "sppm")
 SAMPLER = "independent"
@@ -178,7 +178,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, confi
     if scenes is not None:
         config = replace(config, scenes=tuple(str(s) for s in scenes))
     t_start = time.perf_counter()
-    speed_runtime()
+    arch = speed_runtime()
     load_before = load_average()
     results = []
     for name in config.scenes:
@@ -191,9 +191,9 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, confi
             results.append({"scene": Path(name).stem, "skipped": describe_error(error)})
     print_report(results, config)
     plots = write_plots(results, out_dir)
-    report = {"benchmark": "photons", "quick": quick, "machine": machine_info(), "config": asdict(config),
-              "load_average": {"before": load_before, "after": load_average()}, "rel_mse_eps": REL_MSE_EPS,
-              "scenes": results, "plots": [p.name for p in plots], "total_seconds": time.perf_counter() - t_start}
+    report = {**report_header("photons", quick, load_before, arch=arch, config=asdict(config)),
+              "rel_mse_eps": REL_MSE_EPS, "scenes": results, "plots": [p.name for p in plots],
+              "total_seconds": time.perf_counter() - t_start}
     path = write_json(Path(out_dir) / "bench_photons.json", report)
     print(f"wrote {path}  (total {report['total_seconds']:.0f} s)")
     return 0 if any("curves" in r for r in results) else 1

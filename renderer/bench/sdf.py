@@ -29,7 +29,6 @@ Writes <out_dir>/bench_sdf.json and PNG plots next to it, and prints tables.
 """
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -41,16 +40,17 @@ from renderer.bench.common import (
     error_difference,
     image_errors,
     load_average,
-    machine_info,
+    log,
     print_table,
     pyplot,
     rel_mse,
+    report_header,
     rmse,
     save_figure,
+    speed_runtime,
     time_interleaved,
     verdict,
     write_json,
-    speed_runtime,
 )
 
 STEP_REDUCTION_TARGET = 0.25  # the issue's target: at least 25 % fewer march steps
@@ -95,13 +95,6 @@ def sdf_scenes(paths=None):
 
     scenes = [load_scene(p) for p in (paths if paths is not None else scene_files())]
     return [s for s in scenes if s.geometry == "sdf"]
-
-
-_T0 = time.perf_counter()
-
-
-def log(message: str) -> None:
-    print(f"{time.perf_counter() - _T0:6.1f} s  {message}", file=sys.stderr, flush=True)
 
 
 class SceneBench:
@@ -443,12 +436,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, confi
     plots = write_plots(results, out_dir)
     total = time.perf_counter() - t_start
     report = {
-        "benchmark": "sdf",
-        "quick": quick,
-        "arch": arch,
-        "machine": machine_info(),
-        "config": asdict(config),
-        "load_average": {"before": load_before, "after": load_average()},
+        **report_header("sdf", quick, load_before, arch=arch, config=asdict(config)),
         "targets": {"step_reduction": STEP_REDUCTION_TARGET, "worse_if_z_above": EQUAL_ERROR_Z,
                     "and_relative_difference_above": EQUAL_ERROR_MARGIN,
                     "firefly_trim": FIREFLY_TRIM},

@@ -386,7 +386,7 @@ def start_up_targets(measurements: list[dict]) -> list[dict]:
 
 
 def run(quick: bool = False, out_dir: Path = Path("reports"), warm_runs: int = 3, with_viewer: bool = True) -> int:
-    from renderer.bench.common import load_average, machine_info, write_json
+    from renderer.bench.common import load_average, report_header, write_json
 
     from renderer.scene.catalog import DEFAULT_SCENE
 
@@ -414,12 +414,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), warm_runs: int = 3
     levels = [optimization_level(measurements[0]), optimization_level(full)]
     measurements.append(full)
     report = {
-        "benchmark": "startup",
-        "quick": quick,
-        "scene": DEFAULT_SCENE,
-        "size": list(DEFAULT_SIZE),
-        "machine": machine_info(),
-        "load_average": {"before": load_before, "after": load_average()},
+        **report_header("startup", quick, load_before, scene=DEFAULT_SCENE, size=list(DEFAULT_SIZE)),
         "target_seconds": TARGET_SECONDS,
         "notes": ("Each run is a fresh Python process. Marks are wall-clock (time.time()) from just before "
                   "the parent launched the process. Cold = empty Taichi offline cache (fresh temp dir via "

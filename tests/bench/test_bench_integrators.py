@@ -5,7 +5,6 @@ import math
 
 import pytest
 
-from renderer.bench import BENCHMARKS
 from renderer.bench.integrators import IntegratorBenchConfig, spp_to_reach, value_at
 from tests.scene_builder import tiny_bench_toml
 
@@ -22,10 +21,6 @@ def tiny_scene(tmp_path):
     path = tmp_path / "tiny_integrators.toml"
     path.write_text(TINY_SCENE)
     return path
-
-
-def test_registered():
-    assert "integrators" in BENCHMARKS
 
 
 def test_value_at_interpolates_in_log_log():

@@ -1,7 +1,11 @@
 """Smoke test of `bench photons` on a tiny caustic scene: it runs, reports both integrators and
 the caustic-region errors, and writes its JSON and plot (correctness of the plumbing, not speed)."""
 import json
+import math
 
+import pytest
+
+from renderer.bench.common import verdict
 from renderer.bench.photons import PhotonBenchConfig, corrected, region_mask, run
 from tests.scene_builder import furnace_toml, scene_from_toml
 
@@ -15,7 +19,8 @@ def test_floor_correction_never_goes_negative():
     at = {"rmse": 0.1, "rel_mse": 0.01, "rmse_caustic": 0.2, "rel_mse_caustic": 0.05}
     floor = {"mse": 0.02, "rel_mse": 0.001, "mse_caustic": 0.01, "rel_mse_caustic": 0.1}
     out = corrected(at, floor)
-    assert out["rmse"] == 0.0 and out["rel_mse_caustic"] == 0.0 and abs(out["rmse_caustic"] - 0.1732) < 1e-3
+    assert out["rmse"] == 0.0 and out["rel_mse_caustic"] == 0.0
+    assert out["rmse_caustic"] == pytest.approx(math.sqrt(0.2 ** 2 - 0.01))  # sqrt(RMSE^2 - floor MSE)
 
 
 def test_runs_on_a_tiny_glass_scene(tmp_path, capsys):
@@ -27,5 +32,10 @@ def test_runs_on_a_tiny_glass_scene(tmp_path, capsys):
     res = report["scenes"][0]
     assert set(res["curves"]) == {"mis", "sppm"} and res["caustic_pixels"] == 16 * 9
     printed = capsys.readouterr().out
-    assert "Target (tiny_caustic)" in printed and ("PASS" in printed or "FAIL" in printed)
+    target = res["target"]  # the floor-corrected caustic relMSE of each curve at the budget
+    assert target["mis"] == res["curves"]["mis"]["at_budget_floor_corrected"]["rel_mse_caustic"]
+    assert target["sppm"] == res["curves"]["sppm"]["at_budget_floor_corrected"]["rel_mse_caustic"]
+    assert target["passed"] == (target["sppm"] < target["mis"])
+    assert (f"Target (tiny_caustic): sppm's caustic relMSE (floor-corrected) below mis's at equal time: "
+            f"{target['sppm']:.4g} vs {target['mis']:.4g}  {verdict(target['passed'])}") in printed
     assert (tmp_path / "bench_photons_tiny_caustic.png").exists()

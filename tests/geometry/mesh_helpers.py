@@ -2,8 +2,9 @@
 import numpy as np
 import taichi as ti
 
+from renderer.bench.ray_batch import RayBatch, ray_at
 from renderer.geometry.instance_bvh import build_scene_bvh
-from renderer.geometry.interface import INF, Ray
+from renderer.geometry.interface import INF
 from renderer.geometry.intersect import watertight_setup
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.mesh_geometry import MeshGeometry
@@ -22,61 +23,53 @@ def trimesh_data(mesh, material=0) -> MeshData:
 
 @ti.data_oriented
 class RayShooter:
-    """Closest hits (or any-hit flags) of many rays, by the BVH or by brute force."""
+    """Closest hits (or any-hit flags) of many rays, by the BVH (the benchmark's RayBatch) or by
+    brute force."""
 
     def __init__(self, geometry: MeshGeometry):
         self.geometry = geometry
+        self.batch = RayBatch(geometry)
 
     @ti.kernel
-    def _closest(self, o: ti.types.ndarray(), d: ti.types.ndarray(), out_t: ti.types.ndarray(),
-                 out_prim: ti.types.ndarray(), brute: ti.template()):
+    def _brute_closest(self, o: ti.types.ndarray(), d: ti.types.ndarray(), out_t: ti.types.ndarray(),
+                       out_prim: ti.types.ndarray()):
         for i in range(o.shape[0]):
-            ray = Ray(o=ti.math.vec3(o[i, 0], o[i, 1], o[i, 2]), d=ti.math.vec3(d[i, 0], d[i, 1], d[i, 2]),
-                      cone_width=0.0, cone_spread=0.0)
+            ray = ray_at(o, d, i)
             t = INF
             prim = -1
-            if ti.static(brute):
-                k, s = watertight_setup(ray.d)
-                for g in range(self.geometry.prim_material.shape[0]):
-                    h, th, b1, b2 = self.geometry._test_prim(g, ray.o, ray.d, k, s, t)
-                    if h == 1:
-                        t = th
-                        prim = g
-            else:
-                hit = self.geometry.intersect(ray, INF)
-                if hit.hit == 1:
-                    t = hit.t
-                    prim = hit.prim
+            k, s = watertight_setup(ray.d)
+            for g in range(self.geometry.prim_material.shape[0]):
+                h, th, b1, b2 = self.geometry._test_prim(g, ray.o, ray.d, k, s, t)
+                if h == 1:
+                    t = th
+                    prim = g
             out_t[i] = t
             out_prim[i] = prim
 
     def closest(self, origins, directions, brute=False):
+        """(t, prim) of each ray's closest hit; a miss has t = INF and prim -1."""
         n = len(origins)
+        o, d = np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(directions, np.float32)
         t = np.zeros(n, np.float32)
         prim = np.zeros(n, np.int32)
-        self._closest(np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(directions, np.float32),
-                      t, prim, brute)
+        if brute:
+            self._brute_closest(o, d, t, prim)
+        else:
+            self.batch.closest(o, d, np.full(n, INF, np.float32), t, prim, np.zeros((n, 2), np.int32))
+            t[prim < 0] = INF
         return t, prim
-
-    @ti.kernel
-    def _occluded(self, o: ti.types.ndarray(), d: ti.types.ndarray(), t_max: ti.f32, out: ti.types.ndarray()):
-        for i in range(o.shape[0]):
-            ray = Ray(o=ti.math.vec3(o[i, 0], o[i, 1], o[i, 2]), d=ti.math.vec3(d[i, 0], d[i, 1], d[i, 2]),
-                      cone_width=0.0, cone_spread=0.0)
-            out[i] = 1 if self.geometry.occluded(ray, t_max) else 0
 
     def occluded(self, origins, directions, t_max=INF):
         out = np.zeros(len(origins), np.int32)
-        self._occluded(np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(directions, np.float32),
-                       t_max, out)
+        self.batch.occluded(np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(directions, np.float32),
+                            np.full(len(origins), t_max, np.float32), out)
         return out
 
     @ti.kernel
     def _trace(self, o: ti.types.ndarray(), d: ti.types.ndarray(), t_max: ti.f32, any_hit: ti.types.ndarray(),
                out_hit: ti.types.ndarray(), out_tests: ti.types.ndarray()):
         for i in range(o.shape[0]):
-            ray = Ray(o=ti.math.vec3(o[i, 0], o[i, 1], o[i, 2]), d=ti.math.vec3(d[i, 0], d[i, 1], d[i, 2]),
-                      cone_width=0.0, cone_spread=0.0)
+            ray = ray_at(o, d, i)
             hit = self.geometry.trace(ray, t_max, any_hit[i] == 1)
             out_hit[i] = hit.hit
             out_tests[i] = hit.tests
@@ -94,8 +87,7 @@ class RayShooter:
                  out_prim: ti.types.ndarray(), out_second: ti.types.ndarray(), out_t: ti.types.ndarray()):
         """Hit, then spawn a ray from the hit point in direction d2 and report what it hits."""
         for i in range(o.shape[0]):
-            ray = Ray(o=ti.math.vec3(o[i, 0], o[i, 1], o[i, 2]), d=ti.math.vec3(d[i, 0], d[i, 1], d[i, 2]),
-                      cone_width=0.0, cone_spread=0.0)
+            ray = ray_at(o, d, i)
             hit = self.geometry.intersect(ray, INF)
             out_prim[i] = -1
             out_second[i] = -2
@@ -133,8 +125,7 @@ class SurfaceProbe:
     @ti.kernel
     def _shoot(self, o: ti.types.ndarray(), d: ti.types.ndarray(), out: ti.types.ndarray()):
         for i in range(o.shape[0]):
-            ray = Ray(o=ti.math.vec3(o[i, 0], o[i, 1], o[i, 2]), d=ti.math.vec3(d[i, 0], d[i, 1], d[i, 2]),
-                      cone_width=0.0, cone_spread=0.0)
+            ray = ray_at(o, d, i)
             h = self.geometry.intersect(ray, INF)
             out[i, 0] = h.hit
             if h.hit == 1:
