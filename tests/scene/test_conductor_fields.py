@@ -3,7 +3,7 @@
 import pytest
 
 from renderer.scene.toml_loader import load_scene
-from tests.scene.test_loader import load_error, scene_text, write
+from tests.scene.scene_file_helpers import load_error, scene_text, write
 
 
 def conductor(body: str) -> str:
