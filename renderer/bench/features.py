@@ -623,7 +623,7 @@ def scene_paths(scenes=None) -> list[Path]:
 def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
         config: FeaturesBenchConfig | None = None) -> int:
     """Benchmark every catalog scene but `stress` (or the scene files `scenes`); print, write JSON and a plot."""
-    from renderer.bench.common import load_average, machine_info, write_json
+    from renderer.bench.common import load_average, report_header, write_json
 
     config = config or (QUICK if quick else FULL)
     out_dir = Path(out_dir)
@@ -644,12 +644,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
     plot = write_plot(results, out_dir)
     total = time.perf_counter() - t_start
     report = {
-        "benchmark": "features",
-        "quick": quick,
-        "integrator": INTEGRATOR,
-        "machine": machine_info(),
-        "config": asdict(config),
-        "load_average": {"before": load_before, "after": load_average()},
+        **report_header("features", quick, load_before, integrator=INTEGRATOR, config=asdict(config)),
         "skipped_scenes": [s for s in SKIPPED_SCENES if scenes is None],
         "rule": (f"unused effect e fails iff the 95% bootstrap interval (rounds resampled) of the median paired ratio "
                  f"t(own+e)/t(own) lies wholly below 1 - {TOLERANCE}"),
