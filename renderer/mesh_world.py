@@ -12,13 +12,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from renderer.geometry.mesh_data import MeshData
-from renderer.materials.table import KIND_IDS, NO_MEDIUM, MaterialRows
+from renderer.materials.table import NO_MEDIUM, MaterialRows
 from renderer.scene.description import Scene
 from renderer.scene.features import Features, features_from
 from renderer.scene.mesh_assembly import ModelMaterial, assemble
 from renderer.scene.textures import WRAP_CODES, TextureAtlas, pack_atlas
-
-KIND_NAMES = {v: k for k, v in KIND_IDS.items()}
 
 
 @dataclass
@@ -30,9 +28,7 @@ class MeshScene:
     volume_media: tuple = ()  # MediumSpec of model files' volumes, numbered after the scene's media
 
     def material_uses(self) -> dict:
-        uses = self.rows.uses()
-        uses["kinds"] = {KIND_NAMES[k] for k in uses["kinds"]}
-        return uses
+        return self.rows.uses()
 
     def features(self, scene: Scene) -> Features:
         """The Features of `scene`, of which this is the assembly (with the scene camera's lens)."""

@@ -78,7 +78,7 @@ def test_list_and_info(capsys):
     code, out, _ = run_main(["list"], capsys)
     assert code == 0 and "showcase" in out and "path" in out and "steps" in out
     code, out, _ = run_main(["info", "showcase"], capsys)
-    assert code == 0 and "has_dielectric" in out and "sdf_primitives" in out
+    assert code == 0 and "'dielectric'" in out and "material_kinds" in out and "sdf_primitives" in out
 
 
 def test_render_command_writes_png_and_exr(tmp_path):

@@ -9,7 +9,7 @@ build below; pass `scenes=` to include it), with the `mis` integrator at a small
    optional effect of its geometry kind forced on; effects with no data in the scene are compiled
    but their branches never taken). Per build: compile time, kernel size, samples/s.
 2. Unused effects: own Features plus ONE effect the scene does not use (each boolean field of
-   Features that is off in the scene's own and on in `with_everything()`). Switching off an effect a scene uses would not give a valid
+   Features, material kind and layer that is off in the scene's own and on in `with_everything()`). Switching off an effect a scene uses would not give a valid
    image, so "own build at least as fast as a build with the unused effect removed by hand" is
    tested the other way round: cost of effect e = time(own + e) / time(own), at equal spp.
    The forced build's image is compared with the own image (same seed): forcing an effect the
@@ -59,7 +59,7 @@ import sys
 import tempfile
 import time
 import traceback
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -109,7 +109,7 @@ class FeaturesBenchConfig:
     # 2-3 minutes (cornell_box 128 s, goblet 172 s here, against 7 s and 30 s for their own builds).
     optimize: str = "compile"
     fresh_cache: bool = True  # phase A (cold compile, kernel size); off: first calls hit the user's cache
-    unused_effects: tuple[str, ...] | None = None  # Features fields to force on one by one; None = all
+    unused_effects: tuple[str, ...] | None = None  # Features.optional_effects names to force on one by one; None = all
     effect_cases: tuple[EffectCase, ...] = EFFECT_CASES
     child_timeout_s: float = 1800.0
 
@@ -117,7 +117,7 @@ class FeaturesBenchConfig:
 FULL = FeaturesBenchConfig()
 # --quick: no phase A (first calls against the user's offline cache: warm from the second run on)
 # and only the unused effects the issue names; a few minutes instead of half an hour.
-QUICK_UNUSED = ("has_dielectric", "has_media", "has_textures", "energy_compensation", "analytic_fog", "has_dispersion")
+QUICK_UNUSED = ("dielectric", "has_media", "has_textures", "energy_compensation", "analytic_fog", "has_dispersion")
 QUICK = FeaturesBenchConfig(size=(64, 36), rounds=5, pass_seconds=0.06, image_spp=16, fresh_cache=False,
                             unused_effects=QUICK_UNUSED)
 
@@ -142,10 +142,8 @@ def unused_effect_passes(ratio: dict, tolerance: float = TOLERANCE) -> bool:
 
 
 def optional_effects(own) -> list[str]:
-    """Boolean Features fields off in `own` and on in own.with_everything(): what can be forced on."""
-    every = own.with_everything()
-    return [f.name for f in fields(own) if isinstance(getattr(own, f.name), bool)
-            and not getattr(own, f.name) and getattr(every, f.name)]
+    """What own.with_everything() adds and can be forced on one by one: Features.optional_effects."""
+    return own.optional_effects()
 
 
 def image_difference(a: np.ndarray, b: np.ndarray) -> float:
@@ -251,7 +249,7 @@ class SceneWorld:
         if b.role == "everything":
             return f.with_everything()
         if b.role == "unused":
-            return replace(f, **{b.effect: True})
+            return f.with_effect(b.effect)
         if b.name in FEATURE_EDITS:
             return FEATURE_EDITS[b.name](f)
         return f

@@ -71,7 +71,8 @@ from renderer.geometry.interface import INF, Hit, Ray, Surface
 from renderer.integrators.light_sampling import emission_weight, environment_weight, sample_direct
 from renderer.integrators.photon_grid import PhotonGrid, bucket_of, cell_of, table_size_for
 from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
-from renderer.materials.table import DIELECTRIC, DIFFUSE, PRINCIPLED, Material
+from renderer.materials.kinds import LobeFlags
+from renderer.materials.table import Material
 from renderer.program import RenderProgram
 from renderer.sampling import dims
 from renderer.sampling.warps import PI
@@ -196,6 +197,8 @@ class SppmState:
 @ti.data_oriented
 class SppmProgram(RenderProgram):
     """The kernels of one (geometry, Features, sampler) combination; the state is the Renderer's."""
+
+    sliced = False  # an iteration traces photons for the whole image: passes are whole iterations
 
     def __init__(self, geometry, materials, environment, integrator, film, work, features, sampler, lights,
                  state: SppmState, emission, photon_sampler, options: dict):
@@ -425,12 +428,9 @@ class SppmProgram(RenderProgram):
         (GLOSSY_ALPHA) for a density estimate over the search radius to see its lobe. Smoother
         non-delta surfaces are traced through by the camera pass, like mirrors (pbrt-v3's rule
         for glossy BSDFs), with direct light taken at each of them."""
-        keep = mat.alpha >= GLOSSY_ALPHA
-        if mat.kind == DIFFUSE:
-            keep = True
-        elif mat.kind == PRINCIPLED:
-            keep = keep or (mat.metallic < 1.0 and mat.transmission < 1.0)  # a diffuse base
-        return keep and self.bsdf.has_smooth_part(mat)
+        flags = self.bsdf.flags(mat)
+        keep = mat.alpha >= GLOSSY_ALPHA or (flags & LobeFlags.DIFFUSE) != 0
+        return keep and (flags & LobeFlags.NON_DELTA) != 0
 
     @ti.kernel
     def build_grid(self, width: ti.i32, height: ti.i32, table_size: ti.i32):
@@ -518,11 +518,8 @@ class SppmProgram(RenderProgram):
             factor = num / den
         else:
             factor = 0.0
-        if ti.static(self.features.has_dielectric or self.features.has_principled):
-            refracts = (mat.kind == DIELECTRIC or mat.kind == PRINCIPLED) and wo.dot(ng) * wi.dot(ng) < 0.0
-            if ti.static(self.features.has_thin):
-                refracts = refracts and mat.thin == 0  # a thin wall passes light on unscaled
-            if refracts:
+        if ti.static(len(self.bsdf.refracting) > 0):
+            if self.bsdf.refracts(mat, ng, wo, wi):
                 eta = mat.ior if n.dot(wo) >= 0.0 else 1.0 / mat.ior
                 factor *= eta * eta
         return factor

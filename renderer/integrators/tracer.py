@@ -33,7 +33,8 @@ import taichi as ti
 from renderer.geometry.interface import INF, MEDIUM_POINT, Hit, Surface
 from renderer.integrators.light_sampling import emission_weight, environment_weight, power_heuristic, sample_direct
 from renderer.materials import dispersion
-from renderer.materials.table import NO_MEDIUM, NULL
+from renderer.materials.kinds import NULL_KIND
+from renderer.materials.table import NO_MEDIUM
 from renderer.media import homogeneous, phase
 from renderer.sampling import dims
 from renderer.spectral.cie import spectral_rgb_weights
@@ -129,7 +130,7 @@ class PathTracerBase:
                 # Shadow rays stop at the first hit they find, unless a null surface could be that
                 # hit: passing through it needs the nearest one.
                 any_hit = shadow_pending
-                if ti.static(ctx.features.has_null):
+                if ti.static(ctx.features.has_kind("null")):
                     any_hit = False
                 hit = ctx.geometry.trace(ray, t_max, any_hit)
                 stats += vec3(hit.work, hit.tests, 1.0)
@@ -148,7 +149,7 @@ class PathTracerBase:
                     scattered = ms.scattered == 1
                     scatter_t = ms.t
             hs = s
-            if hit.hit == 1 and not scattered and (not shadow_pending or ti.static(ctx.features.has_null)):
+            if hit.hit == 1 and not scattered and (not shadow_pending or ti.static(ctx.features.has_kind("null"))):
                 hs = ctx.geometry.surface(ray, hit)
 
             # --- a shadow ray -----------------------------------------------------------------------
@@ -161,8 +162,8 @@ class PathTracerBase:
                                               spectral, lam)
                 passes = False
                 if hit.hit == 1:
-                    if ti.static(ctx.features.has_null):
-                        if ctx.bsdf.materials.table[hs.material].kind == NULL:
+                    if ti.static(ctx.features.has_kind("null")):
+                        if ctx.bsdf.materials.table[hs.material].kind == NULL_KIND:
                             passes = True  # on through the invisible boundary, into its other side
                             if ti.static(ctx.features.has_media):
                                 shadow_medium = _medium_beyond(ctx, hs, -ray.d, ray.d, shadow_medium)
@@ -257,8 +258,8 @@ class PathTracerBase:
                 else:
                     throughput *= _tint(ctx, bs.weight, spectral, lam)
                     crossed_null = False
-                    if ti.static(ctx.features.has_null):
-                        crossed_null = mat.kind == NULL
+                    if ti.static(ctx.features.has_kind("null")):
+                        crossed_null = mat.kind == NULL_KIND
                     if not crossed_null:
                         # An invisible boundary changes nothing about how the light at the end of
                         # this ray was sampled: MIS keeps the vertex before it.

@@ -1,10 +1,12 @@
-"""The BSDF of every material kind, over the device material table.
+"""The BSDF over the device material table: shading, and dispatch to each material kind's lobes.
 
-Kinds: null (an invisible boundary, e.g. of a medium), diffuse (Lambert), conductor (GGX; Fresnel
-from the colour at normal incidence and an edge tint, or exact from a complex index of refraction
-eta + i k), dielectric (smooth or rough glass; `thin`: a thin wall that reflects or lets light
-straight through) and principled (glTF metallic-roughness with its clearcoat, sheen and specular
-layers: renderer/materials/principled.py).
+Each kind's lobes are in the module the registry names for it (renderer/materials/kinds.py):
+diffuse.py (Lambert), conductor.py (GGX with a conductor's Fresnel), dielectric.py (smooth or
+rough glass, or a thin wall), principled.py (glTF metallic-roughness with its clearcoat, sheen
+and specular layers) and null_boundary.py (an invisible boundary, e.g. of a medium). `sample`,
+`eval` and `flags` switch on the row's kind over the kinds `Features` compiles in, in registry
+order. The lobes two kinds share stay here: glass (the dielectric and the principled glass lobe)
+and GGX reflection with its multiple scattering (conductors and the principled metal lobe).
 
 Only the kinds, layers and texture slots `Features` calls for are compiled in (`ti.static`).
 Roughness 0 is an exact delta lobe, never a tiny GGX.
@@ -13,6 +15,8 @@ World-space API (n: the outward shading normal; wo: towards where the path came 
   shade(surface, wo) -> (Material, n_shading)   textures, vertex colours and normal maps applied
   sample(mat, n, wo, u1, u2) -> BsdfSample      weight = f |cos| / pdf, pdf of the whole technique
   eval(mat, n, wo, wi) -> (f |cos|, pdf)        non-delta parts; pdf as `sample` would give wi
+  flags(mat) -> LobeFlags bits                  which scattering the material has (pbrt's BxDFFlags)
+  refracts(mat, ng, wo, wi) -> bool             whether wo -> wi crosses into another index
 
 With `features.energy_compensation`, rough GGX reflection of conductors and of the principled
 metal lobe adds Kulla and Conty's multiple-scattering lobe (renderer/materials/energy.py), so
@@ -20,17 +24,21 @@ rough metals no longer darken with roughness; rough dielectric interfaces (glass
 glass lobe) add the lobe of renderer/materials/dielectric_energy.py, and rough thin walls the
 GGX one, so white rough glass keeps all its light.
 """
+import importlib
+
 import taichi as ti
 
 from renderer.geometry.shading import consistent_shading_normal
 from renderer.materials import lobes
 from renderer.materials.lobes import BsdfSample
-from renderer.materials.principled import principled_eval, principled_has_smooth_part, principled_sample
-from renderer.materials.table import (CONDUCTOR, DIELECTRIC, DIFFUSE, NO_TEXTURE, NULL, PRINCIPLED, Material,
-                                      alpha_of)
+from renderer.materials.kinds import KIND_IDS, KINDS
+from renderer.materials.principled import principled_has_smooth_part
+from renderer.materials.table import NO_TEXTURE, Material, alpha_of
 from renderer.sampling.warps import cosine_hemisphere, orthonormal_basis, to_local, to_world
 
 vec3 = ti.math.vec3
+# The kinds whose smooth part has_smooth_part cannot tell from the roughness alone.
+_DIFFUSE, _NULL, _PRINCIPLED = (KIND_IDS[name] for name in ("diffuse", "null", "principled"))
 
 
 @ti.data_oriented
@@ -43,12 +51,17 @@ class Bsdf:
         # Energy compensation is a compile-time switch; the albedo tables exist only where used.
         self.compensate = features.energy_compensation
         self.energy = materials.ggx_albedo if self.compensate else None
-        # Rough glass (and the principled glass lobe) with its multiple-scattering lobe; the
+        # (id, lobe module) of each kind compiled in, in registry order; refracting: the ids of
+        # the kinds compiled in whose transmission changes the index (refracts).
+        self.kinds = tuple((KIND_IDS[k.name], importlib.import_module(k.lobes)) for k in KINDS
+                           if features.has_kind(k.name))
+        self.refracting = tuple(KIND_IDS[k.name] for k in KINDS if k.refracts and features.has_kind(k.name))
+        # Rough glass (the refracting kinds' glass lobes) with its multiple-scattering lobe; the
         # principled model's layering reads the same dielectric tables, compensated or not.
-        self.compensate_glass = self.compensate and (features.has_dielectric or features.has_principled)
-        self.dielectric_tables = (materials.dielectric_albedo if self.compensate_glass or features.has_principled
+        self.compensate_glass = self.compensate and len(self.refracting) > 0
+        self.dielectric_tables = (materials.dielectric_albedo if self.compensate_glass or features.has_kind("principled")
                                   else None)
-        self.sheen_tables = materials.sheen_albedo if features.has_sheen else None
+        self.sheen_tables = materials.sheen_albedo if features.has_layer("sheen") else None
 
     @ti.func
     def shade(self, surface, wo):
@@ -76,18 +89,18 @@ class Bsdf:
                 mat.emission *= tex.sample(rec.textures[3], surface.uv, surface.uv1).xyz
             if rec.transmission_texture != NO_TEXTURE:
                 mat.transmission *= tex.sample(rec.transmission_texture, surface.uv, surface.uv1).x
-            if ti.static(self.features.has_clearcoat):
+            if ti.static(self.features.has_layer("clearcoat")):
                 if rec.layer_textures[0] != NO_TEXTURE:
                     mat.clearcoat *= tex.sample(rec.layer_textures[0], surface.uv, surface.uv1).x
                 if rec.layer_textures[1] != NO_TEXTURE:
                     mat.clearcoat_alpha = alpha_of(rec.clearcoat_roughness
                                                    * tex.sample(rec.layer_textures[1], surface.uv, surface.uv1).y)
-            if ti.static(self.features.has_sheen):
+            if ti.static(self.features.has_layer("sheen")):
                 if rec.layer_textures[2] != NO_TEXTURE:
                     mat.sheen_color *= tex.sample(rec.layer_textures[2], surface.uv, surface.uv1).xyz
                 if rec.layer_textures[3] != NO_TEXTURE:
                     mat.sheen_roughness *= tex.sample(rec.layer_textures[3], surface.uv, surface.uv1).w
-            if ti.static(self.features.has_specular):
+            if ti.static(self.features.has_layer("specular")):
                 if rec.layer_textures2[0] != NO_TEXTURE:
                     mat.specular *= tex.sample(rec.layer_textures2[0], surface.uv, surface.uv1).w
                 if rec.layer_textures2[1] != NO_TEXTURE:
@@ -96,7 +109,7 @@ class Bsdf:
                 if rec.textures[2] != NO_TEXTURE:
                     n = _normal_mapped(tex, rec.textures[2], rec.normal_scale, surface, n, wo)
                 mat.coat_normal = n
-                if ti.static(self.features.has_clearcoat):
+                if ti.static(self.features.has_layer("clearcoat")):
                     if rec.layer_textures2[2] != NO_TEXTURE:
                         mat.coat_normal = _normal_mapped(tex, rec.layer_textures2[2], rec.clearcoat_normal_scale,
                                                          surface, surface.n_shading, wo)
@@ -116,25 +129,9 @@ class Bsdf:
         entering = n.dot(wo_world) >= 0.0
         s = lobes.invalid_sample()
         if wo.z > 0.0:
-            if ti.static(self.features.has_diffuse):
-                if mat.kind == DIFFUSE:
-                    s = lobes.diffuse_sample(mat.base_color, wo, u2)
-            if ti.static(self.features.has_conductor):
-                if mat.kind == CONDUCTOR:
-                    if ti.static(not self.compensate):
-                        s = lobes.conductor_sample(mat, wo, u2)
-                    else:
-                        s = _compensated_conductor_sample(self.energy, mat, wo, u1, u2)
-            if ti.static(self.features.has_dielectric):
-                if mat.kind == DIELECTRIC:
-                    s = self.glass_sample(mat, entering, wo, u1, u2)
-            if ti.static(self.features.has_principled):
-                if mat.kind == PRINCIPLED:
-                    mat.coat_normal = self._local_coat_normal(mat, t, b, n_f)
-                    s = principled_sample(self, mat, entering, wo, u1, u2)
-            if ti.static(self.features.has_null):
-                if mat.kind == NULL:  # an invisible boundary: straight on, nothing changes
-                    s = BsdfSample(wi=-wo, weight=vec3(1.0), pdf=1.0, delta=1, valid=1)
+            for kind_id, kind in ti.static(self.kinds):
+                if mat.kind == kind_id:
+                    s = kind.sample(self, mat, n_f, t, b, entering, wo, u1, u2)
         if s.valid == 1 and not _finite_positive(s.weight):
             s.valid = 0  # a numerically broken sample ends the path rather than reaching the film
         s.wi = to_world(s.wi, t, b, n_f)
@@ -150,22 +147,9 @@ class Bsdf:
         value = vec3(0.0)
         pdf = 0.0
         if wo.z > 0.0:
-            if ti.static(self.features.has_diffuse):
-                if mat.kind == DIFFUSE:
-                    value, pdf = lobes.diffuse_eval(mat.base_color, wo, wi)
-            if ti.static(self.features.has_conductor):
-                if mat.kind == CONDUCTOR:
-                    if ti.static(not self.compensate):
-                        value, pdf = lobes.conductor_eval(mat, wo, wi)
-                    else:
-                        value, pdf = _compensated_conductor_eval(self.energy, mat, wo, wi)
-            if ti.static(self.features.has_dielectric):
-                if mat.kind == DIELECTRIC:
-                    value, pdf = self.glass_eval(mat, entering, wo, wi)
-            if ti.static(self.features.has_principled):
-                if mat.kind == PRINCIPLED:
-                    mat.coat_normal = self._local_coat_normal(mat, t, b, n_f)
-                    value, pdf = principled_eval(self, mat, entering, wo, wi)
+            for kind_id, kind in ti.static(self.kinds):
+                if mat.kind == kind_id:
+                    value, pdf = kind.evaluate(self, mat, n_f, t, b, entering, wo, wi)
         return value, pdf
 
     # --- glass: thick (refracting) or thin-walled, with multiple scattering where compensation is on ---
@@ -288,10 +272,10 @@ class Bsdf:
         return wi
 
     @ti.func
-    def _local_coat_normal(self, mat, t, b, n_f):
+    def local_coat_normal(self, mat, t, b, n_f):
         """The clearcoat's normal in the local frame, on wo's side ((0, 0, 1) without clearcoat)."""
         c = vec3(0.0, 0.0, 1.0)
-        if ti.static(self.features.has_clearcoat):
+        if ti.static(self.features.has_layer("clearcoat")):
             c = to_local(mat.coat_normal, t, b, n_f)
             if c.z < 0.0:
                 c = -c
@@ -317,17 +301,41 @@ class Bsdf:
         return value, pdf
 
     @ti.func
+    def flags(self, mat):
+        """The LobeFlags of the material (0 for a kind not compiled in)."""
+        f = 0
+        for kind_id, kind in ti.static(self.kinds):
+            if mat.kind == kind_id:
+                f = kind.flags(self, mat)
+        return f
+
+    @ti.func
     def has_smooth_part(self, mat):
-        """Whether eval can be non-zero (light sampling is pointless on a purely delta BSDF)."""
+        """Whether eval can be non-zero (light sampling is pointless on a purely delta BSDF): the
+        same as `flags(mat) & NON_DELTA`, written as a switch on the kinds whose answer is not their
+        roughness's (LLVM's fast-math code for the flags test rounds some images differently)."""
         smooth = mat.alpha > 0.0
-        if mat.kind == DIFFUSE:
+        if mat.kind == _DIFFUSE:
             smooth = True
-        elif mat.kind == NULL:
+        elif mat.kind == _NULL:
             smooth = False
-        elif mat.kind == PRINCIPLED:
-            if ti.static(self.features.has_principled):
+        elif mat.kind == _PRINCIPLED:
+            if ti.static(self.features.has_kind("principled")):
                 smooth = principled_has_smooth_part(self, mat)
         return smooth
+
+    @ti.func
+    def refracts(self, mat, ng, wo, wi):
+        """Whether going from wo to wi crosses into another index (a kind that refracts, not a thin
+        wall, wo and wi on opposite sides of the surface): radiance is scaled by 1 / eta^2 on the
+        way, importance (photons) is not."""
+        crosses = False
+        for kind_id in ti.static(self.refracting):
+            crosses = crosses or mat.kind == kind_id
+        crosses = crosses and wo.dot(ng) * wi.dot(ng) < 0.0
+        if ti.static(self.features.has_thin):
+            crosses = crosses and mat.thin == 0  # a thin wall passes light on unscaled
+        return crosses
 
     @ti.func
     def albedo(self, mat):
@@ -391,25 +399,3 @@ def _compensated_reflection_direction(energy, alpha, wo, u_choice, u2):
     else:
         wi = lobes.ggx_reflection_direction(alpha, wo, u2)
     return wi
-
-
-@ti.func
-def _compensated_conductor_eval(energy, mat, wo, wi):
-    h = ti.math.normalize(wo + wi)
-    fresnel = lobes.conductor_reflectance(mat, wo.dot(h))
-    return _compensated_reflection_eval(energy, fresnel, lobes.conductor_reflectance_average(mat),
-                                        mat.alpha, wo, wi)
-
-
-@ti.func
-def _compensated_conductor_sample(energy, mat, wo, u1, u2):
-    s = lobes.invalid_sample()
-    if mat.alpha == 0.0:  # a smooth mirror scatters once: nothing to compensate
-        s = lobes.conductor_sample(mat, wo, u2)
-    else:
-        wi = _compensated_reflection_direction(energy, mat.alpha, wo, u1, u2)
-        if wi.z > 0.0:
-            value, pdf = _compensated_conductor_eval(energy, mat, wo, wi)
-            if pdf > 0.0:
-                s = BsdfSample(wi=wi, weight=value / pdf, pdf=pdf, delta=0, valid=1)
-    return s

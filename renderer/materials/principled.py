@@ -31,6 +31,7 @@ import taichi as ti
 from renderer.luminance import luminance
 from renderer.materials import lobes
 from renderer.materials import microfacet as mf
+from renderer.materials.kinds import LobeFlags
 from renderer.materials.lobes import BsdfSample
 from renderer.materials.sheen import sheen_eval
 from renderer.sampling.warps import INV_PI, cosine_hemisphere, orthonormal_basis, to_local, to_world
@@ -43,7 +44,7 @@ COAT_IOR = 1.5  # KHR_materials_clearcoat fixes the coat's index
 def specular_weight(bsdf, mat):
     """k: KHR_materials_specular's strength times colour (1 without the extension)."""
     k = vec3(1.0)
-    if ti.static(bsdf.features.has_specular):
+    if ti.static(bsdf.features.has_layer("specular")):
         k = ti.math.clamp(mat.specular * mat.specular_color, 0.0, 1.0)
     return k
 
@@ -69,14 +70,14 @@ def _layers(bsdf, mat, wo):
     coat = 0.0
     sheen = 0.0
     through = 1.0
-    if ti.static(bsdf.features.has_clearcoat):
+    if ti.static(bsdf.features.has_layer("clearcoat")):
         if mat.clearcoat > 0.0:
             r, _ = bsdf.dielectric_tables.reflectance(ti.max(wo.dot(mat.coat_normal), 0.0),
                                                       ti.sqrt(mat.clearcoat_alpha), COAT_IOR)
             coat = mat.clearcoat * r
             below_coat = 1.0 - coat
             through = below_coat
-    if ti.static(bsdf.features.has_sheen):
+    if ti.static(bsdf.features.has_layer("sheen")):
         strength = mat.sheen_color.max()
         if strength > 0.0:
             e = strength * bsdf.sheen_tables.albedo(wo.z, mat.sheen_roughness)
@@ -155,12 +156,12 @@ def principled_eval(bsdf, mat, entering, wo, wi):
     f_diff, pdf_diff = _diffuse_eval(bsdf, mat, k, wo, wi)
     value = through * (value + opaque * f_diff)
     pdf += p.w * pdf_diff
-    if ti.static(bsdf.features.has_clearcoat):
+    if ti.static(bsdf.features.has_layer("clearcoat")):
         if mat.clearcoat > 0.0:
             f_coat, pdf_coat = _coat_eval(mat, wo, wi)
             value += mat.clearcoat * f_coat
             pdf += layer_p.x * pdf_coat
-    if ti.static(bsdf.features.has_sheen):
+    if ti.static(bsdf.features.has_layer("sheen")):
         if mat.sheen_color.max() > 0.0:
             f_sheen, pdf_sheen = sheen_eval(mat.sheen_color, mat.sheen_roughness, wo, wi)
             value += below_coat * f_sheen
@@ -234,8 +235,39 @@ def principled_sample(bsdf, mat, entering, wo, u1, u2):
 def principled_has_smooth_part(bsdf, mat):
     """Whether eval can be non-zero: a rough lobe, the diffuse base, a rough coat or a sheen."""
     smooth = mat.alpha > 0.0 or (mat.metallic < 1.0 and mat.transmission < 1.0)
-    if ti.static(bsdf.features.has_clearcoat):
+    if ti.static(bsdf.features.has_layer("clearcoat")):
         smooth = smooth or (mat.clearcoat > 0.0 and mat.clearcoat_alpha > 0.0)
-    if ti.static(bsdf.features.has_sheen):
+    if ti.static(bsdf.features.has_layer("sheen")):
         smooth = smooth or mat.sheen_color.max() > 0.0
     return smooth
+
+
+# --- the kind's lobe module interface (renderer/materials/kinds.py; see diffuse.py) ---------------
+@ti.func
+def sample(bsdf, mat, n_f, t, b, entering, wo, u1, u2):
+    mat.coat_normal = bsdf.local_coat_normal(mat, t, b, n_f)
+    return principled_sample(bsdf, mat, entering, wo, u1, u2)
+
+
+@ti.func
+def evaluate(bsdf, mat, n_f, t, b, entering, wo, wi):
+    mat.coat_normal = bsdf.local_coat_normal(mat, t, b, n_f)
+    return principled_eval(bsdf, mat, entering, wo, wi)
+
+
+@ti.func
+def flags(bsdf, mat):
+    """A diffuse base where not all metal or glass; glossy where rough, or a rough coat or a
+    sheen; specular where smooth, or a smooth coat."""
+    f = LobeFlags.REFLECTION | (LobeFlags.GLOSSY if mat.alpha > 0.0 else LobeFlags.SPECULAR)
+    if mat.metallic < 1.0 and mat.transmission < 1.0:
+        f |= LobeFlags.DIFFUSE
+    if mat.metallic < 1.0 and mat.transmission > 0.0:
+        f |= LobeFlags.TRANSMISSION
+    if ti.static(bsdf.features.has_layer("clearcoat")):
+        if mat.clearcoat > 0.0:
+            f |= LobeFlags.GLOSSY if mat.clearcoat_alpha > 0.0 else LobeFlags.SPECULAR
+    if ti.static(bsdf.features.has_layer("sheen")):
+        if mat.sheen_color.max() > 0.0:
+            f |= LobeFlags.GLOSSY
+    return f

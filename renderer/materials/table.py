@@ -8,16 +8,13 @@ import taichi as ti
 
 from renderer.materials.conductor_ior import conductor_ior_row
 from renderer.materials.dispersion import dispersion_row
+from renderer.materials.kinds import (COLUMNS, KIND_IDS, KIND_NAMES, LAYER_COLUMNS, LAYERS, NO_MEDIUM, NO_TEXTURE,
+                                      compensated_when_rough)
 from renderer.materials.texture_sampler import TextureTable
 from renderer.upload import upload_fields
 
 vec3 = ti.math.vec3
 
-DIFFUSE, CONDUCTOR, DIELECTRIC, PRINCIPLED, NULL = 0, 1, 2, 3, 4
-KIND_IDS = {"diffuse": DIFFUSE, "conductor": CONDUCTOR, "dielectric": DIELECTRIC, "principled": PRINCIPLED,
-            "null": NULL}
-NO_MEDIUM = -1
-NO_TEXTURE = -1
 # glTF allows ior = 1 (no refraction at all); the rough-dielectric half vector wo + eta wi is then
 # zero for the transmitted direction. Just above 1 the interface is as good as invisible and finite.
 MIN_IOR = 1.0001
@@ -26,31 +23,15 @@ MIN_IOR = 1.0001
 # that D(h) <= 1/(pi a^2) ~ 3e7 stays finite in f32.
 MIN_ALPHA = 1e-4
 
-# As stored: one row per material. Texture slots hold a texture-table index or NO_TEXTURE:
-# textures = (base colour, metallic-roughness, normal, emissive), transmission_texture separately.
-# edge_tint: a conductor's grazing-angle tint (Hoffman's F82 model); unused by other kinds.
-# medium: index of the participating medium inside the material's surfaces, or NO_MEDIUM.
-# complex_ior = 1: a conductor whose Fresnel is exact from eta + i k, with its cosine-weighted
-# average fresnel_avg precomputed (renderer/materials/conductor_ior.py); 0: base_color/edge_tint.
-# alpha_mode (ALPHA_OPAQUE / MASK / BLEND), alpha_cutoff and base_alpha: glTF coverage, tested
-# in traversal (base_alpha times the base-colour texture's alpha and the vertex colour's).
-# thin = 1: a thin-walled transmitter (a shell with no inside: glTF transmission without
-# KHR_materials_volume), whose transmission passes straight through instead of refracting.
-# Layers of the principled model (glTF KHR_materials_clearcoat / sheen / specular):
-# clearcoat weight and roughness; sheen colour and roughness; specular strength and colour,
-# scaling the dielectric base's Fresnel. layer_textures = (clearcoat, clearcoat roughness,
-# sheen colour, sheen roughness), layer_textures2 = (specular, specular colour, clearcoat
-# normal, unused).
-MaterialRecord = ti.types.struct(kind=ti.i32, base_color=vec3, roughness=ti.f32, metallic=ti.f32,
-                                 transmission=ti.f32, ior=ti.f32, emission=vec3, edge_tint=vec3,
-                                 normal_scale=ti.f32, textures=ti.math.ivec4, transmission_texture=ti.i32,
-                                 medium=ti.i32, dispersion=ti.i32, dispersion_b=ti.math.vec4,
-                                 dispersion_c=ti.math.vec4, complex_ior=ti.i32, eta=vec3, k=vec3,
-                                 fresnel_avg=vec3, alpha_mode=ti.i32, alpha_cutoff=ti.f32, base_alpha=ti.f32,
-                                 thin=ti.i32, clearcoat=ti.f32, clearcoat_roughness=ti.f32, sheen_color=vec3,
-                                 sheen_roughness=ti.f32, specular=ti.f32, specular_color=vec3,
-                                 clearcoat_normal_scale=ti.f32, layer_textures=ti.math.ivec4,
-                                 layer_textures2=ti.math.ivec4)
+# As stored: one row per material, its members the registry's columns (renderer/materials/
+# kinds.py says what each holds and to which kind or layer it belongs). Texture slots hold a
+# texture-table index or NO_TEXTURE. medium: the participating medium inside the material's
+# surfaces, or NO_MEDIUM. complex_ior = 1: a conductor whose Fresnel is exact from eta + i k,
+# with its cosine-weighted average fresnel_avg precomputed (renderer/materials/conductor_ior.py).
+# alpha_mode, alpha_cutoff and base_alpha: glTF coverage, tested in traversal. thin = 1: a
+# thin-walled transmitter, whose transmission passes straight through instead of refracting.
+_TYPES = {"i32": ti.i32, "f32": ti.f32, "vec3": vec3, "vec4": ti.math.vec4, "ivec4": ti.math.ivec4}
+MaterialRecord = ti.types.struct(**{c.name: _TYPES[c.type] for c in COLUMNS})
 # As shaded: a record with its textures applied at one surface point. coat_normal: the clearcoat's
 # shading normal (its own normal map, else the base's normal).
 Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=ti.f32, transmission=ti.f32,
@@ -73,19 +54,19 @@ def alpha_of(roughness):
 
 
 class MaterialRows:
-    """Numpy rows for the device table, from scene materials and model-file materials."""
+    """Numpy rows for the device table, from scene materials and model-file materials; a row
+    starts from the registry's column defaults."""
 
     def __init__(self, medium_names: tuple[str, ...] = ()):
         self.rows = []
         self.medium_ids = {name: i for i, name in enumerate(medium_names)}
 
     def add_spec(self, spec) -> int:
-        medium = self.medium_ids[spec.medium] if spec.medium else NO_MEDIUM
-        self.rows.append(dict(kind=KIND_IDS[spec.kind], base_color=spec.base_color, roughness=spec.roughness,
-                              metallic=spec.metallic, transmission=spec.transmission, ior=spec.ior,
-                              emission=spec.emission, edge_tint=spec.edge_tint, normal_scale=1.0,
-                              textures=(NO_TEXTURE,) * 4, transmission_texture=NO_TEXTURE, medium=medium,
-                              **dispersion_row(spec), **conductor_ior_row(spec), **_layers_row(spec)))
+        row = _default_row()
+        row.update({c.name: getattr(spec, c.name) for c in COLUMNS if c.from_spec})
+        row.update(kind=KIND_IDS[spec.kind], medium=self.medium_ids[spec.medium] if spec.medium else NO_MEDIUM,
+                   thin=int(spec.thin), **dispersion_row(spec), **conductor_ior_row(spec))
+        self.rows.append(row)
         return len(self.rows) - 1
 
     def add_medium(self, name: str) -> int:
@@ -100,24 +81,23 @@ class MaterialRows:
         def tex(ref):
             return NO_TEXTURE if ref is None else texture_id(ref)
 
-        layers = _layers_row(pbr)
-        layers["layer_textures"] = (tex(pbr.clearcoat_texture), tex(pbr.clearcoat_roughness_texture),
-                                    tex(pbr.sheen_color_texture), tex(pbr.sheen_roughness_texture))
-        layers["layer_textures2"] = (tex(pbr.specular_texture), tex(pbr.specular_color_texture),
-                                     tex(pbr.clearcoat_normal_texture), NO_TEXTURE)
-        layers.update(alpha_mode=ALPHA_MODE_IDS.get(pbr.alpha_mode, ALPHA_OPAQUE), alpha_cutoff=pbr.alpha_cutoff,
-                      base_alpha=pbr.base_color_factor[3],
-                      thin=int(pbr.transmission_factor > 0.0 and pbr.thin_walled))
-        self.rows.append(dict(kind=PRINCIPLED, base_color=tuple(pbr.base_color_factor[:3]),
-                              roughness=pbr.roughness_factor, metallic=pbr.metallic_factor,
-                              transmission=pbr.transmission_factor, ior=max(pbr.ior, MIN_IOR),
-                              emission=tuple(pbr.emissive_factor), edge_tint=(1.0, 1.0, 1.0),
-                              normal_scale=pbr.normal_scale,
-                              textures=(tex(pbr.base_color_texture), tex(pbr.metallic_roughness_texture),
-                                        tex(pbr.normal_texture), tex(pbr.emissive_texture)),
-                              transmission_texture=tex(pbr.transmission_texture), medium=medium,
-                              dispersion=0, dispersion_b=(0.0,) * 4, dispersion_c=(0.0,) * 4,
-                              **conductor_ior_row(), **layers))
+        row = _default_row()
+        row.update({c.name: getattr(pbr, c.gltf) for c in LAYER_COLUMNS if c.gltf})
+        row.update(kind=KIND_IDS["principled"], base_color=tuple(pbr.base_color_factor[:3]),
+                   roughness=pbr.roughness_factor, metallic=pbr.metallic_factor,
+                   transmission=pbr.transmission_factor, ior=max(pbr.ior, MIN_IOR),
+                   emission=tuple(pbr.emissive_factor), normal_scale=pbr.normal_scale,
+                   textures=(tex(pbr.base_color_texture), tex(pbr.metallic_roughness_texture),
+                             tex(pbr.normal_texture), tex(pbr.emissive_texture)),
+                   transmission_texture=tex(pbr.transmission_texture), medium=medium,
+                   layer_textures=(tex(pbr.clearcoat_texture), tex(pbr.clearcoat_roughness_texture),
+                                   tex(pbr.sheen_color_texture), tex(pbr.sheen_roughness_texture)),
+                   layer_textures2=(tex(pbr.specular_texture), tex(pbr.specular_color_texture),
+                                    tex(pbr.clearcoat_normal_texture), NO_TEXTURE),
+                   alpha_mode=ALPHA_MODE_IDS.get(pbr.alpha_mode, ALPHA_OPAQUE), alpha_cutoff=pbr.alpha_cutoff,
+                   base_alpha=pbr.base_color_factor[3],
+                   thin=int(pbr.transmission_factor > 0.0 and pbr.thin_walled))
+        self.rows.append(row)
         return len(self.rows) - 1
 
     def arrays(self) -> dict:
@@ -131,38 +111,25 @@ class MaterialRows:
         return out
 
     def uses(self) -> dict:
-        """Which kinds and texture slots occur (for Features)."""
-        kinds = {r["kind"] for r in self.rows}
-        slots = [any(r["textures"][i] != NO_TEXTURE for r in self.rows) for i in range(4)]
-        layer_textures = any(t != NO_TEXTURE for r in self.rows for t in (*r["layer_textures"], *r["layer_textures2"]))
-        return {"kinds": kinds, "textures": (any(slots) or layer_textures
-                                             or any(r["transmission_texture"] != NO_TEXTURE for r in self.rows)),
-                "normal_maps": slots[2], "emission": any(max(r["emission"]) > 0 for r in self.rows),
-                "media": any(r["medium"] != NO_MEDIUM for r in self.rows),
-                "dispersion": any(r["dispersion"] != 0 for r in self.rows),
-                "rough": any(r["kind"] in (CONDUCTOR, DIELECTRIC) and r["roughness"] > 0.0 for r in self.rows),
-                "alpha": any(r["alpha_mode"] != ALPHA_OPAQUE for r in self.rows),
-                "thin": any(r["thin"] == 1 for r in self.rows),
-                "clearcoat": any(r["clearcoat"] > 0.0 for r in self.rows),
-                "sheen": any(max(r["sheen_color"]) > 0.0 for r in self.rows),
-                "specular": any(r["specular"] != 1.0 or min(r["specular_color"]) != 1.0
-                                or r["layer_textures2"][0] != NO_TEXTURE or r["layer_textures2"][1] != NO_TEXTURE
-                                for r in self.rows)}
+        """What the rows call for (for Features): the names of the kinds and layers they use,
+        texture use, and the rest of features_from's material_uses."""
+        rows = self.rows
+        slots = [any(r["textures"][i] != NO_TEXTURE for r in rows) for i in range(4)]
+        layer_textures = any(t != NO_TEXTURE for r in rows for t in (*r["layer_textures"], *r["layer_textures2"]))
+        return {"kinds": {KIND_NAMES[r["kind"]] for r in rows},
+                "layers": {layer.name for layer in LAYERS if any(layer.in_use(r) for r in rows)},
+                "textures": (any(slots) or layer_textures
+                             or any(r["transmission_texture"] != NO_TEXTURE for r in rows)),
+                "normal_maps": slots[2], "emission": any(max(r["emission"]) > 0 for r in rows),
+                "media": any(r["medium"] != NO_MEDIUM for r in rows),
+                "dispersion": any(r["dispersion"] != 0 for r in rows),
+                "rough": any(compensated_when_rough(KIND_NAMES[r["kind"]]) and r["roughness"] > 0.0 for r in rows),
+                "alpha": any(r["alpha_mode"] != ALPHA_OPAQUE for r in rows),
+                "thin": any(r["thin"] == 1 for r in rows)}
 
 
-def _layers_row(m) -> dict:
-    """The coverage, thin-wall and layer columns of a scene-file material or a glTF material
-    (defaults: opaque, thick, no clearcoat or sheen, the plain dielectric specular)."""
-    g = lambda name, default: getattr(m, name, default)
-    return dict(alpha_mode=ALPHA_OPAQUE, alpha_cutoff=0.5, base_alpha=1.0, thin=int(g("thin", False)),
-                clearcoat=g("clearcoat_factor", g("clearcoat", 0.0)),
-                clearcoat_roughness=g("clearcoat_roughness_factor", g("clearcoat_roughness", 0.0)),
-                sheen_color=tuple(g("sheen_color_factor", g("sheen_color", (0.0, 0.0, 0.0)))),
-                sheen_roughness=g("sheen_roughness_factor", g("sheen_roughness", 0.0)),
-                specular=g("specular_factor", g("specular", 1.0)),
-                specular_color=tuple(g("specular_color_factor", g("specular_color", (1.0, 1.0, 1.0)))),
-                clearcoat_normal_scale=g("clearcoat_normal_scale", 1.0),
-                layer_textures=(NO_TEXTURE,) * 4, layer_textures2=(NO_TEXTURE,) * 4)
+def _default_row() -> dict:
+    return {c.name: c.default for c in COLUMNS}
 
 
 @ti.data_oriented

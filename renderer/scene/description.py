@@ -12,12 +12,14 @@ from typing import Optional
 
 import numpy as np
 
+from renderer.materials.kinds import KIND_NAMES
 from renderer.scene.model_files import ModelFiles
 
 Vec3 = tuple[float, float, float]
 
-# Kinds known to the renderer. The loader refuses anything else with a one-line error.
-MATERIAL_KINDS = ("diffuse", "conductor", "dielectric", "principled", "null")
+# Kinds known to the renderer. The loader refuses anything else with a one-line error. Material
+# kinds are the registry's (renderer/materials/kinds.py).
+MATERIAL_KINDS = KIND_NAMES
 FOG_MODELS = ("none", "medium", "analytic")
 SDF_PRIMITIVES = ("sphere", "box", "rounded_box", "torus", "capsule", "cylinder", "cone", "plane")
 SDF_OPERATORS = ("union", "intersection", "subtraction", "smooth_union", "repeat")

@@ -1,30 +1,30 @@
 """What a scene calls for. Kernels are compiled per Features, so nothing unused is simulated.
 
-Features names *kinds* (BSDF kinds, texture use, primitive and operator kinds, environment kind,
-lens model), never instances: adding a tenth sphere to a scene with spheres compiles nothing new.
+Features names *kinds* (BSDF kinds and layers, texture use, primitive and operator kinds, environment
+kind, lens model), never instances: adding a tenth sphere to a scene with spheres compiles nothing new.
+Material kinds and layers are sets of registry names (renderer/materials/kinds.py), like the SDF
+primitive kinds: code asks `features.has_kind("dielectric")` inside `ti.static`.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 
 from renderer.geometry.mesh_data import KINDS as MESH_PRIMITIVES
-from renderer.scene.description import MATERIAL_KINDS, SDF_OPERATORS, SDF_PRIMITIVES, Scene
+from renderer.materials.kinds import KIND_NAMES, LAYER_NAMES, always_compensated, compensated_when_rough, kind
+from renderer.scene.description import SDF_OPERATORS, SDF_PRIMITIVES, Scene
 
 
 @dataclass(frozen=True)
 class Features:
     geometry: str = "sdf"
-    has_diffuse: bool = False
-    has_conductor: bool = False
-    has_dielectric: bool = False
-    has_principled: bool = False
+    material_kinds: frozenset = frozenset()  # names of the BSDF kinds used (null: invisible boundaries)
+    material_layers: frozenset = frozenset()  # the principled layers used: clearcoat, sheen, specular
     has_emission: bool = False
     has_textures: bool = False
     has_normal_maps: bool = False
     # Kulla-Conty multiple scattering: rough GGX reflection (conductors, principled metal), rough
     # dielectric interfaces (glass, principled glass) and the principled coat's layering
     energy_compensation: bool = False
-    has_null: bool = False  # invisible boundaries (material kind `null`)
     has_media: bool = False  # participating media: free-flight sampling, phase functions, transmittance
     analytic_fog: bool = False  # the exponential-blend approximation on camera rays
     has_dispersion: bool = False  # dispersive dielectrics: spectral paths (one wavelength per path)
@@ -32,26 +32,31 @@ class Features:
     has_vertex_colors: bool = False  # per-vertex colours multiplying the base colour
     has_instances: bool = False  # meshes placed many times, one copy of their triangles
     has_thin: bool = False  # thin-walled transmission (glTF transmission without a volume)
-    has_clearcoat: bool = False  # principled clearcoat layer
-    has_sheen: bool = False  # principled sheen layer
-    has_specular: bool = False  # principled specular strength / colour other than the default
     environment: str = "sky"  # "map" | "sky" | "constant"
     depth_of_field: bool = False
     sdf_primitives: frozenset = frozenset()
     sdf_operators: frozenset = frozenset()
     mesh_primitives: frozenset = frozenset()
 
+    def has_kind(self, name: str) -> bool:
+        """Whether material kind `name` is compiled in (a registry name)."""
+        return name in self.material_kinds
+
+    def has_layer(self, name: str) -> bool:
+        """Whether the principled layer `name` is compiled in (a registry name)."""
+        return name in self.material_layers
+
     def active_effects(self) -> list[str]:
         """Short names for the HUD and `app.py info`."""
-        flags = (("diffuse", self.has_diffuse), ("conductor", self.has_conductor), ("glass", self.has_dielectric),
-                 ("principled", self.has_principled), ("emission", self.has_emission),
+        flags = (*((kind(k).label, True) for k in KIND_NAMES if k in self.material_kinds),
+                 ("emission", self.has_emission),
                  ("textures", self.has_textures), ("normal maps", self.has_normal_maps),
-                 ("multiple scattering", self.energy_compensation), ("null surfaces", self.has_null),
+                 ("multiple scattering", self.energy_compensation),
                  ("media", self.has_media), ("analytic fog", self.analytic_fog),
                  ("dispersion", self.has_dispersion), ("alpha", self.has_alpha),
                  ("vertex colours", self.has_vertex_colors), ("instances", self.has_instances),
-                 ("thin walls", self.has_thin), ("clearcoat", self.has_clearcoat), ("sheen", self.has_sheen),
-                 ("specular", self.has_specular),
+                 ("thin walls", self.has_thin),
+                 *((layer, True) for layer in LAYER_NAMES if layer in self.material_layers),
                  ("depth of field", self.depth_of_field))
         names = [name for name, on in flags if on]
         names.append(f"env:{self.environment}")
@@ -67,40 +72,57 @@ class Features:
     def with_everything(self) -> "Features":
         """Every optional effect of this geometry kind switched on (for the cost benchmark)."""
         sdf = self.geometry == "sdf"
-        return replace(self, has_diffuse=True, has_conductor=True, has_dielectric=True, has_principled=True,
+        return replace(self, material_kinds=frozenset(KIND_NAMES), material_layers=frozenset(LAYER_NAMES),
                        has_emission=True, has_textures=not sdf, has_normal_maps=not sdf, depth_of_field=True,
-                       energy_compensation=True, has_null=True, has_media=True, analytic_fog=True,
-                       has_dispersion=True, has_thin=True, has_clearcoat=True, has_sheen=True, has_specular=True,
+                       energy_compensation=True, has_media=True, analytic_fog=True,
+                       has_dispersion=True, has_thin=True,
                        has_alpha=not sdf, has_vertex_colors=not sdf, has_instances=not sdf,
                        sdf_primitives=frozenset(SDF_PRIMITIVES) if sdf else frozenset(),
                        sdf_operators=frozenset(SDF_OPERATORS) if sdf else frozenset(),
                        mesh_primitives=frozenset() if sdf else frozenset(MESH_PRIMITIVES))
 
+    def optional_effects(self) -> list[str]:
+        """What with_everything() adds one by one (for the cost benchmark): boolean fields off
+        here by field name, then material kinds and layers not used here by registry name."""
+        every = self.with_everything()
+        flags = [f.name for f in fields(self) if isinstance(getattr(self, f.name), bool)
+                 and not getattr(self, f.name) and getattr(every, f.name)]
+        return (flags + [k for k in KIND_NAMES if k not in self.material_kinds]
+                + [layer for layer in LAYER_NAMES if layer not in self.material_layers])
+
+    def with_effect(self, effect: str) -> "Features":
+        """This plus one effect of optional_effects()."""
+        if effect in KIND_NAMES:
+            return replace(self, material_kinds=self.material_kinds | {effect})
+        if effect in LAYER_NAMES:
+            return replace(self, material_layers=self.material_layers | {effect})
+        return replace(self, **{effect: True})
+
 
 def features_from(geometry: str, material_uses: dict, environment: str, aperture: float,
                   sdf_nodes=(), mesh_kinds=frozenset(), energy_compensation: bool = True,
                   fog: str = "none", vertex_colors: bool = False, instances: bool = False) -> Features:
-    """material_uses: {"kinds": set of kind names, "textures", "normal_maps", "emission", "media": bool,
-    "rough": whether a conductor or dielectric has roughness > 0}.
-    energy_compensation: the scene's wish; compiled in only where a rough conductor or dielectric
-    occurs, or a principled material (whose coat layering it also provides).
+    """material_uses: {"kinds", "layers": sets of registry names, "textures", "normal_maps", "emission",
+    "media": bool, "rough": whether a kind compensated where rough (conductor, dielectric) has
+    roughness > 0}.
+    energy_compensation: the scene's wish; compiled in only where such a rough material occurs, or
+    a kind always compensated (principled, whose coat layering it also provides).
     fog: the scene's fog model ("none", "medium" or "analytic").
     vertex_colors, instances: whether the mesh data carries vertex colours / instanced meshes."""
     kinds = material_uses["kinds"]
-    unknown = set(kinds) - set(MATERIAL_KINDS)
+    layers = material_uses.get("layers", set())
+    unknown = (set(kinds) - set(KIND_NAMES)) | (set(layers) - set(LAYER_NAMES))
     if unknown:
-        raise ValueError(f"unknown material kinds {sorted(unknown)}")
+        raise ValueError(f"unknown material kinds or layers {sorted(unknown)}")
     return Features(
         geometry=geometry,
-        has_diffuse="diffuse" in kinds,
-        has_conductor="conductor" in kinds,
-        has_dielectric="dielectric" in kinds,
-        has_principled="principled" in kinds,
+        material_kinds=frozenset(kinds),
+        material_layers=frozenset(layers),
         has_emission=material_uses["emission"],
         has_textures=material_uses["textures"],
         has_normal_maps=material_uses["normal_maps"],
-        energy_compensation=energy_compensation and ("principled" in kinds or material_uses.get("rough", True)),
-        has_null="null" in kinds,
+        energy_compensation=energy_compensation and (any(always_compensated(k) for k in kinds)
+                                                     or material_uses.get("rough", True)),
         has_media=fog == "medium" or bool(material_uses.get("media", False)),
         analytic_fog=fog == "analytic",
         has_dispersion=bool(material_uses.get("dispersion", False)),
@@ -108,9 +130,6 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         has_vertex_colors=vertex_colors,
         has_instances=instances,
         has_thin=bool(material_uses.get("thin", False)),
-        has_clearcoat=bool(material_uses.get("clearcoat", False)),
-        has_sheen=bool(material_uses.get("sheen", False)),
-        has_specular=bool(material_uses.get("specular", False)),
         environment=environment,
         depth_of_field=aperture > 0.0,
         sdf_primitives=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_PRIMITIVES),
@@ -128,7 +147,7 @@ def scene_features(scene: Scene, aperture: float | None = None) -> Features:
     uses = {"kinds": {m.kind for m in used}, "textures": False, "normal_maps": False,
             "emission": any(m.is_emissive for m in used), "media": any(m.medium for m in used),
             "dispersion": any(m.is_dispersive for m in used),
-            "rough": any(m.kind in ("conductor", "dielectric") and m.roughness > 0.0 for m in used)}
+            "rough": any(compensated_when_rough(m.kind) and m.roughness > 0.0 for m in used)}
     lens = scene.camera.aperture if aperture is None else aperture
     return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes,
                          energy_compensation=scene.render.energy_compensation, fog=scene.fog.model)

@@ -11,10 +11,11 @@ Defaults here must equal the dataclass defaults in description.py; a test checks
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable, Optional
 
+from renderer.materials.kinds import kinds_with_param
 from renderer.materials.metals import metal_names
 from renderer.sampling.names import SAMPLERS
 
@@ -394,7 +395,13 @@ ENVIRONMENT = Section(
     ),
 )
 
-_PRINCIPLED = ("principled",)
+
+def _kind_fields(fields: tuple[Field, ...]) -> tuple[Field, ...]:
+    """A material's fields, each with the kinds it belongs to as the registry says (fields no
+    kind claims belong to every kind)."""
+    return tuple(replace(f, only_for=kinds_with_param(f.name) or None) for f in fields)
+
+
 GLASSES_CHOICES = ("bk7", "fused_silica", "sf11", "water")  # renderer/spectral/ior.py SELLMEIER_PRESETS
 
 MATERIAL = Section(
@@ -406,7 +413,7 @@ MATERIAL = Section(
     "refracts instead of scattering diffusely. `null` is an invisible boundary: light passes "
     "straight through it (a path still counts it as a vertex); with `medium` it bounds a "
     "participating medium such as smoke in a box.",
-    (
+    _kind_fields((
         Field("type", "string", "diffuse", "Kind of material.", choices=MATERIAL_KINDS, attr="kind"),
         Field("base_color", "vec3", (0.8, 0.8, 0.8), "Albedo (diffuse), reflectance at normal "
               "incidence (conductor), transmission tint (dielectric) or glTF base colour "
@@ -414,61 +421,57 @@ MATERIAL = Section(
         Field("edge_tint", "vec3", (1.0, 1.0, 1.0), "A conductor's tint near grazing angles: the "
               "Fresnel curve from `base_color` (reflectance at normal incidence) is scaled to "
               "`edge_tint` times Schlick's value at 82 degrees (Hoffman's F82 model). 1 is plain "
-              "Schlick.", UNIT, only_for=("conductor",)),
+              "Schlick.", UNIT),
         Field("eta", "vec3", None, "A conductor's complex index of refraction eta + i k, real part, "
               "per RGB channel (as Mitsuba's `conductor` `eta`): the Fresnel is then the exact one of "
               "that index instead of `base_color` and `edge_tint`. Needs `k`.", Range(0.0, 100.0),
-              only_for=("conductor",), default_doc="none"),
+              default_doc="none"),
         Field("k", "vec3", None, "The imaginary part (extinction coefficient) of that index, per RGB "
-              "channel. Needs `eta`.", Range(0.0, 100.0), only_for=("conductor",), default_doc="none"),
+              "channel. Needs `eta`.", Range(0.0, 100.0), default_doc="none"),
         Field("metal", "string", "", "A measured metal by name: its RGB `eta` and `k` as Mitsuba 3's "
               "RGB variants derive them from its spectra (every Mitsuba preset, such as `Au`, `Ag`, "
               "`Al`, `Cu`, `Cr`, `W`, `Ni_palik`, plus `Fe`, `Ni`, `Ti` from Johnson and Christy 1974 "
               "and `Pt` from Rakic et al. 1998; renderer/materials/data/metals.csv lists them with "
-              "their sources).", only_for=("conductor",), choices=metal_names(), default_doc="none",
+              "their sources).", choices=metal_names(), default_doc="none",
               allowed_doc="a name in renderer/materials/data/metals.csv"),
         Field("metallic", "float", 0.0, "0 is a dielectric base, 1 a metal (glTF "
-              "`metallicFactor`).", UNIT, only_for=_PRINCIPLED),
+              "`metallicFactor`).", UNIT),
         Field("roughness", "float", 0.5, "Perceptual roughness; 0 is a perfect mirror.", UNIT),
         Field("transmission", "float", 0.0, "Fraction of the dielectric base that is transmitted "
-              "(glTF `KHR_materials_transmission`).", UNIT, only_for=_PRINCIPLED),
-        Field("ior", "float", 1.5, "Index of refraction.", Range(1.0, 4.0, lo_open=True),
-              only_for=("dielectric", "principled")),
+              "(glTF `KHR_materials_transmission`).", UNIT),
+        Field("ior", "float", 1.5, "Index of refraction.", Range(1.0, 4.0, lo_open=True)),
         Field("thin", "bool", False, "A thin-walled transmitter: a shell with no inside (a soap "
               "bubble, a window pane modelled as one surface, glTF transmission without "
               "`KHR_materials_volume`). Light reflects off it or passes straight through; it is not "
-              "bent and does not travel inside.", only_for=("dielectric", "principled")),
+              "bent and does not travel inside."),
         Field("clearcoat", "float", 0.0, "Weight of a clear coat over the material (glTF "
               "`KHR_materials_clearcoat`): a dielectric layer of index 1.5 whose reflection is added "
-              "on top, and what it does not reflect reaches the layers below.", UNIT,
-              only_for=_PRINCIPLED),
-        Field("clearcoat_roughness", "float", 0.0, "Perceptual roughness of the clear coat.", UNIT,
-              only_for=_PRINCIPLED),
+              "on top, and what it does not reflect reaches the layers below.", UNIT),
+        Field("clearcoat_roughness", "float", 0.0, "Perceptual roughness of the clear coat.", UNIT),
         Field("sheen_color", "vec3", (0.0, 0.0, 0.0), "Colour of a sheen layer (glTF "
               "`KHR_materials_sheen`): the soft retro-reflection of velvet and cloth (Charlie "
-              "distribution). Black is no sheen.", UNIT, only_for=_PRINCIPLED),
-        Field("sheen_roughness", "float", 0.0, "Perceptual roughness of the sheen.", UNIT,
-              only_for=_PRINCIPLED),
+              "distribution). Black is no sheen.", UNIT),
+        Field("sheen_roughness", "float", 0.0, "Perceptual roughness of the sheen.", UNIT),
         Field("specular", "float", 1.0, "Strength of the dielectric base's specular reflection (glTF "
               "`KHR_materials_specular` `specularFactor`); what it does not reflect goes to the "
-              "diffuse base.", UNIT, only_for=_PRINCIPLED),
+              "diffuse base.", UNIT),
         Field("specular_color", "vec3", (1.0, 1.0, 1.0), "Colour of that specular reflection "
-              "(`specularColorFactor`).", UNIT, only_for=_PRINCIPLED),
+              "(`specularColorFactor`).", UNIT),
         Field("emission", "vec3", (0.0, 0.0, 0.0), "Emitted radiance, linear RGB.", NON_NEGATIVE),
         Field("emission_strength", "float", 1.0, "Multiplier folded into `emission`.",
               NON_NEGATIVE, in_model=False),
         Field("abbe", "float", 0.0, "Dispersion: the Abbe number of the glass (about 64 for crown "
               "glass, 25-35 for flint, lower disperses more); the index then follows a Cauchy curve "
               "through `ior` at 587.6 nm. 0 is no dispersion. A dispersive material makes the scene "
-              "render spectrally (hero wavelengths).", NON_NEGATIVE, only_for=("dielectric",)),
+              "render spectrally (hero wavelengths).", NON_NEGATIVE),
         Field("glass", "string", "", "Dispersion of a real glass from its published Sellmeier "
               "coefficients: `bk7`, `fused_silica`, `sf11` or `water`; replaces `ior` and `abbe`.",
-              only_for=("dielectric",), choices=GLASSES_CHOICES, default_doc="none"),
+              choices=GLASSES_CHOICES, default_doc="none"),
         Field("medium", "string", "", "Name of a `[media]` entry that fills the inside of surfaces "
               "made of this material: paths that cross the surface inwards (by refraction, or "
               "through a `null` surface) travel in it. Media do not nest.",
               default_doc="none", allowed_doc="a defined medium"),
-    ),
+    )),
     rules=(Rule("A conductor's Fresnel comes from one description: `base_color` with `edge_tint`, or "
                 "`eta` with `k`, or `metal`; fields of two of them together are an error, and `eta` and "
                 "`k` come together.", _check_conductor_fresnel),),

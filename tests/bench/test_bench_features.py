@@ -44,10 +44,10 @@ def test_paired_ratio_and_the_rule():
 
 
 def test_optional_effects_are_the_bools_everything_adds():
-    own = Features(geometry="mesh", has_diffuse=True, has_emission=True)
+    own = Features(geometry="mesh", material_kinds=frozenset({"diffuse"}), has_emission=True)
     effects = optional_effects(own)
-    assert "has_diffuse" not in effects and "has_emission" not in effects
-    assert {"has_dielectric", "has_media", "has_textures", "energy_compensation", "analytic_fog"} <= set(effects)
+    assert "diffuse" not in effects and "has_emission" not in effects
+    assert {"dielectric", "clearcoat", "has_media", "has_textures", "energy_compensation", "analytic_fog"} <= set(effects)
     assert "environment" not in effects and "mesh_primitives" not in effects
     assert "has_textures" not in optional_effects(Features(geometry="sdf"))  # SDF scenes have no uv textures
 
@@ -70,7 +70,7 @@ def test_run_on_a_tiny_scene(tmp_path, capsys):
     assert (out / report["plot"]).stat().st_size > 1000
     (res,) = report["scenes"]
     assert "error" not in res, res.get("traceback", res.get("error"))
-    assert res["scene"] == "tiny_features" and res["own_features"]["has_dielectric"] is True
+    assert res["scene"] == "tiny_features" and "dielectric" in res["own_features"]["material_kinds"]
     builds = res["builds"]
     assert set(builds) == {"own", "everything", "+media", "+energy_compensation", "no glass"}
     for name, b in builds.items():

@@ -24,7 +24,7 @@ from renderer.scene.features import Features
 from renderer.scene.description import MaterialSpec
 
 vec3 = ti.math.vec3
-ALL_KINDS = Features(has_diffuse=True, has_conductor=True, has_dielectric=True, has_principled=True)
+ALL_KINDS = Features(material_kinds=frozenset({"diffuse", "conductor", "dielectric", "principled"}))
 
 
 @ti.func

@@ -20,10 +20,13 @@ import pytest
 from scipy import stats
 
 from renderer.materials import sheen
+from renderer.materials.kinds import LAYER_NAMES
 from renderer.scene.description import MaterialSpec
 from tests.materials.bsdf_kernels import (ALL_KINDS, BsdfBench, cell_probabilities, chi2_adaptive, direction,
                                           frame_about, uniforms)
 from tests.stats.chi2 import sidak_alpha
+
+ALL_LAYERS = frozenset(LAYER_NAMES)
 
 ALPHA = 0.01
 N = 1_000_000
@@ -68,8 +71,7 @@ def spec_of(name):
 
 @pytest.fixture(scope="module")
 def bench():
-    features = dataclasses.replace(ALL_KINDS, energy_compensation=True, has_clearcoat=True, has_sheen=True,
-                                   has_specular=True, has_thin=True)
+    features = dataclasses.replace(ALL_KINDS, energy_compensation=True, material_layers=ALL_LAYERS, has_thin=True)
     return BsdfBench(capacity=24, features=features)
 
 
@@ -77,7 +79,7 @@ def bench():
 def single(bench):
     """The same materials without compensation: what single scattering returns (so that the
     furnace is seen not to pass vacuously)."""
-    features = dataclasses.replace(ALL_KINDS, has_clearcoat=True, has_sheen=True, has_specular=True, has_thin=True)
+    features = dataclasses.replace(ALL_KINDS, material_layers=ALL_LAYERS, has_thin=True)
     return BsdfBench(capacity=24, features=features)
 
 

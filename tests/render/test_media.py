@@ -190,7 +190,7 @@ def test_analytic_fog_blends_to_its_colour(tmp_path):
 def test_scenes_without_media_compile_no_medium_code(tmp_path):
     scene = scene_from_toml(tmp_path, FOGGY_EMITTER.format(fog="none", fog_fields=""))
     features = scene_features(scene)
-    assert not (features.has_media or features.analytic_fog or features.has_null)
+    assert not (features.has_media or features.analytic_fog or features.has_kind("null"))
 
 
 @pytest.mark.parametrize("edit,message", [

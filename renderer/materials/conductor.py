@@ -1,0 +1,37 @@
+"""The `conductor` kind: GGX reflection with a conductor's Fresnel (renderer/materials/lobes.py:
+from base_color and edge_tint, or exact from eta + i k); with energy compensation a rough one adds
+Kulla and Conty's multiple-scattering lobe (Bsdf.metal_eval). Roughness 0 is a delta mirror.
+Lobe module of renderer/materials/kinds.py (see diffuse.py)."""
+import taichi as ti
+
+from renderer.materials import lobes
+from renderer.materials.kinds import LobeFlags
+from renderer.materials.lobes import BsdfSample
+
+
+@ti.func
+def sample(bsdf, mat, n_f, t, b, entering, wo, u1, u2):
+    s = lobes.invalid_sample()
+    if ti.static(not bsdf.compensate):
+        s = lobes.conductor_sample(mat, wo, u2)
+    elif mat.alpha == 0.0:  # a smooth mirror scatters once: nothing to compensate
+        s = lobes.conductor_sample(mat, wo, u2)
+    else:
+        wi = bsdf.metal_direction(mat.alpha, wo, u1, u2)
+        if wi.z > 0.0:
+            value, pdf = evaluate(bsdf, mat, n_f, t, b, entering, wo, wi)
+            if pdf > 0.0:
+                s = BsdfSample(wi=wi, weight=value / pdf, pdf=pdf, delta=0, valid=1)
+    return s
+
+
+@ti.func
+def evaluate(bsdf, mat, n_f, t, b, entering, wo, wi):
+    h = ti.math.normalize(wo + wi)
+    fresnel = lobes.conductor_reflectance(mat, wo.dot(h))
+    return bsdf.metal_eval(fresnel, lobes.conductor_reflectance_average(mat), mat.alpha, wo, wi)
+
+
+@ti.func
+def flags(bsdf, mat):
+    return LobeFlags.REFLECTION | (LobeFlags.GLOSSY if mat.alpha > 0.0 else LobeFlags.SPECULAR)

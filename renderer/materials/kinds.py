@@ -1,0 +1,182 @@
+"""The registry of material kinds and of the principled model's layers (numpy side, no Taichi).
+
+A kind is what a scene file's `type` names. Its entry says its id in the device table (its
+position in KINDS), the scene-file parameters that belong to it, its device columns, the lobe
+flags its BSDF can have (pbrt's BxDFFlags) and the module holding its lobes, which
+renderer/materials/bsdf.py dispatches to. The layers of the principled kind (glTF clearcoat,
+sheen, specular) are entries of their own: parameters, columns, flags and the test of a device
+row that says whether the row uses the layer. Features holds the sets of kinds and layers a
+scene uses, and only those are compiled.
+
+Adding a kind: a lobe module with `sample`, `evaluate` and `flags` (see renderer/materials/diffuse.py),
+one MaterialKind entry here, and its tests. Adding a layer: the layer's code in the principled
+model behind `ti.static(features.has_layer(name))` and one MaterialLayer entry here.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+
+class LobeFlags:
+    """pbrt-v4's BxDFFlags, bits of an int: which scattering a BSDF can do. A kind's entry holds
+    the bits it can have; its lobe module's `flags(bsdf, mat)` says which a material has."""
+
+    REFLECTION = 1
+    TRANSMISSION = 2
+    DIFFUSE = 4
+    GLOSSY = 8
+    SPECULAR = 16
+    NON_DELTA = DIFFUSE | GLOSSY  # what `eval` can return and light sampling can use
+
+
+NO_TEXTURE = -1
+NO_MEDIUM = -1
+
+
+@dataclass(frozen=True)
+class Column:
+    """One member of the device table's row. type: "i32", "f32", "vec3", "vec4" or "ivec4";
+    default: the value of a row that does not set it; from_spec: read from the MaterialSpec
+    attribute of the same name (scene files); gltf: the PbrMaterial attribute it is read from
+    (model files; None: set by the table's own code or left at its default)."""
+
+    name: str
+    type: str
+    default: object
+    from_spec: bool = False
+    gltf: str | None = None
+
+
+@dataclass(frozen=True)
+class MaterialKind:
+    """name: the scene file's `type`; label: its name in the HUD and `info`; params: the
+    scene-file fields that belong to it (others are errors on it); columns: its own device
+    columns (shared ones may be listed by several kinds); flags: the LobeFlags it can have;
+    lobes: the module of its `sample`, `evaluate` and `flags` (Taichi funcs); compensation: when
+    Kulla-Conty multiple scattering is compiled for it ("always", "rough": where a row's
+    roughness > 0, "never"); refracts: its transmission bends light into another index (radiance scales by
+    1 / eta^2, photons do not)."""
+
+    name: str
+    label: str
+    params: tuple[str, ...]
+    columns: tuple[Column, ...]
+    flags: int
+    lobes: str
+    compensation: str = "never"
+    refracts: bool = False
+
+
+@dataclass(frozen=True)
+class MaterialLayer:
+    """A layer of a kind (`of`): its scene-file params, device columns, flags, and `in_use(row)`
+    on a numpy row of the table (a scene whose rows do not use it compiles none of its code)."""
+
+    name: str
+    of: str
+    params: tuple[str, ...]
+    columns: tuple[Column, ...]
+    flags: int
+    in_use: Callable[[dict], bool]
+
+
+_F = LobeFlags
+_IOR = Column("ior", "f32", 1.5, from_spec=True)
+_THIN = Column("thin", "i32", 0)
+
+# Shared by every kind: what the base of any surface has (colour, roughness, emission, the
+# base texture slots, the medium inside, glTF coverage).
+SHARED_COLUMNS = (
+    Column("kind", "i32", 0),
+    Column("base_color", "vec3", (0.8, 0.8, 0.8), from_spec=True),
+    Column("roughness", "f32", 0.5, from_spec=True),
+    Column("emission", "vec3", (0.0, 0.0, 0.0), from_spec=True),
+    Column("normal_scale", "f32", 1.0),
+    Column("textures", "ivec4", (NO_TEXTURE,) * 4),  # base colour, metallic-roughness, normal, emissive
+    Column("medium", "i32", NO_MEDIUM),
+    Column("alpha_mode", "i32", 0),
+    Column("alpha_cutoff", "f32", 0.5),
+    Column("base_alpha", "f32", 1.0),
+    # The layers' texture slots: (clearcoat, clearcoat roughness, sheen colour, sheen roughness)
+    # and (specular, specular colour, clearcoat normal, unused).
+    Column("layer_textures", "ivec4", (NO_TEXTURE,) * 4),
+    Column("layer_textures2", "ivec4", (NO_TEXTURE,) * 4),
+)
+
+KINDS = (
+    MaterialKind("diffuse", "diffuse", (), (), _F.REFLECTION | _F.DIFFUSE, "renderer.materials.diffuse"),
+    MaterialKind("conductor", "conductor", ("edge_tint", "eta", "k", "metal"),
+                 (Column("edge_tint", "vec3", (1.0, 1.0, 1.0), from_spec=True), Column("complex_ior", "i32", 0),
+                  Column("eta", "vec3", (0.0, 0.0, 0.0)), Column("k", "vec3", (0.0, 0.0, 0.0)),
+                  Column("fresnel_avg", "vec3", (0.0, 0.0, 0.0))),
+                 _F.REFLECTION | _F.GLOSSY | _F.SPECULAR, "renderer.materials.conductor", compensation="rough"),
+    MaterialKind("dielectric", "glass", ("ior", "thin", "abbe", "glass"),
+                 (_IOR, _THIN, Column("dispersion", "i32", 0), Column("dispersion_b", "vec4", (0.0,) * 4),
+                  Column("dispersion_c", "vec4", (0.0,) * 4)),
+                 _F.REFLECTION | _F.TRANSMISSION | _F.GLOSSY | _F.SPECULAR, "renderer.materials.dielectric",
+                 compensation="rough", refracts=True),
+    MaterialKind("principled", "principled", ("metallic", "transmission", "ior", "thin"),
+                 (Column("metallic", "f32", 0.0, from_spec=True), Column("transmission", "f32", 0.0, from_spec=True),
+                  _IOR, _THIN, Column("transmission_texture", "i32", NO_TEXTURE)),
+                 _F.REFLECTION | _F.TRANSMISSION | _F.DIFFUSE | _F.GLOSSY | _F.SPECULAR,
+                 "renderer.materials.principled", compensation="always", refracts=True),
+    MaterialKind("null", "null surfaces", (), (), _F.TRANSMISSION | _F.SPECULAR, "renderer.materials.null_boundary"),
+)
+
+LAYERS = (
+    MaterialLayer("clearcoat", "principled", ("clearcoat", "clearcoat_roughness"),
+                  (Column("clearcoat", "f32", 0.0, from_spec=True, gltf="clearcoat_factor"),
+                   Column("clearcoat_roughness", "f32", 0.0, from_spec=True, gltf="clearcoat_roughness_factor"),
+                   Column("clearcoat_normal_scale", "f32", 1.0, gltf="clearcoat_normal_scale")),
+                  _F.REFLECTION | _F.GLOSSY | _F.SPECULAR, lambda r: r["clearcoat"] > 0.0),
+    MaterialLayer("sheen", "principled", ("sheen_color", "sheen_roughness"),
+                  (Column("sheen_color", "vec3", (0.0, 0.0, 0.0), from_spec=True, gltf="sheen_color_factor"),
+                   Column("sheen_roughness", "f32", 0.0, from_spec=True, gltf="sheen_roughness_factor")),
+                  _F.REFLECTION | _F.GLOSSY, lambda r: max(r["sheen_color"]) > 0.0),
+    # Strength and colour scale the base's dielectric Fresnel: in use where they differ from
+    # glTF's defaults (1, white) or a texture varies them.
+    MaterialLayer("specular", "principled", ("specular", "specular_color"),
+                  (Column("specular", "f32", 1.0, from_spec=True, gltf="specular_factor"),
+                   Column("specular_color", "vec3", (1.0, 1.0, 1.0), from_spec=True, gltf="specular_color_factor")),
+                  _F.REFLECTION | _F.GLOSSY | _F.SPECULAR,
+                  lambda r: (r["specular"] != 1.0 or min(r["specular_color"]) != 1.0
+                             or r["layer_textures2"][0] != NO_TEXTURE or r["layer_textures2"][1] != NO_TEXTURE)),
+)
+
+KIND_NAMES = tuple(k.name for k in KINDS)
+KIND_IDS = {k.name: i for i, k in enumerate(KINDS)}
+LAYER_NAMES = tuple(layer.name for layer in LAYERS)
+NULL_KIND = KIND_IDS["null"]  # the integrators let paths cross null boundaries
+
+
+def _unique(columns) -> tuple[Column, ...]:
+    seen = {}
+    for c in columns:
+        seen.setdefault(c.name, c)
+    return tuple(seen.values())
+
+
+# Every device column once: the shared ones, then each kind's and each layer's, in registry order.
+COLUMNS = _unique((*SHARED_COLUMNS, *(c for k in KINDS for c in k.columns),
+                   *(c for layer in LAYERS for c in layer.columns)))
+LAYER_COLUMNS = tuple(c for layer in LAYERS for c in layer.columns)
+
+
+def kind(name: str) -> MaterialKind:
+    return KINDS[KIND_IDS[name]]
+
+
+def kinds_with_param(param: str) -> tuple[str, ...]:
+    """The kinds a scene-file field belongs to (their own parameters or their layers'), in
+    registry order."""
+    return tuple(k.name for k in KINDS if param in k.params
+                 or any(layer.of == k.name and param in layer.params for layer in LAYERS))
+
+
+def compensated_when_rough(name: str) -> bool:
+    return kind(name).compensation == "rough"
+
+
+def always_compensated(name: str) -> bool:
+    return kind(name).compensation == "always"
