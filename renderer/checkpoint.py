@@ -7,8 +7,9 @@ definition (CheckpointHeader). It is written atomically (renderer/atomic_write.p
 interrupted save leaves the previous checkpoint whole.
 
 Continuing from it is bit for bit the render that never stopped: samples are hashes of (pixel,
-sample index, dimension, seed), the continuation starts at sample index `spp_done`, and the film
-resumes from the same float32 values (see FilmState).
+sample index, dimension, seed), each pixel continues at its own sample index (its counts), the
+round of pixel slices continues at `slices_in_round`, and the film resumes from the same float32
+values (see FilmState).
 """
 from __future__ import annotations
 
@@ -27,10 +28,11 @@ from renderer.film import FilmState
 from renderer.scene.errors import SceneError
 from renderer.scene.description import Scene
 
-FORMAT = 1  # the layout of the archive; a reader refuses others
+# The layout of the archive; a reader refuses others. 2: the position in a round of pixel slices.
+FORMAT = 2
 CHECKPOINT_EXTENSION = ".ckpt"
 HEADER = "header"
-INTEGER_FIELDS = ("width", "height", "seed", "max_depth", "spp_done")
+INTEGER_FIELDS = ("width", "height", "seed", "max_depth", "spp_done", "slices_in_round")
 
 
 @dataclass
@@ -44,7 +46,8 @@ class CheckpointHeader:
     sampler: str
     seed: int
     max_depth: int
-    spp_done: int
+    spp_done: int  # samples every pixel has
+    slices_in_round: int  # pixel slices of the next sample already rendered (renderer/pixel_slices.py)
     spp_target: int | None  # None: a --time budget
     seconds_budget: float | None
     seconds_rendered: float  # rendering time so far (a --time budget continues from it)

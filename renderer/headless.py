@@ -1,9 +1,11 @@
 """Headless rendering to a file, with a progress bar: the render loop of `app.py render`.
 
-Passes are short (about CHUNK_SECONDS each, never less than one sample per pixel), so a stop
-request, a checkpoint or a --time budget is honoured within about that long. Continuing from a
-checkpoint restores the film's exact float32 state and the sample index, so the image is the one
-an uninterrupted render gives, bit for bit.
+Passes are short (about CHUNK_SECONDS each; a pass may be a share of a sample per pixel, a run of
+the pixel slices of renderer/pixel_slices.py), so a stop request, a checkpoint or a --time budget
+is honoured within about that long even where one sample of the image takes longer. Continuing
+from a checkpoint restores the film's exact float32 state, whose per-pixel counts are the pixels'
+sample indices, and the position in the round of slices, so the image is the one an
+uninterrupted render gives, bit for bit.
 """
 from __future__ import annotations
 
@@ -21,18 +23,19 @@ from renderer.camera import CameraFrame
 from renderer.film import Film, FilmState
 from renderer.image_io import write_exr, write_png
 from renderer.integrators import make_integrator
+from renderer.pixel_slices import ROUND_SLICES, spp_text
 from renderer.renderer import Renderer
 from renderer.scene.description import Scene
 from renderer.tonemap import tonemap_array
 from renderer.version import lantern_version
 
 OUTPUT_EXTENSIONS = (".png", ".exr")
-# Aim each kernel launch at about this long: long enough to amortise launch overhead, short
-# enough for a live progress bar, a prompt stop on Ctrl-C and a --time overshoot of at most this.
+# Aim each pass at about this long: long enough to amortise launch overhead, short enough for a
+# live progress bar, a prompt stop on Ctrl-C and a --time overshoot of at most this.
 CHUNK_SECONDS = 0.5
 # A pass grows at most this much over the last: a single fast measurement cannot make it long.
 CHUNK_GROWTH = 4
-# Sample indices are 32-bit signed kernel arguments: a render stops at this many samples per pixel.
+# Sample indices are 32-bit signed counts: a render stops at this many samples per pixel.
 MAX_SPP = 2**31 - 1
 
 
@@ -64,18 +67,20 @@ class Resume:
     state: FilmState
     spp_done: int
     seconds_rendered: float
+    slices_in_round: int = 0  # pixel slices of the round after spp_done already rendered
 
 
 class Checkpoints(Protocol):
     """What the render loop tells the checkpoint policy (renderer/render_command.py) after a pass."""
 
-    def after_pass(self, film: Film, spp_done: int, seconds_rendered: float, expected_seconds: float) -> None: ...
+    def after_pass(self, film: Film, spp_done: int, seconds_rendered: float, expected_seconds: float,
+                   slices_in_round: int = 0) -> None: ...
 
 
 @dataclass
 class RenderResult:
     image: np.ndarray  # linear (H, W, 3)
-    spp: int
+    spp: int  # samples every pixel has
     seconds: float  # wall time of this run, compilation included
     rejected: int
     integrator: str
@@ -85,6 +90,15 @@ class RenderResult:
     interrupted: bool = False  # stopped by a request before its budget was spent
     seconds_rendered: float = 0.0  # rendering time the --time budget counts, over every run
     film: Film | None = None  # the film, for a final checkpoint
+    slices_in_round: int = 0  # of a round begun but not finished (an interruption): some pixels have spp + 1
+
+    @property
+    def mean_spp(self) -> float:
+        return self.spp + self.slices_in_round / ROUND_SLICES
+
+    def spp_text(self) -> str:
+        """'64', or '12.25' for a render stopped within a round of pixel slices."""
+        return spp_text(self.mean_spp)
 
 
 def check_writable(path: Path) -> None:
@@ -127,65 +141,73 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
     seconds_before = 0.0
     if resume is not None:
         renderer.film.restore(resume.state)
-        renderer.samples_done = resume.spp_done
+        renderer.slices_done = resume.spp_done * ROUND_SLICES + resume.slices_in_round
         seconds_before = resume.seconds_rendered
     camera = CameraFrame.from_spec(scene.camera)
     if stop is not None:
         stop.defer()  # from here on there is an image to save: a signal stops at the next pass
     start = time.perf_counter()
     budget_start = None  # a --time budget counts rendering only, from the end of the first pass
-    seconds_per_spp = None  # measured on passes after the first (which includes compilation)
+    seconds_per_slice = None  # measured on passes after the first (which includes compilation)
     n = 1
     interrupted = False
+    target = None if target_spp is None else target_spp * ROUND_SLICES
+    limit = MAX_SPP * ROUND_SLICES
 
     def rendered() -> float:
         return seconds_before + (time.perf_counter() - budget_start if budget_start is not None else 0.0)
 
     while True:
-        done = renderer.samples_done
-        if target_spp is not None and done >= target_spp:
+        done = renderer.slices_done
+        if target is not None and done >= target:
             break
-        if target_spp is None and (rendered() >= job.seconds or done >= MAX_SPP):
+        if target is None and (rendered() >= job.seconds or done >= limit):
             break
         if stop is not None and stop.requested:  # (a request during the last pass stops nothing)
             interrupted = True
             break
-        n = pass_spp(seconds_per_spp, n, (target_spp or MAX_SPP) - done,
-                     None if target_spp is not None else job.seconds - rendered())
+        n = pass_slices(seconds_per_slice, n, (target or limit) - done,
+                        None if target is not None else job.seconds - rendered())
         t0 = time.perf_counter()
-        renderer.render(camera, n, integrator, job.max_depth, job.seed)
+        renderer.render_slices(camera, n, integrator, job.max_depth, job.seed)
         elapsed = time.perf_counter() - t0
+        n = renderer.slices_done - done  # (an integrator with whole-image passes rounds up to a sample)
         if budget_start is None:
             budget_start = time.perf_counter()
         else:
-            seconds_per_spp = elapsed / n
-        if checkpoints is not None and seconds_per_spp is not None:
-            remaining = ((target_spp - renderer.samples_done) * seconds_per_spp if target_spp is not None
+            seconds_per_slice = elapsed / n
+        if checkpoints is not None and seconds_per_slice is not None:
+            remaining = ((target - renderer.slices_done) * seconds_per_slice if target is not None
                          else job.seconds - rendered())
-            checkpoints.after_pass(renderer.film, renderer.samples_done, rendered(), rendered() + remaining)
-        if progress and seconds_per_spp is not None:  # the compiling pass says nothing of the rate
-            progress(renderer.samples_done, target_spp, rendered(), width * height, job.seconds)
+            checkpoints.after_pass(renderer.film, renderer.samples_done, rendered(), rendered() + remaining,
+                                   renderer.slices_done % ROUND_SLICES)
+        if progress and seconds_per_slice is not None:  # the compiling pass says nothing of the rate
+            progress(renderer.mean_spp, target_spp, rendered(), width * height, job.seconds)
     total = time.perf_counter() - start
     return RenderResult(renderer.image(), renderer.samples_done, total, renderer.film.stats()["rejected"], integrator,
-                        renderer.film.variance_of_mean_image(), interrupted, rendered(), renderer.film)
+                        renderer.film.variance_of_mean_image(), interrupted, rendered(), renderer.film,
+                        renderer.slices_done % ROUND_SLICES)
 
 
-def pass_spp(seconds_per_spp: float | None, previous: int, spp_left: int, seconds_left: float | None) -> int:
-    """Samples per pixel of the next pass: about CHUNK_SECONDS of work at the measured rate, at
-    most CHUNK_GROWTH times the previous pass, never past the spp target or the time budget."""
-    if seconds_per_spp is None:
-        return 1  # the first pass compiles; its time says nothing about the rate
-    n = min(previous * CHUNK_GROWTH, int(CHUNK_SECONDS / max(seconds_per_spp, 1e-9)))
+def pass_slices(seconds_per_slice: float | None, previous: int, slices_left: int, seconds_left: float | None) -> int:
+    """Pixel slices of the next pass (ROUND_SLICES make a sample per pixel): about CHUNK_SECONDS of
+    work at the measured rate, at most CHUNK_GROWTH times the previous pass, never past the spp
+    target or the time budget. The first pass, which compiles, is a single slice: its time says
+    nothing of the rate, and a huge or slow image must not make the user wait for a whole sample."""
+    if seconds_per_slice is None:
+        return 1
+    rate = max(seconds_per_slice, 1e-12)
+    n = min(previous * CHUNK_GROWTH, int(CHUNK_SECONDS / rate))
     if seconds_left is not None:
-        n = min(n, math.ceil(max(seconds_left, 0.0) / max(seconds_per_spp, 1e-9)))
-    return max(1, min(n, spp_left))
+        n = min(n, math.ceil(max(seconds_left, 0.0) / rate))
+    return max(1, min(n, slices_left))
 
 
 def image_metadata(scene: Scene, job: RenderJob, result: RenderResult) -> dict[str, str]:
     """What the image files say about how they were made (PNG text chunks, EXR attributes)."""
     job = job.resolved(scene)
     return {"Software": f"Lantern {lantern_version()}", "scene": scene.name, "integrator": result.integrator,
-            "spp": str(result.spp), "seed": str(job.seed), "max_depth": str(job.max_depth),
+            "spp": result.spp_text(), "seed": str(job.seed), "max_depth": str(job.max_depth),
             "status": "interrupted" if result.interrupted else "complete"}
 
 
@@ -219,7 +241,7 @@ def progress_bar(stream=sys.stderr):
             eta = max(0.0, seconds - elapsed)
         bar = "#" * int(frac * 30)
         total = f"/{target}" if target else ""
-        stream.write(f"\r[{bar:<30}] {spp}{total} spp  {rate / 1e6:6.2f} Msamples/s  ETA {eta:5.1f} s ")
+        stream.write(f"\r[{bar:<30}] {spp_text(spp)}{total} spp  {rate / 1e6:6.2f} Msamples/s  ETA {eta:5.1f} s ")
         stream.flush()
 
     return report

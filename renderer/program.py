@@ -9,6 +9,7 @@ import taichi as ti
 from renderer.camera import generate_ray
 from renderer.geometry.interface import INF
 from renderer.materials.bsdf import Bsdf
+from renderer.pixel_slices import pass_length, slice_pixel
 from renderer.sampling.sampler import SampleState
 
 
@@ -27,22 +28,31 @@ class RenderProgram:
         self.work = work  # per-pixel [geometry work, primitive tests, rays traced] summed over samples
         self.features = features
 
+    # A pass over slices samples its pixels in slice order (renderer/pixel_slices.py); the rounds a
+    # film has seen are in its counts, so the whole-image passes of SPPM do not apply.
+    sliced = True
+
     @ti.kernel
-    def render(self, width: ti.i32, height: ti.i32, spp: ti.i32, first_sample: ti.i32, seed: ti.u32,
-               max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3, right: ti.math.vec3,
+    def render(self, width: ti.i32, height: ti.i32, spp: ti.i32, slice_first: ti.i32, slice_count: ti.i32,
+               seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3, right: ti.math.vec3,
                up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
-        for x, y in ti.ndrange(width, height):
-            pixel = y * width + x
-            work = ti.math.vec3(0.0)
-            for s in range(spp):
-                state = self.sampler.start(pixel, first_sample + s, seed)
-                ray = generate_ray(x, y, width, height, self.sampler, state, origin, forward, right, up,
-                                   tan_half_fov, aperture, focus, self.features.depth_of_field)
-                value, stats = self.integrator.li(self, ray, state, max_depth)
-                self.film.add_sample(x, y, value)
-                work += stats
-            # One plain store per pixel: += on a global field would be an atomic add per sample.
-            self.work[x, y] = self.work[x, y] + work
+        """`spp` samples for each pixel of slices [slice_first, slice_first + slice_count)."""
+        for i in range(pass_length(slice_count, width, height)):
+            x, y = slice_pixel(i, slice_first, slice_count, width, height)
+            if x < width and y < height:
+                pixel = y * width + x
+                # The pixel's own sample count is its next sample index (see pixel_slices).
+                first_sample = self.film.count[x, y] + self.film.rejected[x, y]
+                work = ti.math.vec3(0.0)
+                for s in range(spp):
+                    state = self.sampler.start(pixel, first_sample + s, seed)
+                    ray = generate_ray(x, y, width, height, self.sampler, state, origin, forward, right, up,
+                                       tan_half_fov, aperture, focus, self.features.depth_of_field)
+                    value, stats = self.integrator.li(self, ray, state, max_depth)
+                    self.film.add_sample(x, y, value)
+                    work += stats
+                # One plain store per pixel: += on a global field would be an atomic add per sample.
+                self.work[x, y] = self.work[x, y] + work
 
     @ti.kernel
     def probe(self, u: ti.f32, v: ti.f32, width: ti.i32, height: ti.i32, origin: ti.math.vec3,

@@ -19,6 +19,7 @@ from renderer.headless import (Checkpoints, RenderJob, RenderResult, Resume, che
                                check_writable, display_tonemapper, image_metadata, progress_bar, render, save,
                                save_variance)
 from renderer.interrupts import StopRequests
+from renderer.pixel_slices import ROUND_SLICES, spp_text
 from renderer.scene.errors import SceneError
 from renderer.scene.description import Scene
 from renderer.version import lantern_version
@@ -44,7 +45,8 @@ class CheckpointPolicy(Checkpoints):
         self.stream = stream
         self.last_save = time.monotonic()
 
-    def after_pass(self, film: Film, spp_done: int, seconds_rendered: float, expected_seconds: float) -> None:
+    def after_pass(self, film: Film, spp_done: int, seconds_rendered: float, expected_seconds: float,
+                   slices_in_round: int = 0) -> None:
         if not self.active:
             if expected_seconds <= LONG_RENDER_SECONDS:
                 return
@@ -54,11 +56,11 @@ class CheckpointPolicy(Checkpoints):
                       f"{self.every:g} s; continue an interrupted render with: "
                       f"python app.py render --resume {self.path}")
         if time.monotonic() - self.last_save >= self.every:
-            self.save(film, spp_done, seconds_rendered)
+            self.save(film, spp_done, seconds_rendered, slices_in_round)
 
-    def save(self, film: Film, spp_done: int, seconds_rendered: float) -> None:
-        save_checkpoint(self.path, replace(self.header, spp_done=spp_done, seconds_rendered=seconds_rendered),
-                        film.state())
+    def save(self, film: Film, spp_done: int, seconds_rendered: float, slices_in_round: int = 0) -> None:
+        save_checkpoint(self.path, replace(self.header, spp_done=spp_done, slices_in_round=slices_in_round,
+                                           seconds_rendered=seconds_rendered), film.state())
         self.last_save = time.monotonic()
 
     def finish(self, result: RenderResult) -> str | None:
@@ -68,8 +70,8 @@ class CheckpointPolicy(Checkpoints):
         if self.automatic and not result.interrupted:
             self.path.unlink(missing_ok=True)
             return None
-        self.save(result.film, result.spp, result.seconds_rendered)
-        return f"{self.path}  (checkpoint at {result.spp} spp; continue with: python app.py render --resume {self.path})"
+        self.save(result.film, result.spp, result.seconds_rendered, result.slices_in_round)
+        return f"{self.path}  (checkpoint at {result.spp_text()} spp; continue with: python app.py render --resume {self.path})"
 
     def _say(self, message: str) -> None:
         self.stream.write(f"\n{message}\n")
@@ -104,7 +106,8 @@ def run_render(args, stop: StopRequests) -> int:
             if value != getattr(plan.previous, name):
                 print(f"warning: {name} {value} differs from the checkpoint's {getattr(plan.previous, name)}: the "
                       "result will not be bit-identical to an uninterrupted render", file=sys.stderr)
-    begun = f", continuing at {plan.resume.spp_done} spp" if plan.resume else ""
+    begun = (f", continuing at {spp_text(plan.resume.spp_done + plan.resume.slices_in_round / ROUND_SLICES)} spp"
+             if plan.resume else "")
     print(f"rendering {plan.scene.name} with {plan.job.integrator} on {used}{begun}", file=sys.stderr)
     result = render(plan.scene, plan.job, progress=progress_bar(), stop=stop, checkpoints=plan.checkpoints,
                     resume=plan.resume)
@@ -155,7 +158,7 @@ def plan_render(args) -> RenderPlan:
     resume = None
     if previous is not None:
         _, state = load_checkpoint(args.resume)
-        resume = Resume(state, previous.spp_done, previous.seconds_rendered)
+        resume = Resume(state, previous.spp_done, previous.seconds_rendered, previous.slices_in_round)
     return RenderPlan(scene, job, out, variance, arch, optimize, checkpoints, resume, previous)
 
 
@@ -165,7 +168,7 @@ def write_outputs(plan: RenderPlan, result: RenderResult) -> None:
     save(result, plan.out, plan.job.exposure, display_tonemapper(plan.job.integrator, plan.job.tonemapper), metadata)
     rejected = f", {result.rejected} non-finite samples dropped" if result.rejected else ""
     stopped = ", interrupted" if result.interrupted else ""
-    print(f"{plan.out}  ({result.spp} spp in {result.seconds:.1f} s{rejected}{stopped})")
+    print(f"{plan.out}  ({result.spp_text()} spp in {result.seconds:.1f} s{rejected}{stopped})")
     if plan.variance is not None:
         save_variance(result, plan.variance, metadata)
         print(f"{plan.variance}  (variance of each pixel's mean)")
@@ -204,7 +207,7 @@ def _header(scene, job: RenderJob, out: Path, variance: Path | None, arch: str, 
     return CheckpointHeader(
         lantern_version=lantern_version(), scene=str(Path(scene.path).resolve()), scene_hash=scene_fingerprint(scene),
         width=width, height=height, integrator=job.integrator, sampler=scene.render.sampler, seed=job.seed,
-        max_depth=job.max_depth, spp_done=0, spp_target=job.spp, seconds_budget=job.seconds, seconds_rendered=0.0,
+        max_depth=job.max_depth, spp_done=0, slices_in_round=0, spp_target=job.spp, seconds_budget=job.seconds, seconds_rendered=0.0,
         arch=arch, optimize=optimize, out=str(out.resolve()), variance=str(variance.resolve()) if variance else None,
         exposure=job.exposure, tonemapper=job.tonemapper, automatic=False)
 

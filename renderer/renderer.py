@@ -17,6 +17,7 @@ from renderer.lights.environment import Environment
 from renderer.materials.table import MaterialTable
 from renderer.materials.texture_sampler import TextureTable
 from renderer.media.table import MediaTable
+from renderer.pixel_slices import ROUND_SLICES, filled_mean_array
 from renderer.program import RenderProgram
 from renderer.sampling.sampler import make_sampler
 from renderer.scene.features import Features, scene_features
@@ -76,7 +77,7 @@ class Renderer:
         self.integrator_options: dict[str, object] = {}
         self._shared: dict[str, object] = {}
         self._launched: set[tuple[str, Features]] = set()
-        self.samples_done = 0
+        self.slices_done = 0  # pixel slices rendered since the last reset (renderer/pixel_slices.py)
         self.reset(width, height)
 
     # --- programs ------------------------------------------------------------------------------
@@ -124,21 +125,57 @@ class Renderer:
     def reset(self, width: int | None = None, height: int | None = None) -> None:
         self.film.reset(width or self.film.width, height or self.film.height)
         self.work.fill(0.0)
-        self.samples_done = 0
+        self.slices_done = 0
 
     def render(self, camera: CameraFrame, spp: int, integrator: str | None = None, max_depth: int | None = None,
                seed: int | None = None, features: Features | None = None, sampler: str | None = None) -> None:
-        """Add `spp` samples per pixel to the film's active region."""
+        """Add `spp` samples per pixel to the film's active region (finishing a round in progress first)."""
+        self.render_slices(camera, spp * ROUND_SLICES, integrator, max_depth, seed, features, sampler)
+
+    def render_slices(self, camera: CameraFrame, slices: int, integrator: str | None = None,
+                      max_depth: int | None = None, seed: int | None = None, features: Features | None = None,
+                      sampler: str | None = None) -> None:
+        """Render the next `slices` pixel slices (ROUND_SLICES of them make one sample per pixel;
+        renderer/pixel_slices.py), continuing the round in progress: at most three launches (the
+        rest of that round, whole rounds, the start of the next). An integrator whose passes are
+        global (sppm) renders whole iterations: at least one, `slices` rounded down to rounds."""
         settings = self.scene.render
         integrator = integrator or settings.integrator
         sampler = sampler or settings.sampler
         features = features or self.features(camera)
         program = self.program(integrator, features, sampler)
-        program.render(self.film.width, self.film.height, spp, self.samples_done,
-                       (settings.seed if seed is None else seed) & 0xFFFFFFFF,
-                       settings.max_depth if max_depth is None else max_depth, *camera.kernel_args())
+        seed = (settings.seed if seed is None else seed) & 0xFFFFFFFF
+        max_depth = settings.max_depth if max_depth is None else max_depth
+        width, height = self.film.width, self.film.height
+        if not program.sliced:
+            spp = max(1, slices // ROUND_SLICES)
+            program.render(width, height, spp, self.samples_done, seed, max_depth, *camera.kernel_args())
+            self.slices_done += spp * ROUND_SLICES
+        left = slices if program.sliced else 0
+        while left > 0:
+            cursor = self.slices_done % ROUND_SLICES
+            if cursor == 0 and left >= ROUND_SLICES:
+                spp, first, count = left // ROUND_SLICES, 0, ROUND_SLICES
+            else:
+                spp, first, count = 1, cursor, min(left, ROUND_SLICES - cursor)
+            program.render(width, height, spp, first, count, seed, max_depth, *camera.kernel_args())
+            self.slices_done += spp * count
+            left -= spp * count
         self._launched.add((integrator, features, sampler))
-        self.samples_done += spp
+
+    def is_sliced(self, integrator: str, features: Features, sampler: str = "independent") -> bool:
+        """Whether the integrator's passes can be cut into pixel slices (all but sppm's)."""
+        return self.program(integrator, features, sampler).sliced
+
+    @property
+    def samples_done(self) -> int:
+        """Samples every pixel of the active region has (whole rounds)."""
+        return self.slices_done // ROUND_SLICES
+
+    @property
+    def mean_spp(self) -> float:
+        """Samples per pixel on average, a round in progress counted by its share of slices."""
+        return self.slices_done / ROUND_SLICES
 
     def focus_distance_at(self, camera: CameraFrame, u: float, v: float, integrator: str | None = None) -> float | None:
         """Distance along the view direction to the surface under (u, v) in [0,1]^2 (y up)."""
@@ -152,7 +189,7 @@ class Renderer:
         """Mean geometry work per ray (march steps on SDF scenes, BVH node visits on mesh scenes),
         primitive tests per ray (mesh scenes), and rays per sample."""
         totals = self.work.to_numpy()[: self.film.width, : self.film.height].reshape(-1, 3).sum(axis=0, dtype=np.float64)
-        samples = max(1, self.samples_done * self.film.width * self.film.height)
+        samples = max(1.0, self.mean_spp * self.film.width * self.film.height)
         rays = max(totals[2], 1.0)
         return {"work_per_ray": totals[0] / rays, "tests_per_ray": totals[1] / rays,
                 "rays_per_sample": totals[2] / samples}
@@ -160,3 +197,9 @@ class Renderer:
     def image(self) -> np.ndarray:
         """The linear mean image (H, W, 3), row 0 at the top."""
         return self.film.mean_image()
+
+    def shown_image(self) -> np.ndarray:
+        """The linear image the viewer shows: the mean, with pixels a partial first round has not
+        reached taken from their nearest sampled grid point (renderer/pixel_slices.py)."""
+        film = self.film
+        return filled_mean_array(film.mean_image(), film.sample_counts() + film.rejected_counts())

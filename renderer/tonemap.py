@@ -9,6 +9,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.film import is_finite_f32
+from renderer.pixel_slices import filled_mean
 from renderer.luminance import LUMINANCE_WEIGHTS, luminance
 
 TONEMAPPERS = ("aces", "reinhard", "none")
@@ -96,8 +97,9 @@ def display_value(linear, mapper):
 
 @ti.kernel
 def _tonemap_kernel(
-    mean: ti.template(), out: ti.types.ndarray(dtype=ti.math.vec3, ndim=2), source_width: ti.i32,
-    source_height: ti.i32, scale: ti.f32, mapper: ti.i32,
+    mean: ti.template(), count: ti.template(), rejected: ti.template(),
+    out: ti.types.ndarray(dtype=ti.math.vec3, ndim=2), source_width: ti.i32, source_height: ti.i32, scale: ti.f32,
+    mapper: ti.i32,
 ):
     out_width, out_height = out.shape[0], out.shape[1]
     step_x = ti.cast(source_width, ti.f32) / ti.cast(out_width, ti.f32)
@@ -113,8 +115,12 @@ def _tonemap_kernel(
         y1 = ti.min(y0 + 1, source_height - 1)
         fx = sx - ti.cast(x0, ti.f32)
         fy = sy - ti.cast(y0, ti.f32)
-        bottom = sanitize_radiance(mean[x0, y0]) * (1.0 - fx) + sanitize_radiance(mean[x1, y0]) * fx
-        top = sanitize_radiance(mean[x0, y1]) * (1.0 - fx) + sanitize_radiance(mean[x1, y1]) * fx
+        m00 = sanitize_radiance(filled_mean(mean, count, rejected, x0, y0))
+        m10 = sanitize_radiance(filled_mean(mean, count, rejected, x1, y0))
+        m01 = sanitize_radiance(filled_mean(mean, count, rejected, x0, y1))
+        m11 = sanitize_radiance(filled_mean(mean, count, rejected, x1, y1))
+        bottom = m00 * (1.0 - fx) + m10 * fx
+        top = m01 * (1.0 - fx) + m11 * fx
         linear = bottom * (1.0 - fy) + top * fy
         out[x, y] = display_value(ti.math.clamp(linear * scale, 0.0, MAX_RADIANCE), mapper)
 
@@ -123,12 +129,13 @@ def tonemap_into(film, out: np.ndarray, exposure_ev: float, tonemapper_name: str
     """Fill `out` (float32 (width, height, 3), [x, y] y-up) with display values in [0, 1].
 
     The film's active region (film.width x film.height) is stretched over the whole array with
-    bilinear filtering of the exposed linear radiance. The output is an array argument, not a
+    bilinear filtering of the exposed linear radiance. Pixels a partial first round has not reached
+    show their nearest sampled grid point (renderer/pixel_slices.filled_mean). The output is an array argument, not a
     field: one compiled kernel per film serves every output size (a field argument would compile
     the kernel again for each display size, ~0.1 s apiece).
     """
     _tonemap_kernel(
-        film.mean, out, film.width, film.height,
+        film.mean, film.count, film.rejected, out, film.width, film.height,
         exposure_scale(exposure_ev), tonemapper_index(tonemapper_name),
     )
 

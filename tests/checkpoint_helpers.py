@@ -23,7 +23,7 @@ def header_for(scene_path, **overrides) -> CheckpointHeader:
     scene = load_any(scene_path)
     values = dict(lantern_version=lantern_version(), scene=str(Path(scene_path).resolve()),
                   scene_hash=scene_fingerprint(scene), width=24, height=16, integrator="path",
-                  sampler=scene.render.sampler, seed=0, max_depth=3, spp_done=4, spp_target=8, seconds_budget=None,
+                  sampler=scene.render.sampler, seed=0, max_depth=3, spp_done=4, slices_in_round=0, spp_target=8, seconds_budget=None,
                   seconds_rendered=1.0, arch="cpu", optimize="compile", out=str(Path(scene_path).with_suffix(".exr")),
                   variance=None, exposure=0.0, tonemapper=None, automatic=False)
     values.update(overrides)

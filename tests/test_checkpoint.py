@@ -5,7 +5,8 @@ import pytest
 
 from renderer.checkpoint import load_checkpoint, read_header, save_checkpoint, scene_fingerprint, scene_files
 from renderer.film import FilmState
-from renderer.headless import RenderJob, Resume, pass_spp, render
+from renderer.headless import RenderJob, Resume, pass_slices, render
+from renderer.pixel_slices import ROUND_SLICES
 from renderer.scene import SceneError, load_scene
 from tests.checkpoint_helpers import film_state, header_for
 from tests.scene_builder import furnace_toml
@@ -57,16 +58,18 @@ def test_checkpoint_round_trip_is_exact(tmp_path, scene_path):
     assert_same_state(loaded, state)
 
 
-def test_continuing_a_stopped_render_is_bit_identical(scene_path):
+@pytest.mark.parametrize("passes", [3, 7])
+def test_continuing_a_stopped_render_is_bit_identical(scene_path, passes):
     """Stopped after a few passes, saved, restored into a new Renderer and continued to 300 spp: the
-    same film (mean, m2, counts, rejected) and image as 300 spp in one go, with another pass split."""
+    same film (mean, m2, counts, rejected) and image as 300 spp in one go, with another pass split.
+    Three passes (1 + 4 + 16 pixel slices) stop within the first sample's round; seven, after it."""
     scene = load_scene(scene_path)
     job = RenderJob(spp=300, size=(24, 16), integrator="path", seed=11)
     whole = render(scene, job)
-    part = render(scene, job, stop=StopAfter(3))
-    assert part.interrupted and 0 < part.spp < 300
+    part = render(scene, job, stop=StopAfter(passes))
+    assert part.interrupted and 0 < part.mean_spp < 300 and (part.spp == 0) == (passes == 3)
     state = part.film.state()
-    continued = render(scene, job, resume=Resume(state, part.spp, part.seconds_rendered))
+    continued = render(scene, job, resume=Resume(state, part.spp, part.seconds_rendered, part.slices_in_round))
     assert continued.spp == whole.spp == 300 and not continued.interrupted
     assert_same_state(continued.film.state(), whole.film.state())
     np.testing.assert_array_equal(continued.image, whole.image)
@@ -144,12 +147,15 @@ def test_scene_fingerprint_follows_every_file_the_scene_reads(tmp_path):
 
 
 def test_pass_size_follows_time_not_only_samples():
-    assert pass_spp(None, 64, 1000, None) == 1  # the compiling pass
-    assert pass_spp(0.001, 1, 10_000, None) == 4  # grows at most 4x
-    assert pass_spp(0.001, 1000, 10_000, None) == 500  # about half a second
-    assert pass_spp(2.0, 1000, 10_000, None) == 1  # never less than 1 spp
-    assert pass_spp(0.001, 1000, 30, None) == 30  # not past the target
-    assert pass_spp(0.001, 1000, 10_000, 0.05) == 50  # not past the time budget
+    round_ = ROUND_SLICES
+    assert pass_slices(None, 64, 1000, None) == 1  # the compiling pass: one slice
+    assert pass_slices(0.001 / round_, 1, 10_000 * round_, None) == 4  # grows at most 4x
+    assert pass_slices(0.001 / round_, 1000 * round_, 10_000 * round_, None) == 500 * round_  # about half a second
+    assert pass_slices(0.001 / round_, 1000 * round_, 30 * round_, None) == 30 * round_  # not past the target
+    assert pass_slices(0.001 / round_, 1000 * round_, 10_000 * round_, 0.05) == 50 * round_  # nor the time budget
+    # A sample per pixel of 2 s: a pass is the share of it that fits half a second, 64 of 256 slices.
+    assert pass_slices(2.0 / round_, 1000, 10_000, None) == int(0.5 / (2.0 / round_)) == 64
+    assert pass_slices(1e3, 1000, 10_000, None) == 1  # never less than one slice
 
 
 class FakeFilm:

@@ -19,13 +19,14 @@ from renderer.checkpoint import load_checkpoint, read_header
 from renderer.film import FilmState
 from renderer.image_io import read_exr
 from renderer.interrupts import Interrupted, StopRequests
+from renderer.pixel_slices import ROUND_SLICES, spp_text
 from tests.checkpoint_helpers import ROOT, WatchedChild
 from tests.scene_builder import furnace_toml
 
 # 24x16 pixels of `path` at max depth 3: about a million samples a second on one core, so
-# 8000 spp take seconds, and the first passes (1, 1, 4, 16, ... spp) take milliseconds.
+# 8000 spp take seconds, and the first passes (1, 4, 16, ... pixel slices, 256 to a sample) take milliseconds.
 SMALL = ["--size", "24x16", "--integrator", "path", "--max-depth", "3", "--arch", "cpu", "--seed", "5"]
-PROGRESS = re.compile(r"\] (\d+)(?:/\d+)? spp")
+PROGRESS = re.compile(r"\] (\d+(?:\.\d+)?)(?:/\d+)? spp")
 
 
 @pytest.fixture
@@ -39,9 +40,9 @@ def render_child(*args) -> WatchedChild:
     return WatchedChild([sys.executable, str(ROOT / "app.py"), "render", *map(str, args)])
 
 
-def spp_reported(stderr: str) -> int:
+def spp_reported(stderr: str) -> float:
     found = PROGRESS.findall(stderr)
-    return int(found[-1]) if found else 0
+    return float(found[-1]) if found else 0.0
 
 
 def past_first_pass(stderr: str) -> bool:
@@ -66,22 +67,24 @@ def test_a_signal_stops_at_a_pass_and_writes_the_image_so_far(tmp_path, scene, s
     assert stopped_after < 10, stopped_after
     line = [l for l in child.stdout.splitlines() if l.startswith(f"{out}  (")]
     assert len(line) == 1 and "interrupted" in line[0], child.stdout
-    spp = int(re.search(r"\((\d+) spp", line[0]).group(1))
+    shown = re.search(r"\((\d+(?:\.\d+)?) spp", line[0]).group(1)  # '12', or '12.34' within a round
+    spp = float(shown)
     assert spp >= 2
     if name.endswith(".png"):
         with Image.open(out) as image:
-            assert image.text["spp"] == str(spp) and image.text["status"] == "interrupted"
+            assert image.text["spp"] == shown and image.text["status"] == "interrupted"
             pixels = np.asarray(image)
         assert pixels.shape == (16, 24, 3) and pixels.max() > 0
     else:
         with OpenEXR.File(str(out)) as exr:
-            assert exr.header()["spp"] == str(spp) and exr.header()["status"] == "interrupted"
+            assert exr.header()["spp"] == shown and exr.header()["status"] == "interrupted"
         pixels = read_exr(out)
         assert np.isfinite(pixels).all() and pixels.max() > 0
     # --time 600 is a long render: its automatic checkpoint was announced, and kept for --resume.
     checkpoint = tmp_path / (name + ".ckpt")
     assert f"checkpointing to {checkpoint}" in child.stderr
-    assert read_header(checkpoint).spp_done == spp
+    header = read_header(checkpoint)
+    assert spp_text(header.spp_done + header.slices_in_round / ROUND_SLICES) == shown
 
 
 def test_a_second_ctrl_c_quits_at_once(tmp_path):
@@ -116,8 +119,9 @@ def test_resume_after_a_real_interrupt_is_bit_identical(tmp_path, scene):
     child.wait_for(past_first_pass, timeout=240)
     child.proc.send_signal(signal.SIGINT)
     assert child.finish(timeout=60) == 130, child.stderr
-    stopped_at = read_header(checkpoint).spp_done
-    assert 2 <= stopped_at < spp
+    header = read_header(checkpoint)
+    stopped_at = spp_text(header.spp_done + header.slices_in_round / ROUND_SLICES)
+    assert 2 <= header.spp_done < spp
     assert f"checkpoint at {stopped_at} spp" in child.stdout
 
     final = tmp_path / "final.exr"  # everything else comes from the checkpoint

@@ -13,6 +13,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from renderer.pixel_slices import spp_text
 from viewer.controller import MIN_SPEED
 from viewer.session import Controls
 
@@ -80,7 +81,7 @@ class HudStats:
     effects: Sequence[str] = ()
     fps: float = 0.0
     frame_ms: float = 0.0
-    spp: int = 0
+    spp: float = 0.0  # on average over the pixels: a round of pixel slices in progress counts by its share
     samples_per_second: float = 0.0
     internal_size: tuple[int, int] = (0, 0)
     window_size: tuple[int, int] = (0, 0)
@@ -122,7 +123,7 @@ def hud_lines(s: HudStats) -> list[str]:
         f"integrator  {s.integrator}",
         *effects,
         f"{s.fps:5.1f} fps   frame {s.frame_ms:6.1f} ms",
-        f"spp {s.spp}   {format_rate(s.samples_per_second)}",
+        f"spp {spp_text(s.spp)}   {format_rate(s.samples_per_second)}",
         f"resolution {w}x{h} ({percent:.0f}%, {state})",
         f"noise {format_noise(s.noise)}",
         f"non-finite dropped {s.rejected}",

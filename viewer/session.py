@@ -11,6 +11,10 @@ internal resolution and sample count the next frame renders:
   frame time stays near a target: `ResolutionController` picks the internal resolution from the
   measured cost of the previous frames. Once the camera has been still for `settle_seconds`, the
   next frame resets at full resolution and accumulates from there.
+- A still frame renders what fits the same budget: whole samples per pixel when one fits, else a
+  share of the pixel slices of a sample (renderer/pixel_slices.py), continuing where the last
+  frame stopped; so a frame never waits for a whole sample of a slow scene, and input is read
+  and the window redrawn every frame.
 """
 from __future__ import annotations
 
@@ -21,6 +25,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Callable, Hashable, Iterable, Optional
 
+from renderer.pixel_slices import ROUND_SLICES
 from viewer.camera_state import CameraState
 from viewer.controller import MAX_SPEED, MIN_SPEED, FreeLookController
 
@@ -58,7 +63,8 @@ class ResolutionController:
     Moving: pixels = budget / cost, i.e. the pixel count scaled by target/measured; as a linear
     scale of the window clamped to [min_scale, 1]. A lower target applies at once (the view
     must stay responsive); a higher one is approached by SCALE_RISE per frame (no oscillation).
-    Still: full resolution with as many samples per pixel as fit the budget (at least 1).
+    Still: full resolution with as many pixel slices as fit the budget (at least one slice,
+    ROUND_SLICES of which make a sample per pixel).
     """
 
     def __init__(self, full_size: tuple[int, int], target_seconds: float = DEFAULT_TARGET_SECONDS,
@@ -71,6 +77,10 @@ class ResolutionController:
         self.target_seconds = float(target_seconds)
         self.min_scale = float(min_scale)
         self.max_spp = int(max_spp)
+        # Fewest pixel slices a still frame renders: 1 lets a frame take any share of a sample;
+        # ROUND_SLICES makes every still frame whole samples (the viewer before pixel slices,
+        # which `bench interactive` measures against).
+        self.min_still_slices = 1
         self.scale = INITIAL_MOVING_SCALE
         self.overhead = 0.0
         self._costs: dict[Hashable, float] = {}
@@ -128,13 +138,15 @@ class ResolutionController:
         w, h = self.full_size
         return max(1, min(w, round(w * scale))), max(1, min(h, round(h * scale)))
 
-    def still_spp(self) -> int:
-        """Samples per pixel for a full-resolution frame that takes about the render budget."""
+    def still_slices(self) -> int:
+        """Pixel slices for a full-resolution frame that takes about the render budget (before
+        anything is measured: one slice, the cheapest frame there is)."""
         cost = self.cost
         if cost is None:
-            return 1
-        pixels = self.full_size[0] * self.full_size[1]
-        return int(min(max(self.render_budget() // (cost * pixels), 1), self.max_spp))
+            return self.min_still_slices
+        slice_cost = cost * self.full_size[0] * self.full_size[1] / ROUND_SLICES
+        slices = min(self.render_budget() // slice_cost, self.max_spp * ROUND_SLICES)
+        return int(max(slices, self.min_still_slices))
 
 
 # --- settings ---------------------------------------------------------------------------------
@@ -156,9 +168,14 @@ class Controls:
 @dataclass(frozen=True)
 class FramePlan:
     size: tuple[int, int]  # internal resolution of the film's active region
-    spp: int  # samples per pixel this frame
+    slices: int  # pixel slices this frame (ROUND_SLICES make one sample per pixel)
     reset: bool  # start the accumulation over before rendering
     interactive: bool  # rendering at the moving (reduced) resolution
+
+    @property
+    def spp(self) -> float:
+        """Samples per pixel this frame, on average over the image."""
+        return self.slices / ROUND_SLICES
 
 
 def fix_max_depth(new: int, old: int) -> int:
@@ -370,10 +387,10 @@ class ViewerSession:
         if self._pending_reset and self._pending_interactive:
             interactive = True
         if interactive:
-            size, spp = self.resolution.moving_size(starting=not self._was_interactive), 1
+            size, slices = self.resolution.moving_size(starting=not self._was_interactive), ROUND_SLICES
         else:
             self._last_motion = None
-            size, spp = self.window_size, self.resolution.still_spp()
+            size, slices = self.window_size, self.resolution.still_slices()
         reset = self._pending_reset or size != self.active_size
         if reset:
             self.resets += 1
@@ -381,7 +398,7 @@ class ViewerSession:
         self._pending_interactive = False
         self.active_size = size
         self._was_interactive = interactive
-        return FramePlan(size=size, spp=spp, reset=reset, interactive=interactive)
+        return FramePlan(size=size, slices=slices, reset=reset, interactive=interactive)
 
 
 # --- rate limiting (noise estimate) -----------------------------------------------------------

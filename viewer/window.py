@@ -34,6 +34,7 @@ import taichi as ti
 from renderer.camera import CameraFrame
 from renderer.image_io import write_exr, write_png
 from renderer.integrators import INTEGRATORS, integrator_names
+from renderer.pixel_slices import ROUND_SLICES
 from renderer.renderer import Renderer
 from renderer.scene.catalog import load_any, scene_files
 from renderer.tonemap import TONEMAPPERS, quantize, tonemap_into
@@ -238,14 +239,15 @@ class ViewerApp:
             s.cycle_tonemapper(TONEMAPPERS)
 
     def save_screenshot(self, now: Optional[float] = None) -> tuple[Path, Path]:
-        """The PNG exactly as the canvas shows the image (without the HUD) and the film's linear
-        mean as EXR (at the internal resolution of the moment)."""
+        """The PNG exactly as the canvas shows the image (without the HUD) and the same image linear,
+        as EXR (the film's mean at the internal resolution of the moment; in a first round of pixel
+        slices, unreached pixels filled as shown)."""
         r, s = self.renderer, self.session
         png, exr = screenshot_paths(self.screenshot_folder, r.scene.name, s.integrator, r.samples_done, datetime.now())
         if self.shown is not self.display:  # moving: the canvas stretches a smaller field
             tonemap_into(r.film, self.display, s.exposure, self._display_tonemapper())
         write_png(png, display_to_image(self.display))
-        write_exr(exr, r.image())
+        write_exr(exr, r.shown_image())
         self.last_screenshot = (png, exr)
         print(f"saved {png} and {exr.name}", file=sys.stderr)
         s.notify(f"saved {png.name} (+ .exr)", self.clock() if now is None else now)
@@ -338,11 +340,13 @@ class ViewerApp:
             renderer.reset(*plan.size)
             self._stats["noise"] = None  # "..." until the next (rate-limited) estimate
         t0 = time.perf_counter()
-        renderer.render(frame, plan.spp, integrator, s.max_depth, features=features)
+        renderer.render_slices(frame, plan.slices, integrator, s.max_depth, features=features)
         ti.sync()
         self._awaiting_render = False
         render_seconds = time.perf_counter() - t0
-        pixel_samples = plan.size[0] * plan.size[1] * plan.spp
+        # (an integrator with whole-image passes renders at least a sample per pixel: sppm)
+        pixel_samples = plan.size[0] * plan.size[1] * max(plan.slices, 0 if renderer.is_sliced(
+            integrator, features) else ROUND_SLICES) / ROUND_SLICES
         self._samples.add(now, pixel_samples)
 
         level = display_level_for([f.shape[:2] for f in self.display_levels],
@@ -373,7 +377,7 @@ class ViewerApp:
         return hud.HudStats(
             scene=r.scene.name, scene_position=f"{s.scene_index + 1}/{len(s.scenes)}", integrator=s.integrator,
             effects=features.active_effects(), fps=self._fps.rate(), frame_ms=self._frame_ms,
-            spp=r.samples_done, samples_per_second=self._samples.rate(),
+            spp=r.mean_spp, samples_per_second=self._samples.rate(),
             internal_size=(r.film.width, r.film.height), window_size=self.size,
             interactive=bool(self.last_plan and self.last_plan.interactive),
             noise=self._stats["noise"], rejected=self._stats["rejected"],

@@ -10,7 +10,8 @@ An integrator is a data-oriented class with
 `state` is the camera sample's sampler state (renderer.sampling.sampler).
 
 A multi-pass integrator (sppm) has no `li`; it provides make_program(renderer, features, sampler,
-lights) returning a RenderProgram subclass whose render() runs its own passes, and
+lights) returning a RenderProgram subclass with `sliced = False` whose render(width, height, spp,
+first_sample, seed, max_depth, *camera) runs its own whole-image passes, and
 `noise_estimate = False` when its film holds an estimate rather than a mean of samples.
 """
 from renderer.integrators.debug import AlbedoView, BvhView, DepthView, NormalsView, StepsView

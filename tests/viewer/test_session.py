@@ -7,6 +7,7 @@ from types import SimpleNamespace
 
 import pytest
 
+from renderer.pixel_slices import ROUND_SLICES
 from viewer.controller import MAX_SPEED
 from viewer.session import (MIN_SCALE, Controls, Every, RateMeter, ResolutionController, ViewerSession,
                             fix_max_depth, screenshot_dir, screenshot_paths, screenshot_stem)
@@ -100,16 +101,24 @@ def test_costs_are_kept_per_context():
     assert ctl.cost == pytest.approx(2.0 / PIXELS)
 
 
-def test_still_spp_fills_the_budget():
+def test_still_slices_fill_the_budget():
     ctl = ResolutionController(FULL, target_seconds=0.05)
-    assert ctl.still_spp() == 1  # nothing measured
+    assert ctl.still_slices() == 1  # nothing measured: the cheapest frame there is
     ctl.record(0.005, PIXELS)  # 5 ms per full-resolution sample
-    assert ctl.still_spp() == 10
+    assert ctl.still_slices() == 10 * ROUND_SLICES
     ctl.record(10.0, PIXELS * 1000)  # noise in the measurements never gives 0
-    assert ctl.still_spp() >= 1
+    assert ctl.still_slices() >= 1
     ctl2 = ResolutionController(FULL, target_seconds=0.05, max_spp=4)
     ctl2.record(1e-6, PIXELS)
-    assert ctl2.still_spp() == 4
+    assert ctl2.still_slices() == 4 * ROUND_SLICES
+
+
+def test_a_slow_scene_renders_a_share_of_a_sample_per_still_frame():
+    """1.2 s per sample per pixel (the showcase at 960x540 on two cores) and a 50 ms budget: a
+    still frame renders the slices that fit (floor(0.05 / (1.2 / 256)) = 10), not a whole sample."""
+    ctl = ResolutionController(FULL, target_seconds=0.05)
+    ctl.record(1.2, PIXELS)
+    assert ctl.still_slices() == int(0.05 // (1.2 / ROUND_SLICES)) == 10
 
 
 def test_bad_measurements_are_ignored():

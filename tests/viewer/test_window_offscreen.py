@@ -12,6 +12,7 @@ import pytest
 from renderer.image_io import read_exr
 from renderer.integrators import INTEGRATORS
 from renderer.scene.catalog import resolve_scene, scene_files
+from renderer.pixel_slices import ROUND_SLICES, filled_mean_array
 from renderer.tonemap import tonemap_array
 from viewer import hud
 from viewer.window import FrameInput, ViewerApp, display_level_for, display_level_sizes, window_buffer_to_image
@@ -41,9 +42,13 @@ def settle(app, frames=3):
 
 
 def expected_display(app):
-    s = app.session
+    """The film tone-mapped, pixels a partial first round has not reached filled from their
+    nearest sampled grid point (renderer/pixel_slices.py)."""
+    s, film = app.session, app.renderer.film
     mapper = s.display_tonemapper(INTEGRATORS[s.integrator].display_tonemapper)
-    return tonemap_array(app.renderer.image(), s.exposure, mapper)
+    shown = filled_mean_array(app.renderer.image(), film.sample_counts() + film.rejected_counts())
+    np.testing.assert_array_equal(shown, app.renderer.shown_image())
+    return tonemap_array(shown, s.exposure, mapper)
 
 
 @pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
@@ -81,12 +86,15 @@ def test_idle_frames_accumulate_without_reset(app):
     app.session.hud_visible = True  # untouched sliders must not count as changes
     app.session.set_focus_distance(3.1234567)  # not representable in float32, like the slider's
     settle(app, 1)
-    resets, spp = app.session.resets, app.renderer.samples_done
+    resets, slices = app.session.resets, app.renderer.slices_done
     for _ in range(3):
         app.step(FrameInput(cursor=(0.5, 0.5)))  # a cursor without a button is no motion
     assert app.session.resets == resets
-    assert app.renderer.samples_done > spp
-    assert app.renderer.film.stats()["min_spp"] == app.renderer.samples_done
+    assert app.renderer.slices_done > slices
+    # Every pixel has the whole rounds; those of the round in progress's slices one more.
+    counts = app.renderer.film.sample_counts() + app.renderer.film.rejected_counts()
+    assert counts.min() == app.renderer.samples_done
+    assert counts.mean() == pytest.approx(app.renderer.mean_spp, rel=0.05)
 
 
 def test_movement_lowers_the_resolution_then_returns_to_full(app):
@@ -116,8 +124,9 @@ def test_movement_lowers_the_resolution_then_returns_to_full(app):
     app.step(FrameInput(cursor=(0.6, 0.5)))  # still (settle time 0 here): full size, reset
     assert (film.width, film.height) == SIZE and app.last_plan.reset
     assert app.shown is app.display
+    slices = app.renderer.slices_done
     app.step()
-    assert not app.last_plan.reset and app.renderer.samples_done >= 2
+    assert not app.last_plan.reset and app.renderer.slices_done > slices
 
 
 def test_left_drag_on_the_hud_does_not_turn_the_camera(app):
@@ -185,7 +194,10 @@ def test_integrator_switch_shows_a_notice_then_renders(app):
         assert app.renderer.samples_done == spp  # nothing rendered (or reset) on that frame
         app.step()
         assert app.compiling is None
-    assert app.last_plan.reset and app.renderer.samples_done == app.last_plan.spp
+    renderer, plan = app.renderer, app.last_plan
+    whole_passes = max(1, plan.slices // ROUND_SLICES) * ROUND_SLICES  # an integrator without slices
+    sliced = renderer.is_sliced(name, renderer.features())
+    assert plan.reset and renderer.slices_done == (plan.slices if sliced else whole_passes)
     settle(app, 1)
     shown = window_buffer_to_image(app.last_frame)
     assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1

@@ -1,0 +1,134 @@
+"""Pixel slices: a sample per pixel split into ROUND_SLICES interleaved parts that cover the image evenly.
+
+The image is cut into CELL x CELL cells; slice r of a round is the pixel at the same offset in
+every cell, offsets taken in the order of a CELL x CELL Bayer (ordered-dither) matrix. The first
+4^j slices of a round are then the regular grid of spacing CELL / 2^j, so a frame that renders
+only a few slices still samples the whole image evenly, and an image whose round is unfinished
+can show every pixel from the nearest finer-or-equal grid point already reached (`anchor`).
+
+A pixel's sample index is its own count of samples so far (the film's accepted plus rejected
+counts), not a global counter: pixels may be one sample apart within a round, and a pixel's
+sequence of samples is the same however the rounds were cut into passes. A render is therefore
+bit-identical whatever slices its passes took (frames of the viewer, chunks of `render`, a
+resumed checkpoint).
+"""
+import numpy as np
+import taichi as ti
+
+CELL_BITS = 4
+CELL = 1 << CELL_BITS  # cells of 16 x 16 pixels
+ROUND_SLICES = CELL * CELL  # 256 slices make one sample per pixel
+
+
+@ti.func
+def slice_offset(rank):
+    """(x, y) in the cell of slice `rank` in [0, ROUND_SLICES): the inverse of the Bayer matrix
+    B(x, y) = bit_reverse(interleave(x ^ y, y)) (x ^ y on the odd bits, y on the even bits)."""
+    reversed_rank = 0
+    for b in ti.static(range(2 * CELL_BITS)):
+        reversed_rank |= ((rank >> b) & 1) << (2 * CELL_BITS - 1 - b)
+    x = 0
+    y = 0
+    for i in ti.static(range(CELL_BITS)):
+        y_bit = (reversed_rank >> (2 * i)) & 1
+        x_bit = ((reversed_rank >> (2 * i + 1)) & 1) ^ y_bit
+        x |= x_bit << i
+        y |= y_bit << i
+    return x, y
+
+
+@ti.func
+def slice_pixel(i, slice_first, slice_count, width, height):
+    """The pixel (x, y) of loop index i of a pass over slices [slice_first, slice_first + slice_count).
+
+    A whole round (slice_count == ROUND_SLICES) visits the pixels in raster order (neighbouring
+    loop indices are neighbouring pixels, as a plain full pass); a partial one visits cell after
+    cell of each slice. (x, y) may fall outside the image in a partial pass (the last row and
+    column of cells are cut by the image's edge): callers skip those.
+    """
+    x = 0
+    y = 0
+    if slice_count >= ROUND_SLICES:
+        x = i % width
+        y = i // width
+    else:
+        cells_x = (width + CELL - 1) >> CELL_BITS
+        cells = cells_x * ((height + CELL - 1) >> CELL_BITS)
+        ox, oy = slice_offset(slice_first + i // cells)
+        cell = i % cells
+        x = ((cell % cells_x) << CELL_BITS) + ox
+        y = ((cell // cells_x) << CELL_BITS) + oy
+    return x, y
+
+
+@ti.func
+def pass_length(slice_count, width, height):
+    """Loop indices of a pass over `slice_count` slices (see slice_pixel)."""
+    n = width * height
+    if slice_count < ROUND_SLICES:
+        n = slice_count * ((width + CELL - 1) >> CELL_BITS) * ((height + CELL - 1) >> CELL_BITS)
+    return n
+
+
+# --- numpy (tests, and the host's view of which pixels a slice holds) -----------------------------
+
+
+def bayer_matrix() -> np.ndarray:
+    """B[y, x]: the rank of offset (x, y) in a round, CELL x CELL."""
+    y, x = np.mgrid[0:CELL, 0:CELL]
+    mixed = np.zeros_like(x)
+    for i in range(CELL_BITS):
+        mixed |= (((x ^ y) >> i) & 1) << (2 * i + 1)
+        mixed |= ((y >> i) & 1) << (2 * i)
+    reversed_rank = np.zeros_like(mixed)
+    for b in range(2 * CELL_BITS):
+        reversed_rank |= ((mixed >> b) & 1) << (2 * CELL_BITS - 1 - b)
+    return reversed_rank
+
+
+def slice_mask(slice_first: int, slice_count: int, width: int, height: int) -> np.ndarray:
+    """Boolean (height, width) [row 0 = y 0], True where a pass over those slices samples."""
+    ranks = np.tile(bayer_matrix(), ((height + CELL - 1) // CELL, (width + CELL - 1) // CELL))[:height, :width]
+    if slice_count >= ROUND_SLICES:
+        return np.ones((height, width), bool)
+    return (ranks >= slice_first) & (ranks < slice_first + slice_count)
+
+
+@ti.func
+def filled_mean(mean, count, rejected, x, y):
+    """The film's mean at (x, y), or, while the round that first reaches it is unfinished, the mean
+    at the nearest grid point of the finest spacing (2, 4, ... CELL) already sampled: a partial
+    first round shows as a coarse image that refines, never as black holes. The grid points of
+    spacing s are the cell offsets that are multiples of s, which the Bayer order reaches first."""
+    value = mean[x, y]
+    found = count[x, y] + rejected[x, y] > 0
+    for k in ti.static(range(1, CELL_BITS + 1)):
+        if not found:
+            ax = x & ~((1 << k) - 1)
+            ay = y & ~((1 << k) - 1)
+            if count[ax, ay] + rejected[ax, ay] > 0:
+                value = mean[ax, ay]
+                found = True
+    return value
+
+
+def filled_mean_array(mean: np.ndarray, samples: np.ndarray) -> np.ndarray:
+    """numpy twin of filled_mean over a whole image: mean (H, W, 3) and samples (H, W), row 0 at
+    the top as the film returns them (the grid is anchored at the film's bottom-left corner)."""
+    mean, samples = mean[::-1], samples[::-1]  # y up, as the film's fields
+    height, width = samples.shape
+    y, x = np.mgrid[0:height, 0:width]
+    out = mean.copy()
+    found = samples > 0
+    for k in range(1, CELL_BITS + 1):
+        mask = ~((1 << k) - 1)
+        ay, ax = y & mask, x & mask
+        take = ~found & (samples[ay, ax] > 0)
+        out[take] = mean[ay[take], ax[take]]
+        found |= take
+    return out[::-1]
+
+
+def spp_text(spp: float) -> str:
+    """Samples per pixel as shown to users: '64' when whole, '12.34' within a round of slices."""
+    return f"{spp:.0f}" if float(spp).is_integer() else f"{spp:.2f}"

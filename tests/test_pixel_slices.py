@@ -1,0 +1,70 @@
+"""Pixel slices (renderer/pixel_slices.py): a round of ROUND_SLICES slices visits every pixel once,
+its first 4^j slices are the regular grid of spacing CELL / 2^j, and the viewer's fill of pixels a
+partial first round has not reached is the same on the device as in numpy."""
+import numpy as np
+import pytest
+import taichi as ti
+
+from renderer.film import Film, FilmState
+from renderer.pixel_slices import (CELL, ROUND_SLICES, bayer_matrix, filled_mean_array, pass_length, slice_mask,
+                                   slice_pixel, spp_text)
+from renderer.tonemap import display_array, tonemap_into
+
+
+def test_the_bayer_order_is_a_permutation_whose_prefixes_are_regular_grids():
+    ranks = bayer_matrix()
+    assert sorted(ranks.ravel().tolist()) == list(range(ROUND_SLICES))
+    for j in range(5):  # 1, 4, 16, 64, 256 slices
+        spacing = CELL >> j
+        grid = np.zeros((CELL, CELL), bool)
+        grid[::spacing, ::spacing] = True
+        np.testing.assert_array_equal(ranks < 4 ** j, grid)
+
+
+@ti.kernel
+def _visit(visits: ti.types.ndarray(), first: ti.i32, count: ti.i32, width: ti.i32, height: ti.i32):
+    for i in range(pass_length(count, width, height)):
+        x, y = slice_pixel(i, first, count, width, height)
+        if x < width and y < height:
+            ti.atomic_add(visits[height - 1 - y, x], 1)  # row 0 at the top, as the film's arrays
+
+
+@pytest.mark.parametrize("width, height", [(67, 45), (16, 16), (5, 3), (1, 1)])
+def test_passes_over_slices_visit_their_pixels_and_a_round_visits_each_once(width, height):
+    total = np.zeros((height, width), np.int32)
+    for first, count in ((0, 1), (1, 6), (7, 100), (107, 149)):  # a round cut into unequal passes
+        visits = np.zeros((height, width), np.int32)
+        _visit(visits, first, count, width, height)
+        np.testing.assert_array_equal(visits, slice_mask(first, count, width, height)[::-1].astype(np.int32))
+        total += visits
+    np.testing.assert_array_equal(total, 1)
+    whole = np.zeros((height, width), np.int32)
+    _visit(whole, 0, ROUND_SLICES, width, height)  # a whole round, in raster order
+    np.testing.assert_array_equal(whole, 1)
+
+
+def test_the_display_fills_unreached_pixels_from_the_nearest_sampled_grid_point():
+    """A film whose first round stopped after 9 slices: the tone-mapped display (device) equals the
+    numpy fill, and no displayed pixel is black although most were never sampled."""
+    width, height = 37, 21
+    rng = np.random.default_rng(3)
+    reached = slice_mask(0, 9, width, height)[::-1]  # film rows: row 0 at the top
+    mean = np.where(reached[..., None], rng.uniform(0.2, 2.0, (height, width, 3)), 0.0).astype(np.float32)
+    count = reached.astype(np.int32)
+    film = Film(width, height)
+    film.restore(FilmState(mean, np.zeros_like(mean), count, np.zeros_like(count)))
+    out = np.zeros((width, height, 3), np.float32)
+    tonemap_into(film, out, 0.0, "aces")
+    expected = display_array(filled_mean_array(mean, count), 0.0, "aces")  # (H, W, 3), row 0 at the top
+    shown = np.transpose(out, (1, 0, 2))[::-1]
+    np.testing.assert_allclose(shown, expected, atol=1e-5)  # the kernel and its numpy twin, in f32
+    assert (shown.max(axis=2) > 0).all() and reached.mean() < 0.05
+
+
+def test_a_full_film_is_shown_as_it_is():
+    mean = np.random.default_rng(4).uniform(0, 1, (6, 9, 3)).astype(np.float32)
+    np.testing.assert_array_equal(filled_mean_array(mean, np.ones((6, 9), np.int32)), mean)
+
+
+def test_spp_text():
+    assert spp_text(64) == "64" and spp_text(12.25) == "12.25" and spp_text(9 / ROUND_SLICES) == "0.04"
