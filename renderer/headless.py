@@ -184,7 +184,9 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
         if progress and seconds_per_slice is not None:  # the compiling pass says nothing of the rate
             progress(renderer.mean_spp, target_spp, rendered(), width * height, job.seconds)
     total = time.perf_counter() - start
-    return RenderResult(renderer.image(), renderer.samples_done, total, renderer.film.stats()["rejected"], integrator,
+    # A render stopped within its first round shows the pixels not reached yet as the viewer does
+    # (the nearest sampled grid point); their variance stays +inf. A complete render: the mean.
+    return RenderResult(renderer.shown_image(), renderer.samples_done, total, renderer.film.stats()["rejected"], integrator,
                         renderer.film.variance_of_mean_image(), interrupted, rendered(), renderer.film,
                         renderer.slices_done % ROUND_SLICES)
 

@@ -130,5 +130,8 @@ def filled_mean_array(mean: np.ndarray, samples: np.ndarray) -> np.ndarray:
 
 
 def spp_text(spp: float) -> str:
-    """Samples per pixel as shown to users: '64' when whole, '12.34' within a round of slices."""
-    return f"{spp:.0f}" if float(spp).is_integer() else f"{spp:.2f}"
+    """Samples per pixel as shown to users: '64' when whole, '12.34' within a round of slices,
+    '0.0352' (three significant digits) within the first."""
+    if float(spp).is_integer():
+        return f"{spp:.0f}"
+    return f"{spp:.2f}" if spp >= 1 else f"{spp:.3g}"

@@ -112,7 +112,7 @@ def run_render(args, stop: StopRequests) -> int:
     result = render(plan.scene, plan.job, progress=progress_bar(), stop=stop, checkpoints=plan.checkpoints,
                     resume=plan.resume)
     print(file=sys.stderr)
-    if result.spp == 0:
+    if result.mean_spp == 0:  # (a share of a sample is an image: pixels a first round reached)
         print("interrupted before the first pass: nothing written", file=sys.stderr)
     else:
         write_outputs(plan, result)

@@ -76,6 +76,18 @@ def test_continuing_a_stopped_render_is_bit_identical(scene_path, passes):
     np.testing.assert_array_equal(continued.variance, whole.variance)
 
 
+def test_a_render_stopped_within_its_first_sample_is_an_image(scene_path):
+    """One pass (one pixel slice of 256) of a furnace where every pixel is lit: the image is whole,
+    finite and non-zero everywhere (unreached pixels filled from the sampled grid), while only the
+    reached pixels have a finite variance and a sample."""
+    scene = load_scene(scene_path)
+    part = render(scene, RenderJob(spp=300, size=(40, 24), integrator="path", seed=2), stop=StopAfter(1))
+    assert part.interrupted and part.spp == 0 and part.slices_in_round == 1 and part.spp_text() == "0.00391"
+    assert np.isfinite(part.image).all() and (part.image > 0).all()
+    reached = part.film.sample_counts() > 0
+    assert 0 < reached.mean() < 0.02 and np.isfinite(part.variance[~reached]).sum() == 0
+
+
 def test_restore_refuses_a_state_of_other_types(scene_path):
     from renderer.film import Film
 

@@ -67,4 +67,4 @@ def test_a_full_film_is_shown_as_it_is():
 
 
 def test_spp_text():
-    assert spp_text(64) == "64" and spp_text(12.25) == "12.25" and spp_text(9 / ROUND_SLICES) == "0.04"
+    assert spp_text(64) == "64" and spp_text(12.25) == "12.25" and spp_text(9 / ROUND_SLICES) == "0.0352"

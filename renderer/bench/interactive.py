@@ -36,7 +36,7 @@ import warnings
 from pathlib import Path
 
 from renderer.bench.common import (describe_error, load_average, log, print_table, pyplot, report_header,
-                                   save_figure, speed_runtime, verdict, write_json)
+                                   save_figure, verdict, write_json)
 from renderer.pixel_slices import ROUND_SLICES
 
 DEFAULT_SIZE = (960, 540)
@@ -48,6 +48,18 @@ SWITCH_FRAMES_LIMIT = 50  # a switch that has not shown an image after this many
 FULL_INTEGRATORS = ("path", "nee", "mis", "sppm", "normals")
 QUICK = {"scenes": ("cornell_box", "showcase"), "integrators": ("path", "mis"), "size": (320, 180),
          "still_seconds": 1.0, "moving_seconds": 0.7}
+
+
+def viewer_runtime() -> str:
+    """Taichi as `app.py view` starts it (CPU, kernels optimised for compile time: what a user
+    waits for on a switch), unless the caller has initialised it already; the back-end's name."""
+    import taichi as ti
+
+    from renderer.arch import init_taichi
+
+    if not ti.lang.impl.get_runtime().prog:
+        init_taichi("cpu", optimize="compile")
+    return str(ti.lang.impl.current_cfg().arch).split(".")[-1]
 
 
 def percentile(values, q: float) -> float:
@@ -222,7 +234,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, integ
     if size is not None:
         config["size"] = tuple(size)
     t_start = time.perf_counter()
-    arch = speed_runtime()
+    arch = viewer_runtime()
     load_before = load_average()
     paths = [resolve_scene(name) for name in config["scenes"]]
     with warnings.catch_warnings():
