@@ -8,7 +8,7 @@ lengths in glTF JSON, deleted fields, values of the wrong kind, extreme numbers,
 duplicated lines (tests/fuzz/mutations.py). Case i is a pure function of a fixed seed and i, so
 a failure names a case that can be run again.
 
-The cases run in a worker process (tests/fuzz/fuzz_worker.py) for LANTERN_FUZZ_SECONDS (20 by
+The cases run in a worker process (tests/fuzz/fuzz_worker.py) for LANTERN_FUZZ_SECONDS (12 by
 default) under a memory budget; a worker that stops reporting for WATCHDOG_SECONDS or dies is
 recorded as a hang or a crash of its case and replaced.
 """
@@ -26,7 +26,7 @@ from pathlib import Path
 from tests.fuzz.fuzz_cases import make_workspace
 
 REPO = Path(__file__).resolve().parents[2]
-SECONDS = float(os.environ.get("LANTERN_FUZZ_SECONDS", "20"))
+SECONDS = float(os.environ.get("LANTERN_FUZZ_SECONDS", "12"))  # the suite's time budget; set more to search longer
 BUDGET = 512 << 20  # what one case's files may ask for
 RENDER_SECONDS = 0.4  # of the run spent rendering tiny images of cases that load
 WATCHDOG_SECONDS = 45  # longer than a case's own alarm: a case stuck inside native code
