@@ -16,3 +16,21 @@ def taichi_runtime():
     ti.init(arch=ti.cpu, random_seed=0, offline_cache=True, **taichi_options("compile"))
     yield
     ti.reset()
+
+
+# The longest test files run first. Whole files go to a worker (--dist loadfile) in collection
+# order, and tests/viewer comes last alphabetically: its offscreen window file (every catalog scene
+# compiled) then ran alone at the end while the other core idled. Longest first shortens the run.
+LONGEST_FILES = (
+    "tests/viewer/test_window_offscreen.py",
+    "tests/render/test_glass_furnace.py",
+    "tests/bench/test_bench_features.py",
+    "tests/test_vulkan.py",
+    "tests/render/test_gltf_vulkan.py",
+)
+
+
+def pytest_collection_modifyitems(items):
+    rank = {path: i for i, path in enumerate(LONGEST_FILES)}
+    # A stable sort: the other files, and the tests within every file, keep their order.
+    items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
