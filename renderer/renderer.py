@@ -147,11 +147,13 @@ class Renderer:
         seed = (settings.seed if seed is None else seed) & 0xFFFFFFFF
         max_depth = settings.max_depth if max_depth is None else max_depth
         width, height = self.film.width, self.film.height
+        self._launched.add((integrator, features, sampler))
         if not program.sliced:
             spp = max(1, slices // ROUND_SLICES)
             program.render(width, height, spp, self.samples_done, seed, max_depth, *camera.kernel_args())
             self.slices_done += spp * ROUND_SLICES
-        left = slices if program.sliced else 0
+            return
+        left = slices
         while left > 0:
             cursor = self.slices_done % ROUND_SLICES
             if cursor == 0 and left >= ROUND_SLICES:
@@ -161,7 +163,6 @@ class Renderer:
             program.render(width, height, spp, first, count, seed, max_depth, *camera.kernel_args())
             self.slices_done += spp * count
             left -= spp * count
-        self._launched.add((integrator, features, sampler))
 
     def is_sliced(self, integrator: str, features: Features, sampler: str = "independent") -> bool:
         """Whether the integrator's passes can be cut into pixel slices (all but sppm's)."""

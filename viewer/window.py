@@ -340,13 +340,13 @@ class ViewerApp:
             renderer.reset(*plan.size)
             self._stats["noise"] = None  # "..." until the next (rate-limited) estimate
         t0 = time.perf_counter()
+        slices_before = renderer.slices_done
         renderer.render_slices(frame, plan.slices, integrator, s.max_depth, features=features)
         ti.sync()
         self._awaiting_render = False
         render_seconds = time.perf_counter() - t0
-        # (an integrator with whole-image passes renders at least a sample per pixel: sppm)
-        pixel_samples = plan.size[0] * plan.size[1] * max(plan.slices, 0 if renderer.is_sliced(
-            integrator, features) else ROUND_SLICES) / ROUND_SLICES
+        # What was rendered (an integrator with whole-image passes, sppm, rounds up to a sample)
+        pixel_samples = plan.size[0] * plan.size[1] * (renderer.slices_done - slices_before) / ROUND_SLICES
         self._samples.add(now, pixel_samples)
 
         level = display_level_for([f.shape[:2] for f in self.display_levels],
