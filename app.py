@@ -79,6 +79,13 @@ def _positive_seconds(text: str) -> float:
     return value
 
 
+def _positive_fraction(text: str) -> float:
+    value = _number(text, float)
+    if not 0 < value < 1e3:
+        raise argparse.ArgumentTypeError(f"must be a positive relative error such as 0.02, got {text}")
+    return value
+
+
 def _exposure(text: str) -> float:
     value = _number(text, float)
     low, high = EXPOSURE_EV_RANGE
@@ -143,6 +150,16 @@ def build_parser() -> argparse.ArgumentParser:
                         metavar="SECONDS", help=f"seconds between checkpoints (default {DEFAULT_CHECKPOINT_EVERY:g})")
     render.add_argument("--resume", type=Path, metavar="CHECKPOINT",
                         help="continue a checkpointed render (its scene and options unless given)")
+    render.add_argument("--denoise", action="store_true",
+                        help="write the image denoised by Intel Open Image Denoise (fed the albedo and normal AOVs)")
+    render.add_argument("--aovs", action="store_true",
+                        help="also write albedo, normal, variance, raw colour and spp per pixel: as layers of an "
+                             ".exr --out, or to OUT.aovs.exr beside a .png")
+    render.add_argument("--noise-threshold", type=_positive_fraction, metavar="E",
+                        help="adaptive sampling: stop pixels whose relative standard error is below E (e.g. 0.02); "
+                             "--spp stays the maximum")
+    render.add_argument("--min-spp", type=_render_setting("spp", I32_MAX), metavar="N",
+                        help="adaptive sampling: samples every pixel takes before it may stop (default 16)")
     _add_input_options(render)
 
     sub.add_parser("list", help="list scenes and integrators")

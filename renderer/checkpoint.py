@@ -23,16 +23,18 @@ from urllib.parse import unquote
 
 import numpy as np
 
+from renderer.adaptive import DEFAULT_MIN_SPP
 from renderer.atomic_write import atomic_output
 from renderer.film import FilmState
 from renderer.scene.errors import SceneError
 from renderer.scene.description import Scene
 
-# The layout of the archive; a reader refuses others. 2: the position in a round of pixel slices.
-FORMAT = 2
+# The layout of the archive; a reader refuses others. 2: the position in a round of pixel slices;
+# 3: adaptive sampling's state and the denoising AOVs (optional arrays), their options.
+FORMAT = 3
 CHECKPOINT_EXTENSION = ".ckpt"
 HEADER = "header"
-INTEGER_FIELDS = ("width", "height", "seed", "max_depth", "spp_done", "slices_in_round")
+INTEGER_FIELDS = ("width", "height", "seed", "max_depth", "spp_done", "slices_in_round", "min_spp")
 
 
 @dataclass
@@ -58,6 +60,10 @@ class CheckpointHeader:
     exposure: float
     tonemapper: str | None
     automatic: bool  # a default checkpoint beside --out: removed when the render completes
+    denoise: bool = False
+    aovs: bool = False
+    noise_threshold: float | None = None  # adaptive sampling (None: uniform)
+    min_spp: int = DEFAULT_MIN_SPP
     format: int = FORMAT
 
     def mismatches(self, other: "CheckpointHeader") -> list[str]:
@@ -83,7 +89,9 @@ def save_checkpoint(path: str | os.PathLike, header: CheckpointHeader, state: Fi
     text = json.dumps(asdict(header), sort_keys=True)
     with atomic_output(path) as temporary, open(temporary, "wb") as f:
         # A file object: given a name, np.savez would append ".npz" to it.
-        np.savez(f, **{HEADER: np.array(text)}, **{name: getattr(state, name) for name, _, _ in FilmState.ARRAYS})
+        arrays = {name: getattr(state, name) for name, _, _ in FilmState.ARRAYS + FilmState.OPTIONAL_ARRAYS
+                  if getattr(state, name) is not None}
+        np.savez(f, **{HEADER: np.array(text)}, **arrays)
 
 
 def read_header(path: str | os.PathLike) -> CheckpointHeader:
@@ -97,6 +105,7 @@ def load_checkpoint(path: str | os.PathLike) -> tuple[CheckpointHeader, FilmStat
         header = _header(path, archive)
         try:
             arrays = {name: archive[name] for name, _, _ in FilmState.ARRAYS}
+            arrays.update({name: archive[name] for name, _, _ in FilmState.OPTIONAL_ARRAYS if name in archive.files})
         except (KeyError, ValueError, OSError, zipfile.BadZipFile) as error:
             raise SceneError(path, f"not a complete Lantern checkpoint ({_one_line(error)})") from None
     state = FilmState(**arrays)

@@ -44,8 +44,14 @@ class FilmState:
     m2: np.ndarray  # float32 (height, width, 3): Welford's sum of squared deviations
     count: np.ndarray  # int32 (height, width): accepted samples
     rejected: np.ndarray  # int32 (height, width): non-finite samples dropped
+    # Optional layers (None: absent): adaptive sampling's per-pixel state (renderer/adaptive.py) and
+    # the denoising AOVs' running means (renderer/aovs.py).
+    adaptive: np.ndarray | None = None  # int32 (height, width)
+    albedo: np.ndarray | None = None  # float32 (height, width, 3)
+    normal: np.ndarray | None = None  # float32 (height, width, 3)
 
     ARRAYS = (("mean", np.float32, 3), ("m2", np.float32, 3), ("count", np.int32, 0), ("rejected", np.int32, 0))
+    OPTIONAL_ARRAYS = (("adaptive", np.int32, 0), ("albedo", np.float32, 3), ("normal", np.float32, 3))
 
     @property
     def size(self) -> tuple[int, int]:
@@ -57,8 +63,10 @@ class FilmState:
         if np.ndim(self.count) != 2:
             return f"sample counts have shape {np.shape(self.count)}, expected (height, width)"
         height, width = self.count.shape
-        for name, dtype, channels in self.ARRAYS:
+        for name, dtype, channels in self.ARRAYS + self.OPTIONAL_ARRAYS:
             array = getattr(self, name)
+            if array is None and (name, dtype, channels) in self.OPTIONAL_ARRAYS:
+                continue
             shape = (height, width, channels) if channels else (height, width)
             if not isinstance(array, np.ndarray) or array.dtype != dtype or array.shape != shape:
                 return (f"'{name}' is {getattr(array, 'dtype', type(array).__name__)} {np.shape(array)}, "
@@ -78,6 +86,7 @@ class Film:
         self.m2 = ti.Vector.field(3, ti.f32, shape=shape)
         self.count = ti.field(ti.i32, shape=shape)
         self.rejected = ti.field(ti.i32, shape=shape)
+        self.adaptive = ti.field(ti.i32, shape=shape)  # adaptive sampling's state (renderer/adaptive.py)
         # Reduction results of stats(): [min spp, total rejected, pixels with a noise estimate],
         # [spp sum, sum of squared relative errors].
         self._int_totals = ti.field(ti.i32, shape=3)
@@ -97,18 +106,20 @@ class Film:
 
     @ti.kernel
     def _clear(self):
-        # One kernel for the four fields (four fill() calls would compile four).
+        # One kernel for the five fields (five fill() calls would compile five).
         for x, y in self.mean:
             self.mean[x, y] = ti.math.vec3(0.0)
             self.m2[x, y] = ti.math.vec3(0.0)
             self.count[x, y] = 0
             self.rejected[x, y] = 0
+            self.adaptive[x, y] = 0
 
     def state(self) -> FilmState:
         """The exact accumulation of the active region (what a checkpoint keeps)."""
         m2 = np.empty((self.height, self.width, 3), dtype=np.float32)
         self._copy_vec3(self.m2, m2, self.width, self.height)
-        return FilmState(self.mean_image(), m2, self.sample_counts(), self.rejected_counts())
+        return FilmState(self.mean_image(), m2, self.sample_counts(), self.rejected_counts(),
+                         adaptive=self._active_rows(self.adaptive.to_numpy()))
 
     def restore(self, state: FilmState) -> None:
         """Make `state` the film's accumulation, its size the active region; adding samples then
@@ -117,12 +128,13 @@ class Film:
         if problem:
             raise ValueError(f"film state: {problem}")
         self.reset(*state.size)
-        self._load_state(state.mean, state.m2, state.count, state.rejected, self.width, self.height)
+        adaptive = state.adaptive if state.adaptive is not None else np.zeros_like(state.count)
+        self._load_state(state.mean, state.m2, state.count, state.rejected, adaptive, self.width, self.height)
 
     @ti.kernel
     def _load_state(self, mean: ti.types.ndarray(), m2: ti.types.ndarray(), count: ti.types.ndarray(),
-                    rejected: ti.types.ndarray(), width: ti.i32, height: ti.i32):
-        # One kernel for the four fields (from_numpy would compile one per field).
+                    rejected: ti.types.ndarray(), adaptive: ti.types.ndarray(), width: ti.i32, height: ti.i32):
+        # One kernel for the five fields (from_numpy would compile one per field).
         for x, y in ti.ndrange(width, height):
             row = height - 1 - y
             for c in ti.static(range(3)):
@@ -130,6 +142,7 @@ class Film:
                 self.m2[x, y][c] = m2[row, x, c]
             self.count[x, y] = count[row, x]
             self.rejected[x, y] = rejected[row, x]
+            self.adaptive[x, y] = adaptive[row, x]
 
     @ti.func
     def add_sample(self, x: ti.i32, y: ti.i32, value: ti.math.vec3):

@@ -19,12 +19,13 @@ from typing import Protocol
 
 import numpy as np
 
+from renderer.adaptive import DEFAULT_MIN_SPP
 from renderer.camera import CameraFrame
 from renderer.film import Film, FilmState
 from renderer.image_io import write_exr, write_png
 from renderer.integrators import make_integrator
 from renderer.pixel_slices import ROUND_SLICES, spp_text
-from renderer.renderer import Renderer
+from renderer.renderer import AdaptiveSettings, Renderer
 from renderer.scene.description import Scene
 from renderer.tonemap import tonemap_array
 from renderer.version import lantern_version
@@ -49,6 +50,14 @@ class RenderJob:
     seed: int | None = None
     exposure: float = 0.0
     tonemapper: str | None = None
+    denoise: bool = False  # the image written is denoised (renderer/denoise.py)
+    aovs: bool = False  # albedo, normal, variance, raw colour and spp written with it
+    noise_threshold: float | None = None  # adaptive sampling (renderer/adaptive.py); None: uniform
+    min_spp: int = DEFAULT_MIN_SPP
+
+    @property
+    def keeps_aovs(self) -> bool:
+        return self.denoise or self.aovs
 
     def resolved(self, scene: Scene) -> "RenderJob":
         """The job with the scene's settings where it names none (except a budget: spp or time)."""
@@ -70,10 +79,16 @@ class Resume:
     slices_in_round: int = 0  # pixel slices of the round after spp_done already rendered
 
 
+class FilmSource(Protocol):
+    """What a checkpoint is taken from: the Renderer (its film with the AOVs)."""
+
+    def state(self) -> FilmState: ...
+
+
 class Checkpoints(Protocol):
     """What the render loop tells the checkpoint policy (renderer/render_command.py) after a pass."""
 
-    def after_pass(self, film: Film, spp_done: int, seconds_rendered: float, expected_seconds: float,
+    def after_pass(self, film: FilmSource, spp_done: int, seconds_rendered: float, expected_seconds: float,
                    slices_in_round: int = 0) -> None: ...
 
 
@@ -89,12 +104,23 @@ class RenderResult:
     variance: np.ndarray | None = None
     interrupted: bool = False  # stopped by a request before its budget was spent
     seconds_rendered: float = 0.0  # rendering time the --time budget counts, over every run
-    film: Film | None = None  # the film, for a final checkpoint
+    film: Film | None = None  # the film
     slices_in_round: int = 0  # of a round begun but not finished (an interruption): some pixels have spp + 1
+    state: FilmState | None = None  # the film's arrays: counts, adaptive state, AOVs (Renderer.state())
+    pixels_active: int | None = None  # with adaptive sampling: pixels it had not stopped
+    renderer: FilmSource | None = None  # the renderer, for a final checkpoint (film and AOVs)
 
     @property
     def mean_spp(self) -> float:
         return self.spp + self.slices_in_round / ROUND_SLICES
+
+    @property
+    def pixel_mean_spp(self) -> float:
+        """Samples per pixel on average over the image (below mean_spp where adaptive sampling
+        stopped pixels)."""
+        if self.state is None:
+            return self.mean_spp
+        return float(np.mean(self.state.count + self.state.rejected))
 
     def spp_text(self) -> str:
         """'64', or '12.25' for a render stopped within a round of pixel slices."""
@@ -137,11 +163,12 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
     integrator = job.integrator
     make_integrator(integrator)  # a clear error before any compilation
     target_spp = job.spp
-    renderer = Renderer(scene, (width, height))
+    renderer = Renderer(scene, (width, height), aovs=job.keeps_aovs)
+    if job.noise_threshold is not None:
+        renderer.set_adaptive(AdaptiveSettings(job.noise_threshold, job.min_spp))
     seconds_before = 0.0
     if resume is not None:
-        renderer.film.restore(resume.state)
-        renderer.slices_done = resume.spp_done * ROUND_SLICES + resume.slices_in_round
+        renderer.restore(resume.state, resume.spp_done * ROUND_SLICES + resume.slices_in_round)
         seconds_before = resume.seconds_rendered
     camera = CameraFrame.from_spec(scene.camera)
     if stop is not None:
@@ -163,6 +190,8 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
             break
         if target is None and (rendered() >= job.seconds or done >= limit):
             break
+        if renderer.pixels_active == 0:  # adaptive sampling stopped every pixel
+            break
         if stop is not None and stop.requested:  # (a request during the last pass stops nothing)
             interrupted = True
             break
@@ -172,6 +201,8 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
         renderer.render_slices(camera, n, integrator, job.max_depth, job.seed)
         elapsed = time.perf_counter() - t0
         n = renderer.slices_done - done  # (an integrator with whole-image passes rounds up to a sample)
+        if n == 0:  # adaptive sampling stopped every pixel before the pass began
+            break
         if budget_start is None:
             budget_start = time.perf_counter()
         else:
@@ -179,7 +210,7 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
         if checkpoints is not None and seconds_per_slice is not None:
             remaining = ((target - renderer.slices_done) * seconds_per_slice if target is not None
                          else job.seconds - rendered())
-            checkpoints.after_pass(renderer.film, renderer.samples_done, rendered(), rendered() + remaining,
+            checkpoints.after_pass(renderer, renderer.samples_done, rendered(), rendered() + remaining,
                                    renderer.slices_done % ROUND_SLICES)
         if progress and seconds_per_slice is not None:  # the compiling pass says nothing of the rate
             progress(renderer.mean_spp, target_spp, rendered(), width * height, job.seconds)
@@ -188,7 +219,8 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
     # (the nearest sampled grid point); their variance stays +inf. A complete render: the mean.
     return RenderResult(renderer.shown_image(), renderer.samples_done, total, renderer.film.stats()["rejected"], integrator,
                         renderer.film.variance_of_mean_image(), interrupted, rendered(), renderer.film,
-                        renderer.slices_done % ROUND_SLICES)
+                        renderer.slices_done % ROUND_SLICES, renderer.state(),
+                        renderer.pixels_active if job.noise_threshold is not None else None, renderer)
 
 
 def pass_slices(seconds_per_slice: float | None, previous: int, slices_left: int, seconds_left: float | None) -> int:
@@ -213,12 +245,20 @@ def image_metadata(scene: Scene, job: RenderJob, result: RenderResult) -> dict[s
             "status": "interrupted" if result.interrupted else "complete"}
 
 
-def save(result: RenderResult, out: Path, exposure: float = 0.0, tonemapper: str = "aces",
-         metadata: dict[str, str] | None = None) -> None:
+def save(image: np.ndarray, out: Path, exposure: float = 0.0, tonemapper: str = "aces",
+         metadata: dict[str, str] | None = None, layers: dict[str, np.ndarray] | None = None) -> None:
+    """A linear image to `out`: an EXR as is (with `layers`, renderer/render_outputs.py), a PNG
+    tone-mapped (its layers then go to an EXR beside it)."""
     if out.suffix.lower() == ".exr":
-        write_exr(out, result.image, metadata)
+        write_exr(out, image, metadata, layers)
     else:
-        write_png(out, tonemap_array(result.image, exposure, tonemapper), metadata)
+        write_png(out, tonemap_array(image, exposure, tonemapper), metadata)
+        if layers:
+            from renderer.render_outputs import aovs_path
+
+            layers = dict(layers)
+            raw = layers.pop("raw", image)
+            write_exr(aovs_path(out), raw, {**(metadata or {}), "content": "render AOVs"}, layers)
 
 
 def save_variance(result: RenderResult, out: Path, metadata: dict[str, str] | None = None) -> None:

@@ -82,15 +82,33 @@ def read_exr(path: str | os.PathLike, budget: Optional[MemoryBudget] = None) -> 
     return _read_exr_rgb(path, budget or MemoryBudget.from_settings())
 
 
-def write_exr(path: str | os.PathLike, rgb: np.ndarray, metadata: dict[str, str] | None = None) -> None:
+def write_exr(path: str | os.PathLike, rgb: np.ndarray, metadata: dict[str, str] | None = None,
+              layers: dict[str, np.ndarray] | None = None) -> None:
     """Write linear float RGB (H, W, 3), row 0 = top, as a float32 ZIP-compressed EXR; `metadata`
-    becomes string attributes of the header. Atomic: a kill leaves the previous file whole."""
+    becomes string attributes of the header; `layers` are further images of the same size, each
+    named layer.R/.G/.B (H, W, 3) or a single channel (H, W). Atomic: a kill leaves the previous
+    file whole."""
     import OpenEXR
 
     pixels = np.ascontiguousarray(_check_rgb_shape(rgb), dtype=np.float32)
+    channels = {"RGB": pixels}
+    for name, layer in (layers or {}).items():
+        layer = np.asarray(layer)
+        if layer.shape[:2] != pixels.shape[:2] or layer.ndim not in (2, 3) or (layer.ndim == 3 and layer.shape[2] != 3):
+            raise ValueError(f"EXR layer '{name}' has shape {layer.shape}, expected {pixels.shape[:2]} (+ 3 channels)")
+        channels[name] = np.ascontiguousarray(layer, dtype=np.float32)
     header = {**_text_metadata(metadata), "compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with atomic_output(path) as temporary, OpenEXR.File(header, {"RGB": pixels}) as exr:
+    with atomic_output(path) as temporary, OpenEXR.File(header, channels) as exr:
         exr.write(str(temporary))
+
+
+def read_exr_layers(path: str | os.PathLike) -> dict[str, np.ndarray]:
+    """Every layer of an EXR as float32 arrays: "RGB" and the named ones (H, W, 3), single
+    channels (H, W). For reading back what write_exr wrote (tests, tools)."""
+    import OpenEXR
+
+    with OpenEXR.File(os.fspath(path)) as exr:
+        return {name: np.asarray(channel.pixels, dtype=np.float32) for name, channel in exr.channels().items()}
 
 
 def write_png(path: str | os.PathLike, rgb: np.ndarray, metadata: dict[str, str] | None = None) -> None:

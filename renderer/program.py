@@ -6,6 +6,7 @@ combination already seen compiles nothing.
 """
 import taichi as ti
 
+from renderer.adaptive import STOPPED
 from renderer.camera import generate_ray
 from renderer.geometry.interface import INF
 from renderer.materials.bsdf import Bsdf
@@ -16,7 +17,7 @@ from renderer.sampling.sampler import SampleState
 @ti.data_oriented
 class RenderProgram:
     def __init__(self, geometry, materials, environment, integrator, film, work, features, sampler, lights=None,
-                 media=None):
+                 media=None, aovs=None):
         self.geometry = geometry
         self.media = media  # MediaTable (read only by kernels compiled with media or fog)
         self.lights = lights  # None for integrators that do not sample lights
@@ -27,6 +28,9 @@ class RenderProgram:
         self.film = film
         self.work = work  # per-pixel [geometry work, primitive tests, rays traced] summed over samples
         self.features = features
+        # Denoising AOVs are written where the renderer keeps them and the integrator has them.
+        self.aovs = aovs if getattr(integrator, "writes_aovs", False) else None
+        self.writes_aovs = self.aovs is not None  # (a Python bool: `is` is not Taichi syntax)
 
     # A pass over slices samples its pixels in slice order (renderer/pixel_slices.py); the rounds a
     # film has seen are in its counts, so the whole-image passes of SPPM do not apply.
@@ -40,19 +44,24 @@ class RenderProgram:
         for i in range(pass_length(slice_count, width, height)):
             x, y = slice_pixel(i, slice_first, slice_count, width, height)
             if x < width and y < height:
-                pixel = y * width + x
-                # The pixel's own sample count is its next sample index (see pixel_slices).
-                first_sample = self.film.count[x, y] + self.film.rejected[x, y]
-                work = ti.math.vec3(0.0)
-                for s in range(spp):
-                    state = self.sampler.start(pixel, first_sample + s, seed)
-                    ray = generate_ray(x, y, width, height, self.sampler, state, origin, forward, right, up,
-                                       tan_half_fov, aperture, focus, self.features.depth_of_field)
-                    value, stats = self.integrator.li(self, ray, state, max_depth)
-                    self.film.add_sample(x, y, value)
-                    work += stats
-                # One plain store per pixel: += on a global field would be an atomic add per sample.
-                self.work[x, y] = self.work[x, y] + work
+                # A pixel adaptive sampling has stopped (renderer/adaptive.py) takes no more samples;
+                # a nested test: Taichi's `and` evaluates both sides, and (x, y) may lie outside the film.
+                if self.film.adaptive[x, y] != STOPPED:
+                    pixel = y * width + x
+                    # The pixel's own sample count is its next sample index (see pixel_slices).
+                    first_sample = self.film.count[x, y] + self.film.rejected[x, y]
+                    work = ti.math.vec3(0.0)
+                    for s in range(spp):
+                        state = self.sampler.start(pixel, first_sample + s, seed)
+                        ray = generate_ray(x, y, width, height, self.sampler, state, origin, forward, right, up,
+                                           tan_half_fov, aperture, focus, self.features.depth_of_field)
+                        value, stats, albedo, normal = self.integrator.li(self, ray, state, max_depth)
+                        self.film.add_sample(x, y, value)
+                        if ti.static(self.writes_aovs):
+                            self.aovs.add(x, y, first_sample + s, albedo, normal)
+                        work += stats
+                    # One plain store per pixel: += on a global field would be an atomic add per sample.
+                    self.work[x, y] = self.work[x, y] + work
 
     @ti.kernel
     def probe(self, u: ti.f32, v: ti.f32, width: ti.i32, height: ti.i32, origin: ti.math.vec3,

@@ -14,11 +14,13 @@ from pathlib import Path
 
 from renderer.checkpoint import CHECKPOINT_EXTENSION, CheckpointHeader, load_checkpoint, read_header, \
     save_checkpoint, scene_fingerprint
-from renderer.film import Film
+from renderer.headless import FilmSource
 from renderer.headless import (Checkpoints, RenderJob, RenderResult, Resume, check_output_path, check_variance_path,
                                check_writable, display_tonemapper, image_metadata, progress_bar, render, save,
                                save_variance)
+from renderer.adaptive import DEFAULT_MIN_SPP
 from renderer.interrupts import StopRequests
+from renderer.render_outputs import aovs_path
 from renderer.pixel_slices import ROUND_SLICES, spp_text
 from renderer.scene.errors import SceneError
 from renderer.scene.description import Scene
@@ -45,7 +47,7 @@ class CheckpointPolicy(Checkpoints):
         self.stream = stream
         self.last_save = time.monotonic()
 
-    def after_pass(self, film: Film, spp_done: int, seconds_rendered: float, expected_seconds: float,
+    def after_pass(self, film: FilmSource, spp_done: int, seconds_rendered: float, expected_seconds: float,
                    slices_in_round: int = 0) -> None:
         if not self.active:
             if expected_seconds <= LONG_RENDER_SECONDS:
@@ -58,7 +60,7 @@ class CheckpointPolicy(Checkpoints):
         if time.monotonic() - self.last_save >= self.every:
             self.save(film, spp_done, seconds_rendered, slices_in_round)
 
-    def save(self, film: Film, spp_done: int, seconds_rendered: float, slices_in_round: int = 0) -> None:
+    def save(self, film: FilmSource, spp_done: int, seconds_rendered: float, slices_in_round: int = 0) -> None:
         save_checkpoint(self.path, replace(self.header, spp_done=spp_done, slices_in_round=slices_in_round,
                                            seconds_rendered=seconds_rendered), film.state())
         self.last_save = time.monotonic()
@@ -70,7 +72,7 @@ class CheckpointPolicy(Checkpoints):
         if self.automatic and not result.interrupted:
             self.path.unlink(missing_ok=True)
             return None
-        self.save(result.film, result.spp, result.seconds_rendered, result.slices_in_round)
+        self.save(result.renderer, result.spp, result.seconds_rendered, result.slices_in_round)
         return f"{self.path}  (checkpoint at {result.spp_text()} spp; continue with: python app.py render --resume {self.path})"
 
     def _say(self, message: str) -> None:
@@ -135,6 +137,7 @@ def plan_render(args) -> RenderPlan:
     scene = load_any(resolve_scene(args.scene if args.scene is not None else previous.scene),
                      options_from_arguments(args))
     job = _job(args, scene, previous)
+    _check_denoising(job)
     check_film(scene.path, *job.size, scene.model_files.options.budget,
                "--size" if args.size else "the scene's render.width x height")
     out = args.out or (Path(previous.out) if previous else DEFAULT_OUT_DIR / f"{scene.name}_{job.integrator}.png")
@@ -152,9 +155,12 @@ def plan_render(args) -> RenderPlan:
         if job.spp is not None and job.spp < previous.spp_done:
             raise ValueError(f"--spp {job.spp}: the checkpoint {args.resume} already has {previous.spp_done} spp")
     checkpoints = _checkpoint_policy(args, job, out, header, previous)
-    distinct = [p.resolve() for p in (out, variance, checkpoints.path if checkpoints else None) if p is not None]
+    aovs = aovs_path(out) if job.aovs and aovs_path(out) != out else None
+    if aovs is not None:
+        check_writable(aovs)
+    distinct = [p.resolve() for p in (out, variance, checkpoints.path if checkpoints else None, aovs) if p is not None]
     if len(set(distinct)) != len(distinct):
-        raise ValueError(f"{out}: --out, --variance and --checkpoint must be different files")
+        raise ValueError(f"{out}: --out, --variance, --checkpoint and the AOV file must be different files")
     resume = None
     if previous is not None:
         _, state = load_checkpoint(args.resume)
@@ -164,11 +170,28 @@ def plan_render(args) -> RenderPlan:
 
 def write_outputs(plan: RenderPlan, result: RenderResult) -> None:
     """The image (its spp and status in its metadata), the variance, the last checkpoint; a line each."""
+    from renderer.render_outputs import aov_layers, denoised
+
     metadata = image_metadata(plan.scene, plan.job, result)
-    save(result, plan.out, plan.job.exposure, display_tonemapper(plan.job.integrator, plan.job.tonemapper), metadata)
+    image, raw, denoising = result.image, None, ""
+    if plan.job.denoise:
+        start = time.perf_counter()
+        raw, image = result.image, denoised(result)
+        metadata["denoised"] = "Intel Open Image Denoise"
+        denoising = f", denoised in {time.perf_counter() - start:.1f} s"
+    layers = aov_layers(result, raw) if plan.job.aovs else None
+    save(image, plan.out, plan.job.exposure, display_tonemapper(plan.job.integrator, plan.job.tonemapper), metadata,
+         layers)
     rejected = f", {result.rejected} non-finite samples dropped" if result.rejected else ""
     stopped = ", interrupted" if result.interrupted else ""
-    print(f"{plan.out}  ({result.spp_text()} spp in {result.seconds:.1f} s{rejected}{stopped})")
+    adaptive = ""
+    if result.pixels_active is not None:
+        pixels = result.state.count.size
+        adaptive = (f", adaptive: {result.pixel_mean_spp:.1f} spp per pixel on average, "
+                    f"{100.0 * (pixels - result.pixels_active) / pixels:.0f}% of pixels stopped")
+    print(f"{plan.out}  ({result.spp_text()} spp in {result.seconds:.1f} s{adaptive}{rejected}{stopped}{denoising})")
+    if layers and aovs_path(plan.out) != plan.out:
+        print(f"{aovs_path(plan.out)}  (AOVs: {', '.join(layers)})")
     if plan.variance is not None:
         save_variance(result, plan.variance, metadata)
         print(f"{plan.variance}  (variance of each pixel's mean)")
@@ -176,6 +199,23 @@ def write_outputs(plan: RenderPlan, result: RenderResult) -> None:
         written = plan.checkpoints.finish(result)
         if written:
             print(written)
+
+
+def _check_denoising(job: RenderJob) -> None:
+    """--denoise and --noise-threshold refused in one line before Taichi starts where they cannot work."""
+    from renderer.denoise import unavailable_reason
+    from renderer.integrators import make_integrator
+
+    if job.denoise:
+        reason = unavailable_reason()
+        if reason:
+            raise ValueError(f"--denoise: {reason}")
+        if not make_integrator(job.integrator).denoisable:
+            raise ValueError(f"--denoise: the {job.integrator} view is not an image of light; denoise path, nee, mis "
+                             "or sppm renders")
+    if job.noise_threshold is not None and hasattr(make_integrator(job.integrator), "make_program"):
+        raise ValueError(f"--noise-threshold: {job.integrator} renders whole-image iterations; adaptive sampling "
+                         "works with path, nee, mis and the debug views")
 
 
 def check_checkpoint_path(path: Path) -> None:
@@ -192,13 +232,19 @@ def _job(args, scene, previous: CheckpointHeader | None) -> RenderJob:
         spp, seconds = previous.spp_target, previous.seconds_budget
     exposure = args.exposure if args.exposure is not None else (previous.exposure if previous else 0.0)
     job = RenderJob(spp=spp, seconds=seconds, size=args.size, integrator=args.integrator, max_depth=args.max_depth,
-                    seed=args.seed, exposure=exposure, tonemapper=args.tonemapper)
+                    seed=args.seed, exposure=exposure, tonemapper=args.tonemapper, denoise=args.denoise,
+                    aovs=args.aovs, noise_threshold=args.noise_threshold,
+                    min_spp=args.min_spp if args.min_spp is not None else DEFAULT_MIN_SPP)
     if previous is not None:
         job = replace(job, size=job.size or (previous.width, previous.height),
                       integrator=job.integrator or previous.integrator,
                       max_depth=previous.max_depth if job.max_depth is None else job.max_depth,
                       seed=previous.seed if job.seed is None else job.seed,
-                      tonemapper=job.tonemapper or previous.tonemapper)
+                      tonemapper=job.tonemapper or previous.tonemapper,
+                      denoise=job.denoise or previous.denoise, aovs=job.aovs or previous.aovs,
+                      noise_threshold=(previous.noise_threshold if job.noise_threshold is None
+                                       else job.noise_threshold),
+                      min_spp=previous.min_spp if args.min_spp is None else job.min_spp)
     return job.resolved(scene)
 
 
@@ -209,7 +255,8 @@ def _header(scene, job: RenderJob, out: Path, variance: Path | None, arch: str, 
         width=width, height=height, integrator=job.integrator, sampler=scene.render.sampler, seed=job.seed,
         max_depth=job.max_depth, spp_done=0, slices_in_round=0, spp_target=job.spp, seconds_budget=job.seconds, seconds_rendered=0.0,
         arch=arch, optimize=optimize, out=str(out.resolve()), variance=str(variance.resolve()) if variance else None,
-        exposure=job.exposure, tonemapper=job.tonemapper, automatic=False)
+        exposure=job.exposure, tonemapper=job.tonemapper, automatic=False, denoise=job.denoise, aovs=job.aovs,
+        noise_threshold=job.noise_threshold, min_spp=job.min_spp)
 
 
 def _checkpoint_policy(args, job: RenderJob, out: Path, header: CheckpointHeader,

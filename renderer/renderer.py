@@ -9,8 +9,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 import taichi as ti
 
+from renderer.adaptive import DEFAULT_MIN_SPP, AdaptiveSampling, is_check_point, next_check
+from renderer.aovs import AovFilm
 from renderer.camera import CameraFrame
-from renderer.film import Film
+from renderer.film import Film, FilmState
 from renderer.image_io import read_environment
 from renderer.integrators import make_integrator
 from renderer.lights.environment import Environment
@@ -56,9 +58,20 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
     raise ValueError(f"unknown geometry kind '{scene.geometry}'")
 
 
+@dataclass(frozen=True)
+class AdaptiveSettings:
+    """Adaptive sampling (renderer/adaptive.py): stop pixels whose relative standard error is
+    below `threshold`, once they have `min_spp` samples."""
+
+    threshold: float
+    min_spp: int = DEFAULT_MIN_SPP
+
+
 class Renderer:
     def __init__(self, scene: Scene, max_size: tuple[int, int] | None = None,
-                 mesh_options: MeshOptions = MeshOptions()):
+                 mesh_options: MeshOptions = MeshOptions(), aovs: bool = False):
+        """`aovs`: also accumulate the denoising AOVs (renderer/aovs.py) of integrators that write
+        them; 24 bytes a pixel more."""
         self.scene = scene
         width, height = max_size or (scene.render.width, scene.render.height)
         image = (read_environment(scene.environment.file, scene.model_files.options.budget)
@@ -69,6 +82,10 @@ class Renderer:
         self._env_image = image
         self._lights = None
         self.film = Film(width, height)
+        self.aovs = AovFilm(width, height) if aovs else None
+        self.adaptive: AdaptiveSettings | None = None  # set_adaptive()
+        self._adaptive_rule = None
+        self.pixels_active = width * height  # pixels adaptive sampling has not stopped
         self.work = ti.Vector.field(3, ti.f32, shape=(width, height))
         self._probe_out = ti.field(ti.f32, shape=())
         self._programs: dict[tuple[str, Features], RenderProgram] = {}
@@ -97,7 +114,7 @@ class Renderer:
             else:
                 self._programs[key] = RenderProgram(self.geometry, self.materials, self.environment, chosen,
                                                     self.film, self.work, features, make_sampler(sampler), lights,
-                                                    self.media)
+                                                    self.media, self.aovs)
         return self._programs[key]
 
     def lights(self):
@@ -124,8 +141,42 @@ class Renderer:
     # --- rendering -----------------------------------------------------------------------------
     def reset(self, width: int | None = None, height: int | None = None) -> None:
         self.film.reset(width or self.film.width, height or self.film.height)
+        if self.aovs is not None:
+            self.aovs.reset(self.film.width, self.film.height)
         self.work.fill(0.0)
         self.slices_done = 0
+        self.pixels_active = self.film.width * self.film.height
+
+    def set_adaptive(self, settings: AdaptiveSettings | None) -> None:
+        """Turn adaptive sampling on (or off: None) for the samples rendered from now on; pixels
+        stopped so far stay stopped until the next reset."""
+        if settings is not None and not (settings.threshold > 0.0 and settings.min_spp >= 1):
+            raise ValueError(f"adaptive sampling: threshold {settings.threshold} must be > 0 and min spp "
+                             f"{settings.min_spp} >= 1")
+        self.adaptive = settings
+        if settings is not None and self._adaptive_rule is None:
+            self._adaptive_rule = AdaptiveSampling(self.film)
+
+    def state(self) -> FilmState:
+        """The film's exact state with the AOVs' (what a checkpoint keeps)."""
+        state = self.film.state()
+        if self.aovs is not None:
+            state.albedo, state.normal = self.aovs.images()
+        return state
+
+    def restore(self, state: FilmState, slices_done: int) -> None:
+        """Continue from `state` (Renderer.state()) with `slices_done` slices rendered."""
+        self.film.restore(state)
+        if self.aovs is not None:
+            if state.albedo is not None and state.normal is not None:
+                self.aovs.restore(state.albedo, state.normal)
+            else:
+                self.aovs.reset(self.film.width, self.film.height)
+        self.slices_done = slices_done
+        if self._adaptive_rule is None and state.adaptive is not None and state.adaptive.any():
+            self._adaptive_rule = AdaptiveSampling(self.film)
+        self.pixels_active = (self._adaptive_rule.count_active() if self._adaptive_rule is not None
+                              else self.film.width * self.film.height)
 
     def render(self, camera: CameraFrame, spp: int, integrator: str | None = None, max_depth: int | None = None,
                seed: int | None = None, features: Features | None = None, sampler: str | None = None) -> None:
@@ -154,15 +205,20 @@ class Renderer:
             self.slices_done += spp * ROUND_SLICES
             return
         left = slices
-        while left > 0:
+        while left > 0 and self.pixels_active > 0:
             cursor = self.slices_done % ROUND_SLICES
             if cursor == 0 and left >= ROUND_SLICES:
                 spp, first, count = left // ROUND_SLICES, 0, ROUND_SLICES
+                if self.adaptive is not None:  # whole rounds up to the next check at most
+                    spp = min(spp, next_check(self.samples_done, self.adaptive.min_spp) - self.samples_done)
             else:
                 spp, first, count = 1, cursor, min(left, ROUND_SLICES - cursor)
             program.render(width, height, spp, first, count, seed, max_depth, *camera.kernel_args())
             self.slices_done += spp * count
             left -= spp * count
+            if (self.adaptive is not None and self.slices_done % ROUND_SLICES == 0
+                    and is_check_point(self.samples_done, self.adaptive.min_spp)):
+                self.pixels_active = self._adaptive_rule.check(self.adaptive.threshold, self.adaptive.min_spp)
 
     def is_sliced(self, integrator: str, features: Features, sampler: str = "independent") -> bool:
         """Whether the integrator's passes can be cut into pixel slices (all but sppm's)."""
@@ -194,6 +250,11 @@ class Renderer:
         rays = max(totals[2], 1.0)
         return {"work_per_ray": totals[0] / rays, "tests_per_ray": totals[1] / rays,
                 "rays_per_sample": totals[2] / samples}
+
+    def aov_images(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(albedo, normal) running means (H, W, 3), row 0 at the top; None unless the Renderer
+        keeps AOVs and the integrator rendered writes them (zeros then)."""
+        return self.aovs.images() if self.aovs is not None else None
 
     def image(self) -> np.ndarray:
         """The linear mean image (H, W, 3), row 0 at the top."""

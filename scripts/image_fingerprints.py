@@ -40,7 +40,7 @@ CASES = [
 ]
 
 
-def render_all() -> dict[str, np.ndarray]:
+def render_all(only: str | None = None) -> dict[str, np.ndarray]:
     from renderer.arch import init_taichi
 
     init_taichi("cpu", cpu_threads=1)
@@ -50,6 +50,8 @@ def render_all() -> dict[str, np.ndarray]:
 
     images = {}
     for name, integrator, seed in CASES:
+        if only and only not in f"{name}:{integrator}:{seed}":
+            continue
         path = ROOT / name if "/" in name else resolve_scene(name)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -70,8 +72,9 @@ def main(argv=None) -> int:
     group = parser.add_mutually_exclusive_group(required=True)
     group.add_argument("--write", type=Path, help="write the fingerprints (and images) of this tree")
     group.add_argument("--check", type=Path, help="compare this tree's renders with written fingerprints")
+    parser.add_argument("--only", metavar="TEXT", help="only the cases whose scene:integrator:seed contains TEXT")
     args = parser.parse_args(argv)
-    images = render_all()
+    images = render_all(args.only)
     if args.write:
         args.write.write_text(json.dumps({k: fingerprint(v) for k, v in images.items()}, indent=1))
         np.savez_compressed(args.write.with_suffix(".npz"), **{k.replace("/", "|"): v for k, v in images.items()})
@@ -90,7 +93,7 @@ def main(argv=None) -> int:
         before = stored[key.replace("/", "|")]
         print(f"CHANGED   {key}: largest difference {np.abs(image - before).max():.3e}, "
               f"mean {np.abs(image - before).mean():.3e}")
-    missing = sorted(set(expected) - set(images))
+    missing = sorted(key for key in set(expected) - set(images) if not args.only or args.only in key)
     for key in missing:
         print(f"MISSING   {key}")
     print(f"{len(images) - changed} of {len(images)} images bit-identical")

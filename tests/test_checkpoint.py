@@ -200,7 +200,7 @@ def test_automatic_checkpoint_starts_with_a_long_render_and_goes_when_it_complet
     policy.after_pass(FakeFilm(), 40, 36.0, expected_seconds=300.0)
     assert read_header(path).spp_done == 40 and read_header(path).seconds_rendered == 36.0
 
-    result = RenderResult(np.zeros((16, 24, 3), np.float32), 50, 40.0, 0, "path", film=FakeFilm(),
+    result = RenderResult(np.zeros((16, 24, 3), np.float32), 50, 40.0, 0, "path", renderer=FakeFilm(),
                           seconds_rendered=40.0, interrupted=True)
     assert "checkpoint at 50 spp" in policy.finish(result)
     assert read_header(path).spp_done == 50  # kept, to be continued

@@ -4,8 +4,11 @@ An integrator is a data-oriented class with
   name, description                 for the command line, HUD and help
   hotkey                            the viewer's letter for it (Taichi's window reports letters only)
   display_tonemapper                None (the user's choice) or a tone mapper name its output wants
-  li(ctx, ray, state, max_depth)    a Taichi func returning (value vec3, stats vec3), stats being
-                                    (geometry work, primitive tests, rays traced) for this sample
+  li(ctx, ray, state, max_depth)    a Taichi func returning (value, stats, albedo, normal), all vec3:
+                                    stats = (geometry work, primitive tests, rays traced) for this
+                                    sample; albedo and normal are the denoising AOVs (renderer/aovs.py)
+  writes_aovs                       whether li's albedo and normal mean anything (else zeros)
+  denoisable                        whether its image is light a denoiser may clean (not debug views)
 `ctx` is the RenderProgram: ctx.geometry, ctx.bsdf, ctx.environment, ctx.sampler, ctx.features;
 `state` is the camera sample's sampler state (renderer.sampling.sampler).
 

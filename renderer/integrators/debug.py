@@ -1,4 +1,6 @@
-"""Debug views: what the first hit is, not how it is lit. One ray per sample."""
+"""Debug views: what the first hit is, not how it is lit. One ray per sample.
+
+They write no denoising AOVs (zeros): their images are not noisy estimates of light."""
 import taichi as ti
 
 from renderer.geometry.interface import INF
@@ -27,12 +29,20 @@ def heat(x):
     return c
 
 
+@ti.func
+def view_sample(value, hit):
+    """What a debug view's li returns: its value, the ray's work statistics, no AOVs."""
+    return value, vec3(hit.work, hit.tests, 1.0), vec3(0.0), vec3(0.0)
+
+
 @ti.data_oriented
 class NormalsView:
     name = "normals"
     hotkey = "o"  # "orientation"
     description = "shading normal at the first hit, mapped to [0, 1]"
     display_tonemapper = "none"
+    writes_aovs = False
+    denoisable = False
 
     @ti.func
     def li(self, ctx, ray, state, max_depth):
@@ -41,7 +51,7 @@ class NormalsView:
         if hit.hit == 1:
             _, n = ctx.bsdf.shade(ctx.geometry.surface(ray, hit), -ray.d)  # normal maps included
             value = n * 0.5 + 0.5
-        return value, ti.math.vec3(hit.work, hit.tests, 1.0)
+        return view_sample(value, hit)
 
 
 @ti.data_oriented
@@ -50,6 +60,8 @@ class AlbedoView:
     hotkey = "c"  # "colour"
     description = "base colour at the first hit"
     display_tonemapper = "none"
+    writes_aovs = False
+    denoisable = False
 
     @ti.func
     def li(self, ctx, ray, state, max_depth):
@@ -58,7 +70,7 @@ class AlbedoView:
         if hit.hit == 1:
             mat, _ = ctx.bsdf.shade(ctx.geometry.surface(ray, hit), -ray.d)
             value = ctx.bsdf.albedo(mat)
-        return value, ti.math.vec3(hit.work, hit.tests, 1.0)
+        return view_sample(value, hit)
 
 
 @ti.data_oriented
@@ -67,6 +79,8 @@ class DepthView:
     hotkey = "z"  # "z-buffer"
     description = "distance to the first hit in metres (0 for misses); shown as d / (1 + d)"
     display_tonemapper = "reinhard"
+    writes_aovs = False
+    denoisable = False
 
     @ti.func
     def li(self, ctx, ray, state, max_depth):
@@ -74,7 +88,7 @@ class DepthView:
         value = vec3(0.0)
         if hit.hit == 1:
             value = vec3(hit.t)
-        return value, ti.math.vec3(hit.work, hit.tests, 1.0)
+        return view_sample(value, hit)
 
 
 @ti.data_oriented
@@ -83,12 +97,14 @@ class StepsView:
     hotkey = "g"  # "geometry work"
     description = "geometry work per camera ray (march steps) as a heat map of work / 256"
     display_tonemapper = "none"
+    writes_aovs = False
+    denoisable = False
 
     @ti.func
     def li(self, ctx, ray, state, max_depth):
         hit = ctx.geometry.intersect(ray, INF)
         # 256 is the default step limit: the ramp saturates where rays give up.
-        return heat(hit.work / 256.0), ti.math.vec3(hit.work, hit.tests, 1.0)
+        return view_sample(heat(hit.work / 256.0), hit)
 
 
 @ti.data_oriented
@@ -97,6 +113,8 @@ class BvhView:
     hotkey = "v"  # "visits"
     description = "BVH node visits (red) and primitive tests (green) per camera ray, as fractions of 128"
     display_tonemapper = "none"
+    writes_aovs = False
+    denoisable = False
 
     @ti.func
     def li(self, ctx, ray, state, max_depth):
@@ -105,4 +123,4 @@ class BvhView:
         value = vec3(ti.min(hit.work / 128.0, 1.0), ti.min(hit.tests / 128.0, 1.0), 0.0)
         if hit.hit == 1:
             value.z = 0.25  # a hint of blue shows where the ray found a surface
-        return value, ti.math.vec3(hit.work, hit.tests, 1.0)
+        return view_sample(value, hit)

@@ -587,6 +587,8 @@ class StochasticProgressivePhotonMapping:
     display_tonemapper = None
     uses_lights = True
     noise_estimate = False  # the film holds an estimate, not a mean of samples: no variance
+    writes_aovs = False  # (its camera pass could; until then it is denoised from its colour alone)
+    denoisable = True
 
     def make_program(self, renderer, features, sampler, lights):
         from renderer.sampling.sampler import make_sampler

@@ -91,6 +91,8 @@ class PathTracerBase:
     mis = True
     uses_lights = True
     display_tonemapper = None
+    writes_aovs = True
+    denoisable = True
 
     @ti.func
     def li(self, ctx, ray_in, state, max_depth):
@@ -118,6 +120,12 @@ class PathTracerBase:
         lam = 0.0
         ending = False  # the path is over once its pending shadow ray is traced
         depth = 0
+        # Denoising AOVs (renderer/aovs.py): the first non-delta vertex's albedo, scaled by the
+        # delta bounces before it, and its shading normal; a delta vertex is a stand-in until then.
+        aov_albedo = vec3(0.0)
+        aov_normal = vec3(0.0)
+        aov_open = True
+        aov_weight = vec3(1.0)  # the delta bounces' RGB weights (no roulette, spectral or media factors)
         for _ in range(2 * MAX_VERTICES):
             t_max = INF
             if depth > 0:
@@ -187,6 +195,11 @@ class PathTracerBase:
                     if max_depth >= 0 and depth + 1 >= max_depth:
                         break
                     s = _medium_point(p, ray.cone_width + ray.cone_spread * scatter_t, ray.cone_spread)
+                    if ti.static(ctx.writes_aovs):
+                        if aov_open:  # a scattering medium is a non-delta vertex: its single-scattering albedo
+                            aov_albedo = aov_weight * rec.sigma_s / ti.max(rec.sigma_a + rec.sigma_s, 1e-30)
+                            aov_normal = vec3(0.0)
+                            aov_open = False
                     if ti.static(self.light_sampling):
                         ls = ctx.lights.sample(ctx, p, vec3(0.0), ctx.sampler.get1d(state, dim + dims.LIGHT_SELECT),
                                                ctx.sampler.get2d(state, dim + dims.LIGHT_POINT))
@@ -212,7 +225,12 @@ class PathTracerBase:
                     weight = 1.0
                     if ti.static(self.light_sampling):
                         weight = environment_weight(ctx.lights, self.mis, prev_delta, prev_pdf, ray.d)
-                    radiance += throughput * weight * _tint(ctx, ctx.environment.radiance(ray.d), spectral, lam)
+                    background = _tint(ctx, ctx.environment.radiance(ray.d), spectral, lam)
+                    radiance += throughput * weight * background
+                    if ti.static(ctx.writes_aovs):
+                        if aov_open:
+                            aov_albedo = aov_weight * ti.math.clamp(background, 0.0, 1.0)
+                            aov_normal = vec3(0.0)
                     break
                 s = hs
                 wo = -ray.d
@@ -226,6 +244,11 @@ class PathTracerBase:
                             throughput = (spectral_rgb_weights(lam) / visible_wavelength_pdf(lam)
                                           * rgb_to_spectrum(throughput, lam))
                         mat.ior = dispersion.ior_at(rec, lam)
+                if ti.static(ctx.writes_aovs):  # (compiled only where kept: no change to other kernels' code)
+                    if aov_open:
+                        aov_albedo = aov_weight * ctx.bsdf.albedo(mat)
+                        aov_normal = n
+                        aov_open = not ctx.bsdf.has_smooth_part(mat)
                 if ti.static(ctx.features.has_emission):
                     if s.front_face == 1 and mat.emission.max() > 0.0:
                         weight = 1.0
@@ -257,6 +280,9 @@ class PathTracerBase:
                     ending = True
                 else:
                     throughput *= _tint(ctx, bs.weight, spectral, lam)
+                    if ti.static(ctx.writes_aovs):
+                        if aov_open:
+                            aov_weight *= bs.weight
                     crossed_null = False
                     if ti.static(ctx.features.has_kind("null")):
                         crossed_null = mat.kind == NULL_KIND
@@ -282,4 +308,4 @@ class PathTracerBase:
         if ti.static(ctx.features.analytic_fog):
             fog = ctx.media.fog[None]
             radiance = homogeneous.exponential_fog(radiance, fog.xyz, fog.w, first_distance)
-        return radiance, stats
+        return radiance, stats, aov_albedo, aov_normal

@@ -1,0 +1,279 @@
+"""`python app.py bench denoise`: what denoising and adaptive sampling buy, against a long reference.
+
+For each scene (cornell_box, bunnies, studio, showcase, textured), in one process, with `mis`:
+
+1. Compile (1 spp, reported), then a reference: `mis` on its own seed for `reference_s` seconds.
+   Every error is also given floor-corrected (relMSE minus the reference's own noise, an
+   unbiased estimate of the error against the true image, the two renders being independent).
+2. Raw and denoised against spp: totals of 1, 2, 4, ... max_spp samples per pixel; after each, the
+   raw image and Open Image Denoise's output (colour + albedo + normal AOVs) are compared with the
+   reference. Render time is cumulative and excludes the denoiser, whose time is its own column.
+   Derived: the spp at which raw reaches the error of denoised-at-8-spp (log-log interpolation,
+   extrapolated as relMSE ~ 1/spp past the last point and flagged).
+3. Adaptive against uniform sampling at equal time: the time uniform sampling took for
+   `equal_time_spp` spp is the budget; adaptive renders (renderer/adaptive.py) with each threshold
+   of `thresholds` (min spp 16) run in passes until that budget, and are compared at the budget.
+4. The denoiser's time for one 960x540 frame (median of 3, after one warm-up call).
+
+Targets (the issue's): denoised at 8 spp below raw at 128 spp in relMSE on each scene; adaptive
+(at the default threshold, DEFAULT_THRESHOLD, chosen before measuring) below uniform at equal time
+on at least four of the five scenes.
+
+Writes <out_dir>/bench_denoise.json and one log-log plot per scene.
+"""
+from __future__ import annotations
+
+import statistics
+import time
+import warnings
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from renderer.bench.common import (describe_error, load_average, load_named_scene, log, print_table, pyplot, rel_mse,
+                                   report_header, save_figure, speed_runtime, verdict, write_json)
+from renderer.bench.integrators import noise_floor, progressive, spp_to_reach
+
+INTEGRATOR = "mis"
+DEFAULT_THRESHOLD = 0.05
+
+
+@dataclass(frozen=True)
+class DenoiseBenchConfig:
+    size: tuple[int, int] = (160, 90)
+    reference_s: float = 120.0
+    reference_launch_s: float = 3.0
+    max_spp: int = 256
+    equal_time_spp: int = 64
+    thresholds: tuple[float, ...] = (0.02, DEFAULT_THRESHOLD, 0.1)
+    min_spp: int = 16
+    seed: int = 1
+    reference_seed: int = 7919
+    frame_size: tuple[int, int] = (960, 540)
+    scenes: tuple[str, ...] = ("cornell_box", "bunnies", "studio", "showcase", "textured")
+
+
+FULL = DenoiseBenchConfig()
+QUICK = DenoiseBenchConfig(size=(64, 36), reference_s=8.0, reference_launch_s=1.0, max_spp=32, equal_time_spp=16,
+                           thresholds=(DEFAULT_THRESHOLD,), min_spp=4, frame_size=(320, 180))
+
+
+def _sync():
+    import taichi as ti
+
+    ti.sync()
+
+
+def denoise_curve(renderer, camera, denoiser, reference, floor, config: DenoiseBenchConfig) -> list[dict]:
+    """Raw and denoised relMSE at 1, 2, 4, ... max_spp spp (cumulative render seconds)."""
+    from renderer.denoise import DenoiseInput
+
+    renderer.reset()
+    points, seconds, done = [], 0.0, 0
+    while done < config.max_spp:
+        n = max(1, done)
+        t0 = time.perf_counter()
+        renderer.render(camera, n, INTEGRATOR, seed=config.seed)
+        _sync()
+        seconds += time.perf_counter() - t0
+        done += n
+        raw = renderer.image()
+        albedo, normal = renderer.aov_images()
+        t0 = time.perf_counter()
+        denoised = denoiser.denoise(DenoiseInput(raw, albedo, normal))
+        denoise_s = time.perf_counter() - t0
+        raw_error, denoised_error = rel_mse(raw, reference), rel_mse(denoised, reference)
+        points.append({"spp": done, "seconds": seconds, "denoise_s": denoise_s, "raw": raw_error,
+                       "denoised": denoised_error, "raw_corrected": max(raw_error - floor, 0.0),
+                       "denoised_corrected": max(denoised_error - floor, 0.0)})
+    return points
+
+
+def adaptive_at_equal_time(renderer, camera, reference, floor, budget_s: float, threshold: float,
+                           config: DenoiseBenchConfig) -> dict:
+    """An adaptive render in doubling passes until `budget_s` seconds of render time."""
+    from renderer.renderer import AdaptiveSettings
+
+    renderer.reset()
+    renderer.set_adaptive(AdaptiveSettings(threshold, config.min_spp))
+    try:
+        run = progressive_adaptive(renderer, camera, budget_s, config)
+    finally:
+        renderer.set_adaptive(None)
+    counts = renderer.film.sample_counts() + renderer.film.rejected_counts()
+    error = rel_mse(renderer.image(), reference)
+    return {"threshold": threshold, "seconds": run["seconds"], "max_spp": run["spp"],
+            "mean_spp": float(counts.mean()), "stopped_fraction": 1.0 - renderer.pixels_active / counts.size,
+            "rel_mse": error, "rel_mse_corrected": max(error - floor, 0.0)}
+
+
+def progressive_adaptive(renderer, camera, budget_s: float, config: DenoiseBenchConfig) -> dict:
+    # The renderer's own progressive loop (bench/integrators.py) resets the film: not here.
+    seconds, n = 0.0, 1
+    while seconds < budget_s and renderer.pixels_active > 0:
+        before = renderer.slices_done
+        t0 = time.perf_counter()
+        renderer.render_slices(camera, n, INTEGRATOR, seed=config.seed)
+        _sync()
+        dt = time.perf_counter() - t0
+        seconds += dt
+        rate = dt / max(renderer.slices_done - before, 1)
+        n = max(1, min(4 * n, int((budget_s - seconds) / max(rate, 1e-9)) + 1, int(1.0 / max(rate, 1e-9))))
+    return {"seconds": seconds, "spp": renderer.mean_spp}
+
+
+def denoiser_frame_time(denoiser, scene, size) -> float:
+    """Median seconds of denoising one frame of `scene` at `size` (1 spp with AOVs)."""
+    from renderer.camera import CameraFrame
+    from renderer.denoise import DenoiseInput
+    from renderer.renderer import Renderer
+
+    renderer = Renderer(scene, size, aovs=True)
+    renderer.render(CameraFrame.from_spec(scene.camera), 1, INTEGRATOR)
+    source = DenoiseInput(renderer.image(), *renderer.aov_images())
+    denoiser.denoise(source)
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        denoiser.denoise(source)
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def bench_scene(scene, denoiser, config: DenoiseBenchConfig) -> dict:
+    from renderer.camera import CameraFrame
+    from renderer.renderer import Renderer
+
+    renderer = Renderer(scene, config.size, aovs=True)
+    camera = CameraFrame.from_spec(scene.camera)
+    t0 = time.perf_counter()
+    renderer.render(camera, 1, INTEGRATOR, seed=0)
+    _sync()
+    result = {"scene": scene.name, "size": list(config.size), "compile_s": time.perf_counter() - t0}
+    log(f"[{scene.name}] first launch {result['compile_s']:.1f} s; reference for {config.reference_s:g} s ...")
+    run = progressive(renderer, camera, INTEGRATOR, "independent", config.reference_seed, config.reference_s, 1 << 24,
+                      max_launch_s=config.reference_launch_s)
+    reference = renderer.image()
+    floor = noise_floor(reference, renderer.film.variance_of_mean_image())["rel_mse"]
+    result["reference"] = {"spp": run["spp"], "seconds": run["seconds"], "rel_mse_floor": floor}
+
+    log(f"[{scene.name}] raw and denoised to {config.max_spp} spp ...")
+    points = denoise_curve(renderer, camera, denoiser, reference, floor, config)
+    result["curve"] = points
+    by_spp = {p["spp"]: p for p in points}
+    at8 = by_spp.get(8) or points[min(3, len(points) - 1)]
+    reach, extrapolated = spp_to_reach(points, "raw_corrected", max(at8["denoised_corrected"], 1e-12), power=1.0)
+    result["raw_spp_matching_denoised_8"] = {"spp": reach, "extrapolated": extrapolated}
+    raw128 = by_spp.get(128) or points[-1]
+    result["target_denoise"] = {"denoised_8": at8["denoised_corrected"], "raw_128": raw128["raw_corrected"],
+                                "raw_spp": raw128["spp"], "passed": at8["denoised_corrected"] < raw128["raw_corrected"]}
+
+    uniform = by_spp.get(config.equal_time_spp) or points[-1]
+    budget = uniform["seconds"]
+    result["uniform"] = {"spp": uniform["spp"], "seconds": budget, "rel_mse": uniform["raw"],
+                         "rel_mse_corrected": uniform["raw_corrected"]}
+    result["adaptive"] = []
+    for threshold in config.thresholds:
+        log(f"[{scene.name}] adaptive, threshold {threshold:g}, {budget:.1f} s ...")
+        result["adaptive"].append(adaptive_at_equal_time(renderer, camera, reference, floor, budget, threshold, config))
+    default = next((a for a in result["adaptive"] if a["threshold"] == DEFAULT_THRESHOLD), result["adaptive"][0])
+    result["target_adaptive"] = {"threshold": default["threshold"], "adaptive": default["rel_mse_corrected"],
+                                 "uniform": uniform["raw_corrected"],
+                                 "passed": default["rel_mse_corrected"] < uniform["raw_corrected"]}
+    return result
+
+
+def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, config: DenoiseBenchConfig | None = None) -> int:
+    from renderer.denoise import Denoiser, unavailable_reason
+
+    reason = unavailable_reason()
+    if reason:
+        print(f"bench denoise: {reason}")
+        return 1
+    config = config or (QUICK if quick else FULL)
+    if scenes is not None:
+        config = replace(config, scenes=tuple(str(s) for s in scenes))
+    t_start = time.perf_counter()
+    arch = speed_runtime()
+    load_before = load_average()
+    denoiser = Denoiser()
+    results = []
+    for name in config.scenes:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                scene = load_named_scene(name)
+            results.append(bench_scene(scene, denoiser, config))
+        except Exception as error:  # noqa: BLE001 - one scene must not end the benchmark
+            results.append({"scene": Path(name).stem, "skipped": describe_error(error)})
+    frame_scene = load_named_scene(config.scenes[0])
+    frame_s = denoiser_frame_time(denoiser, frame_scene, config.frame_size)
+    print_report(results, config, frame_s)
+    plots = write_plots(results, out_dir)
+    report = {**report_header("denoise", quick, load_before, arch=arch, config=asdict(config)),
+              "denoiser_frame_s": frame_s, "frame_size": list(config.frame_size), "scenes": results,
+              "plots": [p.name for p in plots], "total_seconds": time.perf_counter() - t_start}
+    path = write_json(Path(out_dir) / "bench_denoise.json", report)
+    print(f"wrote {path}  (total {report['total_seconds']:.0f} s)")
+    return 0 if any("curve" in r for r in results) else 1
+
+
+def print_report(results: list[dict], config: DenoiseBenchConfig, frame_s: float) -> None:
+    done = [r for r in results if "curve" in r]
+    for res in results:
+        if "skipped" in res:
+            print(f"{res['scene']}: skipped ({res['skipped']})\n")
+    rows = []
+    for res in done:
+        for p in res["curve"]:
+            rows.append([res["scene"], p["spp"], p["seconds"], p["raw_corrected"], p["denoised_corrected"],
+                         p["denoise_s"]])
+    w, h = config.size
+    print_table(["scene", "spp", "render s", "raw relMSE", "denoised relMSE", "denoise s"], rows,
+                title=f"Raw and denoised against a long reference ({INTEGRATOR}, {w}x{h}; relMSE minus the "
+                      "reference's noise)")
+    rows = []
+    for res in done:
+        t, m = res["target_denoise"], res["raw_spp_matching_denoised_8"]
+        rows.append([res["scene"], res["reference"]["spp"], t["denoised_8"], t["raw_128"],
+                     f"{m['spp']:.0f}{' (extrapolated)' if m['extrapolated'] else ''}", verdict(t["passed"])])
+    print_table(["scene", "reference spp", "denoised @8", f"raw @{config.max_spp if config.max_spp < 128 else 128}",
+                 "raw spp to match denoised @8", "denoised @8 < raw @128"], rows, title="Denoising")
+    rows = []
+    for res in done:
+        u = res["uniform"]
+        for a in res["adaptive"]:
+            rows.append([res["scene"], u["seconds"], u["spp"], u["rel_mse_corrected"], a["threshold"], a["mean_spp"],
+                         a["stopped_fraction"], a["rel_mse_corrected"],
+                         verdict(a["rel_mse_corrected"] < u["rel_mse_corrected"])])
+    print_table(["scene", "budget s", "uniform spp", "uniform relMSE", "threshold", "adaptive mean spp", "stopped",
+                 "adaptive relMSE", "adaptive better"], rows, title="Adaptive against uniform sampling at equal time")
+    wins = sum(r["target_adaptive"]["passed"] for r in done)
+    print(f"Target: adaptive (threshold {DEFAULT_THRESHOLD:g}) below uniform at equal time on >= 4 of 5 scenes: "
+          f"{wins} of {len(done)}  {verdict(wins >= 4)}")
+    passed = all(r["target_denoise"]["passed"] for r in done) and done
+    print(f"Target: denoised at 8 spp below raw at 128 spp on every scene: {verdict(bool(passed))}")
+    w, h = config.frame_size
+    print(f"Denoiser time per {w}x{h} frame: {frame_s * 1000:.0f} ms (median of 3)\n")
+
+
+def write_plots(results: list[dict], out_dir: Path) -> list[Path]:
+    plt = pyplot()
+    paths = []
+    for res in results:
+        if "curve" not in res:
+            continue
+        fig, ax = plt.subplots(figsize=(6, 4))
+        pts = res["curve"]
+        for key, label in (("raw_corrected", "raw"), ("denoised_corrected", "denoised")):
+            ax.loglog([p["seconds"] for p in pts], [max(p[key], 1e-9) for p in pts], marker="o", label=label)
+        for a in res["adaptive"]:
+            ax.scatter([a["seconds"]], [max(a["rel_mse_corrected"], 1e-9)], marker="x",
+                       label=f"adaptive {a['threshold']:g}")
+        ax.set_xlabel("render seconds")
+        ax.set_ylabel("relMSE (minus reference noise)")
+        ax.set_title(f"{res['scene']}: raw vs denoised, adaptive at equal time")
+        ax.legend(fontsize=8)
+        paths.append(save_figure(fig, Path(out_dir) / f"bench_denoise_{res['scene']}.png"))
+    return paths

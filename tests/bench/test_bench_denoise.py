@@ -1,0 +1,33 @@
+"""`bench denoise` on a tiny configuration: its curves, targets and report hold together."""
+import json
+
+import pytest
+
+from renderer.bench import denoise
+from renderer.denoise import unavailable_reason
+
+pytestmark = pytest.mark.skipif(unavailable_reason() is not None, reason="pyoidn is not installed here")
+
+TINY = denoise.DenoiseBenchConfig(size=(48, 27), reference_s=3.0, reference_launch_s=0.5, max_spp=16,
+                                  equal_time_spp=8, thresholds=(0.05, 0.5), min_spp=2, frame_size=(64, 36),
+                                  scenes=("cornell_box",))
+
+
+def test_tiny_run_writes_curves_targets_and_a_plot(tmp_path, capsys):
+    assert denoise.run(out_dir=tmp_path, config=TINY) == 0
+    report = json.loads((tmp_path / "bench_denoise.json").read_text())
+    (scene,) = report["scenes"]
+    curve = scene["curve"]
+    assert [p["spp"] for p in curve] == [1, 2, 4, 8, 16]
+    assert all(a["seconds"] <= b["seconds"] for a, b in zip(curve, curve[1:]))
+    # The denoiser's whole point: at 1 spp its output is far closer to the reference than the raw image.
+    assert curve[0]["denoised"] < 0.5 * curve[0]["raw"]
+    assert scene["raw_spp_matching_denoised_8"]["spp"] > 8
+    for adaptive in scene["adaptive"]:
+        assert 0.0 <= adaptive["stopped_fraction"] <= 1.0 and adaptive["mean_spp"] >= TINY.min_spp
+    loose = max(scene["adaptive"], key=lambda a: a["threshold"])
+    assert loose["stopped_fraction"] > 0.0  # a loose threshold stops pixels within the budget
+    assert (tmp_path / "bench_denoise_cornell_box.png").stat().st_size > 0
+    assert report["denoiser_frame_s"] > 0.0
+    out = capsys.readouterr().out
+    assert "Adaptive against uniform sampling at equal time" in out and "Denoiser time per 64x36 frame" in out

@@ -1,0 +1,184 @@
+"""Denoising AOVs (renderer/aovs.py): in range, equal to the debug views where no delta surface
+intervenes, and passed through mirrors and glass to the surface seen in them."""
+import numpy as np
+import pytest
+from scipy import stats
+
+from renderer.camera import CameraFrame
+from renderer.renderer import Renderer
+from renderer.scene import load_scene
+from renderer.scene.catalog import resolve_scene
+from tests.scene_builder import scene_from_toml
+
+ALPHA = 0.001  # significance of the z-tests below
+
+
+def render_aovs(scene, integrator, spp, seed=7, size=None):
+    renderer = Renderer(scene, size, aovs=True)
+    renderer.render(CameraFrame.from_spec(scene.camera), spp, integrator, seed=seed)
+    albedo, normal = renderer.aov_images()
+    return renderer, albedo, normal
+
+
+def render_view(scene, integrator, spp, seed=7, size=None):
+    renderer = Renderer(scene, size)
+    renderer.render(CameraFrame.from_spec(scene.camera), spp, integrator, seed=seed)
+    return renderer.image()
+
+
+@pytest.mark.parametrize("name", ["cornell_box", "showcase", "prism", "foggy"])
+def test_aovs_are_finite_and_in_range(name):
+    scene = load_scene(resolve_scene(name))
+    _, albedo, normal = render_aovs(scene, "mis", 2, size=(48, 27))
+    assert np.isfinite(albedo).all() and np.isfinite(normal).all()
+    assert albedo.min() >= 0.0 and albedo.max() <= 1.0
+    assert normal.min() >= -1.0 and normal.max() <= 1.0
+    assert albedo.max() > 0.05  # something was written
+
+
+def test_aovs_equal_the_albedo_and_normals_views_without_delta_surfaces():
+    # The Cornell box is all diffuse: the first vertex is the first hit, and the same seed gives the
+    # same camera rays, so the running means agree up to float rounding.
+    scene = load_scene(resolve_scene("cornell_box"))
+    size, spp = (40, 40), 3
+    _, albedo, normal = render_aovs(scene, "mis", spp, size=size)
+    albedo_view = render_view(scene, "albedo", spp, size=size)
+    normals_view = render_view(scene, "normals", spp, size=size)
+    np.testing.assert_allclose(albedo, np.clip(albedo_view, 0, 1), atol=2e-6)
+    # Pixels whose every sample hit one flat wall (a unit mean normal): where some samples miss, the
+    # AOV averages in 0 and the normals view a black 0 (not the encoded 0.5).
+    hit = np.linalg.norm(normal, axis=2) > 1.0 - 1e-5
+    np.testing.assert_allclose(normal[hit] * 0.5 + 0.5, normals_view[hit], atol=2e-6)
+    assert hit.mean() > 0.5
+
+
+def test_debug_views_and_path_without_aovs_keep_their_images():
+    # Keeping AOVs changes no colour: the images with and without them are identical.
+    scene = load_scene(resolve_scene("cornell_box"))
+    with_aovs, _, _ = render_aovs(scene, "path", 2, size=(24, 24))
+    assert np.array_equal(with_aovs.image(), render_view(scene, "path", 2, size=(24, 24)))
+
+
+PANE_SCENE = """
+[scene]
+geometry = "mesh"
+[camera]
+position = [0.5, 0.0, 3.0]
+look_at = [0.5, 0.0, 0.0]
+fov = 16
+[render]
+width = 32
+height = 32
+max_depth = 8
+[environment]
+type = "constant"
+color = [0.0, 0.0, 0.0]
+[materials.glass]
+type = "dielectric"
+base_color = [1.0, 1.0, 1.0]
+roughness = 0.0
+ior = 1.5
+thin = true
+[[objects]]
+type = "mesh"
+file = "{quad}"
+{pane}
+"""
+
+PANE = """
+[[objects]]
+type = "quad"
+material = "glass"
+size = [4.0, 4.0]
+rotate = [90.0, 0.0, 0.0]
+translate = [0.5, 0.0, 1.5]
+"""
+
+
+def _fresnel_dielectric(cos_i, eta):
+    sin_t2 = (1.0 - cos_i**2) / eta**2
+    cos_t = np.sqrt(1.0 - sin_t2)
+    rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+    rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+    return 0.5 * (rs**2 + rp**2)
+
+
+def test_glass_pane_passes_the_textured_wall_albedo_through(tmp_path):
+    """A thin glass pane in front of a checker-textured wall: each sample's AOV albedo is the wall's
+    albedo where the path passes the pane (probability T = 1 - 2F / (1 + F)) and the black
+    environment's 0 where it reflects. So E[AOV] = T x (the albedo view without the pane), pixel
+    by pixel (a thin pane bends no ray). Tested by a z-test on the pooled ratio, separately on
+    the wall's light and dark texels, so the wall's texture must come through."""
+    from pathlib import Path
+
+    quad = Path(__file__).resolve().parents[1] / "data" / "textured_quad.glb"
+    with_pane = scene_from_toml(tmp_path, PANE_SCENE.format(quad=quad.as_posix(), pane=PANE), "pane")
+    without = scene_from_toml(tmp_path, PANE_SCENE.format(quad=quad.as_posix(), pane=""), "wall")
+    spp = 48
+    _, albedo, _ = render_aovs(with_pane, "mis", spp, seed=3)
+    wall = render_view(without, "albedo", spp, seed=3)
+    assert wall.max() > 0.0
+    # Every camera ray meets the pane within 6 degrees of its normal: T varies by < 1e-4 over the image.
+    transmittance = 1.0 - 2.0 * _fresnel_dielectric(1.0, 1.5) / (1.0 + _fresnel_dielectric(1.0, 1.5))
+    lum_wall = wall.mean(axis=2)
+    lum_aov = albedo.mean(axis=2)
+    on_wall = lum_wall > 0.0
+    split = np.median(lum_wall[on_wall])
+    classes = {"light": on_wall & (lum_wall > split), "dark": on_wall & (lum_wall <= split)}
+    assert all(mask.sum() > 50 for mask in classes.values())
+    for name, mask in classes.items():
+        # Each sample is a Bernoulli(T) multiple of the wall albedo at that ray: the pooled ratio of
+        # sums has variance ~ T (1 - T) sum(a^2) / (spp sum(a)^2) over the pixels' albedos a.
+        a = lum_wall[mask]
+        ratio = lum_aov[mask].sum() / a.sum()
+        sd = np.sqrt(transmittance * (1 - transmittance) * (a**2).sum() / spp) / a.sum()
+        z = (ratio - transmittance) / sd
+        assert abs(z) < stats.norm.isf(ALPHA / 2), f"{name} texels: AOV / wall = {ratio:.4f}, T = {transmittance:.4f}"
+    contrast = lum_wall[classes["light"]].mean() / lum_wall[classes["dark"]].mean()
+    assert contrast > 1.5  # (the checker is real, so the two classes test the texture)
+
+
+MIRROR_SCENE = """
+[scene]
+geometry = "sdf"
+[camera]
+position = [0.0, 0.0, 3.0]
+look_at = [0.0, 0.0, 0.0]
+fov = 20
+[render]
+width = 24
+height = 24
+max_depth = 8
+[environment]
+type = "constant"
+color = [0.2, 0.2, 0.2]
+[materials.mirror]
+type = "conductor"
+base_color = [0.9, 0.6, 0.3]
+roughness = 0.0
+[materials.red]
+type = "diffuse"
+base_color = [0.8, 0.1, 0.1]
+[[objects]]
+type = "plane"
+material = "mirror"
+normal = [0.0, 0.7071068, 0.7071068]
+offset = 0.0
+[[objects]]
+type = "plane"
+material = "red"
+normal = [0.0, -1.0, 0.0]
+offset = -3.0
+"""
+
+
+def test_mirror_passes_the_reflected_surface_albedo_through(tmp_path):
+    """A mirror at 45 degrees shows a red ceiling: the AOV albedo is the ceiling's red scaled by the
+    mirror's reflectance (its colour, at 45 degrees within Schlick's 0.3% of it), not the mirror's
+    own base colour, and the normal is the ceiling's (pointing down)."""
+    scene = scene_from_toml(tmp_path, MIRROR_SCENE, "mirror")
+    _, albedo, normal = render_aovs(scene, "mis", 4)
+    centre = albedo[8:16, 8:16].reshape(-1, 3)
+    expected = np.array([0.9, 0.6, 0.3]) * np.array([0.8, 0.1, 0.1])
+    np.testing.assert_allclose(centre.mean(axis=0), expected, rtol=0.01, atol=2e-3)
+    assert np.allclose(normal[8:16, 8:16].reshape(-1, 3).mean(axis=0), [0.0, -1.0, 0.0], atol=1e-3)
