@@ -1,0 +1,64 @@
+"""The viewer's background denoiser: when it runs, that it never blocks, and which result shows."""
+import threading
+import time
+
+import numpy as np
+
+from renderer.denoise import DenoiseInput
+from viewer.denoise_worker import BackgroundDenoiser, wants_denoise
+
+
+def test_denoise_at_the_first_sample_then_at_each_doubling():
+    assert not wants_denoise(0.5, None)
+    assert wants_denoise(1.0, None)
+    assert not wants_denoise(1.9, 1.0) and wants_denoise(2.0, 1.0)
+    assert not wants_denoise(7.0, 4.0) and wants_denoise(8.0, 4.0)
+
+
+def source():
+    return DenoiseInput(np.ones((4, 4, 3), np.float32))
+
+
+def test_offer_returns_at_once_and_the_result_belongs_to_its_generation():
+    release = threading.Event()
+
+    def slow(s):
+        release.wait(5.0)
+        return s.color * 0.5
+
+    worker = BackgroundDenoiser(slow)
+    t0 = time.perf_counter()
+    assert worker.offer(1, 1.0, source)
+    assert time.perf_counter() - t0 < 0.1  # the caller (the window loop) does not wait
+    assert worker.busy and not worker.offer(1, 4.0, source)  # one job at a time
+    release.set()
+    worker.wait()
+    result = worker.result_for(1)
+    assert result is not None and result.spp == 1.0 and np.allclose(result.image, 0.5)
+    assert worker.result_for(2) is None  # a new accumulation does not show an old image
+
+
+def test_the_input_is_taken_only_when_a_job_starts():
+    taken = []
+    worker = BackgroundDenoiser(lambda s: s.color)
+
+    def take():
+        taken.append(1)
+        return source()
+
+    assert not worker.offer(3, 0.25, take)  # below one sample: nothing downloaded
+    assert worker.offer(3, 1.0, take)
+    worker.wait()
+    assert not worker.offer(3, 1.5, take) and worker.offer(3, 2.0, take)
+    worker.wait()
+    assert len(taken) == 2
+
+
+def test_a_failure_is_one_line_and_keeps_the_viewer_running():
+    def broken(s):
+        raise RuntimeError("OIDN device creation failed\nmore detail")
+
+    worker = BackgroundDenoiser(broken)
+    assert worker.offer(1, 1.0, source)
+    worker.wait()
+    assert worker.error == "OIDN device creation failed" and worker.result_for(1) is None
