@@ -1,0 +1,298 @@
+"""The benchmark page's sections of the speed benchmarks (startup, bvh, features, interactive): their
+main tables rendered from the JSON reports, and what each knob costs, in words computed from the
+same figures. The key names are those renderer/bench/startup.py, bvh_measure.py + bvh.py,
+features.py and interactive.py write."""
+from __future__ import annotations
+
+from renderer.bench.report_markdown import (
+    MISSING,
+    Section,
+    details,
+    interval,
+    is_number,
+    num,
+    pct,
+    spread,
+    table,
+    times,
+    verdict,
+)
+
+# --- startup -------------------------------------------------------------------------------------
+
+
+def _label(entry: dict) -> str:
+    return f"{entry['mode']}, kernels for {entry.get('optimize', 'compile')}"
+
+
+def startup_section(report: dict) -> Section:
+    section = Section()
+    measurements = report.get("measurements", [])
+    rows = []
+    for m in measurements:
+        cold, warm = m["cold"], m["warm"]
+        rows.append([_label(m), cold.get("start_to_first_frame"), warm.get("start_to_first_frame"),
+                     warm.get("import_and_init"), warm.get("start_to_first_window_frame"), warm.get("moving_ms"),
+                     m.get("cache_bytes", 0) / 1e6, f"{warm.get('ok', 0)} of {warm.get('runs', 0)}"])
+    w, h = report.get("size", ("?", "?"))
+    section.blocks += [
+        f"Seconds from process start ({report.get('scene', '?')}, {w}x{h}, CPU). Cold: an empty kernel cache; "
+        f"warm: the median of the runs on the filled cache. The viewer's first frame is the first step() that "
+        f"shows a rendered image; moving: the median frame with W held.",
+        table(["measurement", "cold: to first frame", "warm: to first frame", "warm: import + init",
+               "warm: to first window frame", "moving frame ms", "kernel cache MB", "warm runs ok"], rows)]
+    levels = report.get("optimization_levels", [])
+    if levels:
+        section.blocks += [
+            "Kernel optimisation levels (renderer; kernels = first frame − next frame):",
+            table(["optimise for", "cold kernels s", "warm kernels s", "1 spp frame s", "Msamples/s"],
+                  [[lv["optimize"], lv.get("cold_kernels"), lv.get("warm_kernels"), lv.get("frame_seconds"),
+                    lv.get("msamples_per_second")] for lv in levels])]
+    target_rows = []
+    for t in report.get("targets", []):
+        if "moving_ms" in t:
+            target_rows.append([t["what"], "frame while moving", f"{num(t['moving_ms'])} ms", "≤ 50 ms",
+                                verdict(t["passed"])])
+        else:
+            target_rows.append([t["what"], "warm start to first frame", f"{num(t['seconds'])} s",
+                                f"≤ {num(report.get('target_seconds'))} s",
+                                verdict(t["passed"]) if t.get("judged", True) else "reported"])
+    if target_rows:
+        section.blocks.append(table(["what", "measure", "value", "target", "verdict"], target_rows))
+    phase_rows = []
+    for m in measurements:
+        for name in m["cold"].get("phases", {}):
+            phase_rows.append([_label(m), name, m["cold"]["phases"][name], m["warm"].get("phases", {}).get(name)])
+    if phase_rows:
+        section.blocks.append(details("Every phase (cold, warm median), seconds",
+                                      table(["measurement", "phase", "cold", "warm"], phase_rows)))
+    if report.get("viewer_note"):
+        section.blocks.append(report["viewer_note"])
+
+    judged = next((t for t in report.get("targets", []) if "seconds" in t and t.get("judged", True)), None)
+    if judged is not None:
+        entry = next((m for m in measurements if m["mode"] == judged["mode"]), None)
+        cold = entry["cold"].get("start_to_first_frame") if entry else None
+        section.findings.append(
+            f"A warm start ({judged['what']}) takes {num(judged['seconds'])} s (target ≤ "
+            f"{num(report.get('target_seconds'))} s: {verdict(judged['passed'])}); a cold one, compiling every "
+            f"kernel, {num(cold)} s.")
+    by_level = {lv["optimize"]: lv for lv in levels}
+    fast, quick = by_level.get("run"), by_level.get("compile")
+    if fast and quick and all(is_number(lv.get(k)) for lv in (fast, quick)
+                              for k in ("cold_kernels", "msamples_per_second")):
+        section.findings.append(
+            f"Kernels optimised for speed (`--optimize run`) take {num(fast['cold_kernels'])} s to compile cold "
+            f"against {num(quick['cold_kernels'])} s for `compile`, and render "
+            f"{times(fast['msamples_per_second'] / quick['msamples_per_second'])} as many samples per second.")
+    return section
+
+
+# --- bvh -----------------------------------------------------------------------------------------
+
+def _config(c: dict) -> str:
+    return f"{c['strategy']}/{c['traversal']}/{c['triangle_test']}"
+
+
+def _bvh_trace_details(mesh: dict) -> str:
+    rows = [[_config(c), c["compile_s"], c["coherent"]["mrays_per_s"], c["coherent"]["nodes_per_ray"],
+             c["incoherent"]["mrays_per_s"], c["incoherent"]["nodes_per_ray"], c["incoherent"]["tests_per_ray"],
+             pct(c["incoherent"].get("agreement", {}).get("fraction"), 3)] for c in mesh["configs"]]
+    e = mesh.get("embree", {})
+    if e.get("available"):
+        rows.append(["embree", MISSING, e["coherent"]["mrays_per_s"], MISSING, e["incoherent"]["mrays_per_s"],
+                     MISSING, MISSING, MISSING])
+    return details(f"{mesh['name']}: every split strategy × traversal × triangle test",
+                   table(["configuration", "first call s", "coherent Mrays/s", "nodes/ray", "incoherent Mrays/s",
+                          "nodes/ray", "tests/ray", "agrees with Embree"], rows))
+
+
+def _same_traversal(mesh: dict, strategy: str) -> dict | None:
+    """The configuration of `strategy` with the default configuration's traversal and triangle test."""
+    default = mesh["default_config"].split("/")
+    return next((c for c in mesh["configs"]
+                 if [c["strategy"], c["traversal"], c["triangle_test"]] == [strategy, *default[1:]]), None)
+
+
+def bvh_section(report: dict) -> Section:
+    section = Section()
+    meshes = report.get("meshes", [])
+    embree = report.get("embree", {})
+    targets = report.get("targets", {})
+    rows = []
+    for m in meshes:
+        for b in m["builds"]:
+            rows.append([m["name"], m["triangles"], b["strategy"], b["seconds"], b["triangles_per_s"] / 1e6,
+                         b["sah_cost"], b["depth"], b["device_bytes"]["per_triangle"]])
+        if m.get("embree", {}).get("available"):
+            rows.append([m["name"], m["triangles"], "embree (commit)", m["embree"]["build_s"],
+                         m["triangles"] / m["embree"]["build_s"] / 1e6, MISSING, MISSING, MISSING])
+    bytes_ok = targets.get("bytes_per_triangle_passed", {})
+    big_build = targets.get("sah_build_1m")
+    big_said = f"{verdict(big_build['passed'])}: {num(big_build['seconds'])} s" if big_build else "not measured"
+    section.blocks += [
+        f"Builds (leaves of at most 4; median of repeats). Targets: ≤ {num(targets.get('bytes_per_triangle'))} "
+        f"device bytes per triangle with SAH ({verdict(all(bytes_ok.values()) if bytes_ok else None)}) and the SAH "
+        f"build of the 1M mesh in ≤ {num(targets.get('sah_build_seconds'))} s ({big_said}).",
+        table(["mesh", "triangles", "strategy", "build s", "Mtriangles/s", "SAH cost", "depth", "bytes/triangle"],
+              rows)]
+    rows = []
+    for m in meshes:
+        default = next(c for c in m["configs"] if _config(c) == m["default_config"])
+        best = next(c for c in m["configs"] if _config(c) == m["best_incoherent_config"])
+        e = m.get("embree", {})
+        ratio = m.get("ratio_to_embree", {}).get("incoherent", {}).get("default")
+        rows.append([m["name"], default["coherent"]["mrays_per_s"], default["incoherent"]["mrays_per_s"],
+                     f"{m['best_incoherent_config']} ({num(best['incoherent']['mrays_per_s'])})",
+                     e["incoherent"]["mrays_per_s"] if e.get("available") else MISSING, times(ratio),
+                     pct(m.get("agreement_all_configs", {}).get("incoherent"), 3)])
+    version = " ".join(str(embree.get("version", "")).split())  # embreex's own text: "Embree version: 4.4.0 (...)"
+    embree_note = ((version if version.startswith("Embree") else f"Embree {version}".strip()) if embree.get("available")
+                   else f"Embree not measured ({embree.get('note', 'unavailable')})")
+    section.blocks += [
+        f"Closest-hit rays, Mrays/s, with the Renderer's configuration "
+        f"({meshes[0]['default_config'] if meshes else ''}) and the fastest one on incoherent rays; {embree_note}; "
+        f"target ≥ {num(targets.get('embree_ratio'))}x Embree on incoherent rays.",
+        table(["mesh", "coherent", "incoherent", "fastest incoherent", "Embree incoherent", "vs Embree",
+               "all agree with Embree"], rows)]
+    section.blocks += [_bvh_trace_details(m) for m in meshes]
+    shadow = [m for m in meshes if "shadow" in m]
+    if shadow:
+        section.blocks.append(details("Shadow rays: any-hit against closest-hit on the same segments", table(
+            ["mesh", "any-hit Mrays/s", "closest-hit Mrays/s", "speed-up", "occluded", "Embree any-hit Mrays/s"],
+            [[m["name"], m["shadow"]["occluded_mrays_per_s"], m["shadow"]["closest_mrays_per_s"],
+              times(m["shadow"]["occluded_mrays_per_s"] / m["shadow"]["closest_mrays_per_s"]),
+              pct(m["shadow"]["occluded_fraction"]), m["shadow"].get("embree_occluded_mrays_per_s", MISSING)]
+             for m in shadow])))
+    leaf = report.get("leaf_size")
+    if leaf:
+        section.blocks += [
+            f"Leaf size, SAH on {leaf['mesh']} ({num(leaf['triangles'])} triangles), {leaf['config']}, "
+            f"{num(leaf['rays'])} incoherent rays (* = the Renderer's default):",
+            table(["max leaf", "build s", "SAH cost", "bytes/triangle", "incoherent Mrays/s", "nodes/ray", "tests/ray"],
+                  [[("*" if r["max_leaf_size"] == leaf["renderer_default"] else "") + str(r["max_leaf_size"]),
+                    r["build_s"], r["sah_cost"], r["device_bytes"]["per_triangle"], r["incoherent"]["mrays_per_s"],
+                    r["incoherent"]["nodes_per_ray"], r["incoherent"]["tests_per_ray"]] for r in leaf["rows"]])]
+
+    if meshes:
+        big = max(meshes, key=lambda m: m["triangles"])
+        builds = {b["strategy"]: b for b in big["builds"]}
+        sah, mid = _same_traversal(big, "sah"), _same_traversal(big, "midpoint")
+        if "sah" in builds and "midpoint" in builds and sah and mid:
+            slower = builds["sah"]["seconds"] / builds["midpoint"]["seconds"]
+            sentence = (f"On {big['name']} ({num(big['triangles'])} triangles) the SAH build takes "
+                        f"{num(builds['sah']['seconds'])} s, {times(slower)} the midpoint split's, and its tree traces "
+                        f"incoherent rays "
+                        f"{times(sah['incoherent']['mrays_per_s'] / mid['incoherent']['mrays_per_s'])} as fast")
+            ratio = big.get("ratio_to_embree", {}).get("incoherent", {}).get("default")
+            if ratio is not None:
+                target = targets["embree_ratio"]
+                sentence += (f"; the Renderer's configuration runs at {times(ratio)} Embree's incoherent rays/s "
+                             f"(target {num(target)}x: {verdict(ratio >= target)})")
+            section.findings.append(sentence + ".")
+    if leaf:
+        default = next((r for r in leaf["rows"] if r["max_leaf_size"] == leaf["renderer_default"]), None)
+        sentence = (f"Leaves of at most {leaf['best_max_leaf_size']} trace fastest on {leaf['mesh']} (within "
+                    f"{pct(leaf['tie_fraction'], 0)}: {', '.join(str(v) for v in leaf['within_tie_of_best'])})")
+        if default:
+            sentence += (f"; the default {leaf['renderer_default']} takes "
+                         f"{num(default['device_bytes']['per_triangle'])} device bytes per triangle")
+        section.findings.append(sentence + ".")
+    return section
+
+
+# --- features ------------------------------------------------------------------------------------
+
+def features_section(report: dict) -> Section:
+    section = Section()
+    entries = report.get("scenes", [])
+    scenes = [s for s in entries if "builds" in s and "error" not in s]
+    summary = report.get("summary", {})
+    config = report.get("config", {})
+    compile_word = "cold compile" if config.get("fresh_cache", True) else "first call"
+    rows = []
+    for s in scenes:
+        own, every = s["builds"]["own"], s["builds"].get("everything", {})
+        rows.append([s["scene"], s["geometry"], own.get("compile_s"), every.get("compile_s"),
+                     own.get("samples_per_s", 0) / 1e6, interval(every.get("vs_own"))])
+    section.blocks += [
+        f"The scene's own kernels against every optional effect compiled in ({report.get('integrator', 'mis')}, "
+        f"{'x'.join(str(v) for v in config.get('size', ()))}; median of paired passes with its 95 % interval):",
+        table(["scene", "geometry", f"{compile_word} own s", "all effects s", "Msamples/s own",
+               "t(all) / t(own)"], rows)]
+    by_effect: dict[str, list[dict]] = {}
+    for v in summary.get("unused_effects", []):
+        by_effect.setdefault(v["effect"], []).append(v)
+    rows = [[effect.removeprefix("has_"), len(vs), spread([v.get("ratio") for v in vs], lambda x: f"{x:.3f}"),
+             f"{sum(v['passed'] for v in vs)} of {len(vs)}"] for effect, vs in by_effect.items()]
+    if rows:
+        section.blocks += [
+            f"One unused effect forced on at a time: t(own + effect) / t(own) over the scenes; an effect fails where "
+            f"the own build is measurably faster (95 % interval wholly below {1 - summary.get('tolerance', 0):.2f}). "
+            f"Target: {verdict(summary.get('passed'))}.",
+            table(["unused effect", "scenes", "ratio range", "pass"], rows)]
+    rows = []
+    for s in scenes:
+        for c in s.get("cases", []):
+            if "ratio" in c:
+                rows.append([c["effect"], s["scene"], c["without"], interval(c["ratio"]), c["image_difference"],
+                             c["noise_floor"], pct(c["mean_change"], signed=True)])
+    if rows:
+        section.blocks += [
+            "What each effect costs where a scene uses it (images: sum |with − without| / sum without at equal spp, "
+            "against the same between two renders with it):",
+            table(["effect", "scene", "without it", "t(with) / t(without)", "image difference", "noise floor",
+                   "mean change"], rows)]
+    section.blocks += [f"Not measured: {s['scene']}: {s['error']}." for s in entries if "error" in s]
+
+    slower = [s["builds"]["everything"]["vs_own"]["median"] - 1.0 for s in scenes
+              if "vs_own" in s["builds"].get("everything", {})]
+    verdicts = summary.get("unused_effects", [])
+    if slower:
+        section.findings.append(
+            f"Compiling every optional effect in changes a scene's time per sample by "
+            f"{spread(slower, lambda x: pct(x, signed=True))}; {sum(v['passed'] for v in verdicts)} of {len(verdicts)} "
+            f"unused effects cost nothing measurable (target: {verdict(summary.get('passed'))}).")
+    cases = [(c["ratio"]["median"], c["effect"], s["scene"]) for s in scenes for c in s.get("cases", [])
+             if "ratio" in c]
+    if cases:
+        ratio, effect, scene = max(cases)
+        sentence = f"Where a scene uses it, {effect} costs the most: {times(ratio)} the time per sample on {scene}"
+        if len(cases) > 1:
+            low, cheap, where = min(cases)
+            sentence += f"; {cheap} the least, {times(low)} on {where}"
+        section.findings.append(sentence + ".")
+    return section
+
+
+# --- interactive ---------------------------------------------------------------------------------
+
+def interactive_section(report: dict) -> Section:
+    section = Section()
+    results = report.get("results", [])
+    measured = [r for r in results if "skipped" not in r]
+    target = report.get("latency_target_ms")
+    rows = [[r["scene"], r["integrator"], r["latency_p50_ms"], r["latency_p95_ms"], r["whole_samples_p95_ms"],
+             r["still"]["samples_per_s"] / 1e6, times(r["still"]["rate_ratio"], 3), r["still"]["frame_ms_median"],
+             r["moving"]["frame_ms_median"], r["switch"]["first_image_s"]] for r in measured]
+    w, h = report.get("config", {}).get("size", ("?", "?"))
+    section.blocks += [
+        f"Input latency (event to presented frame), viewer off-screen at {w}x{h}: target p95 ≤ {num(target)} ms "
+        f"({verdict(report.get('latency_ok'))}); still samples/s of sliced frames against whole-sample frames ≥ "
+        f"{pct(report.get('still_rate_target'), 0)} ({verdict(report.get('rate_ok'))}).",
+        table(["scene", "integrator", "p50 ms", "p95 ms", "p95 ms, whole-sample frames", "still Msamples/s",
+               "vs whole-sample frames", "still frame ms", "moving frame ms", "switch s"], rows)]
+    skipped = [f"{r['scene']} / {r['integrator']}: {r['skipped']}" for r in results if "skipped" in r]
+    if skipped:
+        section.blocks.append("Not measured: " + "; ".join(skipped) + ".")
+    if measured:
+        worst = max(measured, key=lambda r: r["latency_p95_ms"])
+        ratios = [r["still"]["rate_ratio"] for r in measured if r["integrator"] != "sppm"]
+        sentence = (f"The p95 input latency is {spread([r['latency_p95_ms'] for r in measured])} ms (worst "
+                    f"{worst['scene']} / {worst['integrator']}; target ≤ {num(target)} ms: "
+                    f"{verdict(report.get('latency_ok'))})")
+        if ratios:
+            sentence += (f", and cutting still frames into pixel slices keeps {spread(ratios, pct)} of the samples "
+                         f"per second of whole-sample frames")
+        section.findings.append(sentence + ".")
+    return section

@@ -1,0 +1,261 @@
+"""`bench report` (renderer/bench/report.py): the benchmark page, docs/benchmarks.md, from reports
+shaped like the benchmarks' own (tests/bench/report_fixtures.py), written to temporary folders."""
+import json
+import math
+import re
+import shutil
+from datetime import datetime
+
+import pytest
+
+from renderer.bench import BENCHMARKS
+from renderer.bench.report import PAGE_NAME, PLOT_FOLDER, build_page, how_to_produce, run
+from renderer.bench.report_markdown import listing, num, pct, table
+from tests.bench.report_fixtures import WRITERS, integrators_report
+
+
+@pytest.fixture(scope="module")
+def reports(tmp_path_factory):
+    """Every benchmark's report and plots in one folder: (folder, {name: report})."""
+    folder = tmp_path_factory.mktemp("reports")
+    return folder, {name: write(folder) for name, write in WRITERS.items()}
+
+
+def make_page(reports_dir, docs_dir) -> str:
+    assert run(out_dir=reports_dir, docs_dir=docs_dir) == 0
+    return (docs_dir / PAGE_NAME).read_text(encoding="utf-8")
+
+
+def sections(page: str) -> dict:
+    """{benchmark name: its section's text}."""
+    parts = re.split(r"^## ", page, flags=re.M)[1:]
+    return {part.split("\n", 1)[0]: part for part in parts}
+
+
+def tables(text: str) -> list:
+    """The Markdown tables of `text`, each as rows of cells (header first, separator left out)."""
+    found, current = [], []
+    for line in text.splitlines() + [""]:
+        if line.startswith("|"):
+            cells = [c.strip() for c in line.strip().strip("|").split(" | ")]
+            if not all(re.fullmatch(r"-+:?", c) for c in cells):
+                current.append(cells)
+        elif current:
+            found.append(current)
+            current = []
+    return found
+
+
+def row(text: str, *first_cells: str) -> dict:
+    """The table row whose first cells are `first_cells`, as {column header: cell}."""
+    for t in tables(text):
+        for cells in t[1:]:
+            if cells[:len(first_cells)] == list(first_cells):
+                return dict(zip(t[0], cells))
+    raise AssertionError(f"no row {first_cells}")
+
+
+def linked_plots(page: str) -> list:
+    return re.findall(r"!\[[^\]]*\]\(([^)]+)\)", page)
+
+
+def test_every_benchmark_shows_where_its_figures_come_from_what_they_cost_and_its_plots(reports, tmp_path):
+    folder, data = reports
+    page = make_page(folder, tmp_path / "docs")
+    by_name = sections(page)
+    registered = [n for n in BENCHMARKS if n != "report"]  # the registry's order, less this command
+    assert list(by_name) == registered + sorted(set(data) - set(registered))
+    for name, report in data.items():
+        text = by_name[name]
+        machine = report["machine"]
+        assert f"`{report['command']}`" in text
+        assert machine["processor"] in text and f"{machine['cpus']} CPUs" in text
+        assert f"{datetime.fromisoformat(report['date']):%Y-%m-%d %H:%M} UTC" in text
+        assert ("a `--quick` run" if report["quick"] else "a full run") in text
+        assert "could not read this report" not in text  # each section reads its benchmark's layout
+        assert "**What it costs.** " in text
+        plots = report.get("plots") or ([report["plot"]] if "plot" in report else [])  # startup draws none
+        assert [f"{PLOT_FOLDER}/{p}" for p in plots] == linked_plots(text)
+        assert f"| [{name}](#{name}) |" in page
+
+
+def test_tables_are_rendered_from_the_json(reports, tmp_path):
+    folder, data = reports
+    text = sections(make_page(folder, tmp_path / "docs"))
+    box = data["integrators"]["scenes"][0]
+    curve = next(c for c in box["curves"] if (c["integrator"], c["sampler"]) == ("nee", "sobol"))
+    cells = row(text["integrators"], "nee/sobol")
+    assert cells["relMSE"] == num(curve["at_budget"]["rel_mse"])
+    assert cells["spp at T"] == num(round(curve["at_budget"]["spp"]))
+    alpha = data["sdf"]["scenes"][0]
+    cells = row(text["sdf"], "alpha")
+    assert cells["fewer steps"] == pct(alpha["target"]["step_reduction"])
+    assert cells["target"] == ("PASS" if alpha["target"]["passed"] else "FAIL")
+    large = data["bvh"]["meshes"][1]
+    sah = next(b for b in large["builds"] if b["strategy"] == "sah")
+    assert row(text["bvh"], "large", "1,000,000", "sah")["build s"] == num(sah["seconds"])
+    warm = data["startup"]["measurements"][1]["warm"]
+    cells = row(text["startup"], "viewer, kernels for compile")
+    assert cells["warm: to first frame"] == num(warm["start_to_first_frame"])
+    sppm = data["photons"]["scenes"][0]["curves"]["sppm"]
+    assert row(text["photons"], "sppm")["caustic −floor"] == num(sppm["at_budget_floor_corrected"]["rel_mse_caustic"])
+    mis = next(r for r in data["interactive"]["results"] if r["integrator"] == "mis")
+    assert row(text["interactive"], "box", "mis")["p95 ms"] == num(mis["latency_p95_ms"])
+    beta = next(s for s in data["features"]["scenes"] if s["scene"] == "beta")
+    ratio = beta["builds"]["everything"]["vs_own"]
+    expected = f"{ratio['median']:.3f} [{ratio['lo']:.3f}, {ratio['hi']:.3f}]"
+    assert row(text["features"], "beta")["t(all) / t(own)"] == expected
+
+    room = data["denoise"]["scenes"][1]
+    assert row(text["denoise"], "room")["denoised at 8 spp"] == num(room["target_denoise"]["denoised_8"])
+
+    # a figure changed in the JSON changes the page
+    changed = tmp_path / "changed"
+    shutil.copytree(folder, changed)
+    report = json.loads((changed / "bench_photons.json").read_text())
+    report["scenes"][0]["curves"]["sppm"]["at_budget_floor_corrected"]["rel_mse_caustic"] = 0.0123
+    (changed / "bench_photons.json").write_text(json.dumps(report))
+    assert row(sections(make_page(changed, tmp_path / "docs2"))["photons"], "sppm")["caustic −floor"] == "0.0123"
+
+
+def test_the_cost_sentences_follow_the_figures(tmp_path):
+    integrators_report(tmp_path, {"box": {"path/independent": 0.4, "mis/sobol": 0.02, "nee/sobol": 0.05},
+                                  "room": {"path/independent": 0.4, "mis/sobol": 0.05, "nee/sobol": 0.01},
+                                  "hall": {"path/independent": 0.3, "mis/sobol": 0.03, "nee/sobol": 0.04}})
+    text = sections(make_page(tmp_path, tmp_path / "docs"))["integrators"]
+    findings = text.split("**What it costs.** ", 1)[1].split("\n", 1)[0]
+    # errors fall as 1/seconds alike, so the ratios at equal time are those of the errors at 1 s
+    assert "the lowest relMSE is mis/sobol's on box and hall; nee/sobol's on room" in findings
+    assert "plain path tracing (path/independent) ends at 10.0x–40.0x that" in findings
+
+
+def test_a_benchmark_without_a_report_says_how_to_produce_one(reports, tmp_path):
+    folder, data = reports
+    only = tmp_path / "reports"
+    only.mkdir()
+    for name in [*data["photons"]["plots"], "bench_photons.json"]:
+        shutil.copy(folder / name, only / name)
+    page = make_page(only, tmp_path / "docs")
+    by_name = sections(page)
+    for name in BENCHMARKS:
+        if name not in ("report", "photons"):
+            assert how_to_produce(name) in by_name[name]
+            assert f"`python app.py bench {name}`" in how_to_produce(name)
+            index_row = page.split(f"| [{name}](#{name}) |", 1)[1].split("\n", 1)[0]
+            assert index_row.endswith("| none yet |")
+    assert "No report yet" not in by_name["photons"]
+    assert sorted(p.name for p in (tmp_path / "docs" / PLOT_FOLDER).iterdir()) == sorted(data["photons"]["plots"])
+
+
+def test_plot_links_resolve_and_only_the_plots_shown_are_copied(reports, tmp_path):
+    folder, _ = reports
+    source = tmp_path / "reports"
+    shutil.copytree(folder, source)
+    (source / "bench_sdf_not_listed.png").write_bytes((source / "bench_features.png").read_bytes())
+    docs = tmp_path / "docs"
+    (docs / PLOT_FOLDER).mkdir(parents=True)
+    (docs / PLOT_FOLDER / "bench_gone.png").write_bytes(b"an earlier page's plot")
+    page = make_page(source, docs)
+    links = linked_plots(page)
+    assert len(links) == len(set(links)) > 10
+    for link in links:
+        target = docs / link
+        assert target.is_file() and target.read_bytes() == (source / target.name).read_bytes()
+    assert sorted(p.name for p in (docs / PLOT_FOLDER).iterdir()) == sorted(link.split("/", 1)[1] for link in links)
+
+    # a plot the report lists but that is not there is named, not linked
+    (source / "bench_bvh_trace.png").unlink()
+    page = make_page(source, docs)
+    assert "bench_bvh_trace.png" not in linked_plots(page)
+    assert "(Plot `bench_bvh_trace.png` is listed in the report but missing beside it.)" in page
+    assert not (docs / PLOT_FOLDER / "bench_bvh_trace.png").exists()
+
+
+def test_the_page_is_deterministic(reports, tmp_path):
+    folder, _ = reports
+    first = make_page(folder, tmp_path / "a")
+    assert make_page(folder, tmp_path / "a") == first  # again over its own output
+    shuffled = tmp_path / "shuffled"
+    shuffled.mkdir()
+    for path in sorted(folder.iterdir(), reverse=True):  # other creation order, other folder
+        shutil.copy(path, shuffled / path.name)
+    assert make_page(shuffled, tmp_path / "b") == first
+    assert {p.name: p.read_bytes() for p in (tmp_path / "a" / PLOT_FOLDER).iterdir()} == \
+        {p.name: p.read_bytes() for p in (tmp_path / "b" / PLOT_FOLDER).iterdir()}
+
+
+def test_the_latest_report_of_a_benchmark_wins(reports, tmp_path):
+    folder, data = reports
+    source = tmp_path / "reports"
+    shutil.copytree(folder, source)
+    older = json.loads((source / "bench_photons.json").read_text())
+    older["date"] = "2020-01-01T00:00:00+00:00"
+    older["command"] = "python app.py bench photons --quick"
+    (source / "zz_photons_older.json").write_text(json.dumps(older))
+    text = sections(make_page(source, tmp_path / "docs"))["photons"]
+    assert f"`{data['photons']['command']}`" in text and older["command"] not in text
+    older["date"] = "2999-01-01T00:00:00+00:00"
+    (source / "zz_photons_older.json").write_text(json.dumps(older))
+    assert f"`{older['command']}`" in sections(make_page(source, tmp_path / "docs"))["photons"]
+
+
+def test_unreadable_json_is_named_in_one_line_and_passed_over(reports, tmp_path, capsys):
+    folder, _ = reports
+    source = tmp_path / "reports"
+    shutil.copytree(folder, source)
+    (source / "broken.json").write_text('{"benchmark": "sdf", ')
+    (source / "other.json").write_text('{"not": "a benchmark report"}')
+    page = make_page(source, tmp_path / "docs")
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"{source / 'broken.json'}: not a readable JSON report (")
+    assert lines[0].endswith("; skipped")
+    assert "No report yet" not in sections(page)["sdf"]
+    assert run(out_dir=tmp_path / "nowhere", docs_dir=tmp_path / "docs") == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"{tmp_path / 'nowhere'}: no such folder of benchmark reports "
+                   f"(run `python app.py bench NAME` first)"]
+
+
+def test_a_report_the_page_has_no_section_for_is_shown_as_it_is(reports, tmp_path):
+    folder, data = reports
+    source = tmp_path / "reports"
+    source.mkdir()
+    shutil.copy(folder / "bench_features.png", source / "bench_novel.png")
+    new = {**{k: data["photons"][k] for k in ("quick", "date", "command", "machine", "load_average")},
+           "benchmark": "novel", "config": {"size": [8, 8]},
+           "results": [{"scene": "box", "spp": 4, "rel_mse": 0.25, "curve": [1, 2]},
+                       {"scene": "room", "spp": 8, "rel_mse": 0.125, "curve": [3]}],
+           "summary": {"passed": True, "seconds": 1.5}, "plots": ["bench_novel.png"]}
+    (source / "novel.json").write_text(json.dumps(new))
+    # a known benchmark whose report lacks what its section reads
+    drifted = {**data["photons"], "scenes": [{"scene": "goblet", "curves": {}}]}
+    (source / "bench_photons.json").write_text(json.dumps(drifted))
+    by_name = sections(make_page(source, tmp_path / "docs"))
+    assert list(by_name)[-1] == "novel"  # after the registry's benchmarks
+    text = by_name["novel"]
+    assert f"`{new['command']}`" in text and linked_plots(text) == [f"{PLOT_FOLDER}/bench_novel.png"]
+    assert row(text, "room") == {"scene": "room", "spp": "8", "rel_mse": "0.125"}  # plain values only
+    assert row(text, "passed") == {"": "passed", "value": "yes"}
+    assert "could not read this report (KeyError" in by_name["photons"]
+    assert row(by_name["photons"], "goblet")["scene"] == "goblet"
+
+
+def test_markdown_pieces():
+    assert [num(v) for v in (None, True, 12345, 0.0, 0.125, 12345.6, 1234567.0, 0.000123, -2.5e-7, "inf", "x")] == \
+        ["–", "yes", "12,345", "0", "0.125", "12,300", "1.23e6", "1.23e-4", "-2.50e-7", "∞", "x"]
+    assert num(math.inf) == "∞" and num(math.nan) == "–"
+    assert pct(-0.0, signed=True) == "+0.0 %" and pct(0.25) == "25.0 %" and pct(None) == "–"
+    assert listing(["a"]) == "a" and listing(["a", "b", "c"]) == "a, b and c"
+    assert table(["name", "x", "ratio"], [["a|b", 1.5, "2.00x"], ["c", None, "–"]]).splitlines() == [
+        "| name | x | ratio |", "| --- | ---: | ---: |", "| a\\|b | 1.5 | 2.00x |", "| c | – | – |"]
+
+
+def test_build_page_needs_no_plots_on_disk_to_name_them(tmp_path):
+    (tmp_path / "bench_x.json").write_text(json.dumps({"benchmark": "x", "date": "2026-01-02T03:04:05+00:00",
+                                                       "plots": ["a.png", "b.svg"], "rows": [{"v": 1}]}))
+    page = build_page(tmp_path, warn=lambda line: pytest.fail(line))
+    text = page.text
+    assert page.plots == {} and page.reported == ("x",)
+    assert "(Plot `a.png` is listed in the report but missing beside it.)" in text
+    assert "b.svg" not in text  # only PNGs are plots on the page
+    assert "Measured 2026-01-02 03:04 UTC by `?`" in sections(text)["x"]
