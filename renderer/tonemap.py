@@ -9,7 +9,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.film import is_finite_f32
-from renderer.pixel_slices import filled_mean
+from renderer.pixel_slices import CELL, CELL_BITS, ROUND_SLICES, filled_mean, pass_length, slice_pixel
 from renderer.luminance import LUMINANCE_WEIGHTS, luminance
 
 TONEMAPPERS = ("aces", "reinhard", "none")
@@ -95,18 +95,32 @@ def display_value(linear, mapper):
     return out
 
 
-@ti.kernel
-def _tonemap_kernel(
-    mean: ti.template(), count: ti.template(), rejected: ti.template(),
-    out: ti.types.ndarray(dtype=ti.math.vec3, ndim=2), source_width: ti.i32, source_height: ti.i32, scale: ti.f32,
-    mapper: ti.i32,
-):
-    out_width, out_height = out.shape[0], out.shape[1]
-    step_x = ti.cast(source_width, ti.f32) / ti.cast(out_width, ti.f32)
-    step_y = ti.cast(source_height, ti.f32) / ti.cast(out_height, ti.f32)
-    for x, y in ti.ndrange(out_width, out_height):
-        # Pixel centres map to pixel centres; with equal sizes sx == x exactly, weight 0 on the
-        # neighbour, so the copy is 1:1.
+@ti.func
+def _film_radiance(mean, count, rejected, x, y, filled):
+    """The film's sanitized mean at (x, y); with `filled` (a first round unfinished), a pixel not
+    reached yet shows its nearest sampled grid point (renderer/pixel_slices.filled_mean). After
+    the first round every pixel has a sample, and the plain lookup gives the same value."""
+    value = ti.math.vec3(0.0)
+    if filled:
+        value = filled_mean(mean, count, rejected, x, y)
+    else:
+        value = mean[x, y]
+    return sanitize_radiance(value)
+
+
+@ti.func
+def _display_at(mean, count, rejected, x, y, out_width, out_height, source_width, source_height, scale,
+                mapper, filled):
+    """The display value of output pixel (x, y): the film's active region stretched over the
+    output with bilinear filtering of the exposed linear radiance."""
+    linear = ti.math.vec3(0.0)
+    if out_width == source_width and out_height == source_height:
+        # 1:1: the bilinear weights below would be exactly (1, 0, 0, 0); one lookup, same value.
+        linear = _film_radiance(mean, count, rejected, x, y, filled)
+    else:
+        step_x = ti.cast(source_width, ti.f32) / ti.cast(out_width, ti.f32)
+        step_y = ti.cast(source_height, ti.f32) / ti.cast(out_height, ti.f32)
+        # Pixel centres map to pixel centres.
         sx = ti.math.clamp((ti.cast(x, ti.f32) + 0.5) * step_x - 0.5, 0.0, ti.cast(source_width - 1, ti.f32))
         sy = ti.math.clamp((ti.cast(y, ti.f32) + 0.5) * step_y - 0.5, 0.0, ti.cast(source_height - 1, ti.f32))
         x0 = ti.cast(ti.floor(sx), ti.i32)
@@ -115,29 +129,123 @@ def _tonemap_kernel(
         y1 = ti.min(y0 + 1, source_height - 1)
         fx = sx - ti.cast(x0, ti.f32)
         fy = sy - ti.cast(y0, ti.f32)
-        m00 = sanitize_radiance(filled_mean(mean, count, rejected, x0, y0))
-        m10 = sanitize_radiance(filled_mean(mean, count, rejected, x1, y0))
-        m01 = sanitize_radiance(filled_mean(mean, count, rejected, x0, y1))
-        m11 = sanitize_radiance(filled_mean(mean, count, rejected, x1, y1))
+        m00 = _film_radiance(mean, count, rejected, x0, y0, filled)
+        m10 = _film_radiance(mean, count, rejected, x1, y0, filled)
+        m01 = _film_radiance(mean, count, rejected, x0, y1, filled)
+        m11 = _film_radiance(mean, count, rejected, x1, y1, filled)
         bottom = m00 * (1.0 - fx) + m10 * fx
         top = m01 * (1.0 - fx) + m11 * fx
         linear = bottom * (1.0 - fy) + top * fy
-        out[x, y] = display_value(ti.math.clamp(linear * scale, 0.0, MAX_RADIANCE), mapper)
+    return display_value(ti.math.clamp(linear * scale, 0.0, MAX_RADIANCE), mapper)
 
 
-def tonemap_into(film, out: np.ndarray, exposure_ev: float, tonemapper_name: str) -> None:
+@ti.func
+def pack_rgba8(display):
+    """Display values in [0, 1] as the u32 GGUI's canvas takes: R in the low byte, then G, B, and
+    alpha 255; each channel rounded to nearest as `quantize` does."""
+    packed = ti.cast(255, ti.u32) << 24
+    for c in ti.static(range(3)):
+        scaled = display[c] * 255.0
+        packed |= ti.cast(ti.floor(scaled + 0.5), ti.u32) << (8 * c)
+    return packed
+
+
+@ti.kernel
+def _tonemap_kernel(
+    mean: ti.template(), count: ti.template(), rejected: ti.template(),
+    out: ti.types.ndarray(dtype=ti.math.vec3, ndim=2), source_width: ti.i32, source_height: ti.i32, scale: ti.f32,
+    mapper: ti.i32, filled: ti.i32,
+):
+    for x, y in ti.ndrange(out.shape[0], out.shape[1]):
+        out[x, y] = _display_at(mean, count, rejected, x, y, out.shape[0], out.shape[1], source_width, source_height,
+                                scale, mapper, filled)
+
+
+@ti.func
+def fill_block_side(rank):
+    """Side of the block of pixels that show the pixel of slice `rank` while the first round is
+    incomplete. filled_mean shows a pixel not reached yet as the corner of its 2x2, 4x4, ... block,
+    the finest one sampled; the Bayer order reaches all corners of 2^k blocks (the first 4^(4-k)
+    slices) before any finer point. So the pixel of slice `rank` is the corner of a block of side
+    CELL >> ceil(log4(rank + 1)) (the whole cell for slice 0, 8x8 for 1-3, 4x4 for 4-15, 2x2 for
+    16-63, itself from 64 on), and sampling it changes exactly that block's displayed pixels: those
+    of its finer points are not reached yet."""
+    side = CELL
+    for j in ti.static(range(CELL_BITS)):
+        if rank >= 4 ** j:
+            side = CELL >> (j + 1)
+    return side
+
+
+@ti.kernel
+def _tonemap_packed_kernel(
+    mean: ti.template(), count: ti.template(), rejected: ti.template(),
+    out: ti.types.ndarray(dtype=ti.u32, ndim=2), source_width: ti.i32, source_height: ti.i32,
+    slice_first: ti.i32, slice_count: ti.i32, scale: ti.f32, mapper: ti.i32, filled: ti.i32, blocks: ti.i32,
+):
+    # The output's pixels in pixel-slice order: a whole round is every pixel (raster order), a
+    # partial one only the pixels of those slices (1:1 with the film, the ones a render of the
+    # same slices changed), with `blocks` (a first round) each one's fill block.
+    out_width, out_height = out.shape[0], out.shape[1]
+    cells = ((out_width + CELL - 1) >> CELL_BITS) * ((out_height + CELL - 1) >> CELL_BITS)
+    for i in range(pass_length(slice_count, out_width, out_height)):
+        x, y = slice_pixel(i, slice_first, slice_count, out_width, out_height)
+        side = 1
+        if blocks:
+            side = fill_block_side(slice_first + i // cells)  # the loop index's slice (slice_pixel)
+        for dy, dx in ti.ndrange(side, side):
+            qx, qy = x + dx, y + dy
+            if qx < out_width and qy < out_height:
+                out[qx, qy] = pack_rgba8(_display_at(mean, count, rejected, qx, qy, out_width, out_height,
+                                                     source_width, source_height, scale, mapper, filled))
+
+
+def tonemap_into(film, out: np.ndarray, exposure_ev: float, tonemapper_name: str, filled: bool = True) -> None:
     """Fill `out` (float32 (width, height, 3), [x, y] y-up) with display values in [0, 1].
 
     The film's active region (film.width x film.height) is stretched over the whole array with
-    bilinear filtering of the exposed linear radiance. Pixels a partial first round has not reached
-    show their nearest sampled grid point (renderer/pixel_slices.filled_mean). The output is an array argument, not a
-    field: one compiled kernel per film serves every output size (a field argument would compile
-    the kernel again for each display size, ~0.1 s apiece).
+    bilinear filtering of the exposed linear radiance. With `filled`, pixels a partial first round
+    has not reached show their nearest sampled grid point (renderer/pixel_slices.filled_mean);
+    without, their own (empty) mean: the same image once the first round is complete. The output
+    is an array argument, not a field: one compiled kernel per film serves every output size (a
+    field argument would compile the kernel again for each display size, ~0.1 s apiece).
     """
     _tonemap_kernel(
         film.mean, film.count, film.rejected, out, film.width, film.height,
-        exposure_scale(exposure_ev), tonemapper_index(tonemapper_name),
+        exposure_scale(exposure_ev), tonemapper_index(tonemapper_name), int(filled),
     )
+
+
+def tonemap_packed(film, out: np.ndarray, exposure_ev: float, tonemapper_name: str, filled: bool = True,
+                   slices: tuple[int, int] | None = None, first_round: bool = False) -> None:
+    """Fill `out` (uint32 (width, height), [x, y] y-up) with the display image packed as RGBA8
+    (pack_rgba8): the bytes of quantize(tonemap_into(...)), in the layout GGUI's canvas shows
+    without a conversion of its own.
+
+    slices = (first, count) within a round (count < ROUND_SLICES): only the pixels of those pixel
+    slices, for an output the film's size; the rest of `out` is left as it is. A viewer whose
+    film gained those slices since `out` was filled updates it so at a fraction of the cost.
+    With `first_round` (those slices belong to the film's first round), each slice's pixel brings
+    its fill block (fill_block_side): the pixels shown filled from it.
+    """
+    first, count = (0, ROUND_SLICES) if slices is None else (int(slices[0]), int(slices[1]))
+    if count < ROUND_SLICES and out.shape[:2] != (film.width, film.height):
+        raise ValueError(f"a partial update needs an output of the film's size {film.width}x{film.height}, "
+                         f"got {out.shape[0]}x{out.shape[1]}")
+    if not (0 <= first and 0 < count and (count >= ROUND_SLICES or first + count <= ROUND_SLICES)):
+        raise ValueError(f"slices ({first}, {count}) are not a range within a round of {ROUND_SLICES}")
+    _tonemap_packed_kernel(
+        film.mean, film.count, film.rejected, out, film.width, film.height, first, count,
+        exposure_scale(exposure_ev), tonemapper_index(tonemapper_name), int(filled),
+        int(first_round and count < ROUND_SLICES),
+    )
+
+
+def unpack_rgba8(packed: np.ndarray) -> np.ndarray:
+    """A packed display image (uint32 (width, height) [x, y] y-up) as uint8 (height, width, 3), row
+    0 at the top: the pixels the canvas shows."""
+    channels = np.ascontiguousarray(packed, dtype=np.uint32).view(np.uint8).reshape(*packed.shape, 4)
+    return np.ascontiguousarray(np.transpose(channels[:, :, :3], (1, 0, 2))[::-1])
 
 
 # --- numpy (float32, mirrors the Taichi code) ---------------------------------------------------

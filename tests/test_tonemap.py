@@ -3,17 +3,21 @@ import pytest
 import taichi as ti
 
 from renderer.film import Film
+from renderer.pixel_slices import ROUND_SLICES, slice_mask
 from renderer.tonemap import (
     TONEMAPPERS,
     display_array,
     display_value,
     exposure_scale,
+    quantize,
     sanitize_radiance,
     srgb_oetf,
     srgb_oetf_array,
     tonemap_array,
     tonemap_into,
+    tonemap_packed,
     tonemapper_index,
+    unpack_rgba8,
 )
 
 
@@ -163,3 +167,85 @@ def test_bilinear_upscale_from_half_size_film():
 def test_unknown_tonemapper_is_named_in_the_error():
     with pytest.raises(ValueError, match="filmic"):
         tonemap_array(np.zeros((1, 1, 3), np.float32), 0.0, "filmic")
+
+
+def lognormal_film(width, height, seed, reached=None):
+    """A film whose mean is lognormal radiance with a few non-finite pixels; `reached` ([x, y]
+    bool) marks the pixels with a sample (default: all)."""
+    rng = np.random.default_rng(seed)
+    mean = rng.lognormal(-1.0, 2.0, size=(width, height, 3)).astype(np.float32)
+    mean[1, 2] = [np.nan, np.inf, -1.0]
+    film = Film(width, height)
+    film.reset(width, height)
+    film.mean.from_numpy(mean)
+    film.count.from_numpy(np.ones((width, height), np.int32) if reached is None else reached.astype(np.int32))
+    return film
+
+
+def test_packed_display_is_the_quantized_display_as_rgba8():
+    """The packed image the canvas gets holds exactly the bytes `quantize` makes of the float
+    display (R in the low byte, alpha 255), at 1:1 and stretched, filled or not."""
+    width, height = 37, 21
+    rng = np.random.default_rng(11)
+    film = lognormal_film(width, height, 4, reached=rng.random((width, height)) < 0.4)
+    for name in TONEMAPPERS:
+        for size in ((width, height), (18, 10), (74, 42)):
+            for filled in (True, False):
+                display = np.zeros((*size, 3), np.float32)
+                tonemap_into(film, display, 0.7, name, filled=filled)
+                packed = np.zeros(size, np.uint32)
+                tonemap_packed(film, packed, 0.7, name, filled=filled)
+                assert np.all(packed >> 24 == 255)
+                np.testing.assert_array_equal(unpack_rgba8(packed), quantize(display_to_rows(display)))
+
+
+def test_filled_and_plain_lookups_agree_once_every_pixel_is_reached():
+    film = lognormal_film(23, 17, 5)
+    for size in ((23, 17), (11, 8)):
+        filled, plain = np.zeros(size, np.uint32), np.zeros(size, np.uint32)
+        tonemap_packed(film, filled, 0.0, "aces", filled=True)
+        tonemap_packed(film, plain, 0.0, "aces", filled=False)
+        np.testing.assert_array_equal(filled, plain)
+
+
+def test_a_slice_update_writes_exactly_the_pixels_of_those_slices():
+    """A film 3x2 cells and a bit (cut cells at the edges): updating slices (first, count)
+    rewrites their pixels as a full update would and leaves every other pixel as it was."""
+    width, height = 53, 35
+    film = lognormal_film(width, height, 6)
+    full = np.zeros((width, height), np.uint32)
+    tonemap_packed(film, full, -1.0, "reinhard", filled=False)
+    for first, count in ((0, 1), (5, 17), (100, 156), (255, 1)):
+        sentinel = np.full((width, height), 0x12345678, np.uint32)
+        tonemap_packed(film, sentinel, -1.0, "reinhard", filled=False, slices=(first, count))
+        mask = slice_mask(first, count, width, height).T  # [x, y]
+        np.testing.assert_array_equal(sentinel[mask], full[mask])
+        assert np.all(sentinel[~mask] == 0x12345678)
+
+
+def test_a_first_round_slice_update_also_writes_the_pixels_shown_filled_from_it():
+    """In a first round, slice r's pixel is the corner of the block filled from it: the whole
+    16x16 cell for slice 0, 8x8 for 1-3, 4x4 for 4-15, 2x2 for 16-63, the pixel alone after."""
+    width, height = 53, 35
+    film = lognormal_film(width, height, 8)
+    full = np.zeros((width, height), np.uint32)
+    tonemap_packed(film, full, 0.0, "aces", filled=True)
+    for first, count in ((0, 1), (1, 3), (3, 20), (60, 8)):
+        sentinel = np.full((width, height), 0x12345678, np.uint32)
+        tonemap_packed(film, sentinel, 0.0, "aces", filled=True, slices=(first, count), first_round=True)
+        expected = np.zeros((width, height), bool)
+        for rank in range(first, first + count):
+            side = 16 if rank == 0 else 8 if rank < 4 else 4 if rank < 16 else 2 if rank < 64 else 1
+            for x, y in zip(*np.nonzero(slice_mask(rank, 1, width, height).T)):
+                expected[x:x + side, y:y + side] = True
+        np.testing.assert_array_equal(sentinel != 0x12345678, expected)
+        np.testing.assert_array_equal(sentinel[expected], full[expected])
+
+
+def test_slice_updates_are_checked():
+    film = lognormal_film(16, 16, 7)
+    with pytest.raises(ValueError, match="film's size 16x16"):
+        tonemap_packed(film, np.zeros((8, 8), np.uint32), 0.0, "aces", slices=(0, 4))
+    with pytest.raises(ValueError, match="within a round"):
+        tonemap_packed(film, np.zeros((16, 16), np.uint32), 0.0, "aces", slices=(250, 10))
+    tonemap_packed(film, np.zeros((8, 8), np.uint32), 0.0, "aces", slices=(0, ROUND_SLICES))  # a full update

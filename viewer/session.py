@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SCREENSHOT_ENV = "LANTERN_SCREENSHOT_DIR"
 DEFAULT_SCREENSHOT_DIR = ROOT / "screenshots"
 
-DEFAULT_TARGET_SECONDS = 0.050  # 20 fps while moving
+DEFAULT_TARGET_SECONDS = 0.045  # ~22 fps: an input waits the rest of a frame and the next, p95 under 100 ms
 MIN_SCALE = 1.0 / 16.0  # smallest internal resolution, as a fraction of the window's width/height
 # However long the rest of the frame (tone mapping, upload, HUD, present) takes, the render gets
 # at least this fraction of the target: the resolution then bottoms out at MIN_SCALE instead of
@@ -45,7 +45,10 @@ COST_SMOOTHING = 0.35  # weight of the newest measurement in the moving averages
 SCALE_RISE = 0.5  # fraction of the way towards a larger target scale taken per frame
 INITIAL_MOVING_SCALE = 0.25  # before anything was measured
 
-NOISE_INTERVAL = 0.25  # seconds between noise / work reductions (they cost a pass over the film)
+# Seconds between refreshes of the HUD's figures that need a reduction over the film (noise, then
+# work per ray, in turn): ~5-10 ms each at 960x540 on a 2-core CPU, time a still frame's render
+# gives up for them.
+STATS_INTERVAL = 0.5
 MESSAGE_SECONDS = 4.0
 
 
@@ -138,14 +141,16 @@ class ResolutionController:
         w, h = self.full_size
         return max(1, min(w, round(w * scale))), max(1, min(h, round(h * scale)))
 
-    def still_slices(self) -> int:
-        """Pixel slices for a full-resolution frame that takes about the render budget (before
-        anything is measured: one slice, the cheapest frame there is)."""
+    def still_slices(self, reserved_seconds: float = 0.0) -> int:
+        """Pixel slices for a full-resolution frame that takes about the render budget, less
+        `reserved_seconds` the frame spends on something else (before anything is measured: one
+        slice, the cheapest frame there is)."""
         cost = self.cost
         if cost is None:
             return self.min_still_slices
         slice_cost = cost * self.full_size[0] * self.full_size[1] / ROUND_SLICES
-        slices = min(self.render_budget() // slice_cost, self.max_spp * ROUND_SLICES)
+        budget = max(self.render_budget() - reserved_seconds, 0.0)
+        slices = min(budget // slice_cost, self.max_spp * ROUND_SLICES)
         return int(max(slices, self.min_still_slices))
 
 
@@ -372,8 +377,9 @@ class ViewerSession:
             self.request_reset(interactive=True)
         return moved
 
-    def plan_frame(self, now: float) -> FramePlan:
-        """Decide size, samples and reset for the frame about to render.
+    def plan_frame(self, now: float, reserved_seconds: float = 0.0) -> FramePlan:
+        """Decide size, samples and reset for the frame about to render; a still frame leaves
+        `reserved_seconds` of its budget to other work (the viewer's rate-limited statistics).
 
         Interactive changes (camera motion, slider drags) render at the reduced resolution. A
         frame counts as still only after `settle_seconds` without such a change: a drag whose
@@ -390,7 +396,7 @@ class ViewerSession:
             size, slices = self.resolution.moving_size(starting=not self._was_interactive), ROUND_SLICES
         else:
             self._last_motion = None
-            size, slices = self.window_size, self.resolution.still_slices()
+            size, slices = self.window_size, self.resolution.still_slices(reserved_seconds)
         reset = self._pending_reset or size != self.active_size
         if reset:
             self.resets += 1
@@ -407,15 +413,22 @@ class ViewerSession:
 class Every:
     """True at most once per `interval` seconds (and on the first call)."""
 
-    def __init__(self, interval: float = NOISE_INTERVAL):
+    def __init__(self, interval: float = STATS_INTERVAL):
         self.interval = interval
         self._last: Optional[float] = None
 
     def __call__(self, now: float) -> bool:
-        if self._last is None or now - self._last >= self.interval:
-            self._last = now
+        if self.ready(now):
+            self.mark(now)
             return True
         return False
+
+    def ready(self, now: float) -> bool:
+        """Whether it is time, without taking the turn (mark() takes it)."""
+        return self._last is None or now - self._last >= self.interval
+
+    def mark(self, now: float) -> None:
+        self._last = now
 
     def force(self) -> None:
         self._last = None

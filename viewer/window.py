@@ -5,13 +5,15 @@
 `window.running` stays True, and no events arrive, so loops are bounded by frame counts).
 
 A frame: dispatch the keys pressed since the last frame, move the camera, decide (ViewerSession)
-whether to reset and at which internal resolution and sample count to render, render into the
-film, tone-map the film's active region into a display field (window-sized when still; while
-moving, the smallest of a few reduced sizes that holds the internal image, which the canvas
-stretches over the window), put it on the canvas, draw the HUD and present.
+whether to reset and at which internal resolution and number of pixel slices to render, render
+into the film, bring the display image up to date (viewer/display.py: packed RGBA8 as the canvas
+takes it, only the pixels the frame's slices changed; while moving, at the reduced internal size,
+which the canvas stretches over the window), put it on the canvas, draw the HUD and present. The HUD's noise and work figures (reductions over the
+film) are refreshed one at a time, at most once per STATS_INTERVAL, on still frames, whose render
+then takes that much less time, so that frame is no longer than the others.
 
-Compiling a kernel takes seconds. Before a render that would compile (a new scene, integrator or
-lens), one frame shows the previous image with a "compiling..." notice; the next frame compiles.
+Loading a scene and compiling its kernels take seconds. Before either, one frame shows the
+previous image with a "loading..." or "compiling..." notice; the next frame does the work.
 
 Keys GGUI (Taichi 1.7) reports are the letters a-z and a few named keys (Escape, Shift, Tab,
 arrows...); digits and punctuation never arrive, so the HUD has buttons for what the digit and
@@ -37,12 +39,13 @@ from renderer.integrators import INTEGRATORS, integrator_names
 from renderer.pixel_slices import ROUND_SLICES
 from renderer.renderer import Renderer
 from renderer.scene.catalog import load_any, scene_files
-from renderer.tonemap import TONEMAPPERS, quantize, tonemap_into
+from renderer.tonemap import TONEMAPPERS, quantize
 from viewer import hud
 from viewer.camera_state import CameraState
+from viewer.display import DisplayImages, DisplaySettings, show_on_canvas
 from viewer.hotkeys import KeyMap
-from viewer.session import (DEFAULT_TARGET_SECONDS, SETTLE_SECONDS, Every, RateMeter, ViewerSession,
-                            scene_scale, screenshot_dir, screenshot_paths)
+from viewer.session import (DEFAULT_TARGET_SECONDS, SETTLE_SECONDS, STATS_INTERVAL, Every, RateMeter,
+                            ViewerSession, scene_scale, screenshot_dir, screenshot_paths)
 
 TITLE = "Lantern"
 DEFAULT_SIZE = (960, 540)
@@ -77,38 +80,10 @@ def poll_input(window) -> FrameInput:
     return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons)
 
 
-DISPLAY_LEVELS = 5  # window size / 1, 2, 4, 8, 16 (MIN_SCALE is 1/16)
-
-
-def display_level_sizes(size: tuple[int, int]) -> list[tuple[int, int]]:
-    w, h = size
-    sizes = []
-    for k in (2 ** i for i in range(DISPLAY_LEVELS)):
-        level = (max(1, w // k), max(1, h // k))
-        if level not in sizes:
-            sizes.append(level)
-    return sizes
-
-
-def display_level_for(sizes: list[tuple[int, int]], internal: tuple[int, int]) -> int:
-    """Index of the smallest display size that holds `internal` without losing pixels."""
-    best = 0
-    for i, (w, h) in enumerate(sizes):
-        if w >= internal[0] and h >= internal[1]:
-            best = i
-    return best
-
-
 def camera_frame(state: CameraState) -> CameraFrame:
     forward, right, up = state.basis()
     return CameraFrame(tuple(state.position), tuple(forward), tuple(right), tuple(up), state.fov,
                        state.aperture, state.focus_distance)
-
-
-def display_to_image(display: np.ndarray) -> np.ndarray:
-    """A window-sized display image ([x, y, rgb] y-up, values in [0, 1]) as uint8
-    (height, width, 3), row 0 at the top: the pixels the canvas shows."""
-    return quantize(np.ascontiguousarray(np.transpose(display, (1, 0, 2))[::-1]))
 
 
 def window_buffer_to_image(buffer: np.ndarray) -> np.ndarray:
@@ -144,15 +119,8 @@ class ViewerApp:
         self.window = ti.ui.Window(TITLE, self.size, vsync=False, show_window=show_window)
         self.canvas = self.window.get_canvas()
         self.gui = self.window.get_gui()
-        # Display images at the window size and at 1/2, 1/4... of it ([x, y, rgb] y-up float32
-        # arrays). A reduced internal image is tone-mapped into the smallest one that still holds
-        # all its pixels and the canvas stretches that over the window: tone mapping a full window
-        # costs ~20 ms on a 2-core CPU, most of the frame budget while moving. Arrays rather than
-        # fields: the tone-mapping kernel and GGUI's copy to the canvas then compile once for every
-        # size, not once per size (~0.1 s each, at start-up and on each new scene).
-        self.display_levels = [np.zeros((*level, 3), np.float32) for level in display_level_sizes(self.size)]
-        self.display = self.display_levels[0]  # the window-sized one
-        self.shown = self.display  # the one on the canvas now
+        self.display = DisplayImages(self.size)
+        self.last_display_update: Optional[str] = None  # what the last frame's display update did
 
         self.running = True
         self._queued_keys: list[str] = []
@@ -161,13 +129,22 @@ class ViewerApp:
         self.last_plan = None
         self.last_frame: Optional[np.ndarray] = None  # off-screen: GGUI's image of the last frame
         self.last_screenshot: Optional[tuple[Path, Path]] = None
-        self.compiling: Optional[str] = None  # the notice shown on the frame before a compile
+        # The notice ("loading..." or "compiling...") shown on the frame before a load or compile.
+        self.notice: Optional[str] = None
         self._notice_key = None
+        self._pending_cycle: Optional[tuple[int, bool]] = None  # (step, notice shown) of a scene to load
+        self.compile_seconds: Optional[float] = None  # the last compiling frame's render call
+        self._features = None  # this frame's Features (None until the frame knows them)
         self._last_time: Optional[float] = None
         self._frame_ms = 0.0
         self._fps = RateMeter()
         self._samples = RateMeter()
-        self._stats_due = Every()
+        # The HUD's figures that need a reduction over the film, refreshed in turn (see step()),
+        # and what each took last time: the budget its frame reserves for it.
+        self._stats_due = Every(STATS_INTERVAL)
+        self._stats_jobs = (self._refresh_noise, self._refresh_work)
+        self._stats_next = 0
+        self._stats_seconds = [0.0] * len(self._stats_jobs)
         self._stats = {"noise": None, "rejected": 0, "work_per_ray": None, "tests_per_ray": None}
         self._drag_blocked = False
         self._buttons_before: frozenset = frozenset()
@@ -200,6 +177,17 @@ class ViewerApp:
         if self.session.error:
             print(f"warning: {self.session.error}", file=sys.stderr)
 
+    def _request_cycle(self, step: int, now: float) -> None:
+        """'n' / 'b': a scene loaded before comes at once; loading a new one takes seconds, so
+        this frame shows a notice and the next one loads (see step())."""
+        s = self.session
+        target = s.scenes[(s.scene_index + step) % len(s.scenes)]
+        if target in self.renderers:
+            self._cycle_scene(step, now)
+        else:
+            self._pending_cycle = (step, False)
+            self.notice = f"loading {target.stem}..."
+
     def _announce(self, text: str, now: float) -> None:
         self.session.notify(text, now)
         print(text, file=sys.stderr)
@@ -212,9 +200,9 @@ class ViewerApp:
         if action == "quit":
             self.running = False
         elif action == "next_scene":
-            self._cycle_scene(+1, now)
+            self._request_cycle(+1, now)
         elif action == "prev_scene":
-            self._cycle_scene(-1, now)
+            self._request_cycle(-1, now)
         elif action == "next_integrator":
             s.next_integrator()
             self._announce(f"integrator {s.integrator}", now)
@@ -244,9 +232,8 @@ class ViewerApp:
         slices, unreached pixels filled as shown)."""
         r, s = self.renderer, self.session
         png, exr = screenshot_paths(self.screenshot_folder, r.scene.name, s.integrator, r.samples_done, datetime.now())
-        if self.shown is not self.display:  # moving: the canvas stretches a smaller field
-            tonemap_into(r.film, self.display, s.exposure, self._display_tonemapper())
-        write_png(png, display_to_image(self.display))
+        write_png(png, self.display.window_sized_image(r.film, self._accumulation(), r.slices_done,
+                                                       self._display_settings()))
         write_exr(exr, r.shown_image())
         self.last_screenshot = (png, exr)
         print(f"saved {png} and {exr.name}", file=sys.stderr)
@@ -283,7 +270,7 @@ class ViewerApp:
             action = self.keymap.action_for(key)
             before = (self.session.scene_index, self.session.integrator)
             self.dispatch(action, inp, now)
-            if (self.session.scene_index, self.session.integrator) != before:
+            if (self.session.scene_index, self.session.integrator) != before or self._pending_cycle:
                 self._awaiting_render = True
             if not self.running:
                 return
@@ -318,23 +305,37 @@ class ViewerApp:
         cursor_px = None if inp.cursor is None else (inp.cursor[0] * w, (1.0 - inp.cursor[1]) * h)
         s.update_camera(dt, set(inp.held), cursor_px, self._drag(inp))
 
+        self._features = None
+        if self._pending_cycle is not None:
+            step, announced = self._pending_cycle
+            if not announced:  # this frame shows the "loading..." notice; the next one loads
+                self._pending_cycle = (step, True)
+                self._present(now)
+                return True
+            self._pending_cycle = None
+            self.notice = None
+            self._cycle_scene(step, now)
+
         renderer = self.renderer
         integrator = s.integrator
         frame = camera_frame(s.controller.state)
-        features = renderer.features(frame)
+        features = self._features = renderer.features(frame)
         key = (id(renderer), integrator, features)
         fresh = not renderer.is_compiled(integrator, features)
         if fresh and self._notice_key != key:
             # Show the notice on this frame; the next frame compiles (and blocks) while it is up.
             self._notice_key = key
-            self.compiling = f"compiling {integrator} for {renderer.scene.name}..."
+            self.notice = f"compiling {integrator} for {renderer.scene.name}..."
             self._present(now)
             return True
-        self.compiling = None
+        self.notice = None
         self._notice_key = None
 
         s.resolution.set_context((s.scene_path, integrator, features))
-        plan = s.plan_frame(now)
+        stats_due = self._stats_due.ready(now)
+        job = self._stats_next
+        reserved = self._stats_seconds[job] if stats_due else 0.0
+        plan = s.plan_frame(now, reserved_seconds=reserved)
         self.last_plan = plan
         if plan.reset:
             renderer.reset(*plan.size)
@@ -345,35 +346,59 @@ class ViewerApp:
         ti.sync()
         self._awaiting_render = False
         render_seconds = time.perf_counter() - t0
+        if fresh:
+            self.compile_seconds = render_seconds
         # What was rendered (an integrator with whole-image passes, sppm, rounds up to a sample)
         pixel_samples = plan.size[0] * plan.size[1] * (renderer.slices_done - slices_before) / ROUND_SLICES
         self._samples.add(now, pixel_samples)
 
-        level = display_level_for([f.shape[:2] for f in self.display_levels],
-                                  (renderer.film.width, renderer.film.height))
-        self.shown = self.display_levels[level]
-        tonemap_into(renderer.film, self.shown, s.exposure, self._display_tonemapper())
-        if self._stats_due(now):
-            stats = renderer.film.stats()
-            work = renderer.work_stats()
-            # An integrator whose film holds an estimate, not a mean of samples (sppm), has no
-            # variance to estimate the noise from: say so rather than show the film's inf or 0.
-            noise = stats["noise"] if getattr(INTEGRATORS[integrator], "noise_estimate", True) else math.nan
-            self._stats = {"noise": noise, "rejected": stats["rejected"],
-                           "work_per_ray": work["work_per_ray"], "tests_per_ray": work["tests_per_ray"]}
+        self.last_display_update = self.display.update(renderer.film, self._accumulation(), renderer.slices_done,
+                                                       self._display_settings())
+        stats_seconds = 0.0
+        if fresh:  # compile the reductions of a new film here, in the frame that waits for Taichi anyway
+            for refresh in self._stats_jobs:
+                refresh(renderer, integrator)
+        elif stats_due and not plan.interactive:  # a moving film restarts every frame: nothing to report
+            t0 = time.perf_counter()
+            self._stats_jobs[job](renderer, integrator)
+            stats_seconds = time.perf_counter() - t0
+            self._stats_due.mark(now)
+            self._stats_seconds[job] = min(stats_seconds, s.resolution.target_seconds)
+            self._stats_next = (job + 1) % len(self._stats_jobs)
         self._present(now)
         frame_seconds = time.perf_counter() - start
         self._frame_ms = 1000.0 * frame_seconds
         if not fresh:  # a compiling frame says nothing about the render cost
-            s.resolution.record(render_seconds, pixel_samples, frame_seconds)
+            s.resolution.record(render_seconds, pixel_samples, frame_seconds - stats_seconds)
         return self.running
+
+    def _refresh_noise(self, renderer: Renderer, integrator: str) -> None:
+        """The HUD's noise estimate and dropped samples: a reduction over the film (~5-10 ms at
+        960x540 on a 2-core CPU), hence rate-limited."""
+        stats = renderer.film.stats()
+        # An integrator whose film holds an estimate, not a mean of samples (sppm), has no
+        # variance to estimate the noise from: say so rather than show the film's inf or 0.
+        noise = stats["noise"] if getattr(INTEGRATORS[integrator], "noise_estimate", True) else math.nan
+        self._stats.update(noise=noise, rejected=stats["rejected"])
+
+    def _refresh_work(self, renderer: Renderer, integrator: str) -> None:
+        """The HUD's geometry work per ray: a download and sum of the work field (~10 ms)."""
+        work = renderer.work_stats()
+        self._stats.update(work_per_ray=work["work_per_ray"], tests_per_ray=work["tests_per_ray"])
+
+    def _accumulation(self) -> tuple:
+        """Identifies the film's accumulation: another film, or the same one reset, is another."""
+        return id(self.renderer.film), self.session.resets
+
+    def _display_settings(self) -> DisplaySettings:
+        return DisplaySettings(float(self.session.exposure), self._display_tonemapper())
 
     def _display_tonemapper(self) -> str:
         return self.session.display_tonemapper(INTEGRATORS[self.session.integrator].display_tonemapper)
 
     def hud_stats(self) -> hud.HudStats:
         s, r = self.session, self.renderer
-        features = r.features(camera_frame(s.controller.state))
+        features = r.features(camera_frame(s.controller.state)) if self._features is None else self._features
         return hud.HudStats(
             scene=r.scene.name, scene_position=f"{s.scene_index + 1}/{len(s.scenes)}", integrator=s.integrator,
             effects=features.active_effects(), fps=self._fps.rate(), frame_ms=self._frame_ms,
@@ -386,7 +411,7 @@ class ViewerApp:
 
     def _present(self, now: float) -> None:
         s = self.session
-        self.canvas.set_image(self.shown)
+        show_on_canvas(self.canvas, self.display.shown)
         if s.hud_visible:
             forced = INTEGRATORS[s.integrator].display_tonemapper
             controls, actions = hud.draw_hud(self.gui, self.size, self.hud_stats(), s.controls(),
@@ -397,8 +422,8 @@ class ViewerApp:
                 self.dispatch(action, FrameInput(), now)
         if s.help_visible:
             hud.draw_help(self.gui, self.size, self.keymap.help_text())
-        if self.compiling:
-            hud.draw_notice(self.gui, self.size, self.compiling)
+        if self.notice:
+            hud.draw_notice(self.gui, self.size, self.notice)
         if self.show_window:
             self.window.show()
         else:

@@ -4,9 +4,11 @@ It drives the real viewer (viewer.window.ViewerApp, an off-screen GGUI window: t
 loop, tone mapping, HUD and canvas upload as on screen) through every chosen scene and
 integrator, at 960x540 by default:
 
-  switch     select the scene and integrator and step until the first rendered image: the
-             compile and first-image time of that switch (Taichi's offline cache is warm after
-             the first run, so this is mostly the kernels' warm start).
+  switch     load the scene (the first visit builds its Renderer), select the integrator and
+             step until the first rendered image: load, compile (the render call of the frame
+             that compiles, after the frame that shows the "compiling..." notice) and
+             first-image time of that switch, and the longest frame meanwhile. Taichi's offline
+             cache is warm after the first run, so the compile is mostly the kernels' warm start.
   still      STILL_SECONDS without input: frame times, and the samples per second of those
              time-sliced frames; then as many seconds of still frames made of whole samples per
              pixel (the viewer before pixel slices), in the same frame loop: the sliced rate must
@@ -23,7 +25,11 @@ and the benchmark checks that the same frame's state reflects it.
 
 Target (issue: "Interactive on a CPU"): p95 latency at most 100 ms for every scene and
 integrator, still or moving, on a quiet machine; still samples/s at least 95% of whole-image
-passes. Writes <out_dir>/bench_interactive.json and bench_interactive.png.
+passes. The two pull apart on a 2-core CPU: p95 <= 100 ms needs frames of ~45 ms, and GGUI's own
+frame (software Vulkan: the canvas image and the HUD drawn, then read back off-screen or
+presented) takes ~10-15 ms of it whatever the viewer does, which caps the sliced rate near
+(45 - 13) / 45 of whole-sample frames; and a scene whose single pixel slice takes longer than
+the budget (the showcase with mis under load) cannot keep its frames that short. Writes <out_dir>/bench_interactive.json and bench_interactive.png.
 """
 from __future__ import annotations
 
@@ -87,24 +93,28 @@ def _step_timed(app, inp) -> float:
 
 def measure_switch(app, scene_path: Path, integrator: str) -> dict:
     """Select scene and integrator; step until a rendered image shows. Frames that only show the
-    'compiling' notice are counted: they are what the user sees meanwhile."""
+    'compiling' notice are counted: they are what the user sees meanwhile. compile_s is the
+    render call of the frame that compiled (None: nothing to compile, the kernels were built
+    earlier in this process)."""
     from viewer.window import FrameInput
 
     t0 = time.perf_counter()
     app.select_scene(scene_path)
     app.session.set_integrator(integrator)
+    load_s = time.perf_counter() - t0
+    app.compile_seconds = None
     notice_frames, frames, longest = 0, 0, 0.0
     while frames < SWITCH_FRAMES_LIMIT:
         seconds = _step_timed(app, FrameInput())
         frames += 1
         longest = max(longest, seconds)
-        if app.compiling:
+        if app.notice:
             notice_frames += 1
             continue
         if app.last_plan is not None and app.renderer.slices_done > 0:
             break
-    return {"first_image_s": time.perf_counter() - t0, "frames": frames, "notice_frames": notice_frames,
-            "longest_frame_s": longest}
+    return {"load_s": load_s, "compile_s": app.compile_seconds, "first_image_s": time.perf_counter() - t0,
+            "frames": frames, "notice_frames": notice_frames, "longest_frame_s": longest}
 
 
 def measure_still(app, seconds: float, rng: random.Random) -> dict:
@@ -186,16 +196,18 @@ def print_report(results: list[dict]) -> None:
     rows = []
     for r in results:
         if "skipped" in r:
-            rows.append([r["scene"], r["integrator"], "skipped: " + r["skipped"], "", "", "", "", "", "", ""])
+            rows.append([r["scene"], r["integrator"], "skipped: " + r["skipped"], *[""] * 10])
             continue
+        switch = r["switch"]
+        compile_s = "-" if switch.get("compile_s") is None else f"{switch['compile_s']:.2f}"
         rows.append([r["scene"], r["integrator"], f"{r['latency_p50_ms']:.0f}", f"{r['latency_p95_ms']:.0f}",
                      f"{r['whole_samples_p95_ms']:.0f}",
                      f"{r['still']['samples_per_s'] / 1e6:.2f}", f"{r['still']['rate_ratio']:.3f}",
                      f"{r['still']['frame_ms_median']:.0f}", f"{r['moving']['frame_ms_median']:.0f}",
-                     f"{r['switch']['first_image_s']:.2f}"])
+                     f"{switch.get('load_s', math.nan):.2f}", compile_s, f"{switch['first_image_s']:.2f}"])
     print_table(["scene", "integrator", "p50 ms", "p95 ms", "p95 ms whole-sample frames", "still Msamples/s",
-                 "vs whole-sample frames",
-                 "still frame ms", "moving frame ms", "switch s"], rows,
+                 "vs whole-sample frames", "still frame ms", "moving frame ms", "switch: load s", "compile s",
+                 "first image s"], rows,
                 title=f"Input latency (event -> presented frame), target p95 <= {TARGET_LATENCY_MS:.0f} ms")
 
 

@@ -121,6 +121,20 @@ def test_a_slow_scene_renders_a_share_of_a_sample_per_still_frame():
     assert ctl.still_slices() == int(0.05 // (1.2 / ROUND_SLICES)) == 10
 
 
+def test_time_reserved_for_other_work_comes_out_of_the_render_budget():
+    """A still frame that also refreshes the HUD's statistics (say 20 ms of a 50 ms budget)
+    renders the slices that fit the other 30 ms, so it is no longer than the frames around it."""
+    ctl = ResolutionController(FULL, target_seconds=0.05)
+    ctl.record(1.2, PIXELS)
+    slice_cost = 1.2 / ROUND_SLICES
+    assert ctl.still_slices(0.020) == int(0.030 // slice_cost) == 6
+    assert ctl.still_slices(1.0) == 1  # never less than a slice
+    s = make_session(settle=0.0)
+    s.resolution.record(1.2, PIXELS)
+    assert s.plan_frame(0.0, reserved_seconds=0.020).slices == 6
+    assert s.plan_frame(0.1).slices == 10
+
+
 def test_bad_measurements_are_ignored():
     ctl = ResolutionController(FULL)
     for render, pixels in ((0.0, 100), (1.0, 0), (math.inf, 100), (math.nan, 100)):
@@ -322,6 +336,14 @@ def test_every_limits_the_rate():
     every = Every(0.25)
     calls = [t / 100 for t in range(100)]  # 1 s at 100 fps
     assert sum(every(t) for t in calls) == 4
+
+
+def test_every_can_be_asked_without_taking_its_turn():
+    every = Every(1.0)
+    assert every.ready(0.0) and every.ready(0.0)  # asking twice takes nothing
+    every.mark(0.0)
+    assert not every.ready(0.5) and every.ready(1.0)
+    assert not every(0.9) and every(1.0) and not every.ready(1.5)
 
 
 def test_rate_meter():

@@ -13,9 +13,10 @@ from renderer.image_io import read_exr
 from renderer.integrators import INTEGRATORS
 from renderer.scene.catalog import resolve_scene, scene_files
 from renderer.pixel_slices import ROUND_SLICES, filled_mean_array
-from renderer.tonemap import tonemap_array
+from renderer.tonemap import tonemap_array, unpack_rgba8
 from viewer import hud
-from viewer.window import FrameInput, ViewerApp, display_level_for, display_level_sizes, window_buffer_to_image
+from viewer.display import UPDATE_SLICES
+from viewer.window import FrameInput, ViewerApp, window_buffer_to_image
 
 SIZE = (128, 72)
 # A frame counts as "not blank" above this standard deviation of its 8-bit pixel values. A
@@ -37,7 +38,7 @@ def settle(app, frames=3):
     """Render until a scene's kernels are compiled and a few still frames accumulated."""
     for _ in range(frames + 1):  # the first may only show the 'compiling...' notice
         app.step()
-    while app.compiling:
+    while app.notice:
         app.step()
 
 
@@ -62,9 +63,11 @@ def test_each_scene_shows_the_film(app, path):
     shown = window_buffer_to_image(app.last_frame)
     assert shown.shape == (SIZE[1], SIZE[0], 3)
     assert shown.std() > MIN_PIXEL_STD
-    # The canvas shows exactly the tone-mapped film (8-bit rounding apart), upright.
+    # The canvas shows exactly the tone-mapped film (8-bit rounding apart), upright: the display
+    # image's bytes, unaltered.
     difference = np.abs(shown.astype(int) - expected_display(app).astype(int))
     assert difference.max() <= 1
+    np.testing.assert_array_equal(shown, unpack_rgba8(app.display.shown))
 
 
 def test_hud_is_drawn_over_the_image(app):
@@ -110,9 +113,10 @@ def test_movement_lowers_the_resolution_then_returns_to_full(app):
         assert app.session.controller.state.position != position
         film = app.renderer.film
         assert (film.width, film.height) == resolution.size_for(1 / 16) == (8, 4)
-        # The canvas got the smallest display image that holds the reduced image.
-        assert app.shown.shape[:2] == display_level_sizes(SIZE)[display_level_for(display_level_sizes(SIZE), (8, 4))]
-        assert app.shown.shape[0] < SIZE[0]
+        # The canvas got the reduced image at its own size (GGUI stretches it over the window).
+        assert app.display.shown.shape == (8, 4)
+        shown = window_buffer_to_image(app.last_frame)
+        assert shown.shape == (SIZE[1], SIZE[0], 3) and shown.std() > MIN_PIXEL_STD / 2
         # Dragging with the right button looks around, also at the reduced size.
         yaw = app.session.controller.state.yaw
         app.step(FrameInput(cursor=(0.5, 0.5), buttons=frozenset({"RMB"})))
@@ -123,7 +127,7 @@ def test_movement_lowers_the_resolution_then_returns_to_full(app):
         resolution.target_seconds = target
     app.step(FrameInput(cursor=(0.6, 0.5)))  # still (settle time 0 here): full size, reset
     assert (film.width, film.height) == SIZE and app.last_plan.reset
-    assert app.shown is app.display
+    assert app.display.shown is app.display.window_image
     slices = app.renderer.slices_done
     app.step()
     assert not app.last_plan.reset and app.renderer.slices_done > slices
@@ -189,11 +193,12 @@ def test_integrator_switch_shows_a_notice_then_renders(app):
     app.step(FrameInput(pressed=("i",)))
     name = app.session.integrator
     assert name != "path"
-    if app.compiling:  # not compiled yet in this process: this frame only showed the notice
-        assert name in app.compiling
+    if app.notice:  # not compiled yet in this process: this frame only showed the notice
+        assert name in app.notice and "compiling" in app.notice
         assert app.renderer.samples_done == spp  # nothing rendered (or reset) on that frame
         app.step()
-        assert app.compiling is None
+        assert app.notice is None
+        assert app.compile_seconds > 0
     renderer, plan = app.renderer, app.last_plan
     whole_passes = max(1, plan.slices // ROUND_SLICES) * ROUND_SLICES  # an integrator without slices
     sliced = renderer.is_sliced(name, renderer.features())
@@ -225,12 +230,72 @@ def test_unreadable_scene_is_skipped(app, tmp_path):
     s.scenes[:] = [s.scene_path, bad]
     try:
         app.step(FrameInput(pressed=("n",)))
-        assert s.scene_path == saved[saved.index(s.scene_path)] and s.scene_path != bad
-        assert "skipped broken.toml" in s.error
+        assert app.notice == "loading broken..."  # this frame only showed the notice
+        before = s.scene_path
+        app.step()  # the next one tried to load it
+        assert s.scene_path == before and s.scene_path != bad
+        assert "skipped broken.toml" in s.error and app.notice is None
         app.step()  # the HUD shows the error line; the loop goes on
     finally:
         s.scenes[:] = saved
         s.error = None
+
+
+def test_a_new_scene_shows_a_loading_then_a_compiling_notice(app, tmp_path):
+    """'n' to a scene not loaded yet: one frame shows "loading..." over the last image, the next
+    loads it and shows "compiling..." (its kernels are new), the next compiles and renders; keys
+    typed meanwhile wait for that frame."""
+    copy = tmp_path / "prism_copy.toml"
+    copy.write_text(resolve_scene("prism").read_text())
+    s = app.session
+    saved = list(s.scenes)
+    s.scenes[:] = [s.scene_path, copy]
+    app.session.hud_visible = False
+    settle(app, 1)
+    try:
+        image = window_buffer_to_image(app.last_frame)
+        app.step(FrameInput(pressed=("n", "Tab")))
+        assert app.notice == "loading prism_copy..." and s.scene_path != copy
+        app.step()
+        assert s.scene_path == copy and app.notice.startswith("compiling")
+        assert not s.help_visible  # 'Tab' still waits
+        # Both notice frames kept showing the last image around the notice box.
+        shown = window_buffer_to_image(app.last_frame)
+        box = hud.notice_rect(SIZE)
+        rows = np.r_[0:int(box.y * SIZE[1]) - 2, int((box.y + box.height) * SIZE[1]) + 2:SIZE[1]]
+        assert len(rows) > 0
+        np.testing.assert_array_equal(shown[rows], image[rows])
+        app.step()
+        assert app.notice is None and app.renderer.slices_done > 0 and app.compile_seconds > 0
+        app.step()
+        assert s.help_visible
+    finally:
+        s.help_visible = False
+        s.scenes[:] = saved
+        app.select_scene(saved[0])
+
+
+def test_still_frames_redraw_only_the_pixels_they_rendered(app):
+    """Past the first round's fill, a still frame tone-maps the pixels of its own slices; the
+    canvas then shows the whole film's tone map."""
+    app.session.hud_visible = False
+    settle(app, 1)
+    resolution = app.session.resolution
+    target = resolution.target_seconds
+    try:
+        while app.renderer.slices_done < ROUND_SLICES:
+            app.step()
+        resolution.target_seconds = 1e-6  # a budget of one slice per frame
+        for _ in range(3):
+            slices = app.renderer.slices_done
+            app.step()
+            assert app.renderer.slices_done == slices + 1 and not app.last_plan.reset
+            assert app.last_display_update == UPDATE_SLICES
+        shown = window_buffer_to_image(app.last_frame)
+        np.testing.assert_array_equal(shown, unpack_rgba8(app.display.shown))
+        assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1
+    finally:
+        resolution.target_seconds = target
 
 
 def test_quit_key_ends_the_loop(app):

@@ -1,0 +1,114 @@
+"""The images the canvas shows: the film tone-mapped into packed RGBA8, updated at the least cost.
+
+GGUI's `Canvas.set_image` converts every image it is given into a staging array of packed RGBA8
+with a kernel of its own (taichi/ui/staging_buffer.py, to_rgba8, even for u32 input): a second
+pass over the window's pixels each frame (~13 ms at 960x540 on a 2-core CPU), on top of the tone
+mapping. Here the tone mapping writes that layout itself (renderer/tonemap.tonemap_packed) and the
+array goes to GGUI's canvas as it is (`show_on_canvas`).
+
+A still frame changes only the pixels of the pixel slices it rendered (within a first round, also
+the pixels shown filled from them: tonemap.fill_block_side), so only those are tone-mapped again;
+a frame that rendered nothing and changed no display setting tone-maps nothing.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Hashable, Optional
+
+import numpy as np
+from taichi.ui.utils import get_field_info
+
+from renderer.pixel_slices import ROUND_SLICES
+from renderer.tonemap import tonemap_packed, unpack_rgba8
+
+# What update() did, for the frame loop's accounting and for tests.
+UPDATE_NONE = "none"
+UPDATE_SLICES = "slices"
+UPDATE_FULL = "full"
+
+
+def show_on_canvas(canvas, packed: np.ndarray) -> None:
+    """Put a packed RGBA8 image (uint32 (width, height), [x, y] y-up) on a GGUI canvas as it is.
+
+    The Python Canvas.set_image would run its conversion kernel first (see the module docstring);
+    the C++ canvas under it takes exactly this layout and copies it to its texture."""
+    canvas.canvas.set_image(get_field_info(packed))
+
+
+@dataclass(frozen=True)
+class DisplaySettings:
+    """Everything besides the film that decides the displayed pixels."""
+
+    exposure: float
+    tonemapper: str
+
+
+class DisplayImages:
+    """The packed display image on the canvas, at the film's active size.
+
+    Still, that is the window's size. While moving the film is smaller: its image goes to the canvas
+    at that size and GGUI stretches it over the window (bilinearly, texel centres on pixel centres),
+    so tone mapping costs what the reduced render does, one lookup a pixel. Arrays rather than
+    fields: the tone-mapping kernel compiles once per film for every size.
+
+    `shown` holds the film `accumulation` (an identity that changes with every reset of the film)
+    with `slices_shown` of its pixel slices, under `settings`; update() brings it to the film's
+    current state with the least work.
+    """
+
+    def __init__(self, window_size: tuple[int, int]):
+        self.window_image = np.zeros(window_size, np.uint32)
+        self._reduced = np.zeros(window_size[0] * window_size[1], np.uint32)  # moving images are views of it
+        self.shown = self.window_image
+        self._state: Optional[tuple] = None  # (size, accumulation, settings) of `shown`
+        self.slices_shown = 0
+
+    def _image_for(self, size: tuple[int, int]) -> np.ndarray:
+        if size == self.window_image.shape:
+            return self.window_image
+        return self._reduced[:size[0] * size[1]].reshape(size)  # contiguous, as the canvas needs
+
+    def update(self, film, accumulation: Hashable, slices_done: int, settings: DisplaySettings) -> str:
+        """Make `shown` the film's image (active region, `slices_done` pixel slices since its last
+        reset); returns UPDATE_NONE, UPDATE_SLICES (only the pixels the slices rendered since the
+        last update changed) or UPDATE_FULL."""
+        size = (film.width, film.height)
+        state = (size, accumulation, settings)
+        new_slices = slices_done - self.slices_shown if state == self._state else None
+        self.shown = self._image_for(size)
+        if new_slices == 0:
+            return UPDATE_NONE
+        if new_slices is not None and 0 < new_slices < ROUND_SLICES:
+            first = self.slices_shown % ROUND_SLICES
+            head = min(new_slices, ROUND_SLICES - first)
+            first_round = self.slices_shown < ROUND_SLICES
+            tonemap_packed(film, self.shown, settings.exposure, settings.tonemapper, filled=first_round,
+                           slices=(first, head), first_round=first_round)
+            if new_slices > head:  # the frame's slices ran on into the next round
+                tonemap_packed(film, self.shown, settings.exposure, settings.tonemapper, filled=False,
+                               slices=(0, new_slices - head))
+            kind = UPDATE_SLICES
+        else:
+            tonemap_packed(film, self.shown, settings.exposure, settings.tonemapper,
+                           filled=slices_done < ROUND_SLICES)
+            kind = UPDATE_FULL
+        self._state = state
+        self.slices_shown = slices_done
+        return kind
+
+    def window_sized_image(self, film, accumulation: Hashable, slices_done: int,
+                           settings: DisplaySettings) -> np.ndarray:
+        """uint8 (height, width, 3), row 0 at the top: the film as the canvas shows it at the window
+        size (a screenshot). While moving the canvas stretches a smaller image: then the film is
+        tone-mapped into the window-sized image (bilinear), which is not on the canvas then."""
+        if (film.width, film.height) == self.window_image.shape:
+            self.update(film, accumulation, slices_done, settings)
+        else:
+            tonemap_packed(film, self.window_image, settings.exposure, settings.tonemapper,
+                           filled=slices_done < ROUND_SLICES)
+            if self.shown is self.window_image:
+                self._state = None  # not what it held any more: the next update fills it anew
+        return unpack_rgba8(self.window_image)
+
+
+__all__ = ["DisplayImages", "DisplaySettings", "UPDATE_FULL", "UPDATE_NONE", "UPDATE_SLICES", "show_on_canvas"]
