@@ -19,7 +19,7 @@ import numpy as np
 from taichi.ui.utils import get_field_info
 
 from renderer.pixel_slices import ROUND_SLICES
-from renderer.tonemap import tonemap_packed, unpack_rgba8
+from renderer.tonemap import tonemap_array, tonemap_packed, unpack_rgba8
 
 # What update() did, for the frame loop's accounting and for tests.
 UPDATE_NONE = "none"
@@ -111,4 +111,32 @@ class DisplayImages:
         return unpack_rgba8(self.window_image)
 
 
-__all__ = ["DisplayImages", "DisplaySettings", "UPDATE_FULL", "UPDATE_NONE", "UPDATE_SLICES", "show_on_canvas"]
+def pack_rgba8_array(display: np.ndarray) -> np.ndarray:
+    """uint8 (height, width, 3), row 0 at the top -> packed RGBA8 uint32 (width, height) [x, y] y-up,
+    the layout of DisplayImages (the inverse of tonemap.unpack_rgba8)."""
+    height, width = display.shape[:2]
+    rgba = np.empty((width, height, 4), np.uint8)
+    rgba[:, :, :3] = np.transpose(display[::-1], (1, 0, 2))
+    rgba[:, :, 3] = 255
+    return rgba.view(np.uint32).reshape(width, height)
+
+
+class DenoisedDisplay:
+    """The packed display image of a denoised result (viewer/denoise_worker.py), tone-mapped in numpy
+    once per result and display setting (a new result comes at most every doubling of the spp)."""
+
+    def __init__(self):
+        self.packed: Optional[np.ndarray] = None
+        self.display: Optional[np.ndarray] = None  # uint8 (height, width, 3), row 0 at the top
+        self._key = None
+
+    def update(self, result, settings: DisplaySettings) -> np.ndarray:
+        key = (id(result), settings)
+        if key != self._key:
+            self.display = tonemap_array(result.image, settings.exposure, settings.tonemapper)
+            self.packed = pack_rgba8_array(self.display)
+            self._key = key
+        return self.packed
+
+
+__all__ = ["DenoisedDisplay", "pack_rgba8_array", "DisplayImages", "DisplaySettings", "UPDATE_FULL", "UPDATE_NONE", "UPDATE_SLICES", "show_on_canvas"]

@@ -45,6 +45,7 @@ def build_hotkeys(integrator_names: list[str], integrator_letters: dict[str, str
     keys += [
         Hotkey("r", "reset", "reset the accumulation"),
         Hotkey("p", "screenshot", "save screenshot"),
+        Hotkey("x", "toggle_denoise", "toggle the denoised view (Open Image Denoise, when still)"),
         Hotkey("f", "focus_at_cursor", "focus at the cursor"),
         Hotkey("h", "toggle_hud", "toggle HUD"),
         Hotkey("tab", "help", "toggle this help"),

@@ -18,7 +18,7 @@ from viewer.controller import MIN_SPEED
 from viewer.session import Controls
 
 HUD_WIDTH_PX = 360
-HUD_HEIGHT_PX = 520
+HUD_HEIGHT_PX = 590
 EFFECTS_WIDTH = 44  # characters per line of the effects list (wrapped)
 MARGIN_PX = 8
 HELP_WIDTH_PX = 330
@@ -36,6 +36,7 @@ APERTURE_PER_SCALE = 0.1  # largest lens radius, as a fraction of the scene scal
 FOCUS_PER_SCALE = 4.0  # farthest focus, as a multiple of the scene scale
 MIN_FOCUS = 0.01  # metres; CameraState needs a positive focus distance
 SPEED_PER_SCALE = 5.0  # fastest move speed on the slider, scene scales per second
+MAX_NOISE_THRESHOLD = 0.2  # adaptive sampling's slider: relative standard error of a pixel's mean
 
 
 @dataclass(frozen=True)
@@ -91,6 +92,8 @@ class HudStats:
     work_per_ray: Optional[float] = None
     tests_per_ray: Optional[float] = None
     work_label: str = "march steps/ray"  # or "node visits/ray" on BVH scenes
+    image: str = "raw"  # which image is shown: "raw", "denoised (8 spp)", "denoising..."
+    adaptive: Optional[str] = None  # e.g. "35% of pixels stopped"; None when adaptive sampling is off
 
 
 def format_rate(per_second: float) -> str:
@@ -125,7 +128,8 @@ def hud_lines(s: HudStats) -> list[str]:
         f"{s.fps:5.1f} fps   frame {s.frame_ms:6.1f} ms",
         f"spp {spp_text(s.spp)}   {format_rate(s.samples_per_second)}",
         f"resolution {w}x{h} ({percent:.0f}%, {state})",
-        f"noise {format_noise(s.noise)}",
+        f"image {s.image}",
+        f"noise {format_noise(s.noise)}" + ("" if s.adaptive is None else f"   adaptive: {s.adaptive}"),
         f"non-finite dropped {s.rejected}",
         f"{s.work_label} {work}" + ("" if not s.tests_per_ray else f"   prim tests/ray {s.tests_per_ray:.1f}"),
     ]
@@ -173,6 +177,7 @@ def draw_hud(gui, window_size: tuple[int, int], stats: HudStats, controls: Contr
         aperture = _slider_float(g, "aperture (m)", controls.aperture, 0.0, APERTURE_PER_SCALE * scale)
         focus = _slider_float(g, "focus (m)", controls.focus_distance, MIN_FOCUS, FOCUS_PER_SCALE * scale)
         focus = max(focus, MIN_FOCUS)
+        threshold = _slider_float(g, "adaptive noise (0 = off)", controls.noise_threshold, 0.0, MAX_NOISE_THRESHOLD)
         speed = controls.move_speed
         if speed is not None:
             speed = _slider_float(g, "move speed (m/s)", speed, MIN_SPEED, SPEED_PER_SCALE * scale)
@@ -180,12 +185,13 @@ def draw_hud(gui, window_size: tuple[int, int], stats: HudStats, controls: Contr
                               ("next scene  [n]", "next_scene"),
                               ("reset view  [r]", "reset"),
                               ("screenshot  [p]", "screenshot"),
+                              (f"denoised view: {'on' if stats.image != 'raw' else 'off'}  [x]", "toggle_denoise"),
                               ("help: all keys", "help")):
             if g.button(label):
                 actions.append(action)
         _text(g, "max depth -1: no limit.  h hides this panel")
     edited = replace(controls, exposure=exposure, max_depth=depth, fov=fov, aperture=aperture, focus_distance=focus,
-                     move_speed=speed)
+                     move_speed=speed, noise_threshold=threshold)
     return edited, actions
 
 

@@ -168,6 +168,7 @@ class Controls:
     aperture: float  # lens radius, metres
     focus_distance: float  # metres
     move_speed: Optional[float] = None  # m/s; None leaves it alone. Not a change of the image
+    noise_threshold: float = 0.0  # adaptive sampling's relative standard error (renderer/adaptive.py); 0 = off
 
 
 @dataclass(frozen=True)
@@ -230,6 +231,8 @@ class ViewerSession:
         self.scene_cameras: dict[Path, CameraState] = {}
         self.max_depth = 8
         self.exposure = 0.0
+        self.noise_threshold = 0.0  # adaptive sampling while still; 0 = every pixel keeps sampling
+        self.denoise_view = False  # show the denoised image (viewer/denoise_worker.py) when there is one
         self.tonemapper = tonemapper
         self.hud_visible = True
         self.help_visible = False
@@ -306,7 +309,7 @@ class ViewerSession:
     def controls(self) -> Controls:
         s = self.controller.state
         return Controls(self.exposure, self.tonemapper, self.max_depth, s.fov, s.aperture, s.focus_distance,
-                        self.controller.move_speed)
+                        self.controller.move_speed, self.noise_threshold)
 
     def apply_controls(self, new: Controls) -> bool:
         """Take the HUD's values; True if the accumulation must restart.
@@ -319,6 +322,10 @@ class ViewerSession:
         if new.move_speed is not None and new.move_speed != self.controller.move_speed:
             self.controller.move_speed = min(max(float(new.move_speed), MIN_SPEED), MAX_SPEED)
         changed = False
+        threshold = max(float(new.noise_threshold), 0.0)
+        if threshold != self.noise_threshold:  # stopped pixels would stay stopped: start over
+            self.noise_threshold = threshold
+            changed = True
         depth = fix_max_depth(new.max_depth, self.max_depth)
         if depth != self.max_depth:
             self.max_depth = depth

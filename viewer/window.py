@@ -34,15 +34,17 @@ import numpy as np
 import taichi as ti
 
 from renderer.camera import CameraFrame
+from renderer.denoise import DenoiseInput, Denoiser, unavailable_reason
 from renderer.image_io import write_exr, write_png
 from renderer.integrators import INTEGRATORS, integrator_names
-from renderer.pixel_slices import ROUND_SLICES
-from renderer.renderer import Renderer
+from renderer.pixel_slices import ROUND_SLICES, spp_text
+from renderer.renderer import AdaptiveSettings, Renderer
 from renderer.scene.catalog import load_any, scene_files
 from renderer.tonemap import TONEMAPPERS, quantize
 from viewer import hud
 from viewer.camera_state import CameraState
-from viewer.display import DisplayImages, DisplaySettings, show_on_canvas
+from viewer.denoise_worker import BackgroundDenoiser
+from viewer.display import DenoisedDisplay, DisplayImages, DisplaySettings, show_on_canvas
 from viewer.hotkeys import KeyMap
 from viewer.session import (DEFAULT_TARGET_SECONDS, SETTLE_SECONDS, STATS_INTERVAL, Every, RateMeter,
                             ViewerSession, scene_scale, screenshot_dir, screenshot_paths)
@@ -120,6 +122,12 @@ class ViewerApp:
         self.canvas = self.window.get_canvas()
         self.gui = self.window.get_gui()
         self.display = DisplayImages(self.size)
+        # The denoised view (key x): a worker thread denoises the still image as its samples double.
+        self._denoiser: Optional[BackgroundDenoiser] = None
+        self.denoised_display = DenoisedDisplay()
+        self.shown_denoised = None  # the Denoised result on screen, if any
+        self._shown: Optional[np.ndarray] = None  # the packed image to present (None: the film's)
+        self.image_label = "raw"
         self.last_display_update: Optional[str] = None  # what the last frame's display update did
 
         self.running = True
@@ -158,7 +166,8 @@ class ViewerApp:
         """The cached Renderer of a scene file, built (loaded and uploaded) on first use."""
         path = Path(path).resolve()
         if path not in self.renderers:
-            self.renderers[path] = Renderer(load_any(path, self.load_options), max_size=self.size)
+            # With AOVs: the denoised view needs them, and toggling it must not recompile.
+            self.renderers[path] = Renderer(load_any(path, self.load_options), max_size=self.size, aovs=True)
         return self.renderers[path]
 
     def select_scene(self, path) -> None:
@@ -225,6 +234,13 @@ class ViewerApp:
             s.controller.change_speed(-1)
         elif action == "cycle_tonemapper":
             s.cycle_tonemapper(TONEMAPPERS)
+        elif action == "toggle_denoise":
+            reason = unavailable_reason()
+            if reason:
+                s.error = reason
+                return
+            s.denoise_view = not s.denoise_view
+            self._announce(f"denoised view {'on' if s.denoise_view else 'off'}", now)
 
     def save_screenshot(self, now: Optional[float] = None) -> tuple[Path, Path]:
         """The PNG exactly as the canvas shows the image (without the HUD) and the same image linear,
@@ -235,9 +251,18 @@ class ViewerApp:
         write_png(png, self.display.window_sized_image(r.film, self._accumulation(), r.slices_done,
                                                        self._display_settings()))
         write_exr(exr, r.shown_image())
+        saved = f"{png} and {exr.name}"
+        denoised = self.shown_denoised
+        if denoised is not None:  # the denoised view: both images, the denoised one beside the raw
+            self.denoised_display.update(denoised, self._display_settings())
+            d_png, d_exr = (p.with_name(p.stem + "_denoised" + p.suffix) for p in (png, exr))
+            write_png(d_png, self.denoised_display.display)
+            write_exr(d_exr, denoised.image)
+            saved += f" (raw), {d_png.name} and {d_exr.name} (denoised at {spp_text(denoised.spp)} spp)"
         self.last_screenshot = (png, exr)
-        print(f"saved {png} and {exr.name}", file=sys.stderr)
-        s.notify(f"saved {png.name} (+ .exr)", self.clock() if now is None else now)
+        print(f"saved {saved}", file=sys.stderr)
+        s.notify(f"saved {png.name} (+ .exr{', denoised' if denoised is not None else ''})",
+                 self.clock() if now is None else now)
         return png, exr
 
     def focus_at_cursor(self, cursor, now: float) -> None:
@@ -340,6 +365,9 @@ class ViewerApp:
         if plan.reset:
             renderer.reset(*plan.size)
             self._stats["noise"] = None  # "..." until the next (rate-limited) estimate
+        wanted = AdaptiveSettings(s.noise_threshold) if s.noise_threshold > 0.0 else None
+        if renderer.adaptive != wanted:
+            renderer.set_adaptive(wanted)
         t0 = time.perf_counter()
         slices_before = renderer.slices_done
         renderer.render_slices(frame, plan.slices, integrator, s.max_depth, features=features)
@@ -354,6 +382,7 @@ class ViewerApp:
 
         self.last_display_update = self.display.update(renderer.film, self._accumulation(), renderer.slices_done,
                                                        self._display_settings())
+        self._choose_image(renderer, integrator, plan)
         stats_seconds = 0.0
         if fresh:  # compile the reductions of a new film here, in the frame that waits for Taichi anyway
             for refresh in self._stats_jobs:
@@ -368,9 +397,37 @@ class ViewerApp:
         self._present(now)
         frame_seconds = time.perf_counter() - start
         self._frame_ms = 1000.0 * frame_seconds
-        if not fresh:  # a compiling frame says nothing about the render cost
+        if not fresh and pixel_samples > 0:  # a compiling frame says nothing about the render cost (nor
+            # does one where adaptive sampling had stopped every pixel)
             s.resolution.record(render_seconds, pixel_samples, frame_seconds - stats_seconds)
         return self.running
+
+    def _choose_image(self, renderer: Renderer, integrator: str, plan) -> None:
+        """The raw film, or in the denoised view the newest denoised image of this accumulation
+        (offered to the worker while still, at full size, as its samples double)."""
+        self._shown, self.shown_denoised, self.image_label = None, None, "raw"
+        if not (self.session.denoise_view and INTEGRATORS[integrator].denoisable):
+            return
+        if self._denoiser is None:
+            self._denoiser = BackgroundDenoiser(Denoiser().denoise)
+        worker, generation = self._denoiser, self._accumulation()
+        if not plan.interactive and (renderer.film.width, renderer.film.height) == self.size:
+            worker.offer(generation, renderer.mean_spp, lambda: self._denoise_input(renderer, integrator))
+        result = worker.result_for(generation)
+        if worker.error:
+            self.session.error = f"denoising failed: {worker.error}"
+        if result is not None:
+            self._shown = self.denoised_display.update(result, self._display_settings())
+            self.shown_denoised = result
+            self.image_label = f"denoised ({spp_text(result.spp)} spp, {1000 * result.seconds:.0f} ms)"
+        else:
+            self.image_label = "raw (denoising...)" if worker.busy else "raw (denoised from 1 spp on)"
+
+    @staticmethod
+    def _denoise_input(renderer: Renderer, integrator: str) -> DenoiseInput:
+        if INTEGRATORS[integrator].writes_aovs:
+            return DenoiseInput(renderer.shown_image(), *renderer.aov_images())
+        return DenoiseInput(renderer.shown_image())
 
     def _refresh_noise(self, renderer: Renderer, integrator: str) -> None:
         """The HUD's noise estimate and dropped samples: a reduction over the film (~5-10 ms at
@@ -407,11 +464,19 @@ class ViewerApp:
             interactive=bool(self.last_plan and self.last_plan.interactive),
             noise=self._stats["noise"], rejected=self._stats["rejected"],
             work_per_ray=self._stats["work_per_ray"], tests_per_ray=self._stats["tests_per_ray"],
-            work_label="march steps/ray" if r.scene.geometry == "sdf" else "node visits/ray")
+            work_label="march steps/ray" if r.scene.geometry == "sdf" else "node visits/ray",
+            image=self.image_label, adaptive=self._adaptive_text(r))
+
+    @staticmethod
+    def _adaptive_text(r: Renderer) -> Optional[str]:
+        if r.adaptive is None:
+            return None
+        pixels = r.film.width * r.film.height
+        return f"{100.0 * (pixels - r.pixels_active) / max(pixels, 1):.0f}% stopped"
 
     def _present(self, now: float) -> None:
         s = self.session
-        show_on_canvas(self.canvas, self.display.shown)
+        show_on_canvas(self.canvas, self.display.shown if self._shown is None else self._shown)
         if s.hud_visible:
             forced = INTEGRATORS[s.integrator].display_tonemapper
             controls, actions = hud.draw_hud(self.gui, self.size, self.hud_stats(), s.controls(),

@@ -27,13 +27,13 @@ def test_action_for():
         "n": "next_scene", "b": "prev_scene", "i": "next_integrator", "r": "reset",
         "p": "screenshot", "f": "focus_at_cursor", "h": "toggle_hud", "/": "help",
         "=": "speed_up", "+": "speed_up", "-": "speed_down", "escape": "quit",
-        "Escape": "quit", "1": "integrator:path", "2": "integrator:direct", "3": "integrator:ao",
+        "Escape": "quit", "x": "toggle_denoise", "1": "integrator:path", "2": "integrator:direct", "3": "integrator:ao",
     }
     for key, action in expected.items():
         assert km.action_for(key) == action
     assert km.action_for("4") is None
     assert km.action_for("w") is None
-    assert km.action_for("x") is None
+    assert km.action_for("y") is None
 
 
 def test_digits_cover_first_nine_integrators():

@@ -298,6 +298,59 @@ def test_still_frames_redraw_only_the_pixels_they_rendered(app):
         resolution.target_seconds = target
 
 
+@pytest.mark.skipif(__import__("renderer.denoise", fromlist=["x"]).unavailable_reason() is not None,
+                    reason="pyoidn is not installed here")
+def test_denoised_view_shows_the_denoiser_output_and_screenshots_save_both(app, tmp_path):
+    """Key x: while still, a worker denoises the film as its samples double; the canvas shows its
+    tone-mapped output, the HUD says so, and a screenshot writes the raw and the denoised images."""
+    import time
+
+    app.select_scene(resolve_scene("cornell_box"))
+    app.session.set_integrator("mis")
+    app.session.hud_visible = False
+    settle(app, 2)
+    app.step(FrameInput(pressed=("x",)))
+    assert app.session.denoise_view
+    deadline = time.monotonic() + 60
+    while app.shown_denoised is None and time.monotonic() < deadline:
+        app.step()
+        app._denoiser.wait(5.0)
+    result = app.shown_denoised
+    assert result is not None and result.spp >= 1 and app.image_label.startswith("denoised")
+    assert np.isfinite(result.image).all() and result.image.shape == (SIZE[1], SIZE[0], 3)
+    shown = window_buffer_to_image(app.last_frame)
+    s = app.session
+    mapper = s.display_tonemapper(INTEGRATORS[s.integrator].display_tonemapper)
+    assert np.abs(shown.astype(int) - tonemap_array(result.image, s.exposure, mapper).astype(int)).max() <= 1
+    app.screenshot_folder = tmp_path
+    app.save_screenshot()
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert len(names) == 4 and sum("_denoised" in n for n in names) == 2
+    app.step(FrameInput(pressed=("x",)))
+    assert not app.session.denoise_view and app.image_label == "raw"
+
+
+def test_adaptive_slider_stops_converged_pixels(app):
+    app.select_scene(resolve_scene("cornell_box"))
+    app.session.set_integrator("mis")
+    controls = app.session.controls()
+    from dataclasses import replace
+
+    app.session.apply_controls(replace(controls, noise_threshold=1e6))  # every pixel converged at once
+    try:
+        for _ in range(400):
+            app.step()
+            if app.renderer.pixels_active == 0:
+                break
+        counts = app.renderer.film.sample_counts()
+        assert app.renderer.pixels_active == 0 and counts.min() >= 16
+        assert any("adaptive: 100% stopped" in line for line in hud.hud_lines(app.hud_stats()))
+    finally:
+        app.session.apply_controls(replace(app.session.controls(), noise_threshold=0.0))
+        app.step()
+    assert app.renderer.adaptive is None
+
+
 def test_quit_key_ends_the_loop(app):
     assert app.step(FrameInput(pressed=("Escape",))) is False
     assert not app.running
