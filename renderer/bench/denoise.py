@@ -198,6 +198,11 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, confi
     arch = speed_runtime()
     load_before = load_average()
     denoiser = Denoiser()
+    try:
+        frame_s = denoiser_frame_time(denoiser, load_named_scene(config.scenes[0]), config.frame_size)
+    except Exception as error:  # noqa: BLE001 - the curves are worth having without it
+        log(f"denoiser frame time: {describe_error(error)}")
+        frame_s = float("nan")
     results = []
     for name in config.scenes:
         try:
@@ -207,8 +212,6 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, confi
             results.append(bench_scene(scene, denoiser, config))
         except Exception as error:  # noqa: BLE001 - one scene must not end the benchmark
             results.append({"scene": Path(name).stem, "skipped": describe_error(error)})
-    frame_scene = load_named_scene(config.scenes[0])
-    frame_s = denoiser_frame_time(denoiser, frame_scene, config.frame_size)
     print_report(results, config, frame_s)
     plots = write_plots(results, out_dir)
     report = {**report_header("denoise", quick, load_before, arch=arch, config=asdict(config)),
