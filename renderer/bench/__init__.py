@@ -9,7 +9,7 @@ Taichi and compile kernels.
 from importlib import import_module
 
 BENCHMARKS = {name: f"renderer.bench.{name}" for name in ("sdf", "startup", "bvh", "integrators", "features",
-                                                          "photons", "interactive", "report")}
+                                                          "photons", "interactive", "denoise", "report")}
 
 
 def run_benchmark(name: str, **options) -> int:
