@@ -25,7 +25,8 @@ SAH_BUILD_TARGET_MIN_TRIANGLES = 1_000_000
 EMBREE_RATIO_TARGET = 0.3  # Lantern / Embree incoherent closest-hit rays per second
 
 STRATEGIES = ("sah", "midpoint", "equal_count")
-TRAVERSALS = ("stack", "stackless")
+TRAVERSALS = ("stack", "stackless", "wide4")
+WIDE = "wide4"  # the 4-wide BVH's traversal, compared with the binary "stack" one on the same rays
 TRIANGLE_TESTS = ("watertight", "moller")
 DEFAULT = ("sah", "stack", "watertight")  # the Renderer's MeshOptions
 DEFAULT_LEAF = 4  # the Renderer's MeshOptions.max_leaf_size
@@ -177,7 +178,11 @@ def _build_all(name, data, n_tris, config, build_runs, log):
                 t0 = time.perf_counter()
                 geometries[(strategy, traversal, test)] = MeshGeometry(data, bvh, traversal, test)
                 row.setdefault("upload_s", time.perf_counter() - t0)
-        row["device_bytes"] = bytes_of(next(g for k, g in geometries.items() if k[0] == strategy), n_tris)
+        own = {k[1]: g for k, g in geometries.items() if k[0] == strategy}
+        binary = next((t for t in own if t != WIDE), None)
+        row["device_bytes"] = bytes_of(own[binary] if binary else own[WIDE], n_tris)
+        if WIDE in own:
+            row["wide_device_bytes"] = bytes_of(own[WIDE], n_tris)
         rows.append(row)
         log(f"  {name}: {strategy} build {timing.median:.3f} s, SAH cost {row['sah_cost']:.2f}, "
             f"{row['device_bytes']['per_triangle']:.1f} bytes/triangle")
@@ -220,13 +225,18 @@ def _embree_ratios(result: dict, default: dict, kinds) -> dict:
     return ratios
 
 
-def _shadow_rays(batch: RayBatch, key, shadow: Rays, emb, config) -> dict:
-    """Any-hit (occluded) against closest-hit on the same segments, and Embree's any-hit."""
+def _shadow_rays(batch: RayBatch, key, shadow: Rays, emb, config, wide: RayBatch | None = None) -> dict:
+    """Any-hit (occluded) against closest-hit on the same segments, and Embree's any-hit; with
+    `wide` (the same configuration's 4-wide traversal), its any-hit too."""
     occ = OccludedCall(batch, shadow.head(64))
     occ()  # compile
     occ = OccludedCall(batch, shadow)
     seg_closest = ClosestCall(batch, shadow)
     shadow_calls = {"lantern:occluded": occ, "lantern:closest": seg_closest}
+    wide_occ = None
+    if wide is not None:
+        OccludedCall(wide, shadow.head(64))()  # compile
+        wide_occ = shadow_calls["lantern-wide:occluded"] = OccludedCall(wide, shadow)
     e_occ = None
     if emb is not None:
         e_occ = embree_side.EmbreeOccludedCall(emb, shadow)
@@ -242,6 +252,9 @@ def _shadow_rays(batch: RayBatch, key, shadow: Rays, emb, config) -> dict:
           "timing": {k: v.as_dict() for k, v in st.items()}}
     # a segment is occluded exactly when its closest hit lies inside it
     sh["consistent_with_closest"] = float((occ.out.astype(bool) == (seg_closest.t >= 0)).mean())
+    if wide_occ is not None:
+        sh["wide_occluded_mrays_per_s"] = n / st["lantern-wide:occluded"].median / 1e6
+        sh["wide_agreement"] = float((wide_occ.out == occ.out).mean())
     if e_occ is not None:
         sh["embree_occluded_mrays_per_s"] = n / st["embree:occluded"].median / 1e6
         sh["embree_occluded_fraction"] = float(e_occ.out.mean())
@@ -320,10 +333,32 @@ def measure_mesh(name: str, tris: np.ndarray, config: BvhBenchConfig, embree=Non
             per_kind[kind] = float(ok.mean())
         result["agreement_all_configs"] = per_kind
 
-    # any-hit (shadow) segments on the Renderer's configuration
+    result["wide_vs_binary"] = wide_vs_binary(result["configs"])
+    # any-hit (shadow) segments on the Renderer's configuration (and its 4-wide counterpart)
     if config.shadow_rays:
-        result["shadow"] = _shadow_rays(batches[default_key], default_key, shadow, emb, config)
+        wide_key = (default_key[0], WIDE, default_key[2])
+        wide = batches.get(wide_key) if default_key[1] != WIDE else None
+        result["shadow"] = _shadow_rays(batches[default_key], default_key, shadow, emb, config, wide)
     return result
+
+
+def wide_vs_binary(configs: list) -> list:
+    """Per strategy x triangle test measured with both: the 4-wide traversal's rays/s over the
+    binary "stack" traversal's (medians of the same interleaved runs), and their node visits."""
+    by_key = {(c["strategy"], c["traversal"], c["triangle_test"]): c for c in configs}
+    rows = []
+    for (strategy, traversal, test), wide in by_key.items():
+        binary = by_key.get((strategy, "stack", test))
+        if traversal != WIDE or binary is None:
+            continue
+        row = {"strategy": strategy, "triangle_test": test}
+        for kind in ("coherent", "incoherent"):
+            row[kind] = {"speedup": wide[kind]["mrays_per_s"] / binary[kind]["mrays_per_s"],
+                         "speedup_fastest_runs": wide[kind]["mrays_per_s_best"] / binary[kind]["mrays_per_s_best"],
+                         "wide_nodes_per_ray": wide[kind]["nodes_per_ray"],
+                         "binary_nodes_per_ray": binary[kind]["nodes_per_ray"]}
+        rows.append(row)
+    return rows
 
 
 def leaf_size_sweep(name: str, tris: np.ndarray, config: BvhBenchConfig, log=print) -> dict:

@@ -95,6 +95,13 @@ def print_report(report: dict) -> None:
                           f"({hits['incoherent']:.0%} hit); nodes/tests = mean per ray; =embree = rays agreeing "
                           f"with Embree (same miss, or t within {embree_side.AGREEMENT_RTOL:g} relative); 1st call = compile "
                           f"(or load from Taichi's offline cache) + 64 rays")
+        for w in m.get("wide_vs_binary", ()):
+            co, inc = w["coherent"], w["incoherent"]
+            print(f"  wide4 / stack ({w['strategy']}, {w['triangle_test']}): coherent {co['speedup']:.2f}x "
+                  f"(fastest runs {co['speedup_fastest_runs']:.2f}x; nodes {co['wide_nodes_per_ray']:.1f} vs "
+                  f"{co['binary_nodes_per_ray']:.1f}), incoherent {inc['speedup']:.2f}x (fastest runs "
+                  f"{inc['speedup_fastest_runs']:.2f}x; nodes {inc['wide_nodes_per_ray']:.1f} vs "
+                  f"{inc['binary_nodes_per_ray']:.1f})")
         if e.get("available"):
             ratio = m["ratio_to_embree"]
             print(f"  Lantern/Embree on {m['name']}: incoherent {ratio['incoherent']['default']:.3f}x "
@@ -114,10 +121,10 @@ def print_report(report: dict) -> None:
             s = m["shadow"]
             rows.append([m["name"], s["config"], s["occluded_mrays_per_s"], s["closest_mrays_per_s"],
                          s["occluded_mrays_per_s"] / s["closest_mrays_per_s"], _pct(s["occluded_fraction"]),
-                         _pct(s["consistent_with_closest"]), s.get("embree_occluded_mrays_per_s", "-"),
-                         _pct(s.get("agreement_with_embree"))])
+                         _pct(s["consistent_with_closest"]), s.get("wide_occluded_mrays_per_s", "-"),
+                         s.get("embree_occluded_mrays_per_s", "-"), _pct(s.get("agreement_with_embree"))])
         print_table(["mesh", "config", "any-hit Mray/s", "closest Mray/s", "speed-up", "occluded",
-                     "=closest", "embree any Mray/s", "=embree"], rows,
+                     "=closest", "wide4 any Mray/s", "embree any Mray/s", "=embree"], rows,
                     title="Shadow rays (the incoherent rays as segments ending at their random targets): any-hit "
                           "(occluded) vs closest-hit on the same segments")
 

@@ -1,10 +1,12 @@
 """The mesh side of the geometry interface: triangles, analytic spheres, quads and discs, and
 Bezier surfaces of revolution (patches, bezier_device.py) in one BVH, traversed on the device.
 
-Two traversals (a compile-time choice, benchmarked against each other):
+Three traversals (a compile-time choice, benchmarked against each other):
   "stack":     ordered traversal; both children's boxes are tested, the nearer visited first, the
                farther pushed with its entry distance and skipped on pop once a closer hit is known.
   "stackless": the depth-first next-pointer ("miss link") walk: no stack, no ordering.
+  "wide4":     the binary tree collapsed into 4-wide nodes (renderer/geometry/wide_bvh.py), whose
+               four child boxes are tested together, ordered as "stack" (wide_traversal.py).
 Two triangle tests: "watertight" (Woop et al. 2013, the default) and "moller" (Moller-Trumbore).
 Only the primitive kinds the scene has are compiled in, and each of these only where the scene
 needs it: vertex colours, alpha coverage (renderer/geometry/coverage.py, which needs the material
@@ -23,6 +25,8 @@ from renderer.geometry.instances import InstanceTable
 from renderer.geometry.interface import INF, EmitterPoint, Hit, Ray, Surface
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.shading import consistent_shading_normal
+from renderer.geometry.wide_bvh import collapse, empty_wide_bvh
+from renderer.geometry.wide_traversal import WideNodes, stack_size
 from renderer.materials.table import ALPHA_OPAQUE
 from renderer.sampling.warps import PI
 from renderer.upload import upload_fields
@@ -30,7 +34,7 @@ from renderer.upload import upload_fields
 vec3 = ti.math.vec3
 STACK_SIZE = 64  # deeper than any tree the builder makes (its depth is bounded well below this)
 RESUME_WORLD = -2  # the stack entry below an instance's nodes: the world ray comes back there
-TRAVERSALS = ("stack", "stackless")
+TRAVERSALS = ("stack", "stackless", "wide4")
 TRIANGLE_TESTS = ("watertight", "moller")
 
 
@@ -65,10 +69,14 @@ class MeshGeometry:
         self.node_total = len(nodes.node_count)
         self.data = data  # kept for emitter_info (the device has its own copy)
         uploads = []  # (field, array): copied in one launch (renderer.upload)
-        self._upload_bvh(nodes, uploads)
+        mesh_root = bvh.mesh_root if self.has_instances else np.zeros(0, np.int32)
+        if traversal == "wide4":
+            mesh_root = self._upload_wide(nodes, mesh_root, uploads)
+        else:
+            self._upload_bvh(nodes, uploads)
         self._upload_primitives(data, nodes, uploads)
         if self.has_instances:
-            self.instances = InstanceTable(bvh.mesh_root[data.instance_mesh], data.instance_to_world, uploads)
+            self.instances = InstanceTable(mesh_root[data.instance_mesh], data.instance_to_world, uploads)
         upload_fields(uploads)
 
     # --- upload --------------------------------------------------------------------------------
@@ -85,6 +93,18 @@ class MeshGeometry:
         self.slot_prim = ti.field(ti.i32, shape=max(1, len(bvh.prim_order)))
         if len(bvh.prim_order):
             uploads.append((self.slot_prim, bvh.prim_order))
+
+    def _upload_wide(self, bvh, mesh_root, uploads):
+        """The binary tree collapsed into wide nodes, uploaded; returns the wide root of each
+        instanced mesh's tree."""
+        wide = collapse(bvh, np.concatenate([[0], mesh_root])) if self.node_total else empty_wide_bvh()
+        self.node_total = wide.num_nodes
+        self.stack_size = stack_size(wide)
+        self.wide = WideNodes(wide, uploads)
+        self.slot_prim = ti.field(ti.i32, shape=max(1, len(wide.prim_order)))
+        if len(wide.prim_order):
+            uploads.append((self.slot_prim, wide.prim_order))
+        return wide.roots[1:]
 
     def _upload_primitives(self, data: MeshData, bvh, uploads):
         def vec_field(n, array, width=3, rows=()):
@@ -125,7 +145,7 @@ class MeshGeometry:
         """Bytes on the device: the BVH (every level), the triangles' intersection data, their
         shading attributes (normals, texture coordinates, tangents, colours), the instance table,
         and the total of these with the other primitives and the material ids."""
-        nodes = self.node_total * (12 + 12 + 12)
+        nodes = self.wide.device_bytes() if self.traversal == "wide4" else self.node_total * (12 + 12 + 12)
         slots = self.slot_prim.shape[0] * 4
         triangles = self.tri_v.shape[0] * 36
         attributes = sum(_field_bytes(getattr(self, name)) for name in ("tri_n", "tri_uv", "tri_uv1", "tri_tangent",
@@ -165,11 +185,11 @@ class MeshGeometry:
         return hit, t, b1, b2
 
     @ti.func
-    def _leaf(self, node, o, d, k, s, hit: ti.template(), any_hit, ray, instance):
-        """Test a leaf's primitives with the ray (o, d) of the current frame; `ray` is the world
-        ray and `instance` the instance whose frame o, d are in (-1: the world)."""
-        link = self.node_link[node]
-        for j in range(link[0], link[0] + link[1]):
+    def test_leaf(self, first, count, o, d, k, s, hit: ti.template(), any_hit, ray, instance):
+        """Test a leaf's primitives (slots first .. first + count - 1) with the ray (o, d) of the
+        current frame; `ray` is the world ray and `instance` the instance whose frame o, d are in
+        (-1: the world)."""
+        for j in range(first, first + count):
             g = self.slot_prim[j]
             h, t, b1, b2 = self._test_prim(g, o, d, k, s, hit.t)
             hit.tests += 1
@@ -199,6 +219,15 @@ class MeshGeometry:
     def _traverse(self, ray, t_max, any_hit):
         """Closest hit, or (any_hit: a constant or a per-ray value) the first hit found."""
         hit = Hit(hit=0, t=t_max, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0), instance=-1)
+        if ti.static(self.traversal == "wide4"):
+            self.wide.traverse(self, ray, hit, any_hit)
+        else:
+            self._traverse_binary(ray, hit, any_hit)
+        return hit
+
+    @ti.func
+    def _traverse_binary(self, ray, hit: ti.template(), any_hit):
+        """The "stack" and "stackless" traversals of the binary tree, into `hit`."""
         o = ray.o
         d = ray.d
         inv_d, k, s = self._ray_setup(d)
@@ -211,7 +240,7 @@ class MeshGeometry:
                 link = self.node_link[node]
                 if isect.box_entry(o, inv_d, self.node_lo[node], self.node_hi[node], hit.t) <= hit.t:
                     if link[1] > 0:
-                        self._leaf(node, o, d, k, s, hit, any_hit, ray, instance)
+                        self.test_leaf(link[0], link[1], o, d, k, s, hit, any_hit, ray, instance)
                         if any_hit:
                             if hit.hit == 1:
                                 break
@@ -258,7 +287,7 @@ class MeshGeometry:
                 link = self.node_link[node]
                 next_node = -1
                 if link[1] > 0:
-                    self._leaf(node, o, d, k, s, hit, any_hit, ray, instance)
+                    self.test_leaf(link[0], link[1], o, d, k, s, hit, any_hit, ray, instance)
                     if any_hit:
                         if hit.hit == 1:
                             break
@@ -291,7 +320,6 @@ class MeshGeometry:
                     if stack_t[sp] <= hit.t:
                         next_node = stack_node[sp]
                 node = next_node
-        return hit
 
     @ti.func
     def intersect(self, ray, t_max):

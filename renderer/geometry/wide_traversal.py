@@ -1,0 +1,191 @@
+"""The 4-wide BVH on the device (renderer/geometry/wide_bvh.py) and its ordered traversal.
+
+A visit tests the node's four children together, written so that LLVM's SLP vectoriser turns
+the test into 4-lane instructions on the CPU (docs/architecture.md, "Decisions worth knowing",
+has the evidence; scripts/wide_bvh_ir.py shows it): every child's entry and exit distances and
+the hit mask are computed unconditionally and folded into one key per child (its entry
+distance, or MISS_KEY) before the first branch, and the keys are also stored to a local array
+that a dynamic index reads (that store is what LLVM vectorises from). Only then are the keys
+sorted (a five-comparison network carrying the child slots) and the children entered: the
+nearest next, the others pushed farthest first with their entry distance, and skipped on pop
+once a closer hit is known. Shadow rays stop at their first hit, as in the binary traversals.
+
+Per ray, each axis reads its near planes from the lo row (direction >= 0) or the hi row, and its
+far planes from the other, so a slab test needs no min/max between t0 and t1, and an empty slot
+(lo = +F32_MAX > hi = -F32_MAX) has its far planes behind every origin, so it is never entered.
+The far distance is widened as in intersect.box_entry (Ize 2013). Minima and maxima are
+compare-and-select: LLVM's minnum/maxnum would add two instructions each for NaN, which these
+distances never are (the direction's zero components are replaced as in MeshGeometry).
+
+Instances (the two-level BVH): an instance child, once entered, moves the ray into the
+instance's frame and walks its mesh's wide tree from its root, above a stack marker that brings
+the world ray back.
+"""
+import taichi as ti
+
+from renderer.geometry.wide_bvh import WIDTH, WideBVH
+
+MISS_KEY = 3.0e38  # a child's key when the ray does not enter it; above every t_max (INF = 1e30)
+RESUME_WORLD = 2**31 - 1  # the stack entry below an instance's nodes (never a node index)
+GROW_FAR = 1.00000024  # the far distance's widening, as intersect.box_entry's
+
+ivec3 = ti.math.ivec3
+vec4 = ti.math.vec4
+
+
+@ti.func
+def _min(a, b):
+    """min for values that are never NaN: one vminps (ti.min adds a NaN check)."""
+    return ti.select(a < b, a, b)
+
+
+@ti.func
+def _max(a, b):
+    return ti.select(a > b, a, b)
+
+
+@ti.func
+def _ordered(ka, sa, kb, sb):
+    """One comparator of the sorting network: (smaller key, its slot, larger key, its slot)."""
+    swap = kb < ka
+    return ti.select(swap, kb, ka), ti.select(swap, sb, sa), ti.select(swap, ka, kb), ti.select(swap, sa, sb)
+
+
+@ti.func
+def sort_keys(key):
+    """The four keys in ascending order and the child slot of each (a sorting network)."""
+    k0, k1, k2, k3 = key[0], key[1], key[2], key[3]
+    s0, s1, s2, s3 = 0, 1, 2, 3
+    k0, s0, k1, s1 = _ordered(k0, s0, k1, s1)
+    k2, s2, k3, s3 = _ordered(k2, s2, k3, s3)
+    k0, s0, k2, s2 = _ordered(k0, s0, k2, s2)
+    k1, s1, k3, s3 = _ordered(k1, s1, k3, s3)
+    k1, s1, k2, s2 = _ordered(k1, s1, k2, s2)
+    return vec4(k0, k1, k2, k3), ti.math.ivec4(s0, s1, s2, s3)
+
+
+@ti.func
+def plane_rows(d):
+    """Rows of the near and far planes of each axis for direction d: lo (0..2) where d >= 0."""
+    near = ivec3(0, 1, 2)
+    for a in ti.static(range(3)):
+        near[a] = a if d[a] >= 0.0 else a + 3
+    return near, (near + 3) % 6
+
+
+@ti.data_oriented
+class WideNodes:
+    """The wide nodes on the device: child boxes as (node, row) vec4s, one lane per child, and
+    each child as one packed i32 (WideBVH.packed_refs: a node >= 0, or a leaf or an instance)."""
+
+    BYTES_PER_NODE = 6 * WIDTH * 4 + WIDTH * 4
+
+    def __init__(self, wide: WideBVH, uploads: list):
+        """Appends its (field, array) pairs to `uploads` (one launch for the whole mesh)."""
+        if wide.num_nodes >= RESUME_WORLD:
+            raise ValueError("the wide BVH has too many nodes for i32 references")
+        self.count = wide.num_nodes
+        refs, self.count_bits = wide.packed_refs()
+        self.count_mask = (1 << self.count_bits) - 1
+        self.bounds = ti.Vector.field(WIDTH, ti.f32, shape=(self.count, 6))
+        self.child = ti.field(ti.i32, shape=(self.count, WIDTH))
+        uploads += [(self.bounds, wide.bounds), (self.child, refs)]
+
+    def device_bytes(self) -> int:
+        return self.count * self.BYTES_PER_NODE
+
+    @ti.func
+    def child_keys(self, node, o, inv_d, near, far, t_max):
+        """Each child's entry distance if the ray (origin o, 1 / direction inv_d) enters its box
+        before t_max, else MISS_KEY; all four lanes at once, no branch."""
+        tnx = (self.bounds[node, near.x] - o.x) * inv_d.x
+        tny = (self.bounds[node, near.y] - o.y) * inv_d.y
+        tnz = (self.bounds[node, near.z] - o.z) * inv_d.z
+        tfx = (self.bounds[node, far.x] - o.x) * inv_d.x
+        tfy = (self.bounds[node, far.y] - o.y) * inv_d.y
+        tfz = (self.bounds[node, far.z] - o.z) * inv_d.z
+        tn = _max(_max(tnx, tny), _max(tnz, 0.0))
+        tf = _min(_min(tfx, tfy), _min(tfz, t_max)) * GROW_FAR
+        return ti.select(tn <= tf, tn, MISS_KEY)
+
+    @ti.func
+    def visit(self, node, o, inv_d, near, far, t_max, stack_ref: ti.template(), stack_t: ti.template(), sp):
+        """Test node's children; push every entered one but the nearest, farthest first.
+        Returns (the nearest entered child's ref, whether there is one, the new stack size)."""
+        entry = self.child_keys(node, o, inv_d, near, far, t_max)
+        # The keys also go to a local array read by a dynamic index below: its four stores become
+        # one 4-lane store, from which LLVM vectorises the node test 4 lanes wide. Without it, or
+        # with other code after the test (an argmin and branches on the hit count instead of the
+        # network and these pushes, for one), it chose 2 lanes.
+        keys = ti.Vector([MISS_KEY] * WIDTH, dt=ti.f32)
+        for c in ti.static(range(WIDTH)):
+            keys[c] = entry[c]
+        key, slot = sort_keys(entry)
+        for j in ti.static((3, 2, 1)):  # farthest first: the nearest is popped first
+            if key[j] < MISS_KEY:
+                stack_ref[sp] = self.child[node, slot[j]]
+                stack_t[sp] = keys[slot[j]]
+                sp += 1
+        return self.child[node, slot[0]], key[0] < MISS_KEY, sp
+
+    @ti.func
+    def traverse(self, geometry: ti.template(), ray, hit: ti.template(), any_hit):
+        """Into `hit` (a fresh Hit whose t is the ray's t_max): the closest hit, or (any_hit: a
+        constant or a per-ray value) the first hit found, of ray in geometry (a MeshGeometry: its
+        leaf test, ray constants, stack size and instances)."""
+        o = ray.o
+        d = ray.d
+        inv_d, k, s = geometry._ray_setup(d)
+        near, far = plane_rows(d)
+        instance = -1  # the instance whose frame o, d are in; -1: the world
+        stack_ref = ti.Vector([0] * geometry.stack_size, dt=ti.i32)
+        stack_t = ti.Vector([0.0] * geometry.stack_size, dt=ti.f32)
+        sp = 0
+        ref = 0  # the current child: the world's root node
+        going = True
+        while going:
+            if ti.static(geometry.has_instances):
+                if ref < 0 and (~ref & self.count_mask) == 0:
+                    # an instance whose box was entered: walk its mesh's tree in its frame
+                    instance = ~ref >> self.count_bits
+                    o, d = geometry.instances.ray_to_object(instance, ray.o, ray.d)
+                    inv_d, k, s = geometry._ray_setup(d)
+                    near, far = plane_rows(d)
+                    stack_ref[sp] = RESUME_WORLD
+                    stack_t[sp] = -1.0
+                    sp += 1
+                    ref = geometry.instances.root[instance]
+            found = False
+            if ref < 0:
+                leaf = ~ref
+                geometry.test_leaf(leaf >> self.count_bits, leaf & self.count_mask, o, d, k, s, hit, any_hit, ray,
+                                   instance)
+                if any_hit:
+                    if hit.hit == 1:
+                        break
+            else:
+                hit.work += 1
+                ref, found, sp = self.visit(ref, o, inv_d, near, far, hit.t, stack_ref, stack_t, sp)
+            # pop, skipping children whose entry lies beyond the closest hit found since the push
+            while not found and sp > 0:
+                sp -= 1
+                take = stack_t[sp] <= hit.t
+                if ti.static(geometry.has_instances):
+                    if stack_ref[sp] == RESUME_WORLD:  # back in the world
+                        instance = -1
+                        o = ray.o
+                        d = ray.d
+                        inv_d, k, s = geometry._ray_setup(d)
+                        near, far = plane_rows(d)
+                        take = False
+                if take:
+                    ref = stack_ref[sp]
+                    found = True
+            going = found
+
+
+def stack_size(wide: WideBVH) -> int:
+    """Stack entries the traversal needs: the world's levels and the deepest mesh's, WIDTH - 1
+    siblings each, and the marker below an instance's nodes."""
+    meshes = int(wide.depth[1:].max()) if len(wide.depth) > 1 else 0
+    return (WIDTH - 1) * (int(wide.depth[0]) + meshes) + 1

@@ -1,0 +1,27 @@
+"""`bench bvh` with the 4-wide traversal among its knobs: the wide4 / stack figures it reports are
+the ratios of its own measurements, and the wide traversal's shadow rays agree with the binary
+one's."""
+import pytest
+
+from renderer.bench import bvh_measure
+from tests.bench.test_bench_bvh import TINY, tiny_config
+
+
+def test_wide_traversal_is_measured_against_the_binary_one():
+    config = tiny_config(strategies=("sah",), traversals=("stack", bvh_measure.WIDE))
+    res = bvh_measure.measure_mesh(TINY.name, TINY.load(), config, None, None, log=lambda *a: None)
+    configs = {c["traversal"]: c for c in res["configs"]}
+    assert set(configs) == {"stack", bvh_measure.WIDE}
+    (row,) = res["wide_vs_binary"]
+    assert (row["strategy"], row["triangle_test"]) == ("sah", "watertight")
+    for kind in ("coherent", "incoherent"):
+        wide, binary = configs[bvh_measure.WIDE][kind], configs["stack"][kind]
+        assert row[kind]["speedup"] == pytest.approx(wide["mrays_per_s"] / binary["mrays_per_s"])
+        assert row[kind]["wide_nodes_per_ray"] == wide["nodes_per_ray"]
+        # a wide node stands for up to three binary ones; the same rays hit
+        assert wide["nodes_per_ray"] < binary["nodes_per_ray"]
+        assert wide["hit_fraction"] == binary["hit_fraction"]
+    build = res["builds"][0]
+    assert build["wide_device_bytes"]["bvh"] < build["device_bytes"]["bvh"]
+    shadow = res["shadow"]
+    assert shadow["wide_occluded_mrays_per_s"] > 0 and shadow["wide_agreement"] == 1.0
