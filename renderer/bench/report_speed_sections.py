@@ -156,6 +156,16 @@ def bvh_section(report: dict) -> Section:
         table(["mesh", "coherent", "incoherent", "fastest incoherent", "Embree incoherent", "vs Embree",
                "all agree with Embree"], rows)]
     section.blocks += [_bvh_trace_details(m) for m in meshes]
+    wide_rows = [[m["name"], f"{w['strategy']}/{w['triangle_test']}", times(w["coherent"]["speedup"]),
+                  times(w["incoherent"]["speedup"]),
+                  f"{num(w['incoherent']['wide_nodes_per_ray'])} / {num(w['incoherent']['binary_nodes_per_ray'])}"]
+                 for m in meshes for w in m.get("wide_vs_binary", [])]
+    if wide_rows:
+        section.blocks += [
+            "The 4-wide BVH (traversal `wide4`) against the binary tree's `stack` traversal, rays/s of the same "
+            "interleaved runs (a wide node visit tests four boxes):",
+            table(["mesh", "strategy/test", "coherent", "incoherent", "incoherent node visits, wide / binary"],
+                  wide_rows)]
     shadow = [m for m in meshes if "shadow" in m]
     if shadow:
         section.blocks.append(details("Shadow rays: any-hit against closest-hit on the same segments", table(
@@ -189,6 +199,11 @@ def bvh_section(report: dict) -> Section:
                 target = targets["embree_ratio"]
                 sentence += (f"; the Renderer's configuration runs at {times(ratio)} Embree's incoherent rays/s "
                              f"(target {num(target)}x: {verdict(ratio >= target)})")
+            wide = next((w for w in big.get("wide_vs_binary", []) if w["strategy"] == "sah"
+                         and f"sah/stack/{w['triangle_test']}" == big["default_config"]), None)
+            if wide is not None:
+                sentence += (f"; its 4-wide traversal runs at {times(wide['incoherent']['speedup'])} the binary "
+                             f"stack traversal's incoherent rays/s")
             section.findings.append(sentence + ".")
     if leaf:
         default = next((r for r in leaf["rows"] if r["max_leaf_size"] == leaf["renderer_default"]), None)
