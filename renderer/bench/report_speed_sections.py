@@ -197,8 +197,10 @@ def bvh_section(report: dict) -> Section:
             ratio = big.get("ratio_to_embree", {}).get("incoherent", {}).get("default")
             if ratio is not None:
                 target = targets["embree_ratio"]
+                passed = [ok for ok in targets.get("embree_ratio_passed", {}).values() if ok is not None]
                 sentence += (f"; the Renderer's configuration runs at {times(ratio)} Embree's incoherent rays/s "
-                             f"(target {num(target)}x: {verdict(ratio >= target)})")
+                             f"(target {num(target)}x: {verdict(ratio >= target)}; met on {sum(passed)} of "
+                             f"{len(passed)} meshes)")
             wide = next((w for w in big.get("wide_vs_binary", []) if w["strategy"] == "sah"
                          and f"sah/stack/{w['triangle_test']}" == big["default_config"]), None)
             if wide is not None:
