@@ -31,7 +31,9 @@ class MeshOptions:
     """Compile-time and build-time choices of the mesh world (benchmarked knobs)."""
 
     strategy: str = "sah"
-    traversal: str = "stack"
+    # "wide4" (the binary tree collapsed into 4-wide nodes), or the binary tree's "stack" or
+    # "stackless" (renderer/geometry/mesh_geometry.py; `bench bvh` compares them)
+    traversal: str = "wide4"
     triangle_test: str = "watertight"
     max_leaf_size: int = 4
     instancing: bool = True  # False: every instance flattened into world triangles (a reference)

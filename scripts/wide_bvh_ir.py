@@ -1,7 +1,7 @@
 """What LLVM makes of the wide BVH's node test: compiles it (and the whole closest-hit traversal)
 with Taichi's optimised LLVM IR and assembly written out, and counts the 4-lane instructions.
 
-    python scripts/wide_bvh_ir.py [--keep DIR]
+    python scripts/wide_bvh_ir.py [--keep DIR] [--optimize compile|run]
 
 Two kernels, each on Taichi's CPU back-end with the offline cache off (so the files are written):
   node:      a stand-alone loop over rays that visits one wide node each (WideNodes.visit)
@@ -97,7 +97,7 @@ def compile_traversal_kernel():
                                np.zeros(n, np.float32), np.zeros(n, np.int32), np.zeros((n, 2), np.int32))
 
 
-def run_in(directory: Path, which: str) -> dict:
+def run_in(directory: Path, which: str, optimize: str = "run") -> dict:
     """Compile one kernel set in a fresh Taichi runtime with `directory` as the working directory
     (where Taichi writes its .ll and .s files), and count."""
     import taichi as ti
@@ -106,8 +106,10 @@ def run_in(directory: Path, which: str) -> dict:
     cwd = os.getcwd()
     os.chdir(directory)
     try:
+        from renderer.arch import taichi_options
+
         ti.init(arch=ti.cpu, offline_cache=False, print_kernel_llvm_ir_optimized=True, print_kernel_asm=True,
-                log_level=ti.WARN)
+                log_level=ti.WARN, **taichi_options(optimize))
         (compile_node_kernel if which == "node" else compile_traversal_kernel)()
         ti.reset()
     finally:
@@ -118,11 +120,14 @@ def run_in(directory: Path, which: str) -> dict:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--keep", type=Path, help="write the .ll and .s files here (default: a temporary folder)")
+    parser.add_argument("--optimize", choices=("compile", "run"), default="run",
+                        help="Taichi's optimisation level (renderer/arch.py): run (benchmarks, long renders) or "
+                             "compile (the viewer's and the tests'); LLVM optimises both")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         root = args.keep or Path(tmp)
         for which in ("node", "traversal"):
-            counts = run_in(root / which, which)
+            counts = run_in(root / which, which, args.optimize)
             print(f"{which}: " + ", ".join(f"{k} {v}" for k, v in counts.items()))
         if args.keep:
             print(f"files in {args.keep}")

@@ -15,19 +15,19 @@ terrain), in one process so that ratios are meaningful:
    around the mesh, aimed at uniform random points in its box), with the mean node visits (a
    wide4 visit tests four boxes) and primitive tests per ray (`Hit.work`, `Hit.tests`), and
    wide4 / stack per strategy and triangle test (medians of the same interleaved runs).
-   Any-hit (`occluded`) rays on the Renderer's configuration (and its wide4 counterpart): the
-   incoherent rays as segments ending at their random target points (shadow rays), against
-   closest-hit on the same segments.
+   Any-hit (`occluded`) rays on the Renderer's configuration (and on the binary "stack"
+   traversal): the incoherent rays as segments ending at their random target points (shadow
+   rays), against closest-hit on the same segments.
    Each configuration is compiled (first call, on a few rays) before timing; the timed calls run
    round-robin over all configurations of a mesh (and Embree), medians of several launches.
 3. Embree (the optional `embreex` package: `pip install embreex`, or the project's `bench` extra)
    on the same meshes and the same rays: its build time (scene commit), Mrays/s, and the ratio
    Lantern / Embree on incoherent rays. Issue target: at least 0.3x Embree's rays/s on incoherent
-   closest-hit rays, judged on the Renderer's configuration (sah, stack, watertight). Cross-check:
+   closest-hit rays, judged on the Renderer's configuration (sah, wide4, watertight). Cross-check:
    the fraction of rays on which every Lantern configuration agrees with Embree (both miss, or
    both hit with distances within 1e-4 relative). Without embreex the Embree columns are skipped.
 4. Leaf size: SAH builds with max_leaf_size 1, 2, 4, 8, 16 on the 100k mesh: build time, bytes per
-   triangle, SAH cost and incoherent Mrays/s (stack, watertight).
+   triangle, SAH cost and incoherent Mrays/s (the Renderer's traversal and triangle test).
 
 Threads: Taichi's CPU back-end runs kernels on `cpu_max_num_threads` (all cores by default, 2 on
 the machine this was written on). embreex traces one ray at a time in a loop that releases the

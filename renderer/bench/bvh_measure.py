@@ -28,7 +28,7 @@ STRATEGIES = ("sah", "midpoint", "equal_count")
 TRAVERSALS = ("stack", "stackless", "wide4")
 WIDE = "wide4"  # the 4-wide BVH's traversal, compared with the binary "stack" one on the same rays
 TRIANGLE_TESTS = ("watertight", "moller")
-DEFAULT = ("sah", "stack", "watertight")  # the Renderer's MeshOptions
+DEFAULT = ("sah", "wide4", "watertight")  # the Renderer's MeshOptions
 DEFAULT_LEAF = 4  # the Renderer's MeshOptions.max_leaf_size
 # Leaf sizes whose rays/s lie within this fraction of the best are reported as ties: run-to-run
 # noise on a shared machine is a few per cent.
@@ -225,18 +225,19 @@ def _embree_ratios(result: dict, default: dict, kinds) -> dict:
     return ratios
 
 
-def _shadow_rays(batch: RayBatch, key, shadow: Rays, emb, config, wide: RayBatch | None = None) -> dict:
+def _shadow_rays(batch: RayBatch, key, shadow: Rays, emb, config, other=None) -> dict:
     """Any-hit (occluded) against closest-hit on the same segments, and Embree's any-hit; with
-    `wide` (the same configuration's 4-wide traversal), its any-hit too."""
+    `other` ((key, RayBatch) of the same strategy and test on the other tree: binary or wide),
+    its any-hit too."""
     occ = OccludedCall(batch, shadow.head(64))
     occ()  # compile
     occ = OccludedCall(batch, shadow)
     seg_closest = ClosestCall(batch, shadow)
     shadow_calls = {"lantern:occluded": occ, "lantern:closest": seg_closest}
-    wide_occ = None
-    if wide is not None:
-        OccludedCall(wide, shadow.head(64))()  # compile
-        wide_occ = shadow_calls["lantern-wide:occluded"] = OccludedCall(wide, shadow)
+    other_occ = None
+    if other is not None:
+        OccludedCall(other[1], shadow.head(64))()  # compile
+        other_occ = shadow_calls["lantern-other:occluded"] = OccludedCall(other[1], shadow)
     e_occ = None
     if emb is not None:
         e_occ = embree_side.EmbreeOccludedCall(emb, shadow)
@@ -252,9 +253,10 @@ def _shadow_rays(batch: RayBatch, key, shadow: Rays, emb, config, wide: RayBatch
           "timing": {k: v.as_dict() for k, v in st.items()}}
     # a segment is occluded exactly when its closest hit lies inside it
     sh["consistent_with_closest"] = float((occ.out.astype(bool) == (seg_closest.t >= 0)).mean())
-    if wide_occ is not None:
-        sh["wide_occluded_mrays_per_s"] = n / st["lantern-wide:occluded"].median / 1e6
-        sh["wide_agreement"] = float((wide_occ.out == occ.out).mean())
+    if other_occ is not None:
+        sh["other"] = {"config": config_name(*other[0]),
+                       "occluded_mrays_per_s": n / st["lantern-other:occluded"].median / 1e6,
+                       "agreement": float((other_occ.out == occ.out).mean())}
     if e_occ is not None:
         sh["embree_occluded_mrays_per_s"] = n / st["embree:occluded"].median / 1e6
         sh["embree_occluded_fraction"] = float(e_occ.out.mean())
@@ -334,11 +336,12 @@ def measure_mesh(name: str, tris: np.ndarray, config: BvhBenchConfig, embree=Non
         result["agreement_all_configs"] = per_kind
 
     result["wide_vs_binary"] = wide_vs_binary(result["configs"])
-    # any-hit (shadow) segments on the Renderer's configuration (and its 4-wide counterpart)
+    # any-hit (shadow) segments on the Renderer's configuration, and on the other tree (binary
+    # "stack" against wide, or wide against a binary traversal)
     if config.shadow_rays:
-        wide_key = (default_key[0], WIDE, default_key[2])
-        wide = batches.get(wide_key) if default_key[1] != WIDE else None
-        result["shadow"] = _shadow_rays(batches[default_key], default_key, shadow, emb, config, wide)
+        other_key = (default_key[0], "stack" if default_key[1] == WIDE else WIDE, default_key[2])
+        other = (other_key, batches[other_key]) if other_key in batches else None
+        result["shadow"] = _shadow_rays(batches[default_key], default_key, shadow, emb, config, other)
     return result
 
 
@@ -372,7 +375,7 @@ def leaf_size_sweep(name: str, tris: np.ndarray, config: BvhBenchConfig, log=pri
     rows, calls = [], {}
     for leaf in config.leaf_sizes:
         bvh, timing = timed_builds(lo, hi, centroids, "sah", leaf, runs)
-        geometry = MeshGeometry(data, bvh, "stack", "watertight")
+        geometry = MeshGeometry(data, bvh, DEFAULT[1], DEFAULT[2])
         batch, compile_s = _compiled_batch(geometry, rays)
         calls[leaf] = ClosestCall(batch, rays)
         rows.append({"max_leaf_size": leaf, "build_s": timing.median, "timing": timing.as_dict(),
@@ -385,6 +388,6 @@ def leaf_size_sweep(name: str, tris: np.ndarray, config: BvhBenchConfig, log=pri
     best = max(rows, key=lambda r: r["incoherent"]["mrays_per_s"])
     top = best["incoherent"]["mrays_per_s"]
     near = [r["max_leaf_size"] for r in rows if r["incoherent"]["mrays_per_s"] >= (1.0 - LEAF_TIE) * top]
-    return {"mesh": name, "triangles": n_tris, "config": "sah/stack/watertight", "rays": len(rays),
+    return {"mesh": name, "triangles": n_tris, "config": config_name("sah", *DEFAULT[1:]), "rays": len(rays),
             "rows": rows, "best_max_leaf_size": best["max_leaf_size"], "within_tie_of_best": near,
             "tie_fraction": LEAF_TIE, "renderer_default": DEFAULT_LEAF}

@@ -121,10 +121,11 @@ def print_report(report: dict) -> None:
             s = m["shadow"]
             rows.append([m["name"], s["config"], s["occluded_mrays_per_s"], s["closest_mrays_per_s"],
                          s["occluded_mrays_per_s"] / s["closest_mrays_per_s"], _pct(s["occluded_fraction"]),
-                         _pct(s["consistent_with_closest"]), s.get("wide_occluded_mrays_per_s", "-"),
+                         _pct(s["consistent_with_closest"]), s["other"]["config"] if "other" in s else "-",
+                         s["other"]["occluded_mrays_per_s"] if "other" in s else "-",
                          s.get("embree_occluded_mrays_per_s", "-"), _pct(s.get("agreement_with_embree"))])
         print_table(["mesh", "config", "any-hit Mray/s", "closest Mray/s", "speed-up", "occluded",
-                     "=closest", "wide4 any Mray/s", "embree any Mray/s", "=embree"], rows,
+                     "=closest", "other tree", "its any-hit Mray/s", "embree any Mray/s", "=embree"], rows,
                     title="Shadow rays (the incoherent rays as segments ending at their random targets): any-hit "
                           "(occluded) vs closest-hit on the same segments")
 

@@ -6,7 +6,8 @@ Three traversals (a compile-time choice, benchmarked against each other):
                farther pushed with its entry distance and skipped on pop once a closer hit is known.
   "stackless": the depth-first next-pointer ("miss link") walk: no stack, no ordering.
   "wide4":     the binary tree collapsed into 4-wide nodes (renderer/geometry/wide_bvh.py), whose
-               four child boxes are tested together, ordered as "stack" (wide_traversal.py).
+               four child boxes are tested together, ordered as "stack" (wide_traversal.py); the
+               Renderer's default (MeshOptions).
 Two triangle tests: "watertight" (Woop et al. 2013, the default) and "moller" (Moller-Trumbore).
 Only the primitive kinds the scene has are compiled in, and each of these only where the scene
 needs it: vertex colours, alpha coverage (renderer/geometry/coverage.py, which needs the material
