@@ -247,7 +247,7 @@ def cmd_view(args) -> int:
 
     path = resolve_scene(args.scene or DEFAULT_SCENE)
     options = options_from_arguments(args)
-    check_film(path, *args.size, options.budget, "--size")
+    check_film(path, *args.size, options.budget, "--size", aovs=True)  # the viewer keeps denoising AOVs
     init_taichi(args.arch, optimize=args.optimize)
     return run_viewer(path, size=args.size, integrator=args.integrator, max_frames=args.frames, load_options=options)
 

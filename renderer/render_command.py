@@ -139,7 +139,7 @@ def plan_render(args) -> RenderPlan:
     job = _job(args, scene, previous)
     _check_denoising(job)
     check_film(scene.path, *job.size, scene.model_files.options.budget,
-               "--size" if args.size else "the scene's render.width x height")
+               "--size" if args.size else "the scene's render.width x height", aovs=job.keeps_aovs)
     out = args.out or (Path(previous.out) if previous else DEFAULT_OUT_DIR / f"{scene.name}_{job.integrator}.png")
     variance = args.variance or (Path(previous.variance) if previous and previous.variance else None)
     check_output_path(out)

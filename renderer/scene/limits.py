@@ -113,15 +113,18 @@ class MemoryLedger:
 # --- the film --------------------------------------------------------------------------------
 
 # Bytes per pixel of a render: the film's fields (renderer/film.py: mean and m2, 3 x f32 each;
-# count and rejected, i32 each), the renderer's work buffer (3 x f32), and the mean and variance
-# images downloaded at the end (3 x f32 each). tests/scene/test_input_limits.py checks the film's
-# share against a real Film.
-FILM_FIELD_BYTES = 3 * 4 + 3 * 4 + 4 + 4
+# count, rejected and the adaptive-sampling state, i32 each), the renderer's work buffer (3 x f32),
+# and the mean and variance images downloaded at the end (3 x f32 each). tests/scene/
+# test_input_limits.py checks the film's share against a real Film. A render that keeps the
+# denoising AOVs (renderer/aovs.py) adds their two fields and their two downloaded images.
+FILM_FIELD_BYTES = 3 * 4 + 3 * 4 + 4 + 4 + 4
 RENDER_BYTES_PER_PIXEL = FILM_FIELD_BYTES + 3 * 4 + 2 * 3 * 4
+AOV_BYTES_PER_PIXEL = 2 * 3 * 4 + 2 * 3 * 4
 
 
-def check_film(path: PathLike, width: int, height: int, budget: MemoryBudget, source: str) -> None:
+def check_film(path: PathLike, width: int, height: int, budget: MemoryBudget, source: str,
+               aovs: bool = False) -> None:
     """Refuse a film whose buffers would not fit the budget; `source` says where the size came
-    from (e.g. "render.width x height", "--size")."""
-    budget.check(path, f"a {width}x{height} film ({source}, {RENDER_BYTES_PER_PIXEL} bytes per pixel)",
-                 width * height * RENDER_BYTES_PER_PIXEL)
+    from (e.g. "render.width x height", "--size"); `aovs`: the render keeps denoising AOVs."""
+    per_pixel = RENDER_BYTES_PER_PIXEL + (AOV_BYTES_PER_PIXEL if aovs else 0)
+    budget.check(path, f"a {width}x{height} film ({source}, {per_pixel} bytes per pixel)", width * height * per_pixel)

@@ -305,10 +305,15 @@ def test_film_bytes_per_pixel_match_the_film_and_the_renderer(tmp_path):
     film = Film(width, height)
     per_pixel = [cell_bytes(v) for v in vars(film).values()
                  if isinstance(v, ti.Field) and tuple(v.shape) == (width, height)]
-    assert len(per_pixel) == 4 and sum(per_pixel) == limits.FILM_FIELD_BYTES
+    assert len(per_pixel) == 5 and sum(per_pixel) == limits.FILM_FIELD_BYTES
     renderer = Renderer(load_scene(h.huge_film_scene(tmp_path, width, height)))
     assert tuple(renderer.work.shape) == (width, height) and cell_bytes(renderer.work) == 3 * 4
     assert limits.RENDER_BYTES_PER_PIXEL == limits.FILM_FIELD_BYTES + 3 * 4 + 2 * 3 * 4
+    from renderer.aovs import AovFilm
+
+    aovs = AovFilm(width, height)
+    aov_fields = [cell_bytes(v) for v in vars(aovs).values() if isinstance(v, ti.Field)]
+    assert sum(aov_fields) + 2 * 3 * 4 == limits.AOV_BYTES_PER_PIXEL  # (+ the two images downloaded)
 
 
 # --- references outside the model's folder -------------------------------------------------------
