@@ -201,8 +201,6 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
         renderer.render_slices(camera, n, integrator, job.max_depth, job.seed)
         elapsed = time.perf_counter() - t0
         n = renderer.slices_done - done  # (an integrator with whole-image passes rounds up to a sample)
-        if n == 0:  # adaptive sampling stopped every pixel before the pass began
-            break
         if budget_start is None:
             budget_start = time.perf_counter()
         else:

@@ -20,7 +20,7 @@ from renderer.headless import (Checkpoints, RenderJob, RenderResult, Resume, che
                                save_variance)
 from renderer.adaptive import DEFAULT_MIN_SPP
 from renderer.interrupts import StopRequests
-from renderer.render_outputs import aovs_path
+from renderer.render_outputs import aovs_path, denoise_refusal
 from renderer.pixel_slices import ROUND_SLICES, spp_text
 from renderer.scene.errors import SceneError
 from renderer.scene.description import Scene
@@ -210,9 +210,9 @@ def _check_denoising(job: RenderJob) -> None:
         reason = unavailable_reason()
         if reason:
             raise ValueError(f"--denoise: {reason}")
-        if not make_integrator(job.integrator).denoisable:
-            raise ValueError(f"--denoise: the {job.integrator} view is not an image of light; denoise path, nee, mis "
-                             "or sppm renders")
+        refusal = denoise_refusal(job.integrator)
+        if refusal:
+            raise ValueError(f"--denoise: {refusal}")
     if job.noise_threshold is not None and hasattr(make_integrator(job.integrator), "make_program"):
         raise ValueError(f"--noise-threshold: {job.integrator} renders whole-image iterations; adaptive sampling "
                          "works with path, nee, mis and the debug views")

@@ -28,10 +28,15 @@ def denoise_input(result) -> DenoiseInput:
     return DenoiseInput(result.image)
 
 
+def denoise_refusal(integrator: str) -> str | None:
+    """Why --denoise cannot apply to `integrator`'s images (one line), or None."""
+    if not make_integrator(integrator).denoisable:
+        return f"the {integrator} view is not an image of light; denoise path, nee, mis or sppm renders"
+    return None
+
+
 def denoised(result, denoiser: Denoiser | None = None) -> np.ndarray:
-    if not make_integrator(result.integrator).denoisable:
-        raise ValueError(f"--denoise: the {result.integrator} view is not an image of light; "
-                         "denoise path, nee, mis or sppm renders")
+    """The render's image denoised (render_command has refused integrators it does not apply to)."""
     return (denoiser or Denoiser()).denoise(denoise_input(result))
 
 

@@ -44,7 +44,7 @@ class BackgroundDenoiser:
         self._result: Optional[Denoised] = None
         self._busy = False
         self._thread: Optional[threading.Thread] = None
-        self._last_spp: dict[int, float] = {}  # generation -> spp of the last job started
+        self._last_job: Optional[tuple] = None  # (generation, spp) of the last job started
         self.error: Optional[str] = None  # a failure, one line (the view falls back to the raw image)
 
     @property
@@ -54,11 +54,12 @@ class BackgroundDenoiser:
     def offer(self, generation: int, spp: float, take_input: Callable[[], DenoiseInput]) -> bool:
         """Start a job if idle and the accumulation has doubled since the last job of this
         generation; `take_input` is called only then (downloading the film costs a few ms)."""
-        if self._busy or not wants_denoise(spp, self._last_spp.get(generation)):
+        last_spp = self._last_job[1] if self._last_job and self._last_job[0] == generation else None
+        if self._busy or not wants_denoise(spp, last_spp):
             return False
         source = take_input()
         self._busy = True
-        self._last_spp = {generation: spp}  # older generations are over
+        self._last_job = (generation, spp)
         self._thread = threading.Thread(target=self._work, args=(generation, spp, source), daemon=True,
                                         name="lantern-denoise")
         self._thread.start()
