@@ -245,6 +245,23 @@ def _check_camera(v: dict) -> Optional[str]:
     return None
 
 
+def _check_keyframes(v: dict) -> Optional[str]:
+    keyframes = [dict(k) for k in v["keyframes"]]
+    if not keyframes:
+        return None
+    if len(keyframes) < 2:
+        return "keyframes: a camera path needs at least 2 keyframes, got 1"
+    for i, k in enumerate(keyframes):
+        if i and k["time"] <= keyframes[i - 1]["time"]:
+            return (f"keyframes[{i}].time {format_number(k['time'])} is not after keyframes[{i - 1}].time "
+                    f"{format_number(keyframes[i - 1]['time'])} (times must increase strictly)")
+        view = {"position": k["position"], "look_at": k["look_at"], "up": k["up"] or v["up"]}
+        problem = _check_camera(view)
+        if problem:
+            return f"keyframes[{i}]: {problem}"
+    return None
+
+
 def _check_rounded_box(v: dict) -> Optional[str]:
     half = min(v["size"]) / 2.0
     if v["radius"] > half:
@@ -298,9 +315,21 @@ SCENE = Section(
     ),
 )
 
+KEYFRAME_FIELDS = (
+    Field("time", "float", REQUIRED, "When the camera is here, seconds from the animation's start.",
+          default_doc="required"),
+    Field("position", "vec3", REQUIRED, "Eye position, metres.", default_doc="required"),
+    Field("look_at", "vec3", REQUIRED, "Point the camera looks at, metres.", default_doc="required"),
+    Field("fov", "float", None, "Vertical field of view, degrees.", Range(1.0, 179.0),
+          default_doc="the camera's `fov`"),
+    Field("up", "vec3", None, "Up direction (need not be unit length).", default_doc="the camera's `up`"),
+)
+
 CAMERA = Section(
     "camera",
-    "A thin-lens perspective camera. Every field is optional.",
+    "A thin-lens perspective camera. Every field is optional. The fields above `keyframes` are the "
+    "camera of still renders and the viewer; `keyframes` adds a camera path for `render --frames` "
+    "(README, Animations).",
     (
         Field("position", "vec3", (0.0, 1.0, 5.0), "Eye position, metres."),
         Field("look_at", "vec3", (0.0, 0.0, 0.0), "Point the camera looks at, metres."),
@@ -310,9 +339,20 @@ CAMERA = Section(
               NON_NEGATIVE),
         Field("focus_distance", "float", 5.0, "Distance to the plane in focus, metres, along the "
               "view direction.", POSITIVE),
+        Field("keyframes", "tables", (), "A camera path, one `[[camera.keyframes]]` table per keyframe "
+              "(fields below). Between keyframes the position and look-at point follow a C1 Hermite "
+              "spline in time (each inner keyframe's velocity from its neighbours, as non-uniform "
+              "Catmull-Rom; zero at the first and last keyframe, so the camera eases in and out), the "
+              "field of view a monotone one (it never leaves the range of the two keyframes around "
+              "it), the up direction as the position; at a keyframe's time the camera is exactly the "
+              "keyframe's. Before the first keyframe and after the last the camera holds it. The lens "
+              "(`aperture`, `focus_distance`) stays the camera's.",
+              default_doc="none (a still camera)", allowed_doc="see below", items=KEYFRAME_FIELDS),
     ),
     (Rule("`position` and `look_at` must differ, and `up` must not be parallel to the view "
-          "direction.", _check_camera),),
+          "direction.", _check_camera),
+     Rule("A camera path has at least 2 keyframes, their times increase strictly, and each keyframe's "
+          "`position`, `look_at` and `up` obey the rule above.", _check_keyframes)),
 )
 
 RENDER = Section(
@@ -1038,9 +1078,18 @@ def _section_heading(section: Section) -> str:
     return section.heading if section.heading is not None else f"`[{section.name}]`"
 
 
+def _items_markdown(fields: tuple[Field, ...]) -> list[str]:
+    """The fields of each table of a field of tables (a camera's keyframes, a water surface's waves)."""
+    lines = []
+    for f in fields:
+        if f.items:
+            lines += ["", f"Each table of `{f.name}`:", "", *_field_table(f.items)]
+    return lines
+
+
 def _section_markdown(section: Section) -> list[str]:
     return ["", f"## {_section_heading(section)}", "", section.description, "",
-            *_field_table(section.fields), *_rules_list(section.rules)]
+            *_field_table(section.fields), *_items_markdown(section.fields), *_rules_list(section.rules)]
 
 
 def _node_kind_markdown(kind: NodeKind) -> list[str]:
@@ -1067,12 +1116,8 @@ def _mesh_kind_markdown(kind: MeshKind) -> list[str]:
 
 
 def _generator_markdown(generator: Generator) -> list[str]:
-    lines = ["", f"#### `{generator.name}`", "", generator.description, "",
-             *_field_table(generator.params)]
-    for f in generator.params:
-        if f.items:
-            lines += ["", f"Each table of `{f.name}`:", "", *_field_table(f.items)]
-    return lines + _rules_list(generator.rules)
+    return ["", f"#### `{generator.name}`", "", generator.description, "",
+            *_field_table(generator.params), *_items_markdown(generator.params), *_rules_list(generator.rules)]
 
 
 def render_markdown() -> str:

@@ -345,7 +345,7 @@ BAD_SCENES = {
     "camera up parallel": (scene_text(extra="[camera]\nposition = [0, 5, 0]\nlook_at = [0, 0, 0]\n"),
                            "camera: up is zero or parallel to the view direction"),
     "camera unknown field": (scene_text(extra="[camera]\nfovy = 30\n"),
-                             "camera: unknown field 'fovy' (allowed: position, look_at, up, fov, aperture, focus_distance)"),
+                             "camera: unknown field 'fovy' (allowed: position, look_at, up, fov, aperture, focus_distance, keyframes)"),
     "date instead of number": (scene_text(extra="[camera]\nfov = 1979-05-27\n"), "camera.fov: expected a number, got date/time"),
     # render
     "width zero": (scene_text(extra="[render]\nwidth = 0\n"), "render.width: 0 is out of range (allowed: [1, 16384])"),
