@@ -155,22 +155,28 @@ def check_variance_path(out: Path) -> None:
 
 
 def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: Checkpoints | None = None,
-           resume: Resume | None = None) -> RenderResult:
+           resume: Resume | None = None, renderer: Renderer | None = None,
+           camera: CameraFrame | None = None) -> RenderResult:
     """Render `job` (resolved against the scene). `stop`: a StopRequests (renderer/interrupts.py),
-    asked at every pass boundary; `checkpoints`: told after every pass; `resume`: continue there."""
+    asked at every pass boundary; `checkpoints`: told after every pass; `resume`: continue there.
+    `renderer`: one made for this scene and job's size, reused with its film cleared (an
+    animation's frames compile once); `camera`: instead of the scene's."""
     job = job.resolved(scene)
     width, height = job.size
     integrator = job.integrator
     make_integrator(integrator)  # a clear error before any compilation
     target_spp = job.spp
-    renderer = Renderer(scene, (width, height), aovs=job.keeps_aovs)
+    if renderer is None:
+        renderer = Renderer(scene, (width, height), aovs=job.keeps_aovs)
+    else:
+        renderer.reset(width, height)
     if job.noise_threshold is not None:
         renderer.set_adaptive(AdaptiveSettings(job.noise_threshold, job.min_spp))
     seconds_before = 0.0
     if resume is not None:
         renderer.restore(resume.state, resume.spp_done * ROUND_SLICES + resume.slices_in_round)
         seconds_before = resume.seconds_rendered
-    camera = CameraFrame.from_spec(scene.camera)
+    camera = camera if camera is not None else CameraFrame.from_spec(scene.camera)
     if stop is not None:
         stop.defer()  # from here on there is an image to save: a signal stops at the next pass
     start = time.perf_counter()
