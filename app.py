@@ -79,6 +79,13 @@ def _positive_seconds(text: str) -> float:
     return value
 
 
+def _positive_int(text: str) -> int:
+    value = _number(text, int)
+    if not 1 <= value <= I32_MAX:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
+    return value
+
+
 def _positive_fraction(text: str) -> float:
     value = _number(text, float)
     if not 0 < value < 1e3:
@@ -160,6 +167,26 @@ def build_parser() -> argparse.ArgumentParser:
                              "--spp stays the maximum")
     render.add_argument("--min-spp", type=_render_setting("spp", I32_MAX), metavar="N",
                         help="adaptive sampling: samples every pixel takes before it may stop (default 16)")
+    distributed = render.add_argument_group("distributed rendering (Ray)")
+    distributed.add_argument("--workers", type=_positive_int, metavar="K",
+                             help="render on K Ray workers: a local Ray instance started for the run, or the "
+                                  "cluster of --ray-address (the image is bit-identical to a one-process render)")
+    distributed.add_argument("--ray-address", metavar="ADDR",
+                             help="join this Ray cluster (host:port, ray://host:port or auto) instead of starting one")
+    distributed.add_argument("--worker-threads", type=_positive_int, metavar="N",
+                             help="CPU threads of each worker (default: the CPUs of this machine over the local "
+                                  "workers; 1 on a cluster)")
+    distributed.add_argument("--chunk-spp", type=_positive_int, metavar="N",
+                             help="samples per pixel of one chunk of work (default: chosen from the measured rate "
+                                  "so that a chunk takes a few seconds)")
+    animation = render.add_argument_group("animations")
+    animation.add_argument("--frames", metavar="A:B",
+                           help="render frames A to B (inclusive) of the scene's camera path; --out is a pattern "
+                                "such as dir/frame_####.png")
+    animation.add_argument("--fps", type=_positive_seconds, metavar="F", help="frames per second (default 24)")
+    animation.add_argument("--video", type=Path, metavar="OUT.mp4", help="also assemble the frames into a video")
+    animation.add_argument("--turntable", type=_positive_seconds, metavar="SECONDS",
+                           help="a camera orbiting the scene's bounds once in SECONDS (instead of the scene's path)")
     _add_input_options(render)
 
     sub.add_parser("list", help="list scenes and integrators")

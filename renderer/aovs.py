@@ -77,6 +77,30 @@ class AovFilm:
         self._upload(np.ascontiguousarray(albedo, dtype=np.float32), np.ascontiguousarray(normal, dtype=np.float32),
                      width, height)
 
+    def write_pixels(self, xs: np.ndarray, ys: np.ndarray, albedo: np.ndarray, normal: np.ndarray) -> None:
+        """Set the running means of pixels (xs[i], ys[i]) (y up) from (n, 3) arrays (Film.write_pixels)."""
+        self._pixels(xs, ys, albedo, normal, True)
+
+    def read_pixels(self, xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(albedo, normal) of pixels (xs[i], ys[i]), (n, 3) each."""
+        albedo = np.empty((len(xs), 3), np.float32)
+        normal = np.empty((len(xs), 3), np.float32)
+        self._pixels(xs, ys, albedo, normal, False)
+        return albedo, normal
+
+    @ti.kernel
+    def _pixels(self, xs: ti.types.ndarray(), ys: ti.types.ndarray(), albedo: ti.types.ndarray(),
+                normal: ti.types.ndarray(), write: ti.template()):
+        for i in range(xs.shape[0]):
+            x, y = xs[i], ys[i]
+            for c in ti.static(range(3)):
+                if ti.static(write):
+                    self.albedo[x, y][c] = albedo[i, c]
+                    self.normal[x, y][c] = normal[i, c]
+                else:
+                    albedo[i, c] = self.albedo[x, y][c]
+                    normal[i, c] = self.normal[x, y][c]
+
     @ti.kernel
     def _download(self, albedo: ti.types.ndarray(), normal: ti.types.ndarray(), width: ti.i32, height: ti.i32):
         for x, y in ti.ndrange(width, height):

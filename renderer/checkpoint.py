@@ -17,7 +17,7 @@ import hashlib
 import json
 import os
 import zipfile
-from dataclasses import asdict, dataclass, fields
+from dataclasses import MISSING, asdict, dataclass, fields
 from pathlib import Path
 from urllib.parse import unquote
 
@@ -64,6 +64,9 @@ class CheckpointHeader:
     aovs: bool = False
     noise_threshold: float | None = None  # adaptive sampling (None: uniform)
     min_spp: int = DEFAULT_MIN_SPP
+    # Ray workers of a distributed render (renderer/distributed/): its pixel groups may stand at
+    # different sample counts, so it continues distributed (with any number of workers). None: one process.
+    workers: int | None = None
     format: int = FORMAT
 
     def mismatches(self, other: "CheckpointHeader") -> list[str]:
@@ -136,7 +139,8 @@ def _header(path, archive) -> CheckpointHeader:
         found = values.get("format") if isinstance(values, dict) else None
         raise SceneError(path, f"checkpoint format {found} is not the format this Lantern reads ({FORMAT})")
     names = {f.name for f in fields(CheckpointHeader)}
-    missing = sorted(names - set(values))
+    optional = {f.name for f in fields(CheckpointHeader) if f.default is not MISSING}
+    missing = sorted(names - optional - set(values))
     if missing:
         raise SceneError(path, f"corrupt checkpoint header: missing {', '.join(missing)}")
     wrong = [name for name in INTEGER_FIELDS if not isinstance(values[name], int) or isinstance(values[name], bool)]
@@ -148,14 +152,18 @@ def _header(path, archive) -> CheckpointHeader:
 # --- what defines the scene ------------------------------------------------------------------------
 
 def scene_files(scene: Scene) -> list[Path]:
-    """The files a render of `scene` reads: the scene file, its environment map, its model files
-    and the buffers and images a .gltf names beside it."""
+    """The files a render of `scene` reads: the scene file, its environment map, its model files,
+    the buffers and images a .gltf names beside it and an .obj's material libraries and textures."""
     found = [scene.path, scene.environment.file if scene.environment.kind == "map" else None]
     for obj in scene.mesh_objects:
         if obj.file is not None:
             found.append(obj.file)
             if Path(obj.file).suffix.lower() == ".gltf":
                 found.extend(_gltf_resources(Path(obj.file)))
+            elif Path(obj.file).suffix.lower() == ".obj":
+                from renderer.scene.model_formats.obj_mtl import obj_dependencies
+
+                found.extend(obj_dependencies(Path(obj.file)))
     unique = []
     for path in found:
         if path is not None and Path(path).resolve() not in unique:

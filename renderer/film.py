@@ -144,6 +144,48 @@ class Film:
             self.rejected[x, y] = rejected[row, x]
             self.adaptive[x, y] = adaptive[row, x]
 
+    def write_pixels(self, xs: np.ndarray, ys: np.ndarray, arrays: dict[str, np.ndarray]) -> None:
+        """Set the accumulation of pixels (xs[i], ys[i]) (film coordinates, y up) from per-pixel
+        arrays (renderer/distributed/pixel_groups.py: "mean", "m2" (n, 3), "count", "rejected",
+        "adaptive" (n,)); the other pixels keep theirs. A distributed render's worker takes a group
+        of pixels' exact state this way, without touching the rest of its film."""
+        self._write_pixels(xs, ys, arrays["mean"], arrays["m2"], arrays["count"], arrays["rejected"],
+                           arrays["adaptive"])
+
+    def read_pixels(self, xs: np.ndarray, ys: np.ndarray) -> dict[str, np.ndarray]:
+        """The accumulation of pixels (xs[i], ys[i]), as write_pixels takes it."""
+        n = len(xs)
+        arrays = {"mean": np.empty((n, 3), np.float32), "m2": np.empty((n, 3), np.float32),
+                  "count": np.empty(n, np.int32), "rejected": np.empty(n, np.int32), "adaptive": np.empty(n, np.int32)}
+        self._read_pixels(xs, ys, arrays["mean"], arrays["m2"], arrays["count"], arrays["rejected"], arrays["adaptive"])
+        return arrays
+
+    @ti.kernel
+    def _write_pixels(self, xs: ti.types.ndarray(), ys: ti.types.ndarray(), mean: ti.types.ndarray(),
+                      m2: ti.types.ndarray(), count: ti.types.ndarray(), rejected: ti.types.ndarray(),
+                      adaptive: ti.types.ndarray()):
+        for i in range(xs.shape[0]):
+            x, y = xs[i], ys[i]
+            for c in ti.static(range(3)):
+                self.mean[x, y][c] = mean[i, c]
+                self.m2[x, y][c] = m2[i, c]
+            self.count[x, y] = count[i]
+            self.rejected[x, y] = rejected[i]
+            self.adaptive[x, y] = adaptive[i]
+
+    @ti.kernel
+    def _read_pixels(self, xs: ti.types.ndarray(), ys: ti.types.ndarray(), mean: ti.types.ndarray(),
+                     m2: ti.types.ndarray(), count: ti.types.ndarray(), rejected: ti.types.ndarray(),
+                     adaptive: ti.types.ndarray()):
+        for i in range(xs.shape[0]):
+            x, y = xs[i], ys[i]
+            for c in ti.static(range(3)):
+                mean[i, c] = self.mean[x, y][c]
+                m2[i, c] = self.m2[x, y][c]
+            count[i] = self.count[x, y]
+            rejected[i] = self.rejected[x, y]
+            adaptive[i] = self.adaptive[x, y]
+
     @ti.func
     def add_sample(self, x: ti.i32, y: ti.i32, value: ti.math.vec3):
         """Welford update of pixel (x, y); a sample with any NaN/inf component is only counted.

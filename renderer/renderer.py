@@ -192,15 +192,8 @@ class Renderer:
         renderer/pixel_slices.py), continuing the round in progress: at most three launches (the
         rest of that round, whole rounds, the start of the next). An integrator whose passes are
         global (sppm) renders whole iterations: at least one, `slices` rounded down to rounds."""
-        settings = self.scene.render
-        integrator = integrator or settings.integrator
-        sampler = sampler or settings.sampler
-        features = features or self.features(camera)
-        program = self.program(integrator, features, sampler)
-        seed = (settings.seed if seed is None else seed) & 0xFFFFFFFF
-        max_depth = settings.max_depth if max_depth is None else max_depth
+        program, seed, max_depth = self._launch(camera, integrator, max_depth, seed, features, sampler)
         width, height = self.film.width, self.film.height
-        self._launched.add((integrator, features, sampler))
         if not program.sliced:
             spp = max(1, slices // ROUND_SLICES)
             program.render(width, height, spp, self.samples_done, seed, max_depth, *camera.kernel_args())
@@ -221,6 +214,30 @@ class Renderer:
             if (self.adaptive is not None and self.slices_done % ROUND_SLICES == 0
                     and is_check_point(self.samples_done, self.adaptive.min_spp)):
                 self.pixels_active = self._adaptive_rule.check(self.adaptive.threshold, self.adaptive.min_spp)
+
+    def render_pass(self, camera: CameraFrame, spp: int, slice_first: int, slice_count: int,
+                    integrator: str | None = None, max_depth: int | None = None, seed: int | None = None,
+                    sampler: str | None = None) -> None:
+        """`spp` samples for every pixel of slices [slice_first, slice_first + slice_count) whatever
+        the round in progress (slices_done is not advanced): a distributed render's worker renders
+        its group of pixels this way. Each pixel continues at its own sample index, so the pixels
+        end exactly as in a render that took their samples in any other passes."""
+        program, seed, max_depth = self._launch(camera, integrator, max_depth, seed, None, sampler)
+        if not program.sliced:
+            raise ValueError("an integrator with whole-image passes (sppm) cannot render a group of pixels")
+        program.render(self.film.width, self.film.height, spp, slice_first, slice_count, seed, max_depth,
+                       *camera.kernel_args())
+
+    def _launch(self, camera, integrator, max_depth, seed, features, sampler):
+        """(program, seed, max depth) of a launch, the scene's settings where none are given."""
+        settings = self.scene.render
+        integrator = integrator or settings.integrator
+        sampler = sampler or settings.sampler
+        features = features or self.features(camera)
+        program = self.program(integrator, features, sampler)
+        self._launched.add((integrator, features, sampler))
+        seed = (settings.seed if seed is None else seed) & 0xFFFFFFFF
+        return program, seed, settings.max_depth if max_depth is None else max_depth
 
     def is_sliced(self, integrator: str, features: Features, sampler: str = "independent") -> bool:
         """Whether the integrator's passes can be cut into pixel slices (all but sppm's)."""

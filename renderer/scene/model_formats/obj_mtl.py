@@ -283,3 +283,25 @@ def read_obj(b: AssetBuilder) -> None:
         where = f"material '{material_name}'" if material_name in index else "faces without a material"
         b.add_mesh(where, g["vertices"], faces, material=material,
                    normals=g.get("vertex_normals"), uv0=uv, colors=colors, name=str(key))
+
+
+def obj_dependencies(obj_file: Path) -> list[Path]:
+    """The files an OBJ model reads besides itself: its material libraries and the texture images
+    they name (those that exist; the loader reports missing ones). For checkpoints' fingerprints
+    and for shipping a scene to other machines."""
+    text = _read_text(obj_file)
+    found: list[Path] = []
+    for match in re.finditer(r"^[ \t]*mtllib[ \t]+(.+?)[ \t]*$", text, flags=re.MULTILINE):
+        value = match.group(1).replace("\\", "/")
+        names = [value] if (obj_file.parent / value).is_file() else value.split()
+        for library in (obj_file.parent / name for name in names):
+            if not library.is_file():
+                continue
+            found.append(library)
+            for entries in _parse_mtl(_read_text(library)).values():
+                for key, args in entries.items():
+                    if key.startswith("map_") or key in ("bump", "norm", "disp", "decal", "refl"):
+                        image = library.parent / _parse_map_statement(args)[0]
+                        if image.is_file():
+                            found.append(image)
+    return found

@@ -1,0 +1,77 @@
+"""Starting or joining Ray for a render, and the render's actors.
+
+Ray is imported here only, when a distributed render asks for it: Lantern works without it. A
+local instance started for a run is shut down after it; a cluster joined (--ray-address) or a Ray
+the caller already started is left running.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import socket
+from pathlib import Path
+
+PACKAGE_ROOT = Path(__file__).resolve().parents[2]  # the folder holding the `renderer` package
+ADDRESS_TIMEOUT = 5.0  # seconds to wait for a cluster's address to answer
+
+
+def import_ray():
+    try:
+        import ray
+    except ImportError:
+        raise RuntimeError("distributed rendering needs Ray, which is not installed (pip install ray)") from None
+    return ray
+
+
+def check_address(address: str) -> None:
+    """A one-line error unless something listens at a host:port (or ray://host:port) address; Ray's
+    own connect would retry for minutes."""
+    if address == "auto":
+        return
+    target = address.split("://", 1)[-1]
+    host, _, port = target.rpartition(":")
+    if not host or not port.isdigit():
+        raise RuntimeError(f"--ray-address {address}: expected host:port, ray://host:port or auto")
+    try:
+        socket.create_connection((host, int(port)), timeout=ADDRESS_TIMEOUT).close()
+    except OSError as error:
+        raise RuntimeError(f"--ray-address {address}: no Ray cluster answers there ({error.strerror or error})") from None
+
+
+class RayCluster:
+    """`with RayCluster(cpus, address) as ray:` the Ray module, initialised for the run."""
+
+    def __init__(self, cpus: int | None, address: str | None):
+        self.cpus = cpus
+        self.address = address
+        self._started = False
+
+    def __enter__(self):
+        ray = import_ray()
+        if ray.is_initialized():
+            return ray  # a Ray the caller started (a test, a notebook): used as it is
+        quiet = {"include_dashboard": False, "log_to_driver": False, "logging_level": logging.ERROR,
+                 "configure_logging": True}
+        if self.address is not None:
+            check_address(self.address)
+            # The nodes get this Lantern's code; its dependencies (taichi, numpy...) must be installed there.
+            ray.init(address=self.address, runtime_env={"py_modules": [str(PACKAGE_ROOT / "renderer")]}, **quiet)
+        else:
+            # Workers import the same Lantern as this process, whichever checkout it runs from.
+            path = os.pathsep.join(p for p in (str(PACKAGE_ROOT), os.environ.get("PYTHONPATH")) if p)
+            ray.init(num_cpus=self.cpus, runtime_env={"env_vars": {"PYTHONPATH": path}}, **quiet)
+        self._started = True
+        return ray
+
+    def __exit__(self, *exc) -> None:
+        if self._started:
+            import ray
+
+            ray.shutdown()
+
+
+def worker_actor(ray, threads: int | None, gpu: bool):
+    """The RenderWorker class as a Ray actor needing `threads` CPUs (and a GPU for --arch cuda)."""
+    from renderer.distributed.worker import RenderWorker
+
+    return ray.remote(RenderWorker).options(num_cpus=threads or 1, num_gpus=1 if gpu else 0, max_restarts=0)
