@@ -9,6 +9,7 @@ from __future__ import annotations
 import logging
 import os
 import socket
+import sys
 from pathlib import Path
 
 PACKAGE_ROOT = Path(__file__).resolve().parents[2]  # the folder holding the `renderer` package
@@ -48,12 +49,13 @@ class RayCluster:
 
     def __enter__(self):
         ray = import_ray()
+        if self.address is not None:
+            check_address(self.address)
         if ray.is_initialized():
             return ray  # a Ray the caller started (a test, a notebook): used as it is
         quiet = {"include_dashboard": False, "log_to_driver": False, "logging_level": logging.ERROR,
                  "configure_logging": True}
         if self.address is not None:
-            check_address(self.address)
             # The nodes get this Lantern's code; its dependencies (taichi, numpy...) must be installed there.
             ray.init(address=self.address, runtime_env={"py_modules": [str(PACKAGE_ROOT / "renderer")]}, **quiet)
         else:
@@ -75,3 +77,39 @@ def worker_actor(ray, threads: int | None, gpu: bool):
     from renderer.distributed.worker import RenderWorker
 
     return ray.remote(RenderWorker).options(num_cpus=threads or 1, num_gpus=1 if gpu else 0, max_restarts=0)
+
+
+# Workers that die this many times per worker of the render end it: something kills them all.
+MAX_LOSSES_PER_WORKER = 3
+
+
+class WorkerPool:
+    """The render's actors: started, numbered, their process ids known, replaced when they die.
+    `run` (render.DistributedRun) gets a WorkerStats per worker and counts the losses."""
+
+    def __init__(self, ray, actor_class, bundle_ref, settings, run):
+        self.ray, self.actor_class, self.bundle_ref, self.settings, self.run = ray, actor_class, bundle_ref, settings, run
+        self.idle: list = []  # actors waiting for work
+        self.ids: dict = {}  # actor -> worker number (1, 2, ...)
+        self.pids: dict = {}  # actor -> its process id
+
+    def spawn(self, count: int = 1) -> None:
+        """Start `count` workers (in parallel) and wait until each has its scene; one-line errors."""
+        from renderer.distributed.render import WorkerStats
+
+        actors = [self.actor_class.remote(self.bundle_ref, self.settings) for _ in range(count)]
+        for actor, hello in zip(actors, self.ray.get([a.hello.remote() for a in actors])):
+            if hello["error"]:
+                raise RuntimeError(f"worker on {hello['host']}: {hello['error']}")
+            number = len(self.ids) + 1
+            self.ids[actor], self.pids[actor] = number, hello["pid"]
+            self.run.worker_stats[number] = WorkerStats(host=hello["host"])
+            self.idle.append(actor)
+
+    def replace(self, actor, what: str) -> None:
+        """`actor` died doing `what`: say so, start another in its place."""
+        self.run.lost_chunks += 1
+        if self.run.lost_chunks > MAX_LOSSES_PER_WORKER * max(1, self.run.workers):
+            raise RuntimeError(f"{self.run.lost_chunks} chunks lost with their workers: giving up")
+        print(f"\nworker {self.ids[actor]} died during {what}: re-running it on a new worker", file=sys.stderr)
+        self.spawn()

@@ -15,14 +15,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from renderer.distributed.cluster import WorkerPool
 from renderer.distributed.planner import MAX_SPP, Chunk, ChunkPlanner, ChunkSizer
 from renderer.film import FilmState
 from renderer.headless import RenderJob, RenderResult, Resume
 from renderer.pixel_slices import ROUND_SLICES, filled_mean_array
 from renderer.scene.description import Scene
 
-# A worker that dies this many times per worker of the render ends it: something kills them all.
-MAX_LOST_CHUNKS_PER_WORKER = 3
 WAIT_SECONDS = 0.25  # the driver wakes at least this often for progress, stop requests and checkpoints
 
 
@@ -97,7 +96,8 @@ def render_distributed(scene: Scene, job: RenderJob, options: DistributedOptions
                          "nee or mis")
     width, height = job.size
     adaptive = job.noise_threshold is not None
-    state = _starting_state(resume, width, height, adaptive, job.keeps_aovs, empty_state)
+    # The adaptive layer is kept even for uniform sampling, as a one-process film keeps it.
+    state = _starting_state(resume, width, height, True, job.keeps_aovs, empty_state)
     slices = PixelSlices(width, height)
     run = run if run is not None else DistributedRun()
     threads = options.threads or (local_threads(options.workers or 1) if options.address is None else 1)
@@ -151,11 +151,10 @@ class _Driver:
         self.ray, self.actor_class, self.bundle_ref, self.settings = ray, actor_class, bundle_ref, settings
         self.planner, self.slices, self.state, self.job, self.run = planner, slices, state, job, run
         self.stop, self.sizer, self.on_worker_started = stop, sizer, on_worker_started
-        self.idle: list = []
+        self.pool = WorkerPool(ray, actor_class, bundle_ref, settings, run)
+        self.idle = self.pool.idle
         self.pending: dict = {}  # object ref -> (actor, chunk, submitted at)
         self.compiled: set = set()  # actors past their first chunk
-        self.pids: dict = {}
-        self.ids: dict = {}  # actor -> worker number (for the progress line)
         self.interrupted = False
         self.budget_start: float | None = None
         self.seconds_before = 0.0
@@ -172,22 +171,8 @@ class _Driver:
         self._film.restore(self.state)
         return self._film
 
-    # --- workers -----------------------------------------------------------------------------------
     def start(self, workers: int) -> None:
-        for _ in range(workers):
-            self._new_worker()
-
-    def _new_worker(self):
-        actor = self.actor_class.remote(self.bundle_ref, self.settings)
-        hello = self.ray.get(actor.hello.remote())
-        if hello["error"]:
-            raise RuntimeError(f"worker on {hello['host']}: {hello['error']}")
-        number = len(self.ids) + 1
-        self.ids[actor] = number
-        self.pids[actor] = hello["pid"]
-        self.run.worker_stats[number] = WorkerStats(host=hello["host"])
-        self.idle.append(actor)
-        return actor
+        self.pool.spawn(workers)
 
     # --- the loop ------------------------------------------------------------------------------------
     def rendered(self) -> float:
@@ -236,7 +221,7 @@ class _Driver:
             ref = actor.render_chunk.remote(chunk, arrays)
             self.pending[ref] = (actor, chunk, time.perf_counter())
             if self.on_worker_started is not None:
-                self.on_worker_started(chunk, self.pids[actor])
+                self.on_worker_started(chunk, self.pool.pids[actor])
 
     def _collect(self, ref) -> None:
         actor, chunk, submitted = self.pending.pop(ref)
@@ -247,13 +232,13 @@ class _Driver:
             return
         except self.ray.exceptions.RayTaskError as error:
             cause = getattr(error, "cause", None)
-            raise RuntimeError(f"worker {self.ids[actor]}: {cause or str(error).splitlines()[0]}") from None
+            raise RuntimeError(f"worker {self.pool.ids[actor]}: {cause or str(error).splitlines()[0]}") from None
         self.slices.scatter(self.state, chunk.first, chunk.count, arrays)
         self.run.bytes_moved += sum(a.nbytes for a in arrays.values())
         first = actor not in self.compiled
         self.planner.complete(chunk)
         self.sizer.record(chunk, seconds, first)
-        stats = self.run.worker_stats[self.ids[actor]]
+        stats = self.run.worker_stats[self.pool.ids[actor]]
         stats.chunks += 1
         if not first:
             stats.samples += chunk.spp * self.slices.pixels(chunk.first, chunk.count)
@@ -269,12 +254,7 @@ class _Driver:
     def _lost(self, actor, chunk: Chunk) -> None:
         """`actor` died with `chunk`: the chunk goes back to the planner, a new worker takes its place."""
         self.planner.abandon(chunk)
-        self.run.lost_chunks += 1
-        if self.run.lost_chunks > MAX_LOST_CHUNKS_PER_WORKER * max(1, self.run.workers):
-            raise RuntimeError(f"{self.run.lost_chunks} chunks lost with their workers: giving up")
-        print(f"\nworker {self.ids[actor]} died during a chunk of slices {chunk.first}-{chunk.first + chunk.count - 1} "
-              f"at {chunk.start} spp: re-running it on a new worker", file=sys.stderr)
-        self._new_worker()
+        self.pool.replace(actor, f"a chunk of slices {chunk.first}-{chunk.first + chunk.count - 1} at {chunk.start} spp")
 
     def _check_adaptive(self) -> None:
         """Adaptive sampling's check on the merged film: the one a single process runs at this point."""

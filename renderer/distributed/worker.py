@@ -59,6 +59,24 @@ class RenderWorker:
         """Who and where this worker is, and why it cannot work if it cannot."""
         return {"pid": os.getpid(), "host": socket.gethostname(), "arch": self.arch, "error": self.error}
 
+    def render_frame(self, request, job):
+        """A whole animation frame (renderer/animation/frames.py): the still render of the job with
+        the request's camera, denoised where the job asks."""
+        from renderer.animation.frames import FrameResult
+        from renderer.headless import render
+
+        if self.error is not None:
+            raise RuntimeError(self.error)
+        result = render(self.scene, job, renderer=self.renderer, camera=request.camera)
+        image = result.image
+        if job.denoise:
+            from renderer.denoise import Denoiser
+            from renderer.render_outputs import denoised
+
+            self._denoiser = getattr(self, "_denoiser", None) or Denoiser()
+            image = denoised(result, self._denoiser)
+        return FrameResult(request.index, image, result.spp, result.seconds, result.rejected, result.interrupted)
+
     def render_chunk(self, chunk: Chunk, arrays: dict[str, np.ndarray]) -> tuple[dict[str, np.ndarray], float]:
         """Render `chunk` from its pixels' state `arrays` (PixelSlices.gather); their new state and
         the seconds the rendering took (compilation included on a worker's first chunk)."""

@@ -1,0 +1,75 @@
+"""Animation frames as Ray tasks: each worker renders whole frames on its own compiled Renderer.
+
+The same contract as renderer/animation/frames.LocalFrames (results in the order of the requests;
+a stop request hands out no further frame), with frames handed to idle workers as they free up,
+and a frame lost with its worker rendered again by a new one. A frame rendered on a worker is the
+still render of its camera, as in one process (same back-end and optimisation level).
+"""
+from __future__ import annotations
+
+from typing import Iterator, Sequence
+
+from renderer.animation.frames import FrameRequest, FrameResult
+from renderer.headless import RenderJob
+from renderer.scene.description import Scene
+
+
+class RayFrames:
+    def __init__(self, scene: Scene, job: RenderJob, args):
+        from renderer.distributed.render import DistributedOptions
+
+        self.scene = scene
+        self.job = job.resolved(scene)
+        self.options = DistributedOptions(getattr(args, "workers", None), getattr(args, "ray_address", None),
+                                          getattr(args, "worker_threads", None))
+        self.arch = getattr(args, "arch", None) or "cpu"
+        self.optimize = getattr(args, "optimize", None) or "compile"
+        self.run = None  # the DistributedRun of the last render() (tests, reports)
+
+    def render(self, requests: Sequence[FrameRequest], stop=None) -> Iterator[FrameResult]:
+        from renderer.distributed.bundle import SceneBundle
+        from renderer.distributed.cluster import RayCluster, WorkerPool, worker_actor
+        from renderer.distributed.render import DistributedRun, local_threads
+        from renderer.distributed.worker import WorkerSettings
+
+        options, job = self.options, self.job
+        threads = options.threads or (local_threads(options.workers or 1) if options.address is None else 1)
+        self.run = run = DistributedRun()
+        with RayCluster(None if options.address else (options.workers or 1) * threads, options.address) as ray:
+            workers = options.workers or max(1, int(ray.cluster_resources().get("CPU", 1)) // threads)
+            workers = max(1, min(workers, len(requests)))
+            settings = WorkerSettings(job.size, job.integrator, job.max_depth, job.seed, self.arch, self.optimize,
+                                      threads, job.keeps_aovs, self.scene.model_files.options)
+            bundle = SceneBundle.of(self.scene)
+            run.workers, run.scene_bytes = workers, bundle.size
+            pool = WorkerPool(ray, worker_actor(ray, threads, gpu=self.arch == "cuda"), ray.put(bundle), settings, run)
+            pool.spawn(workers)
+            waiting = list(requests)
+            pending: dict = {}  # object ref -> (actor, request)
+            done: dict[int, FrameResult] = {}
+            order = [request.index for request in requests]
+            while waiting or pending:
+                if stop is not None and stop.requested:
+                    waiting.clear()
+                while waiting and pool.idle:
+                    actor, request = pool.idle.pop(0), waiting.pop(0)
+                    pending[actor.render_frame.remote(request, job)] = (actor, request)
+                if not pending:
+                    break
+                ready, _ = ray.wait(list(pending), num_returns=1)
+                actor, request = pending.pop(ready[0])
+                try:
+                    done[request.index] = ray.get(ready[0])
+                except ray.exceptions.RayActorError:
+                    waiting.insert(0, request)
+                    pool.replace(actor, f"frame {request.index}")
+                    continue
+                except ray.exceptions.RayTaskError as error:
+                    cause = getattr(error, "cause", None)
+                    raise RuntimeError(f"worker {pool.ids[actor]}: {cause or str(error).splitlines()[0]}") from None
+                run.chunks += 1
+                pool.idle.append(actor)
+                while order and order[0] in done:  # in the order of the requests
+                    yield done.pop(order.pop(0))
+            while order and order[0] in done:
+                yield done.pop(order.pop(0))
