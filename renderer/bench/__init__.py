@@ -9,7 +9,8 @@ Taichi and compile kernels.
 from importlib import import_module
 
 BENCHMARKS = {name: f"renderer.bench.{name}" for name in ("sdf", "startup", "bvh", "integrators", "features",
-                                                          "photons", "interactive", "denoise", "report")}
+                                                          "photons", "interactive", "denoise", "scale",
+                                                          "report")}
 
 
 def run_benchmark(name: str, **options) -> int:

@@ -216,10 +216,11 @@ class _Driver:
             if chunk is None:
                 return
             self.idle.pop(0)
+            submitted = time.perf_counter()
             arrays = self.slices.gather(self.state, chunk.first, chunk.count)
             self.run.bytes_moved += sum(a.nbytes for a in arrays.values())
             ref = actor.render_chunk.remote(chunk, arrays)
-            self.pending[ref] = (actor, chunk, time.perf_counter())
+            self.pending[ref] = (actor, chunk, submitted)
             if self.on_worker_started is not None:
                 self.on_worker_started(chunk, self.pool.pids[actor])
 
