@@ -23,6 +23,9 @@ from renderer.pixel_slices import ROUND_SLICES, filled_mean_array
 from renderer.scene.description import Scene
 
 WAIT_SECONDS = 0.25  # the driver wakes at least this often for progress, stop requests and checkpoints
+# Pixel state the driver may send and receive per second, all workers together: a share of a 1 Gbit/s
+# link that leaves room for the object store's own traffic (docs/distributed.md).
+DRIVER_BYTES_PER_SECOND = 50e6
 
 
 @dataclass(frozen=True)
@@ -112,8 +115,10 @@ def render_distributed(scene: Scene, job: RenderJob, options: DistributedOptions
         run.workers, run.groups, run.scene_bytes = workers, groups, bundle.size
         actor_class = worker_actor(ray, threads, gpu=arch == "cuda")
         bundle_ref = ray.put(bundle)
+        round_trip = 2 * sum(a.nbytes for a in slices.gather(state, 0, planner.size).values())
+        seconds = chunk_seconds(options.chunk_seconds, workers, round_trip)
         driver = _Driver(ray, actor_class, bundle_ref, settings, planner, slices, state, job, run, stop,
-                         ChunkSizer(options.chunk_spp, options.chunk_seconds), on_worker_started)
+                         ChunkSizer(options.chunk_spp, seconds), on_worker_started)
         driver.start(workers)
         seconds_before = resume.seconds_rendered if resume is not None else 0.0
         driver.loop(seconds_before, progress, checkpoints)
@@ -124,6 +129,12 @@ def render_distributed(scene: Scene, job: RenderJob, options: DistributedOptions
                         int(state.rejected.sum()), job.integrator, variance, driver.interrupted,
                         driver.rendered(), film, _slices_in_round(planner), state,
                         driver.pixels_active if adaptive else None, MergedFilm(state))
+
+
+def chunk_seconds(target: float, workers: int, round_trip_bytes: int) -> float:
+    """How long a chunk should render: `target`, or longer where the workers together would send the
+    driver more than DRIVER_BYTES_PER_SECOND of pixel state (many workers, large images)."""
+    return max(target, workers * round_trip_bytes / DRIVER_BYTES_PER_SECOND)
 
 
 def _starting_state(resume, width, height, adaptive, aovs, empty_state) -> FilmState:

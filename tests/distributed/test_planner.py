@@ -145,3 +145,11 @@ def test_sizer_first_chunks_growth_and_budget():
     assert sizer.spp(256, first_of_worker=False) == 200  # 2 s at 0.01 s per sample
     assert sizer.spp(256, first_of_worker=False, seconds_left=0.05) == 5
     assert ChunkSizer(fixed=7).spp(256, first_of_worker=True) == 7
+
+
+def test_chunks_lengthen_when_the_driver_link_would_saturate():
+    from renderer.distributed.render import DRIVER_BYTES_PER_SECOND, chunk_seconds
+
+    assert chunk_seconds(2.0, 2, 500_000) == 2.0  # two local workers: far below the link
+    # 100 workers each sending and receiving a 4K group's 1.17 MB: the link sets the chunk's length
+    assert chunk_seconds(2.0, 100, 2 * 1_166_400) == pytest.approx(100 * 2 * 1_166_400 / DRIVER_BYTES_PER_SECOND)

@@ -169,3 +169,19 @@ def test_without_ray_installed_it_says_so_in_one_line(tmp_path):
     assert done.returncode == 2
     assert done.stderr.strip().splitlines()[-1] == ("error: distributed rendering needs Ray, which is not installed "
                                                     "(pip install ray)"), done.stderr
+
+
+def test_bench_scale_on_a_tiny_image(tmp_path):
+    import json
+
+    from renderer.bench import scale
+
+    config = scale.ScaleBenchConfig(size=(48, 32), spp=3)
+    assert scale.run(out_dir=tmp_path, config=config) == 0  # 0: every image bit-identical to one process
+    report = json.loads((tmp_path / "bench_scale.json").read_text())
+    runs = {r["name"]: r for r in report["runs"]}
+    assert set(runs) == {"1 process x all cores", "1 worker x 1 thread", "2 workers x 1 thread",
+                         "2 workers x 1 thread, 1-spp chunks"}
+    one_spp = runs["2 workers x 1 thread, 1-spp chunks"]
+    assert one_spp["chunks"] == one_spp["groups"] * 3 and one_spp["bytes_per_chunk"] > 0
+    assert report["chunk_rule"]["min_chunk_render_s"] > 0 and (tmp_path / "bench_scale.png").is_file()
