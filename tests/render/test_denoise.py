@@ -12,10 +12,24 @@ from renderer.scene.catalog import resolve_scene
 pytestmark = pytest.mark.skipif(unavailable_reason() is not None, reason="pyoidn is not installed here")
 
 
-def rendered(name, size, spp, seed):
-    scene = load_scene(resolve_scene(name))
-    renderer = Renderer(scene, size, aovs=True)
-    renderer.render(CameraFrame.from_spec(scene.camera), spp, "mis", seed=seed)
+# The largest image of the module: one Renderer of this size renders every smaller one (its film's
+# active region), so the module compiles its kernel once. Same seed and spp, same image as a
+# Renderer of the smaller size: a pixel's samples depend on its index and sample count only.
+FILM = (128, 128)
+
+
+@pytest.fixture(scope="module")
+def renderers():
+    """Renderer with AOVs per scene name, made on first use, kept for the module."""
+    return {}
+
+
+def rendered(renderers, name, size, spp, seed):
+    if name not in renderers:
+        renderers[name] = Renderer(load_scene(resolve_scene(name)), FILM, aovs=True)
+    renderer = renderers[name]
+    renderer.reset(*size)
+    renderer.render(CameraFrame.from_spec(renderer.scene.camera), spp, "mis", seed=seed)
     albedo, normal = renderer.aov_images()
     return renderer.image(), albedo, normal
 
@@ -25,24 +39,24 @@ def relative_mse(image, reference):
 
 
 @pytest.mark.parametrize("name, size", [("cornell_box", (128, 128))])  # (bench denoise covers five scenes)
-def test_denoised_mean_stays_within_two_percent_of_the_raw_mean(name, size):
-    raw, albedo, normal = rendered(name, size, 8, seed=1)
+def test_denoised_mean_stays_within_two_percent_of_the_raw_mean(renderers, name, size):
+    raw, albedo, normal = rendered(renderers, name, size, 8, seed=1)
     denoised = Denoiser().denoise(DenoiseInput(raw, albedo, normal))
     assert np.isfinite(denoised).all() and denoised.shape == raw.shape
     for channel in range(3):
         ratio = denoised[..., channel].mean() / raw[..., channel].mean()
         assert abs(ratio - 1.0) < 0.02, f"channel {channel}: denoised / raw mean = {ratio:.4f}"
     # ... and it removes noise: closer to a converged render than the raw image is.
-    reference, _, _ = rendered(name, size, 128, seed=2)
+    reference, _, _ = rendered(renderers, name, size, 128, seed=2)
     assert relative_mse(denoised, reference) < 0.5 * relative_mse(raw, reference)
 
 
-def test_denoising_a_converged_image_changes_it_no_more_than_its_noise():
+def test_denoising_a_converged_image_changes_it_no_more_than_its_noise(renderers):
     """At 512 spp the Cornell box still has some noise: an ideal denoiser would move the image by
     about its variance, relMSE(raw_a, raw_b) / 2 for two independent renders. Allowed: 1.25 times
     that, and the image mean within 1%."""
-    raw, albedo, normal = rendered("cornell_box", (64, 64), 512, seed=1)
-    other, _, _ = rendered("cornell_box", (64, 64), 512, seed=2)
+    raw, albedo, normal = rendered(renderers, "cornell_box", (64, 64), 512, seed=1)
+    other, _, _ = rendered(renderers, "cornell_box", (64, 64), 512, seed=2)
     denoised = Denoiser().denoise(DenoiseInput(raw, albedo, normal))
     noise = relative_mse(other, raw) / 2
     assert relative_mse(denoised, raw) < 1.25 * noise
