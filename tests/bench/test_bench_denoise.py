@@ -23,10 +23,22 @@ def test_tiny_run_writes_curves_targets_and_a_plot(tmp_path, capsys):
     # The denoiser's whole point: at 1 spp its output is far closer to the reference than the raw image.
     assert curve[0]["denoised"] < 0.5 * curve[0]["raw"]
     assert scene["raw_spp_matching_denoised_8"]["spp"] > 8
+    # No pixel stops before min spp. The adaptive renders get the uniform render's time, so on a
+    # loaded machine one may end early. A pixel stops only at a check, after min spp, 2 min spp,
+    # 4 min spp ... whole rounds (at the second at the earliest: below the threshold at two checks
+    # in a row), and at a check every pixel has that many samples: a render that stopped pixels
+    # gave every pixel at least min spp, and one that ended before 2 min spp stopped none.
     for adaptive in scene["adaptive"]:
-        assert 0.0 <= adaptive["stopped_fraction"] <= 1.0 and adaptive["mean_spp"] >= TINY.min_spp
+        assert 0.0 <= adaptive["stopped_fraction"] <= 1.0
+        if adaptive["stopped_fraction"] > 0.0:
+            assert adaptive["mean_spp"] >= TINY.min_spp, adaptive
+        if adaptive["max_spp"] < 2 * TINY.min_spp:  # (max_spp: the pixel slices rendered, in rounds)
+            assert adaptive["stopped_fraction"] == 0.0, adaptive
+    # A loose threshold stops pixels at the second check if the budget reached it (the film there
+    # is the same however the passes fell: fixed seed, whole rounds).
     loose = max(scene["adaptive"], key=lambda a: a["threshold"])
-    assert loose["stopped_fraction"] > 0.0  # a loose threshold stops pixels within the budget
+    if loose["max_spp"] >= 2 * TINY.min_spp:
+        assert loose["stopped_fraction"] > 0.0, loose
     assert (tmp_path / "bench_denoise_cornell_box.png").stat().st_size > 0
     assert report["denoiser_frame_s"] > 0.0
     out = capsys.readouterr().out
