@@ -22,11 +22,12 @@ Emission: in the Cornell box (one quad light of uniform radiance), light selecti
 area sampling make every photon carry exactly the scene's emitted power (luminance), points lie on
 the light, and cosine-weighted directions have E[cos] = 2/3.
 
-Threads: the same render with init_taichi(cpu_threads=1) and =4, each in a subprocess (a
-process holds one Taichi runtime): photon counts N and radii must be bit-identical (integer
-counts, per-pixel arithmetic, and a row-ordered sum for the initial radii); the image may differ
-only by the order of f32 atomic additions into phi: relative 1e-4 (a sum of K terms reordered
-changes by at most ~K * 2^-24 relative, K being a few hundred photons per pixel and pass here).
+Threads: the same render with init_taichi(cpu_threads=1) and =4, one runtime after the other in
+a child process (a runtime's thread count is fixed, and the suite's is the test's): photon counts
+N and radii must be bit-identical (integer counts, per-pixel arithmetic, and a row-ordered sum for
+the initial radii); the image may differ only by the order of f32 atomic additions into phi:
+relative 1e-4 (a sum of K terms reordered changes by at most ~K * 2^-24 relative, K being a few
+hundred photons per pixel and pass here).
 """
 import json
 import subprocess
@@ -244,15 +245,14 @@ def test_aimed_photons_carry_the_scene_power_on_average(tmp_path, light):
 
 
 def test_photon_statistics_do_not_depend_on_thread_count(tmp_path):
+    cmd = [sys.executable, "-m", "tests.render.sppm_threads_child", str(tmp_path / "threads"), "1", "4"]
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    lines = [json.loads(line) for line in proc.stdout.splitlines() if line.startswith("{")]
     results = {}
-    for threads in (1, 4):
-        out = tmp_path / f"threads{threads}.npz"
-        cmd = [sys.executable, "-m", "tests.render.sppm_threads_child", str(threads), str(out)]
-        proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600)
-        assert proc.returncode == 0, proc.stderr[-2000:]
-        info = json.loads(proc.stdout.strip().splitlines()[-1])
+    for threads, info in zip((1, 4), lines, strict=True):
         assert info["threads"] == threads
-        results[threads] = (info, dict(np.load(out)))
+        results[threads] = (info, dict(np.load(tmp_path / f"threads{threads}.npz")))
     (info1, one), (info4, four) = results[1], results[4]
     assert info1["photons"] == info4["photons"] == 6 * 16 * 16
     assert np.array_equal(one["n"], four["n"]), "photon counts depend on the thread count"
