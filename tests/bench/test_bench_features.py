@@ -1,5 +1,6 @@
-"""Smoke test of `bench features`: its decision rule and statistics exactly, and one real run on a
-tiny scene at 16x9 (report structure, every build renders; not speed)."""
+"""Smoke test of `bench features`: its decision rule and statistics exactly, its summary over several
+unused effects on made-up results, and one real run on a tiny scene at 16x9 (report structure,
+every build renders; not speed)."""
 import json
 
 import numpy as np
@@ -7,24 +8,30 @@ import pytest
 
 from renderer.bench.common import verdict
 from renderer.bench.features import (
+    QUICK,
     EffectCase,
     FeaturesBenchConfig,
     image_difference,
     mean_change,
     optional_effects,
     paired_ratio,
+    print_report,
     short,
     unused_effect_passes,
 )
 from renderer.scene.features import Features
+from tests.bench.report_fixtures import features_report
 from tests.scene_builder import tiny_bench_toml
 
 # Diffuse and glass under a sky: the glass case strips the dielectric (a scene variant), and the
-# unused effects forced on have no data here (their branches are compiled, never taken).
+# unused effect forced on has no data here (its branches are compiled, never taken). Each build
+# costs a cold compile and a cache load, in runtimes of its own, so one unused effect: media
+# forced on renders in the `everything` build, and the summary over several effects is tested on
+# made-up results (test_summary_over_several_unused_effects).
 TINY_SCENE = tiny_bench_toml("tiny_features", 16, 9, glass_ball=True)
 
 TINY = FeaturesBenchConfig(size=(16, 9), rounds=2, pass_seconds=0.005, max_pass_spp=4, image_spp=2,
-                           unused_effects=("has_media", "energy_compensation"),
+                           unused_effects=("energy_compensation",),
                            effect_cases=(EffectCase("glass", "tiny_features", "own", "no glass"),),
                            child_timeout_s=600.0)
 
@@ -59,6 +66,20 @@ def test_image_difference():
     assert mean_change(1.5 * a, a) == pytest.approx(0.5) and mean_change(a, a) == 0.0
 
 
+def test_summary_over_several_unused_effects(tmp_path, capsys):
+    """Two scenes with a passing (+dielectric, 1.01) and a failing (+media, 0.9: the own build
+    measurably slower) unused effect each, and a scene that errored: one verdict per build, the
+    target fails, and the printed target line counts and names the failures."""
+    report = features_report(tmp_path)
+    summary = report["summary"]
+    verdicts = {(v["scene"], v["effect"]): v["passed"] for v in summary["unused_effects"]}
+    assert verdicts == {("alpha", "dielectric"): True, ("alpha", "has_media"): False,
+                        ("beta", "dielectric"): True, ("beta", "has_media"): False}
+    assert summary["passed"] is False
+    print_report(report["scenes"], summary, QUICK, [])
+    assert "FAIL  (2/4 effects pass; failing: alpha+media, beta+media)" in capsys.readouterr().out
+
+
 def test_run_on_a_tiny_scene(tmp_path, capsys):
     from renderer.bench.features import run
 
@@ -72,7 +93,7 @@ def test_run_on_a_tiny_scene(tmp_path, capsys):
     assert "error" not in res, res.get("traceback", res.get("error"))
     assert res["scene"] == "tiny_features" and "dielectric" in res["own_features"]["material_kinds"]
     builds = res["builds"]
-    assert set(builds) == {"own", "everything", "+media", "+energy_compensation", "no glass"}
+    assert set(builds) == {"own", "everything", "+energy_compensation", "no glass"}
     for name, b in builds.items():
         assert "error" not in b, (name, b.get("error"))
         assert b["compile_s"] > 0 and b["cache_bytes"] >= 0 and b["load_s"] > 0
@@ -93,11 +114,11 @@ def test_run_on_a_tiny_scene(tmp_path, capsys):
     assert case["image_difference"] > 0 and case["noise_floor"] > 0
     assert case["mean_change"] != 0.0 and case["ratio"]["lo"] <= case["ratio"]["hi"]
     verdicts = report["summary"]["unused_effects"]
-    assert {v["effect"] for v in verdicts} == {"has_media", "energy_compensation"}
+    assert {v["effect"] for v in verdicts} == {"energy_compensation"}
     for v in verdicts:  # each verdict is the decision rule applied to its build's measured ratio
         assert v["passed"] == unused_effect_passes(builds["+" + short(v["effect"])]["vs_own"])
     passed = report["summary"]["passed"]
     assert passed == all(v["passed"] for v in verdicts)
     printed = capsys.readouterr().out
     assert "tiny_features" in printed
-    assert f"{verdict(passed)}  ({sum(v['passed'] for v in verdicts)}/2 effects pass" in printed
+    assert f"{verdict(passed)}  ({sum(v['passed'] for v in verdicts)}/1 effects pass" in printed
