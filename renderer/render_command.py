@@ -93,14 +93,33 @@ class RenderPlan:
     checkpoints: CheckpointPolicy | None
     resume: Resume | None
     previous: CheckpointHeader | None  # the header of the checkpoint continued
+    distributed: "DistributedPlan | None" = None  # Ray workers (renderer/distributed/)
+
+
+@dataclass(frozen=True)
+class DistributedPlan:
+    workers: int | None
+    address: str | None
+    threads: int | None
+    chunk_spp: int | None
+
+    def where(self, arch: str) -> str:
+        place = f"the Ray cluster at {self.address}" if self.address else "a local Ray instance"
+        count = f"{self.workers} workers" if self.workers else "its workers"
+        return f"{count} ({arch}) on {place}"
 
 
 def run_render(args, stop: StopRequests) -> int:
     """The render command. `args`: app.py's parsed `render` options; returns the exit status."""
+    if args.frames is not None or args.turntable is not None:
+        from renderer.animation.command import run_animation
+
+        return run_animation(args, stop)
     plan = plan_render(args)
     from renderer.arch import init_taichi
 
-    used = init_taichi(plan.arch, optimize=plan.optimize)
+    # A distributed render's driver only merges films and runs adaptive sampling's checks: the CPU.
+    used = init_taichi("cpu" if plan.distributed else plan.arch, optimize=plan.optimize)
     if plan.checkpoints is not None:
         plan.checkpoints.header = replace(plan.checkpoints.header, arch=_arch_name(used))
     if plan.previous is not None:
@@ -110,9 +129,13 @@ def run_render(args, stop: StopRequests) -> int:
                       "result will not be bit-identical to an uninterrupted render", file=sys.stderr)
     begun = (f", continuing at {spp_text(plan.resume.spp_done + plan.resume.slices_in_round / ROUND_SLICES)} spp"
              if plan.resume else "")
-    print(f"rendering {plan.scene.name} with {plan.job.integrator} on {used}{begun}", file=sys.stderr)
-    result = render(plan.scene, plan.job, progress=progress_bar(), stop=stop, checkpoints=plan.checkpoints,
-                    resume=plan.resume)
+    where = used if plan.distributed is None else plan.distributed.where(plan.arch)
+    print(f"rendering {plan.scene.name} with {plan.job.integrator} on {where}{begun}", file=sys.stderr)
+    if plan.distributed is not None:
+        result = _render_distributed(plan, stop)
+    else:
+        result = render(plan.scene, plan.job, progress=progress_bar(), stop=stop, checkpoints=plan.checkpoints,
+                        resume=plan.resume)
     print(file=sys.stderr)
     if result.mean_spp == 0:  # (a share of a sample is an image: pixels a first round reached)
         print("interrupted before the first pass: nothing written", file=sys.stderr)
@@ -164,8 +187,50 @@ def plan_render(args) -> RenderPlan:
     resume = None
     if previous is not None:
         _, state = load_checkpoint(args.resume)
+        most = int((state.count.astype("int64") + state.rejected).max(initial=0))
+        if job.spp is not None and job.spp < most:  # (pixels of a stopped round or a distributed group)
+            raise ValueError(f"--spp {job.spp}: pixels of the checkpoint {args.resume} already have {most} samples")
         resume = Resume(state, previous.spp_done, previous.seconds_rendered, previous.slices_in_round)
-    return RenderPlan(scene, job, out, variance, arch, optimize, checkpoints, resume, previous)
+    distributed = _distributed_plan(args, job, previous)
+    if distributed is not None and checkpoints is not None:
+        checkpoints.header = replace(checkpoints.header, workers=distributed.workers or 0)
+    return RenderPlan(scene, job, out, variance, arch, optimize, checkpoints, resume, previous, distributed)
+
+
+def _distributed_plan(args, job: RenderJob, previous: CheckpointHeader | None) -> DistributedPlan | None:
+    """Ray workers when asked for, or when continuing a distributed render (its pixel groups may
+    stand at different sample counts: only the distributed driver continues that exactly)."""
+    workers = getattr(args, "workers", None)
+    address = getattr(args, "ray_address", None)
+    if workers is None and address is None and previous is not None and previous.workers is not None:
+        if not previous.workers:
+            raise ValueError(f"{args.resume}: a render on a Ray cluster; continue it with --ray-address ADDR (or "
+                             "--workers K on this machine)")
+        workers = previous.workers
+    if workers is None and address is None:
+        return None
+    from renderer.integrators import make_integrator
+
+    if hasattr(make_integrator(job.integrator), "make_program"):
+        raise ValueError(f"--workers: {job.integrator} renders whole-image photon passes and cannot be distributed; "
+                         "use path, nee or mis")
+    return DistributedPlan(workers, address, getattr(args, "worker_threads", None), getattr(args, "chunk_spp", None))
+
+
+def _render_distributed(plan: RenderPlan, stop: StopRequests) -> RenderResult:
+    from renderer.distributed.render import DistributedOptions, DistributedRun, progress_line, render_distributed
+    from renderer.scene.load_options import LoadOptions
+
+    d = plan.distributed
+    run = DistributedRun()
+    if stop is not None:
+        stop.defer()
+    result = render_distributed(plan.scene, plan.job, DistributedOptions(d.workers, d.address, d.threads, d.chunk_spp),
+                                plan.arch, plan.optimize, plan.scene.model_files.options or LoadOptions(),
+                                progress_line(), stop, plan.checkpoints, plan.resume, run)
+    lost = f", {run.lost_chunks} chunks re-run after their worker died" if run.lost_chunks else ""
+    print(f"\n{run.workers} workers, {run.groups} pixel groups, {run.chunks} chunks{lost}", file=sys.stderr)
+    return result
 
 
 def write_outputs(plan: RenderPlan, result: RenderResult) -> None:
