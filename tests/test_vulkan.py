@@ -2,6 +2,7 @@
 
 Runs in subprocesses, since a process holds one Taichi runtime and the suite's is on the CPU.
 """
+import functools
 import subprocess
 import sys
 from pathlib import Path
@@ -14,6 +15,7 @@ from renderer.image_io import read_exr
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@functools.cache  # asked by every Vulkan test: one probe per test process
 def vulkan_available() -> bool:
     probe = "from renderer.arch import init_taichi; init_taichi('vulkan')"  # raises without a Vulkan device
     try:
