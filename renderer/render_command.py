@@ -115,6 +115,9 @@ def run_render(args, stop: StopRequests) -> int:
         from renderer.animation.command import run_animation
 
         return run_animation(args, stop)
+    for option, value in (("--fps", args.fps), ("--video", args.video)):
+        if value is not None:
+            raise ValueError(f"{option} is for animations: add --frames A:B or --turntable SECONDS")
     plan = plan_render(args)
     from renderer.arch import init_taichi
 

@@ -112,6 +112,8 @@ def test_a_stop_request_ends_the_frame_in_progress_writes_it_and_renders_no_more
     (["--frames", "0:2", "--aovs"], "--aovs: not written for animation frames"),
     (["--turntable", "0"], "argument --turntable: must be a positive number of seconds"),
     (["--frames", "0:2", "--fps=-24"], "argument --fps: must be a positive number"),
+    (["--video", "{d}/v.mp4"], "--video is for animations: add --frames A:B or --turntable SECONDS"),
+    (["--fps", "12"], "--fps is for animations: add --frames A:B or --turntable SECONDS"),
 ])
 def test_bad_animation_options_are_one_line_errors_before_rendering(tmp_path, capsys, no_rendering, argv, expected):
     argv = [a.format(d=tmp_path) for a in argv]
