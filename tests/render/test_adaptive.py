@@ -1,5 +1,9 @@
 """Adaptive sampling (renderer/adaptive.py): the minimum spp, unbiasedness where pixels stopped,
-exact continuation from a checkpointed state."""
+exact continuation from a checkpointed state.
+
+The renders share one Renderer (each starts from reset(): film, adaptive state and rounds
+cleared), so the module compiles its kernels once; the continued render alone gets a new one, as
+a resumed render would."""
 import numpy as np
 import pytest
 
@@ -14,14 +18,21 @@ ALPHA = 0.01  # the suite's level for image comparisons (tests/stats/image_tests
 SIZE = (32, 32)
 
 
+@pytest.fixture(scope="module")
 def cornell():
     return load_scene(resolve_scene("cornell_box"))
 
 
-def adaptive_renderer(scene, threshold, min_spp, spp, seed=5):
-    renderer = Renderer(scene, SIZE)
-    renderer.set_adaptive(AdaptiveSettings(threshold, min_spp))
-    renderer.render(CameraFrame.from_spec(scene.camera), spp, "mis", seed=seed)
+@pytest.fixture(scope="module")
+def renderer(cornell):
+    return Renderer(cornell, SIZE)
+
+
+def rendered(renderer, spp, seed, adaptive=None):
+    """`renderer` from an empty film: `spp` samples of `mis`, adaptive (AdaptiveSettings) or not."""
+    renderer.reset()
+    renderer.set_adaptive(adaptive)
+    renderer.render(CameraFrame.from_spec(renderer.scene.camera), spp, "mis", seed=seed)
     return renderer
 
 
@@ -30,10 +41,10 @@ def test_check_points_double_from_the_minimum():
     assert next_check(0, 8) == 8 and next_check(8, 8) == 16 and next_check(20, 8) == 32
 
 
-def test_no_pixel_stops_before_the_minimum_spp():
+def test_no_pixel_stops_before_the_minimum_spp(renderer):
     # A threshold every pixel meets at once: the rule still waits for min_spp, then for a second
     # check at twice that (a variance from 8 samples must be confirmed by 16).
-    renderer = adaptive_renderer(cornell(), threshold=1e6, min_spp=8, spp=64)
+    rendered(renderer, 64, 5, AdaptiveSettings(1e6, 8))
     counts = renderer.film.sample_counts() + renderer.film.rejected_counts()
     assert counts.min() >= 8
     assert (counts == 16).all()
@@ -41,29 +52,26 @@ def test_no_pixel_stops_before_the_minimum_spp():
     assert (renderer.film.state().adaptive == STOPPED).all()
 
 
-def test_an_unreachable_threshold_samples_uniformly():
-    scene = cornell()
-    renderer = adaptive_renderer(scene, threshold=1e-9, min_spp=4, spp=20)
-    uniform = Renderer(scene, SIZE)
-    uniform.render(CameraFrame.from_spec(scene.camera), 20, "mis", seed=5)
-    assert np.array_equal(renderer.image(), uniform.image())
+def test_an_unreachable_threshold_samples_uniformly(renderer):
+    rendered(renderer, 20, 5, AdaptiveSettings(1e-9, 4))
+    adaptive = renderer.image()
     assert (renderer.film.sample_counts() + renderer.film.rejected_counts() == 20).all()
+    uniform = rendered(renderer, 20, 5).image()
+    assert np.array_equal(adaptive, uniform)
 
 
-def test_adaptive_render_is_unbiased_where_it_stopped():
+def test_adaptive_render_is_unbiased_where_it_stopped(renderer):
     """Pixels adaptive sampling stopped, against a uniform render with another seed: the suite's
     per-pixel z-test (Sidak-corrected, 99.75% of pixel channels) and the z of the image mean over
     those pixels, at ALPHA."""
-    scene = cornell()
-    adaptive = adaptive_renderer(scene, threshold=0.15, min_spp=16, spp=256, seed=11)
-    uniform = Renderer(scene, SIZE)
-    uniform.render(CameraFrame.from_spec(scene.camera), 256, "mis", seed=12)
-    counts = adaptive.film.sample_counts() + adaptive.film.rejected_counts()
+    rendered(renderer, 256, 11, AdaptiveSettings(0.15, 16))
+    counts = renderer.film.sample_counts() + renderer.film.rejected_counts()
     # Stopped before the maximum (a pixel the check at 256 spp stops took every sample anyway).
-    stopped = (adaptive.film.state().adaptive == STOPPED) & (counts < 256)
+    stopped = (renderer.film.state().adaptive == STOPPED) & (counts < 256)
     assert 0.1 < stopped.mean() < 0.95, f"{stopped.mean():.2f} of the pixels stopped: the test needs both kinds"
-    a = (adaptive.image()[stopped][None], adaptive.film.variance_of_mean_image()[stopped][None])
-    b = (uniform.image()[stopped][None], uniform.film.variance_of_mean_image()[stopped][None])
+    a = (renderer.image()[stopped][None], renderer.film.variance_of_mean_image()[stopped][None])
+    rendered(renderer, 256, 12)
+    b = (renderer.image()[stopped][None], renderer.film.variance_of_mean_image()[stopped][None])
     passed, fraction, *_ = pixel_z_test(*a, *b, alpha=ALPHA)
     assert passed, f"{fraction:.4f} of stopped pixel channels agree"
     for channel in range(3):
@@ -71,21 +79,21 @@ def test_adaptive_render_is_unbiased_where_it_stopped():
         assert abs(z) < 2.576, f"channel {channel}: image mean z = {z:.2f} over {stopped.sum()} stopped pixels"
 
 
-def test_a_continued_adaptive_render_is_bit_identical():
-    scene = cornell()
-    straight = adaptive_renderer(scene, threshold=0.1, min_spp=4, spp=40)
-    first = adaptive_renderer(scene, threshold=0.1, min_spp=4, spp=11)
+def test_a_continued_adaptive_render_is_bit_identical(cornell, renderer):
+    settings = AdaptiveSettings(0.1, 4)
+    straight = rendered(renderer, 40, 5, settings)
+    expected = (straight.film.state().adaptive, straight.image(), straight.pixels_active)
+    first = rendered(renderer, 11, 5, settings)
     state, slices = first.state(), first.slices_done
-    second = Renderer(scene, SIZE)
-    second.set_adaptive(AdaptiveSettings(0.1, 4))
+    second = Renderer(cornell, SIZE)
+    second.set_adaptive(settings)
     second.restore(state, slices)
-    second.render(CameraFrame.from_spec(scene.camera), 40 - 11, "mis", seed=5)
-    assert np.array_equal(second.film.state().adaptive, straight.film.state().adaptive)
-    assert np.array_equal(second.image(), straight.image())
-    assert second.pixels_active == straight.pixels_active
+    second.render(CameraFrame.from_spec(cornell.camera), 40 - 11, "mis", seed=5)
+    assert np.array_equal(second.film.state().adaptive, expected[0])
+    assert np.array_equal(second.image(), expected[1])
+    assert second.pixels_active == expected[2]
 
 
-def test_invalid_settings_are_refused():
-    renderer = Renderer(cornell(), (8, 8))
+def test_invalid_settings_are_refused(renderer):
     with pytest.raises(ValueError, match="threshold"):
         renderer.set_adaptive(AdaptiveSettings(0.0))
