@@ -13,17 +13,32 @@ from tests.scene_builder import scene_from_toml
 ALPHA = 0.001  # significance of the z-tests below
 
 
-def render_aovs(scene, integrator, spp, seed=7, size=None):
-    renderer = Renderer(scene, size, aovs=True)
+def render_aovs(scene, integrator, spp, seed=7, size=None, renderer=None):
+    """A render with AOVs: on `renderer` (reset to `size`) if given, else on a new Renderer."""
+    renderer = fresh(renderer, size) if renderer is not None else Renderer(scene, size, aovs=True)
     renderer.render(CameraFrame.from_spec(scene.camera), spp, integrator, seed=seed)
     albedo, normal = renderer.aov_images()
     return renderer, albedo, normal
 
 
-def render_view(scene, integrator, spp, seed=7, size=None):
-    renderer = Renderer(scene, size)
+def render_view(scene, integrator, spp, seed=7, size=None, renderer=None):
+    renderer = fresh(renderer, size) if renderer is not None else Renderer(scene, size)
     renderer.render(CameraFrame.from_spec(scene.camera), spp, integrator, seed=seed)
     return renderer.image()
+
+
+def fresh(renderer, size):
+    renderer.reset(*size)
+    return renderer
+
+
+@pytest.fixture(scope="module")
+def cornell_box():
+    """The Cornell box and two Renderers of it, with and without AOVs, shared by the tests on it:
+    each render resets the film to its size (an active region of the 40x40 film), so each
+    (integrator, AOVs) kernel compiles once."""
+    scene = load_scene(resolve_scene("cornell_box"))
+    return scene, Renderer(scene, (40, 40), aovs=True), Renderer(scene, (40, 40))
 
 
 @pytest.mark.parametrize("name", ["prism", "foggy"])  # dispersion (spectral paths), media (fog, glass)
@@ -36,14 +51,14 @@ def test_aovs_are_finite_and_in_range(name):
     assert albedo.max() > 0.05  # something was written
 
 
-def test_aovs_equal_the_albedo_and_normals_views_without_delta_surfaces():
+def test_aovs_equal_the_albedo_and_normals_views_without_delta_surfaces(cornell_box):
     # The Cornell box is all diffuse: the first vertex is the first hit, and the same seed gives the
     # same camera rays, so the running means agree up to float rounding.
-    scene = load_scene(resolve_scene("cornell_box"))
+    scene, with_aovs, without = cornell_box
     size, spp = (40, 40), 3
-    _, albedo, normal = render_aovs(scene, "mis", spp, size=size)
-    albedo_view = render_view(scene, "albedo", spp, size=size)
-    normals_view = render_view(scene, "normals", spp, size=size)
+    _, albedo, normal = render_aovs(scene, "mis", spp, size=size, renderer=with_aovs)
+    albedo_view = render_view(scene, "albedo", spp, size=size, renderer=without)
+    normals_view = render_view(scene, "normals", spp, size=size, renderer=without)
     np.testing.assert_allclose(albedo, np.clip(albedo_view, 0, 1), atol=2e-6)
     # Pixels whose every sample hit one flat wall (a unit mean normal): where some samples miss, the
     # AOV averages in 0 and the normals view a black 0 (not the encoded 0.5).
@@ -52,11 +67,11 @@ def test_aovs_equal_the_albedo_and_normals_views_without_delta_surfaces():
     assert hit.mean() > 0.5
 
 
-def test_debug_views_and_path_without_aovs_keep_their_images():
+def test_debug_views_and_path_without_aovs_keep_their_images(cornell_box):
     # Keeping AOVs changes no colour: the images with and without them are identical.
-    scene = load_scene(resolve_scene("cornell_box"))
-    with_aovs, _, _ = render_aovs(scene, "path", 2, size=(24, 24))
-    assert np.array_equal(with_aovs.image(), render_view(scene, "path", 2, size=(24, 24)))
+    scene, with_aovs, without = cornell_box
+    render_aovs(scene, "path", 2, size=(24, 24), renderer=with_aovs)
+    assert np.array_equal(with_aovs.image(), render_view(scene, "path", 2, size=(24, 24), renderer=without))
 
 
 PANE_SCENE = """
