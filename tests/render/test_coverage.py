@@ -95,23 +95,35 @@ def test_mask_shows_what_lies_behind_its_holes(tmp_path, mode):
     np.testing.assert_array_equal(on_quad, expected)
 
 
+SHADOW_SIZE = 64
+
+
+@pytest.fixture(scope="module")
+def shadow_renderer():
+    """The scene of test_mask_casts_a_checkered_shadow, built once for both integrators."""
+    camera = CameraSpec(position=(0.0, 0.0, 5.0), look_at=(0.0, 0.0, 0.0), fov=90.0)
+    scene = scene_with([MeshObject(kind="quad", material="wall", size=(14.0, 14.0), rotate=(90.0, 0.0, 0.0)),
+                        MeshObject(kind="mesh", file=DATA / "cutout.gltf", translate=(0.0, 0.0, 8.0)),
+                        MeshObject(kind="sphere", material="lamp", radius=0.02, translate=(0.0, 0.0, 10.0))],
+                       camera, SHADOW_SIZE, SHADOW_SIZE, [MaterialSpec("wall", "diffuse", (0.8, 0.8, 0.8)),
+                                                          MaterialSpec("lamp", "diffuse", (0.0, 0.0, 0.0),
+                                                                       emission=(2000.0, 2000.0, 2000.0))])
+    return Renderer(scene)
+
+
 @pytest.mark.parametrize("integrator", ["mis", "nee"])
-def test_mask_casts_a_checkered_shadow(integrator):
+def test_mask_casts_a_checkered_shadow(shadow_renderer, integrator):
     """A small lamp 10 m above a white wall, the cut-out at 8 m between them, direct light only
     (max depth 2), black sky. Seen from 5 m by a camera whose field of view (90 degrees) maps the
     wall's points onto the cut-out's through the lamp's centre (a wall point x lies in the shadow
     of the cut-out's point x / 5 = the camera's image-plane coordinate): the wall is exactly black
     behind opaque cells (shadow rays stop there) and lit behind holes (shadow rays pass), except
     within the lamp's penumbra (radius 0.02 m: 0.016 m on the cut-out's scale) of a cell edge."""
-    size = 64
-    camera = CameraSpec(position=(0.0, 0.0, 5.0), look_at=(0.0, 0.0, 0.0), fov=90.0)
-    scene = scene_with([MeshObject(kind="quad", material="wall", size=(14.0, 14.0), rotate=(90.0, 0.0, 0.0)),
-                        MeshObject(kind="mesh", file=DATA / "cutout.gltf", translate=(0.0, 0.0, 8.0)),
-                        MeshObject(kind="sphere", material="lamp", radius=0.02, translate=(0.0, 0.0, 10.0))],
-                       camera, size, size, [MaterialSpec("wall", "diffuse", (0.8, 0.8, 0.8)),
-                                            MaterialSpec("lamp", "diffuse", (0.0, 0.0, 0.0),
-                                                         emission=(2000.0, 2000.0, 2000.0))])
-    image = render(scene, 4, integrator, max_depth=2).image()[..., 1]
+    size = SHADOW_SIZE
+    r = shadow_renderer
+    r.reset()
+    r.render(CameraFrame.from_spec(r.scene.camera), 4, integrator=integrator, max_depth=2, seed=0)
+    image = r.image()[..., 1]
     rows, cols = cells(*footprints(size, size, 90.0, 1.0), margin=0.02)
     decided = rows >= 0
     assert decided.sum() > 0.6 * size * size
