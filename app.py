@@ -149,7 +149,9 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--exposure", type=_exposure, help="exposure in EV stops (PNG only; default 0)")
     render.add_argument("--tonemapper", choices=TONEMAPPERS, help="PNG tone mapper (default aces)")
     render.add_argument("--optimize", choices=OPTIMIZE_FOR,
-                        help="kernel optimisation: compile (fast compiling, the default) or run (every optimisation: a few %% faster, compiles several times longer)")
+                        help="kernel optimisation: compile (fast compiling) or run (every optimisation: a few %% faster, "
+                             "compiles several times longer); default: run for renders long enough to repay that "
+                             "(renderer/optimize_choice.py), else compile; on --resume, the checkpoint's")
     render.add_argument("--checkpoint", type=Path,
                         help="save the film here every --checkpoint-every seconds and when stopped (default: "
                              "OUT.ckpt for renders expected to take over a minute, removed when they complete)")

@@ -7,8 +7,9 @@ import taichi as ti
 ARCHES = ("auto", "cpu", "cuda", "vulkan")
 # "compile": skip Taichi's own IR optimisations (LLVM still optimises the code): a path tracer
 # kernel compiles 3-10x sooner, and runs up to ~10% slower (`python app.py bench startup`).
-# "run": every optimisation, for long renders and benchmarks. Kernels of both levels live side by
-# side in the offline cache.
+# "run": every optimisation, for long renders (`render` picks it for them by itself:
+# renderer/optimize_choice.py) and benchmarks. Kernels of both levels live side by side in the
+# offline cache.
 OPTIMIZE_FOR = ("compile", "run")
 
 
@@ -37,7 +38,7 @@ def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str |
         kwargs["cpu_max_num_threads"] = cpu_threads
     if os.environ.get("LANTERN_TAICHI_DEBUG"):
         kwargs["debug"] = True
-    if arch == "auto" and ctypes.util.find_library("cuda") is None:
+    if arch == "auto" and cpu_expected(arch):
         arch = "cpu"  # no CUDA driver: skip Taichi's noisy probe-and-fall-back
     wanted = {"auto": ti.cuda, "cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan}[arch]
     ti.init(arch=wanted, **kwargs)
@@ -45,3 +46,9 @@ def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str |
     if arch in ("cuda", "vulkan") and used != wanted:
         raise RuntimeError(f"arch '{arch}' is not available on this machine")
     return str(used).split(".")[-1]
+
+
+def cpu_expected(arch: str) -> bool:
+    """Whether `arch` (an --arch choice) will run on the CPU, as far as is known before ti.init:
+    'cpu', or 'auto' without a CUDA driver (with one, 'auto' may still fall back to the CPU)."""
+    return arch == "cpu" or (arch == "auto" and ctypes.util.find_library("cuda") is None)

@@ -20,6 +20,7 @@ from renderer.headless import (Checkpoints, RenderJob, RenderResult, Resume, che
                                save_variance)
 from renderer.adaptive import DEFAULT_MIN_SPP
 from renderer.interrupts import StopRequests
+from renderer.optimize_choice import choose_for_render
 from renderer.render_outputs import aovs_path, denoise_refusal
 from renderer.pixel_slices import ROUND_SLICES, spp_text
 from renderer.scene.errors import SceneError
@@ -172,7 +173,8 @@ def plan_render(args) -> RenderPlan:
     if variance is not None:
         check_variance_path(variance)
     arch = args.arch or (previous.arch if previous else "auto")
-    optimize = args.optimize or (previous.optimize if previous else "compile")
+    choice = choose_for_render(args.optimize, previous.optimize if previous else None, job, scene.geometry, arch)
+    optimize = choice.level
     header = _header(scene, job, out, variance, arch, optimize)
     if previous is not None:
         problems = previous.mismatches(header)
@@ -197,6 +199,8 @@ def plan_render(args) -> RenderPlan:
     distributed = _distributed_plan(args, job, previous)
     if distributed is not None and checkpoints is not None:
         checkpoints.header = replace(checkpoints.header, workers=distributed.workers or 0)
+    if choice.automatic:  # (once every check has passed: a refusal stays one line)
+        print(choice.line(), file=sys.stderr)
     return RenderPlan(scene, job, out, variance, arch, optimize, checkpoints, resume, previous, distributed)
 
 
