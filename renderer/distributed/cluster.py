@@ -57,7 +57,12 @@ class RayCluster:
                  "configure_logging": True}
         if self.address is not None:
             # The nodes get this Lantern's code; its dependencies (taichi, numpy...) must be installed there.
-            ray.init(address=self.address, runtime_env={"py_modules": [str(PACKAGE_ROOT / "renderer")]}, **quiet)
+            try:
+                ray.init(address=self.address, runtime_env={"py_modules": [str(PACKAGE_ROOT / "renderer")]}, **quiet)
+            except Exception as error:  # noqa: BLE001 - Ray raises ConnectionError, RuntimeError, ValueError...
+                first = (str(error).strip().splitlines() or [type(error).__name__])[0]
+                raise RuntimeError(f"--ray-address {self.address}: could not join the Ray cluster ({first}); a "
+                                   "cluster with token authentication also needs RAY_AUTH_MODE=token here") from None
         else:
             # Workers import the same Lantern as this process, whichever checkout it runs from.
             path = os.pathsep.join(p for p in (str(PACKAGE_ROOT), os.environ.get("PYTHONPATH")) if p)
