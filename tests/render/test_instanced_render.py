@@ -3,9 +3,10 @@ SimpleInstancing stand-in renders, and a thousand instances of a 20k-triangle me
 copy of its triangles and render.
 
 Where the claim is about geometry (the z-test, the crowd), the model files' glTF materials are
-overridden by diffuse ones, one per object: a kernel with the principled BSDF takes four times as
-long to compile (a fresh suite compiles every kernel) and is not what these tests compare. The
-stand-in test renders a model file as it opens, principled materials and environment map included."""
+overridden by diffuse ones, one per object: a kernel with the principled BSDF takes three to four
+times as long to compile (a fresh suite compiles every kernel) and is not what these tests
+compare. The stand-in test renders a model file as it opens, principled materials and environment
+map included."""
 import json
 import math
 import warnings
