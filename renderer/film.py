@@ -160,31 +160,33 @@ class Film:
         self._read_pixels(xs, ys, arrays["mean"], arrays["m2"], arrays["count"], arrays["rejected"], arrays["adaptive"])
         return arrays
 
-    @ti.kernel
-    def _write_pixels(self, xs: ti.types.ndarray(), ys: ti.types.ndarray(), mean: ti.types.ndarray(),
-                      m2: ti.types.ndarray(), count: ti.types.ndarray(), rejected: ti.types.ndarray(),
-                      adaptive: ti.types.ndarray()):
-        for i in range(xs.shape[0]):
-            x, y = xs[i], ys[i]
-            for c in ti.static(range(3)):
-                self.mean[x, y][c] = mean[i, c]
-                self.m2[x, y][c] = m2[i, c]
-            self.count[x, y] = count[i]
-            self.rejected[x, y] = rejected[i]
-            self.adaptive[x, y] = adaptive[i]
+    def _write_pixels(self, xs, ys, mean, m2, count, rejected, adaptive):
+        self._pixels(xs, ys, mean, m2, count, rejected, adaptive, True)
+
+    def _read_pixels(self, xs, ys, mean, m2, count, rejected, adaptive):
+        self._pixels(xs, ys, mean, m2, count, rejected, adaptive, False)
 
     @ti.kernel
-    def _read_pixels(self, xs: ti.types.ndarray(), ys: ti.types.ndarray(), mean: ti.types.ndarray(),
-                     m2: ti.types.ndarray(), count: ti.types.ndarray(), rejected: ti.types.ndarray(),
-                     adaptive: ti.types.ndarray()):
+    def _pixels(self, xs: ti.types.ndarray(), ys: ti.types.ndarray(), mean: ti.types.ndarray(),
+                m2: ti.types.ndarray(), count: ti.types.ndarray(), rejected: ti.types.ndarray(),
+                adaptive: ti.types.ndarray(), write: ti.template()):
+        # One kernel body for both directions (`write` is compile-time).
         for i in range(xs.shape[0]):
             x, y = xs[i], ys[i]
-            for c in ti.static(range(3)):
-                mean[i, c] = self.mean[x, y][c]
-                m2[i, c] = self.m2[x, y][c]
-            count[i] = self.count[x, y]
-            rejected[i] = self.rejected[x, y]
-            adaptive[i] = self.adaptive[x, y]
+            if ti.static(write):
+                for c in ti.static(range(3)):
+                    self.mean[x, y][c] = mean[i, c]
+                    self.m2[x, y][c] = m2[i, c]
+                self.count[x, y] = count[i]
+                self.rejected[x, y] = rejected[i]
+                self.adaptive[x, y] = adaptive[i]
+            else:
+                for c in ti.static(range(3)):
+                    mean[i, c] = self.mean[x, y][c]
+                    m2[i, c] = self.m2[x, y][c]
+                count[i] = self.count[x, y]
+                rejected[i] = self.rejected[x, y]
+                adaptive[i] = self.adaptive[x, y]
 
     @ti.func
     def add_sample(self, x: ti.i32, y: ti.i32, value: ti.math.vec3):
