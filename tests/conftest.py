@@ -23,6 +23,7 @@ def taichi_runtime():
 # compiled) then ran alone at the end while the other core idled. Longest first shortens the run.
 LONGEST_FILES = (
     "tests/viewer/test_window_offscreen.py",
+    "tests/distributed/test_ray_render.py",
     "tests/render/test_glass_furnace.py",
     "tests/bench/test_bench_features.py",
     "tests/test_vulkan.py",

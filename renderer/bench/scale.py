@@ -36,6 +36,8 @@ class ScaleBenchConfig:
     spp: int = 128
     integrator: str = "mis"
     seed: int = 3
+    # (workers, chunk spp or None for the default sizer) of each distributed run
+    distributed_runs: tuple[tuple[int, int | None], ...] = ((1, None), (2, None), (2, 1))
 
 
 FULL = ScaleBenchConfig()
@@ -102,7 +104,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), config: ScaleBench
     log(f"{config.scene} {config.size[0]}x{config.size[1]}, {config.spp} spp, {config.integrator}: one process")
     rows = [one_process(scene, job)]
     with RayCluster(cpus=2, address=None):
-        for workers, chunk_spp in ((1, None), (2, None), (2, 1)):
+        for workers, chunk_spp in config.distributed_runs:
             log(f"{workers} workers, chunks of {chunk_spp or 'about 2 s'}")
             rows.append(distributed(scene, job, workers, chunk_spp))
     base = rows[0]

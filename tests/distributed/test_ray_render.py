@@ -51,7 +51,7 @@ def one_process(cornell):
     return render(cornell, job(spp=8))
 
 
-@pytest.mark.parametrize("workers, chunk_spp", [(2, 3), (1, 5)])
+@pytest.mark.parametrize("workers, chunk_spp", [(2, 3)])  # (one worker: the resume test's second half)
 def test_bit_identical_to_one_process_whatever_the_split(cornell, one_process, workers, chunk_spp):
     run = DistributedRun()
     result = render_distributed(cornell, job(spp=8), DistributedOptions(workers=workers, chunk_spp=chunk_spp), run=run)
@@ -63,7 +63,7 @@ def test_bit_identical_to_one_process_whatever_the_split(cornell, one_process, w
 
 
 def test_adaptive_sampling_and_aovs_are_bit_identical(cornell):
-    wanted = job(spp=64, noise_threshold=0.08, min_spp=4, aovs=True)
+    wanted = job(spp=32, noise_threshold=0.1, min_spp=4, aovs=True)
     single = render(cornell, wanted)
     result = render_distributed(cornell, wanted, DistributedOptions(workers=2, chunk_spp=6))
     assert single.pixels_active < single.state.count.size  # some pixels stopped
@@ -88,7 +88,7 @@ def test_a_worker_killed_during_a_chunk_is_replaced_and_the_image_unchanged(corn
 
 
 def test_a_time_budget_ends_with_every_pixel_at_the_same_spp(cornell):
-    result = render_distributed(cornell, job(spp=None, seconds=1.5), DistributedOptions(workers=2))
+    result = render_distributed(cornell, job(spp=None, seconds=1.0), DistributedOptions(workers=2))
     samples = result.state.count + result.state.rejected
     assert result.spp >= 1 and (samples == result.spp).all()
     assert_same_film(result.state, render(cornell, job(spp=result.spp)).state)
@@ -176,12 +176,12 @@ def test_bench_scale_on_a_tiny_image(tmp_path):
 
     from renderer.bench import scale
 
-    config = scale.ScaleBenchConfig(size=(48, 32), spp=3)
+    # (the full benchmark's other runs differ only in their worker count and chunk sizes)
+    config = scale.ScaleBenchConfig(size=(48, 32), spp=3, distributed_runs=((2, 1),))
     assert scale.run(out_dir=tmp_path, config=config) == 0  # 0: every image bit-identical to one process
     report = json.loads((tmp_path / "bench_scale.json").read_text())
     runs = {r["name"]: r for r in report["runs"]}
-    assert set(runs) == {"1 process x all cores", "1 worker x 1 thread", "2 workers x 1 thread",
-                         "2 workers x 1 thread, 1-spp chunks"}
+    assert set(runs) == {"1 process x all cores", "2 workers x 1 thread, 1-spp chunks"}
     one_spp = runs["2 workers x 1 thread, 1-spp chunks"]
     assert one_spp["chunks"] == one_spp["groups"] * 3 and one_spp["bytes_per_chunk"] > 0
     assert report["chunk_rule"]["min_chunk_render_s"] > 0 and (tmp_path / "bench_scale.png").is_file()
