@@ -94,20 +94,7 @@ class RenderPlan:
     checkpoints: CheckpointPolicy | None
     resume: Resume | None
     previous: CheckpointHeader | None  # the header of the checkpoint continued
-    distributed: "DistributedPlan | None" = None  # Ray workers (renderer/distributed/)
-
-
-@dataclass(frozen=True)
-class DistributedPlan:
-    workers: int | None
-    address: str | None
-    threads: int | None
-    chunk_spp: int | None
-
-    def where(self, arch: str) -> str:
-        place = f"the Ray cluster at {self.address}" if self.address else "a local Ray instance"
-        count = f"{self.workers} workers" if self.workers else "its workers"
-        return f"{count} ({arch}) on {place}"
+    distributed: "DistributedOptions | None" = None  # Ray workers (renderer/distributed/render.py)
 
 
 def run_render(args, stop: StopRequests) -> int:
@@ -204,7 +191,7 @@ def plan_render(args) -> RenderPlan:
     return RenderPlan(scene, job, out, variance, arch, optimize, checkpoints, resume, previous, distributed)
 
 
-def _distributed_plan(args, job: RenderJob, previous: CheckpointHeader | None) -> DistributedPlan | None:
+def _distributed_plan(args, job: RenderJob, previous: CheckpointHeader | None) -> "DistributedOptions | None":
     """Ray workers when asked for, or when continuing a distributed render (its pixel groups may
     stand at different sample counts: only the distributed driver continues that exactly)."""
     workers = getattr(args, "workers", None)
@@ -221,19 +208,20 @@ def _distributed_plan(args, job: RenderJob, previous: CheckpointHeader | None) -
     if hasattr(make_integrator(job.integrator), "make_program"):
         raise ValueError(f"--workers: {job.integrator} renders whole-image photon passes and cannot be distributed; "
                          "use path, nee or mis")
-    return DistributedPlan(workers, address, getattr(args, "worker_threads", None), getattr(args, "chunk_spp", None))
+    from renderer.distributed.render import DistributedOptions
+
+    return DistributedOptions(workers, address, getattr(args, "worker_threads", None), getattr(args, "chunk_spp", None))
 
 
 def _render_distributed(plan: RenderPlan, stop: StopRequests) -> RenderResult:
-    from renderer.distributed.render import DistributedOptions, DistributedRun, progress_line, render_distributed
+    from renderer.distributed.render import DistributedRun, progress_line, render_distributed
     from renderer.scene.load_options import LoadOptions
 
-    d = plan.distributed
     run = DistributedRun()
     if stop is not None:
         stop.defer()
-    result = render_distributed(plan.scene, plan.job, DistributedOptions(d.workers, d.address, d.threads, d.chunk_spp),
-                                plan.arch, plan.optimize, plan.scene.model_files.options or LoadOptions(),
+    result = render_distributed(plan.scene, plan.job, plan.distributed, plan.arch, plan.optimize,
+                                plan.scene.model_files.options or LoadOptions(),
                                 progress_line(), stop, plan.checkpoints, plan.resume, run)
     lost = f", {run.lost_chunks} chunks re-run after their worker died" if run.lost_chunks else ""
     print(f"\n{run.workers} workers, {run.groups} pixel groups, {run.chunks} chunks{lost}", file=sys.stderr)

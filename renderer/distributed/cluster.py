@@ -111,6 +111,11 @@ class WorkerPool:
             self.run.worker_stats[number] = WorkerStats(host=hello["host"])
             self.idle.append(actor)
 
+    def failure(self, actor, error) -> RuntimeError:
+        """A worker's task that raised (Ray's RayTaskError), as one line naming the worker."""
+        cause = getattr(error, "cause", None)
+        return RuntimeError(f"worker {self.ids[actor]}: {cause or str(error).splitlines()[0]}")
+
     def replace(self, actor, what: str) -> None:
         """`actor` died doing `what`: say so, start another in its place."""
         self.run.lost_chunks += 1

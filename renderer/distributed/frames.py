@@ -28,16 +28,15 @@ class RayFrames:
 
     def render(self, requests: Sequence[FrameRequest], stop=None) -> Iterator[FrameResult]:
         from renderer.distributed.bundle import SceneBundle
-        from renderer.distributed.cluster import RayCluster, WorkerPool, worker_actor
-        from renderer.distributed.render import DistributedRun, local_threads
+        from renderer.distributed.cluster import WorkerPool, worker_actor
+        from renderer.distributed.render import DistributedRun
         from renderer.distributed.worker import WorkerSettings
 
         options, job = self.options, self.job
-        threads = options.threads or (local_threads(options.workers or 1) if options.address is None else 1)
+        threads = options.threads_per_worker()
         self.run = run = DistributedRun()
-        with RayCluster(None if options.address else (options.workers or 1) * threads, options.address) as ray:
-            workers = options.workers or max(1, int(ray.cluster_resources().get("CPU", 1)) // threads)
-            workers = max(1, min(workers, len(requests)))
+        with options.cluster() as ray:
+            workers = max(1, min(options.worker_count(ray), len(requests)))
             settings = WorkerSettings(job.size, job.integrator, job.max_depth, job.seed, self.arch, self.optimize,
                                       threads, job.keeps_aovs, self.scene.model_files.options)
             bundle = SceneBundle.of(self.scene)
@@ -65,8 +64,7 @@ class RayFrames:
                     pool.replace(actor, f"frame {request.index}")
                     continue
                 except ray.exceptions.RayTaskError as error:
-                    cause = getattr(error, "cause", None)
-                    raise RuntimeError(f"worker {pool.ids[actor]}: {cause or str(error).splitlines()[0]}") from None
+                    raise pool.failure(actor, error) from None
                 run.chunks += 1
                 pool.idle.append(actor)
                 while order and order[0] in done:  # in the order of the requests

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from renderer.distributed.cluster import WorkerPool
+from renderer.distributed.cluster import RayCluster, WorkerPool
 from renderer.distributed.planner import MAX_SPP, Chunk, ChunkPlanner, ChunkSizer
 from renderer.film import FilmState
 from renderer.headless import RenderJob, RenderResult, Resume
@@ -35,6 +35,25 @@ class DistributedOptions:
     threads: int | None = None  # CPU threads per worker
     chunk_spp: int | None = None  # None: ChunkSizer's rule
     chunk_seconds: float = 2.0
+
+    def threads_per_worker(self) -> int:
+        if self.threads:
+            return self.threads
+        return local_threads(self.workers or 1) if self.address is None else 1
+
+    def cluster(self) -> RayCluster:
+        """The Ray to run on: a local instance with a CPU per worker thread, or the cluster joined."""
+        return RayCluster(None if self.address else (self.workers or 1) * self.threads_per_worker(), self.address)
+
+    def worker_count(self, ray) -> int:
+        """The workers asked for, or as many as the cluster's CPUs hold."""
+        return self.workers or max(1, int(ray.cluster_resources().get("CPU", 1)) // self.threads_per_worker())
+
+    def where(self, arch: str) -> str:
+        """Where the render runs, in words."""
+        place = f"the Ray cluster at {self.address}" if self.address else "a local Ray instance"
+        count = f"{self.workers} workers" if self.workers else "its workers"
+        return f"{count} ({arch}) on {place}"
 
 
 @dataclass
@@ -88,7 +107,7 @@ def render_distributed(scene: Scene, job: RenderJob, options: DistributedOptions
     driver runs adaptive sampling's checks and the final statistics on its own film).
     `on_worker_started(chunk, pid)`: called as each chunk is handed out (tests kill workers there)."""
     from renderer.distributed.bundle import SceneBundle
-    from renderer.distributed.cluster import RayCluster, worker_actor
+    from renderer.distributed.cluster import worker_actor
     from renderer.distributed.pixel_groups import PixelSlices, empty_state, group_count
     from renderer.distributed.worker import WorkerSettings
     from renderer.integrators import make_integrator
@@ -103,10 +122,10 @@ def render_distributed(scene: Scene, job: RenderJob, options: DistributedOptions
     state = _starting_state(resume, width, height, True, job.keeps_aovs, empty_state)
     slices = PixelSlices(width, height)
     run = run if run is not None else DistributedRun()
-    threads = options.threads or (local_threads(options.workers or 1) if options.address is None else 1)
+    threads = options.threads_per_worker()
     start = time.perf_counter()
-    with RayCluster(None if options.address else (options.workers or 1) * threads, options.address) as ray:
-        workers = options.workers or max(1, int(ray.cluster_resources().get("CPU", 1)) // threads)
+    with options.cluster() as ray:
+        workers = options.worker_count(ray)
         groups = group_count(width * height, workers)
         planner = ChunkPlanner(slices.progress(state), groups, job.spp, job.min_spp if adaptive else None)
         bundle = SceneBundle.of(scene)
@@ -243,8 +262,7 @@ class _Driver:
             self._lost(actor, chunk)
             return
         except self.ray.exceptions.RayTaskError as error:
-            cause = getattr(error, "cause", None)
-            raise RuntimeError(f"worker {self.pool.ids[actor]}: {cause or str(error).splitlines()[0]}") from None
+            raise self.pool.failure(actor, error) from None
         self.slices.scatter(self.state, chunk.first, chunk.count, arrays)
         self.run.bytes_moved += sum(a.nbytes for a in arrays.values())
         first = actor not in self.compiled
