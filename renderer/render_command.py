@@ -150,8 +150,8 @@ def plan_render(args) -> RenderPlan:
         raise ValueError("render: give a SCENE, or --resume CHECKPOINT")
     scene = load_any(resolve_scene(args.scene if args.scene is not None else previous.scene),
                      options_from_arguments(args))
-    job = _job(args, scene, previous)
-    _check_denoising(job)
+    job = job_from_arguments(args, scene, previous)
+    check_denoising(job)
     check_film(scene.path, *job.size, scene.model_files.options.budget,
                "--size" if args.size else "the scene's render.width x height", aovs=job.keeps_aovs)
     out = args.out or (Path(previous.out) if previous else DEFAULT_OUT_DIR / f"{scene.name}_{job.integrator}.png")
@@ -261,7 +261,7 @@ def write_outputs(plan: RenderPlan, result: RenderResult) -> None:
             print(written)
 
 
-def _check_denoising(job: RenderJob) -> None:
+def check_denoising(job: RenderJob) -> None:
     """--denoise and --noise-threshold refused in one line before Taichi starts where they cannot work."""
     from renderer.denoise import unavailable_reason
     from renderer.integrators import make_integrator
@@ -285,7 +285,7 @@ def check_checkpoint_path(path: Path) -> None:
     check_writable(path)
 
 
-def _job(args, scene, previous: CheckpointHeader | None) -> RenderJob:
+def job_from_arguments(args, scene, previous: CheckpointHeader | None) -> RenderJob:
     """The command line's job; on --resume, the checkpoint's settings where the line names none."""
     spp, seconds = args.spp, args.seconds
     if previous is not None and spp is None and seconds is None:

@@ -61,7 +61,7 @@ def run_animation(args, stop: StopRequests) -> int:
 def plan_animation(args) -> AnimationPlan:
     """Read and check the options and the scene (one-line errors), and the camera of every frame."""
     from renderer.animation.turntable import Turntable, orbit_centre
-    from renderer.render_command import _check_denoising, _job
+    from renderer.render_command import check_denoising, job_from_arguments
     from renderer.scene.catalog import load_any, resolve_scene
     from renderer.scene.limits import check_film
     from renderer.scene.load_options import options_from_arguments
@@ -79,8 +79,8 @@ def plan_animation(args) -> AnimationPlan:
     if args.scene is None:
         raise ValueError("render: give a SCENE")
     scene = load_any(resolve_scene(args.scene), options_from_arguments(args))
-    job = _job(args, scene, None)
-    _check_denoising(job)
+    job = job_from_arguments(args, scene, None)
+    check_denoising(job)
     check_film(scene.path, *job.size, scene.model_files.options.budget,
                "--size" if args.size else "the scene's render.width x height", aovs=job.keeps_aovs)
     if frames is None:
