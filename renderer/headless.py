@@ -276,18 +276,24 @@ def display_tonemapper(integrator: str, requested: str | None) -> str:
     return requested or make_integrator(integrator).display_tonemapper or "aces"
 
 
+def progress_head(spp: float, target: int | None, elapsed: float, seconds: float | None) -> tuple[str, float]:
+    """'[####      ] 12/64 spp' of a render towards an spp target or a time budget, and its ETA in seconds."""
+    if target:
+        frac = spp / target
+        eta = elapsed * (1 - frac) / max(frac, 1e-9)
+    else:
+        frac = min(1.0, elapsed / seconds)
+        eta = max(0.0, seconds - elapsed)
+    bar = "#" * int(frac * 30)
+    total = f"/{target}" if target else ""
+    return f"[{bar:<30}] {spp_text(spp)}{total} spp", eta
+
+
 def progress_bar(stream=sys.stderr):
     def report(spp, target, elapsed, pixels, seconds):
         rate = spp * pixels / max(elapsed, 1e-9)
-        if target:
-            frac = spp / target
-            eta = elapsed * (1 - frac) / max(frac, 1e-9)
-        else:
-            frac = min(1.0, elapsed / seconds)
-            eta = max(0.0, seconds - elapsed)
-        bar = "#" * int(frac * 30)
-        total = f"/{target}" if target else ""
-        stream.write(f"\r[{bar:<30}] {spp_text(spp)}{total} spp  {rate / 1e6:6.2f} Msamples/s  ETA {eta:5.1f} s ")
+        head, eta = progress_head(spp, target, elapsed, seconds)
+        stream.write(f"\r{head}  {rate / 1e6:6.2f} Msamples/s  ETA {eta:5.1f} s ")
         stream.flush()
 
     return report

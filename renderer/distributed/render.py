@@ -307,16 +307,13 @@ class _Driver:
 
 def progress_line(stream=sys.stderr):
     """A progress bar over every worker: spp of the image, samples/s of each worker and in total."""
-    from renderer.pixel_slices import spp_text
+    from renderer.headless import progress_head
 
     def report(spp, target, elapsed, workers: dict[int, WorkerStats], seconds):
-        frac = spp / target if target else min(1.0, elapsed / seconds)
-        eta = elapsed * (1 - frac) / max(frac, 1e-9) if target else max(0.0, seconds - elapsed)
+        head, eta = progress_head(spp, target, elapsed, seconds)
         rates = " ".join(f"w{n} {s.rate / 1e6:.2f}" for n, s in sorted(workers.items()))
         total = sum(s.rate for s in workers.values()) / 1e6
-        bar = "#" * int(frac * 30)
-        of = f"/{target}" if target else ""
-        stream.write(f"\r[{bar:<30}] {spp_text(spp)}{of} spp  {total:6.2f} Msamples/s ({rates})  ETA {eta:5.1f} s ")
+        stream.write(f"\r{head}  {total:6.2f} Msamples/s ({rates})  ETA {eta:5.1f} s ")
         stream.flush()
 
     return report
