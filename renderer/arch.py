@@ -4,6 +4,8 @@ import os
 
 import taichi as ti
 
+from renderer import taichi_frontend
+
 ARCHES = ("auto", "cpu", "cuda", "vulkan")
 # "compile": skip Taichi's own IR optimisations (LLVM still optimises the code): a path tracer
 # kernel compiles 3-10x sooner, and runs up to ~10% slower (`python app.py bench startup`).
@@ -41,6 +43,7 @@ def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str |
     if arch == "auto" and cpu_expected(arch):
         arch = "cpu"  # no CUDA driver: skip Taichi's noisy probe-and-fall-back
     wanted = {"auto": ti.cuda, "cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan}[arch]
+    taichi_frontend.install()  # a third less compile time for large kernels
     ti.init(arch=wanted, **kwargs)
     used = ti.lang.impl.current_cfg().arch
     if arch in ("cuda", "vulkan") and used != wanted:

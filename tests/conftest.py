@@ -1,6 +1,7 @@
 import pytest
 import taichi as ti
 
+from renderer import taichi_frontend
 from renderer.arch import taichi_options
 
 
@@ -13,6 +14,7 @@ def taichi_runtime():
     per module frees them; compiled kernels come back from the offline cache. Kernels are
     optimised for compile time: a clean checkout compiles every kernel of the suite afresh.
     """
+    taichi_frontend.install()  # as init_taichi does: cheaper compiles
     ti.init(arch=ti.cpu, random_seed=0, offline_cache=True, **taichi_options("compile"))
     yield
     ti.reset()
