@@ -14,7 +14,12 @@ internal resolution and sample count the next frame renders:
 - A still frame renders what fits the same budget: whole samples per pixel when one fits, else a
   share of the pixel slices of a sample (renderer/pixel_slices.py), continuing where the last
   frame stopped; so a frame never waits for a whole sample of a slow scene, and input is read
-  and the window redrawn every frame.
+  every frame.
+- Presenting (tone mapping, canvas upload, HUD, the window's own frame) costs a fixed 10-15 ms at
+  960x540 on a CPU with software Vulkan, a third of a frame. A moving view or an input presents
+  at once; an untouched still view redraws every `present_interval()` (a few times a second:
+  presenting then costs at most STILL_PRESENT_SHARE of the time), and its frames in between only
+  render and read input, so sampling keeps its speed without making an input wait.
 """
 from __future__ import annotations
 
@@ -45,6 +50,12 @@ COST_SMOOTHING = 0.35  # weight of the newest measurement in the moving averages
 SCALE_RISE = 0.5  # fraction of the way towards a larger target scale taken per frame
 INITIAL_MOVING_SCALE = 0.25  # before anything was measured
 
+# An untouched still view redraws often enough that presenting takes at most this share of the
+# time (between these bounds, in seconds): with a 13 ms present that is about twice a second.
+STILL_PRESENT_SHARE = 0.03
+MIN_PRESENT_INTERVAL = 0.1
+MAX_PRESENT_INTERVAL = 0.5
+
 # Seconds between refreshes of the HUD's figures that need a reduction over the film (noise, then
 # work per ray, in turn): ~5-10 ms each at 960x540 on a 2-core CPU, time a still frame's render
 # gives up for them.
@@ -60,8 +71,9 @@ class ResolutionController:
 
     It keeps an exponential moving average of the render cost in seconds per pixel-sample (one
     per context, e.g. per (scene, integrator), so switching back to a cheap view is right at
-    once) and of the frame's overhead outside rendering. The render budget is the target frame
-    time minus that overhead (at least MIN_RENDER_BUDGET_FRACTION of the target).
+    once), of the frame's overhead outside rendering and presenting, and of presenting. The render
+    budget is the target frame time minus that overhead, and minus the present on a frame that
+    presents (at least MIN_RENDER_BUDGET_FRACTION of the target).
 
     Moving: pixels = budget / cost, i.e. the pixel count scaled by target/measured; as a linear
     scale of the window clamped to [min_scale, 1]. A lower target applies at once (the view
@@ -86,6 +98,7 @@ class ResolutionController:
         self.min_still_slices = 1
         self.scale = INITIAL_MOVING_SCALE
         self.overhead = 0.0
+        self.present_seconds = 0.0
         self._costs: dict[Hashable, float] = {}
         self.context: Hashable = None
 
@@ -99,8 +112,19 @@ class ResolutionController:
         """Smoothed seconds per pixel-sample in the current context, None before a measurement."""
         return self._costs.get(self.context)
 
+    def record_present(self, seconds: float) -> None:
+        """What presenting a frame took (display update, canvas, HUD, the window's frame)."""
+        if math.isfinite(seconds) and seconds >= 0.0:
+            self.present_seconds += COST_SMOOTHING * (seconds - self.present_seconds)
+
+    def present_interval(self) -> float:
+        """Seconds between redraws of an untouched still view: presenting then takes about
+        STILL_PRESENT_SHARE of the time."""
+        return min(max(self.present_seconds / STILL_PRESENT_SHARE, MIN_PRESENT_INTERVAL), MAX_PRESENT_INTERVAL)
+
     def record(self, render_seconds: float, pixel_samples: int, frame_seconds: Optional[float] = None) -> None:
-        """One frame's measurement: render time for `pixel_samples`, and the whole frame's time."""
+        """One frame's measurement: render time for `pixel_samples`, and the frame's time outside
+        presenting (the caller leaves that out: see record_present)."""
         if pixel_samples <= 0 or render_seconds <= 0 or not math.isfinite(render_seconds):
             return
         cost = render_seconds / pixel_samples
@@ -111,8 +135,9 @@ class ResolutionController:
             self.overhead += COST_SMOOTHING * (overhead - self.overhead)
 
     # -- decisions --
-    def render_budget(self) -> float:
-        return max(self.target_seconds - self.overhead, MIN_RENDER_BUDGET_FRACTION * self.target_seconds)
+    def render_budget(self, presenting: bool = True) -> float:
+        spent = self.overhead + (self.present_seconds if presenting else 0.0)
+        return max(self.target_seconds - spent, MIN_RENDER_BUDGET_FRACTION * self.target_seconds)
 
     def target_scale(self) -> float:
         """The linear scale whose pixel count fits the budget at the measured cost."""
@@ -141,7 +166,7 @@ class ResolutionController:
         w, h = self.full_size
         return max(1, min(w, round(w * scale))), max(1, min(h, round(h * scale)))
 
-    def still_slices(self, reserved_seconds: float = 0.0) -> int:
+    def still_slices(self, reserved_seconds: float = 0.0, presenting: bool = True) -> int:
         """Pixel slices for a full-resolution frame that takes about the render budget, less
         `reserved_seconds` the frame spends on something else (before anything is measured: one
         slice, the cheapest frame there is)."""
@@ -149,7 +174,7 @@ class ResolutionController:
         if cost is None:
             return self.min_still_slices
         slice_cost = cost * self.full_size[0] * self.full_size[1] / ROUND_SLICES
-        budget = max(self.render_budget() - reserved_seconds, 0.0)
+        budget = max(self.render_budget(presenting) - reserved_seconds, 0.0)
         slices = min(budget // slice_cost, self.max_spp * ROUND_SLICES)
         return int(max(slices, self.min_still_slices))
 
@@ -384,9 +409,10 @@ class ViewerSession:
             self.request_reset(interactive=True)
         return moved
 
-    def plan_frame(self, now: float, reserved_seconds: float = 0.0) -> FramePlan:
+    def plan_frame(self, now: float, reserved_seconds: float = 0.0, presenting: bool = True) -> FramePlan:
         """Decide size, samples and reset for the frame about to render; a still frame leaves
-        `reserved_seconds` of its budget to other work (the viewer's rate-limited statistics).
+        `reserved_seconds` of its budget to other work (the viewer's rate-limited statistics),
+        and the present's share of it only if it will present (a moving frame always does).
 
         Interactive changes (camera motion, slider drags) render at the reduced resolution. A
         frame counts as still only after `settle_seconds` without such a change: a drag whose
@@ -403,7 +429,7 @@ class ViewerSession:
             size, slices = self.resolution.moving_size(starting=not self._was_interactive), ROUND_SLICES
         else:
             self._last_motion = None
-            size, slices = self.window_size, self.resolution.still_slices(reserved_seconds)
+            size, slices = self.window_size, self.resolution.still_slices(reserved_seconds, presenting)
         reset = self._pending_reset or size != self.active_size
         if reset:
             self.resets += 1

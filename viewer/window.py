@@ -6,10 +6,14 @@
 
 A frame: dispatch the keys pressed since the last frame, move the camera, decide (ViewerSession)
 whether to reset and at which internal resolution and number of pixel slices to render, render
-into the film, bring the display image up to date (viewer/display.py: packed RGBA8 as the canvas
-takes it, only the pixels the frame's slices changed; while moving, at the reduced internal size,
-which the canvas stretches over the window), put it on the canvas, draw the HUD and present. The HUD's noise and work figures (reductions over the
-film) are refreshed one at a time, at most once per STATS_INTERVAL, on still frames, whose render
+into the film, and, if the frame presents, bring the display image up to date (viewer/display.py:
+packed RGBA8 as the canvas takes it, only the pixels the slices rendered since the last present
+changed; while moving, at the reduced internal size, which the canvas stretches over the window),
+put it on the canvas, draw the HUD and present. A frame presents when the view moves, on any
+input, when what the HUD or notice says changes, and otherwise every
+ResolutionController.present_interval() (viewer/session.py): an untouched still view spends its
+frames rendering. The HUD's noise and work figures (reductions over the film) are refreshed one at
+a time, at most once per STATS_INTERVAL, on still frames that present with the HUD up, whose render
 then takes that much less time, so that frame is no longer than the others.
 
 Loading a scene and compiling its kernels take seconds. Before either, one frame shows the
@@ -99,11 +103,16 @@ class ViewerApp:
     def __init__(self, scene_path, size: tuple[int, int] = DEFAULT_SIZE, integrator: Optional[str] = None,
                  show_window: bool = True, screenshot_folder=None, target_seconds: float = DEFAULT_TARGET_SECONDS,
                  settle_seconds: float = SETTLE_SECONDS, scenes: Optional[list] = None,
-                 clock: Callable[[], float] = time.perf_counter, load_options=None):
+                 clock: Callable[[], float] = time.perf_counter, load_options=None,
+                 still_present_interval: Optional[float] = None):
         self.size = (int(size[0]), int(size[1]))
         self.load_options = load_options  # memory budget and model-folder rule (None: defaults)
         self.show_window = show_window
         self.clock = clock
+        # Seconds between redraws of an untouched still view: None adapts it to what presenting
+        # costs (ResolutionController.present_interval); 0 presents every frame (tests that read
+        # every frame's image back).
+        self.still_present_interval = still_present_interval
         self.screenshot_folder = screenshot_dir(screenshot_folder)
         self.keymap = KeyMap(integrator_names(), {name: cls.hotkey for name, cls in INTEGRATORS.items()})
         self.renderers: dict[Path, Renderer] = {}
@@ -134,6 +143,10 @@ class ViewerApp:
         self._queued_keys: list[str] = []
         self._awaiting_render = False
         self.frames = 0
+        self.presents = 0  # frames that presented (the rest only rendered and read input)
+        self._last_present: Optional[float] = None
+        self._presented_key = None  # what the HUD and notices said on the last present
+        self._cursor_before = None
         self.last_plan = None
         self.last_frame: Optional[np.ndarray] = None  # off-screen: GGUI's image of the last frame
         self.last_screenshot: Optional[tuple[Path, Path]] = None
@@ -357,10 +370,11 @@ class ViewerApp:
         self._notice_key = None
 
         s.resolution.set_context((s.scene_path, integrator, features))
-        stats_due = self._stats_due.ready(now)
+        asked = self._present_asked(inp, now)
+        stats_due = asked and s.hud_visible and self._stats_due.ready(now)
         job = self._stats_next
         reserved = self._stats_seconds[job] if stats_due else 0.0
-        plan = s.plan_frame(now, reserved_seconds=reserved)
+        plan = s.plan_frame(now, reserved_seconds=reserved, presenting=asked)
         self.last_plan = plan
         if plan.reset:
             renderer.reset(*plan.size)
@@ -380,8 +394,6 @@ class ViewerApp:
         pixel_samples = plan.size[0] * plan.size[1] * (renderer.slices_done - slices_before) / ROUND_SLICES
         self._samples.add(now, pixel_samples)
 
-        self.last_display_update = self.display.update(renderer.film, self._accumulation(), renderer.slices_done,
-                                                       self._display_settings())
         self._choose_image(renderer, integrator, plan)
         stats_seconds = 0.0
         if fresh:  # compile the reductions of a new film here, in the frame that waits for Taichi anyway
@@ -394,13 +406,45 @@ class ViewerApp:
             self._stats_due.mark(now)
             self._stats_seconds[job] = min(stats_seconds, s.resolution.target_seconds)
             self._stats_next = (job + 1) % len(self._stats_jobs)
-        self._present(now)
+        present_seconds = 0.0
+        self.last_display_update = None
+        if asked or plan.interactive or plan.reset or fresh or self._display_key(now) != self._presented_key:
+            t0 = time.perf_counter()
+            self.last_display_update = self.display.update(renderer.film, self._accumulation(),
+                                                           renderer.slices_done, self._display_settings())
+            self._present(now)
+            present_seconds = time.perf_counter() - t0
+            if not fresh:
+                s.resolution.record_present(present_seconds)
         frame_seconds = time.perf_counter() - start
         self._frame_ms = 1000.0 * frame_seconds
         if not fresh and pixel_samples > 0:  # a compiling frame says nothing about the render cost (nor
             # does one where adaptive sampling had stopped every pixel)
-            s.resolution.record(render_seconds, pixel_samples, frame_seconds - stats_seconds)
+            s.resolution.record(render_seconds, pixel_samples, frame_seconds - stats_seconds - present_seconds)
         return self.running
+
+    def _present_asked(self, inp: FrameInput, now: float) -> bool:
+        """Whether this frame presents whatever it renders: on input (a key, a held key or button,
+        the cursor moving over the HUD, whose widgets react to it), and when the still view's
+        present interval has passed."""
+        cursor_moved = inp.cursor != self._cursor_before
+        self._cursor_before = inp.cursor
+        if inp.pressed or inp.held or inp.buttons:
+            return True
+        if cursor_moved and inp.cursor is not None and self.session.hud_visible:
+            u, v = inp.cursor
+            if hud.hud_rect(self.size).contains(u, 1.0 - v):
+                return True
+        interval = self.still_present_interval
+        if interval is None:
+            interval = self.session.resolution.present_interval()
+        return self._last_present is None or now - self._last_present >= interval
+
+    def _display_key(self, now: float) -> tuple:
+        """What the window says besides the image: a change presents at once."""
+        s = self.session
+        return (s.hud_visible, s.help_visible, self.notice, s.error, s.current_message(now), self.image_label,
+                self._display_settings())
 
     def _choose_image(self, renderer: Renderer, integrator: str, plan) -> None:
         """The raw film, or in the denoised view the newest denoised image of this accumulation
@@ -476,6 +520,8 @@ class ViewerApp:
 
     def _present(self, now: float) -> None:
         s = self.session
+        self.presents += 1
+        self._last_present = now
         show_on_canvas(self.canvas, self.display.shown if self._shown is None else self._shown)
         if s.hud_visible:
             forced = INTEGRATORS[s.integrator].display_tonemapper
@@ -489,6 +535,7 @@ class ViewerApp:
             hud.draw_help(self.gui, self.size, self.keymap.help_text())
         if self.notice:
             hud.draw_notice(self.gui, self.size, self.notice)
+        self._presented_key = self._display_key(now)
         if self.show_window:
             self.window.show()
         else:

@@ -9,27 +9,30 @@ integrator, at 960x540 by default:
              that compiles, after the frame that shows the "compiling..." notice) and
              first-image time of that switch, and the longest frame meanwhile. Taichi's offline
              cache is warm after the first run, so the compile is mostly the kernels' warm start.
-  still      STILL_SECONDS without input: frame times, and the samples per second of those
-             time-sliced frames; then as many seconds of still frames made of whole samples per
-             pixel (the viewer before pixel slices), in the same frame loop: the sliced rate must
-             stay within 5% of it, and its latency is the "before" figure.
-  moving     MOVING_SECONDS with W held (the camera flies): frame times.
+  still      STILL_SECONDS without input: frame times, presents, and the samples per second of
+             those time-sliced frames (an untouched still view presents a few times a second and
+             otherwise only renders: viewer/session.py); then STILL_SECONDS of still frames
+             every third of which gets a key press (Tab toggles the help overlay, a display-only
+             change, and the benchmark checks that the same frame presented it): the times of
+             frames that answer an input. Then the same with every still frame made of whole
+             samples per pixel (the viewer before pixel slices), in the same frame loop: the
+             sliced rate must stay within 5% of it, and its latency is the "before" figure.
+  moving     MOVING_SECONDS with W held (the camera flies): frame times (every one presents).
 
 Latency is measured from an input event to the end of the first frame that shows its effect.
 GGUI queues events while a frame renders and the next frame reads them first, so an event that
-arrives at a uniformly random moment of frame k waits for the rest of frame k and shows at the
-end of frame k + 1: latency = (1 - u) * t_k + t_{k+1}, u uniform (fixed seed). Both frames are
-measured wall times of the real loop; each frame also really receives a key press ('h' toggles
-the help overlay (Tab) on still frames, a display-only change; W moves the camera on moving frames),
-and the benchmark checks that the same frame's state reflects it.
+arrives at a uniformly random moment waits for the rest of the frame it arrived in and shows at
+the end of the frame after it: latency = (1 - u) * t_k + t_answer, with frame k drawn in
+proportion to its length (a long frame catches more events), u uniform, and t_answer the next
+moving frame, or one of the measured frames that answered a key while still (fixed seed). All
+are measured wall times of the real loop.
 
 Target (issue: "Interactive on a CPU"): p95 latency at most 100 ms for every scene and
 integrator, still or moving, on a quiet machine; still samples/s at least 95% of whole-image
-passes. The two pull apart on a 2-core CPU: p95 <= 100 ms needs frames of ~45 ms, and GGUI's own
-frame (software Vulkan: the canvas image and the HUD drawn, then read back off-screen or
-presented) takes ~10-15 ms of it whatever the viewer does, which caps the sliced rate near
-(45 - 13) / 45 of whole-sample frames; and a scene whose single pixel slice takes longer than
-the budget (the showcase with mis under load) cannot keep its frames that short. Writes <out_dir>/bench_interactive.json and bench_interactive.png.
+passes. GGUI's own frame (software Vulkan: the canvas image and the HUD drawn, then read back
+off-screen or presented) takes ~10-15 ms whatever the viewer does, which is why the still view
+presents only on input and a few times a second. Writes <out_dir>/bench_interactive.json and
+bench_interactive.png.
 """
 from __future__ import annotations
 
@@ -40,6 +43,7 @@ import tempfile
 import time
 import warnings
 from pathlib import Path
+from typing import Optional
 
 from renderer.bench.common import (describe_error, load_average, log, print_table, pyplot, report_header,
                                    save_figure, verdict, write_json)
@@ -51,6 +55,8 @@ TARGET_STILL_RATE = 0.95  # sliced still frames keep this share of whole-image p
 STILL_SECONDS = 3.0
 MOVING_SECONDS = 2.0
 SWITCH_FRAMES_LIMIT = 50  # a switch that has not shown an image after this many frames failed
+EVENTS = 2000  # simulated input events per measured phase (their arrival moments; see event_latencies)
+KEY_EVERY = 3  # still frames per key press while measuring the frames that answer an input
 FULL_INTEGRATORS = ("path", "nee", "mis", "sppm", "normals")
 QUICK = {"scenes": ("cornell_box", "showcase"), "integrators": ("path", "mis"), "size": (320, 180),
          "still_seconds": 1.0, "moving_seconds": 0.7}
@@ -79,10 +85,20 @@ def percentile(values, q: float) -> float:
     return ordered[low] + (position - low) * (ordered[high] - ordered[low])
 
 
-def event_latencies(frame_seconds: list[float], rng: random.Random) -> list[float]:
-    """One event per frame boundary: arriving at a uniform moment of frame k, shown at the end of
-    frame k + 1 (see the module docstring)."""
-    return [(1.0 - rng.random()) * before + after for before, after in zip(frame_seconds, frame_seconds[1:])]
+def event_latencies(frame_seconds: list[float], rng: random.Random, answers: Optional[list[float]] = None,
+                    count: int = EVENTS) -> list[float]:
+    """`count` events at uniformly random moments of the measured frames (a frame is hit in
+    proportion to its length), each shown at the end of the frame after the one it arrived in:
+    the next measured frame, or with `answers` one of those frame times (the frames that
+    answered an input). See the module docstring."""
+    hit = frame_seconds if answers is not None else frame_seconds[:-1]
+    if not hit or (answers is not None and not answers):
+        return []
+    latencies = []
+    for k in rng.choices(range(len(hit)), weights=hit, k=count):
+        after = frame_seconds[k + 1] if answers is None else rng.choice(answers)
+        latencies.append((1.0 - rng.random()) * hit[k] + after)
+    return latencies
 
 
 def _step_timed(app, inp) -> float:
@@ -118,31 +134,47 @@ def measure_switch(app, scene_path: Path, integrator: str) -> dict:
 
 
 def measure_still(app, seconds: float, rng: random.Random) -> dict:
-    """Still frames for `seconds`, a help-overlay toggle (Tab) on each; from the first frame that
-    accumulates at full size (the frames before it are the switch's preview and reset)."""
+    """Still frames from the first that accumulates at full size (the frames before it are the
+    switch's preview and reset): `seconds` untouched (samples/s, frame times, presents), then
+    `seconds` with a help-overlay toggle (Tab) every KEY_EVERY frames (the frames that answer)."""
     from viewer.window import FrameInput
 
     for _ in range(SWITCH_FRAMES_LIMIT):
         if app.last_plan is not None and not app.last_plan.interactive and not app.last_plan.reset:
             break
         app.step(FrameInput())
-    times, pixel_samples = [], 0.0
-    toggles_seen = True
-    end = time.perf_counter() + seconds
-    while time.perf_counter() < end or len(times) < 3:
-        before_help = app.session.help_visible
+
+    def still_step(inp) -> tuple[float, float]:
         slices_before = app.renderer.slices_done
-        times.append(_step_timed(app, FrameInput(pressed=("Tab",))))
-        toggles_seen &= app.session.help_visible != before_help  # the same frame showed it
+        seconds_taken = _step_timed(app, inp)
         if app.last_plan.reset:
             raise RuntimeError("a still frame reset the accumulation")
         film = app.renderer.film
-        pixel_samples += (app.renderer.slices_done - slices_before) * film.width * film.height / ROUND_SLICES
+        return seconds_taken, (app.renderer.slices_done - slices_before) * film.width * film.height / ROUND_SLICES
+
+    times, pixel_samples, presents = [], 0.0, app.presents
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end or len(times) < 3:
+        taken, samples = still_step(FrameInput())
+        times.append(taken)
+        pixel_samples += samples
+    presents = app.presents - presents
+    answers, answered = [], True
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end or len(answers) < 3:
+        for _ in range(KEY_EVERY - 1):
+            still_step(FrameInput())
+        before_help, presents_before = app.session.help_visible, app.presents
+        answers.append(still_step(FrameInput(pressed=("Tab",)))[0])
+        # The same frame toggled the overlay and presented it.
+        answered &= app.session.help_visible != before_help and app.presents == presents_before + 1
     if app.session.help_visible:
         app.step(FrameInput(pressed=("Tab",)))
     return {"frames": len(times), "frame_ms_median": 1000 * statistics.median(times),
-            "frame_ms_max": 1000 * max(times), "latency_ms": [1000 * v for v in event_latencies(times, rng)],
-            "samples_per_s": pixel_samples / sum(times), "input_seen_in_frame": toggles_seen}
+            "frame_ms_max": 1000 * max(times), "presents_per_s": presents / sum(times),
+            "answer_ms_median": 1000 * statistics.median(answers),
+            "latency_ms": [1000 * v for v in event_latencies(times, rng, answers)],
+            "samples_per_s": pixel_samples / sum(times), "input_seen_in_frame": answered}
 
 
 def measure_still_both(app, seconds: float, rng: random.Random) -> tuple[dict, dict]:

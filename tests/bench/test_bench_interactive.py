@@ -18,15 +18,33 @@ def test_an_event_waits_for_the_rest_of_its_frame_and_shows_at_the_end_of_the_ne
     """Frames of 40 ms: an event arriving at a uniform moment of one frame is seen after the rest
     of it plus the next, between 40 and 80 ms, 60 ms on average (the mean of 10,000 within 4
     standard errors: the rest of a frame is uniform, sd 40 / sqrt(12) ms)."""
-    frames = [0.040] * 10_001
-    latencies = event_latencies(frames, random.Random(7))
+    frames = [0.040] * 101
+    latencies = event_latencies(frames, random.Random(7), count=10_000)
     assert len(latencies) == 10_000
     assert min(latencies) >= 0.040 and max(latencies) <= 0.080
     standard_error = 0.040 / 12 ** 0.5 / 10_000 ** 0.5
     assert abs(sum(latencies) / len(latencies) - 0.060) < 4 * standard_error
-    # A long frame delays the events that arrive during it and those of the frame before.
-    slow = event_latencies([0.04, 1.0, 0.04], random.Random(1))
-    assert slow[0] >= 1.0 and slow[1] >= 0.04 and max(slow) <= 1.04
+
+
+def test_a_long_frame_catches_events_in_proportion_to_its_length():
+    """Frames of 40 ms, 1 s, 40 ms (events land in the first two, which have a next frame): one in
+    the first (probability 0.04 / 1.04) waits for the long frame, >= 1 s; one in the long frame
+    (1 / 1.04) waits >= 1 s only if it came in its first 40 ms (4%). So P(>= 1 s) = 0.08 / 1.04,
+    against 0.52 if frames were hit equally often; 10,000 events, within 4 standard errors."""
+    latencies = event_latencies([0.04, 1.0, 0.04], random.Random(1), count=10_000)
+    assert 0.04 <= min(latencies) and max(latencies) <= 1.04 + 1e-12
+    p = 0.08 / 1.04
+    share = sum(v >= 1.0 for v in latencies) / len(latencies)
+    assert abs(share - p) < 4 * (p * (1 - p) / len(latencies)) ** 0.5
+
+
+def test_still_events_are_answered_by_the_frames_that_took_an_input():
+    """Still frames of 40 ms that only render, and answering frames (render + present) of 50 ms:
+    an event waits the rest of a 40 ms frame, then one answering frame: 50 to 90 ms."""
+    latencies = event_latencies([0.040] * 30, random.Random(3), answers=[0.050, 0.050], count=5_000)
+    assert len(latencies) == 5_000 and min(latencies) >= 0.050 and max(latencies) <= 0.090
+    assert event_latencies([0.04], random.Random(3), answers=[]) == []
+    assert event_latencies([0.04], random.Random(3)) == []  # no frame after it
 
 
 def test_report_shows_each_switch_load_compile_and_first_image(capsys):

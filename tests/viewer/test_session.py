@@ -9,7 +9,7 @@ import pytest
 
 from renderer.pixel_slices import ROUND_SLICES
 from viewer.controller import MAX_SPEED
-from viewer.session import (MIN_SCALE, Controls, Every, RateMeter, ResolutionController, ViewerSession,
+from viewer.session import (MAX_PRESENT_INTERVAL, MIN_PRESENT_INTERVAL, MIN_SCALE, STILL_PRESENT_SHARE, Controls, Every, RateMeter, ResolutionController, ViewerSession,
                             fix_max_depth, screenshot_dir, screenshot_paths, screenshot_stem)
 
 FULL = (960, 540)
@@ -133,6 +133,35 @@ def test_time_reserved_for_other_work_comes_out_of_the_render_budget():
     s.resolution.record(1.2, PIXELS)
     assert s.plan_frame(0.0, reserved_seconds=0.020).slices == 6
     assert s.plan_frame(0.1).slices == 10
+
+
+def test_a_frame_that_presents_leaves_the_present_out_of_its_render_budget():
+    """Presenting costs 13 ms of a 50 ms frame: a frame that presents renders 37 ms worth of
+    slices, one that only renders and reads input the whole 50 ms."""
+    ctl = ResolutionController(FULL, target_seconds=0.05)
+    ctl.record(1.2, PIXELS)
+    for _ in range(60):
+        ctl.record_present(0.013)
+    assert ctl.present_seconds == pytest.approx(0.013)
+    slice_cost = 1.2 / ROUND_SLICES
+    assert ctl.still_slices(presenting=True) == int(0.037 // slice_cost) == 7
+    assert ctl.still_slices(presenting=False) == int(0.05 // slice_cost) == 10
+    s = make_session(settle=0.0)
+    s.resolution.record(1.2, PIXELS)
+    s.resolution.present_seconds = 0.013
+    assert s.plan_frame(0.0, presenting=False).slices == 10
+    assert s.plan_frame(0.1, presenting=True).slices == 7
+    ctl.record_present(math.nan)  # a bad measurement is ignored
+    assert ctl.present_seconds == pytest.approx(0.013)
+
+
+@pytest.mark.parametrize("present, interval", [(0.0, MIN_PRESENT_INTERVAL), (0.006, 0.2),
+                                               (0.013, 0.013 / STILL_PRESENT_SHARE), (1.0, MAX_PRESENT_INTERVAL)])
+def test_a_still_view_redraws_so_that_presenting_costs_a_small_share(present, interval):
+    ctl = ResolutionController(FULL)
+    ctl.present_seconds = present
+    assert ctl.present_interval() == pytest.approx(interval)
+    assert present / ctl.present_interval() <= STILL_PRESENT_SHARE + 1e-12 or interval == MAX_PRESENT_INTERVAL
 
 
 def test_bad_measurements_are_ignored():

@@ -29,8 +29,11 @@ SCENES = scene_files()  # SDF and mesh scenes alike: one viewer shows both world
 
 @pytest.fixture(scope="module")
 def app(tmp_path_factory):
+    # Every frame presents (the tests read each frame's image back); the still view's present
+    # interval has its own test.
     viewer = ViewerApp(resolve_scene("showcase"), size=SIZE, show_window=False,
-                       screenshot_folder=tmp_path_factory.mktemp("shots"), settle_seconds=0.0)
+                       screenshot_folder=tmp_path_factory.mktemp("shots"), settle_seconds=0.0,
+                       still_present_interval=0.0)
     yield viewer
 
 
@@ -296,6 +299,35 @@ def test_still_frames_redraw_only_the_pixels_they_rendered(app):
         assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1
     finally:
         resolution.target_seconds = target
+
+
+def test_an_untouched_still_view_renders_without_presenting_until_an_input(app):
+    """Between redraws a still frame only renders (and reads input); an input presents on its own
+    frame, showing every slice rendered so far."""
+    app.session.hud_visible = False
+    settle(app, 1)
+    app.still_present_interval = 3600.0
+    try:
+        app.step()
+        presents, slices = app.presents, app.renderer.slices_done
+        for _ in range(3):
+            app.step()
+            assert not app.last_plan.reset and app.last_display_update is None
+        assert app.presents == presents and app.renderer.slices_done > slices
+        app.step(FrameInput(pressed=("Tab",)))
+        assert app.session.help_visible and app.presents == presents + 1
+        app.step(FrameInput(pressed=("Tab",)))
+        assert not app.session.help_visible and app.presents == presents + 2
+        shown = window_buffer_to_image(app.last_frame)
+        np.testing.assert_array_equal(shown, unpack_rgba8(app.display.shown))
+        assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1
+        app.step()
+        assert app.presents == presents + 2
+        app.still_present_interval = 0.0  # the interval has passed: the next frame presents
+        app.step()
+        assert app.presents == presents + 3
+    finally:
+        app.still_present_interval = 0.0
 
 
 @pytest.mark.skipif(__import__("renderer.denoise", fromlist=["x"]).unavailable_reason() is not None,
