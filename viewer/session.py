@@ -17,7 +17,7 @@ internal resolution and sample count the next frame renders:
   every frame.
 - Presenting (tone mapping, canvas upload, HUD, the window's own frame) costs a fixed 10-15 ms at
   960x540 on a CPU with software Vulkan, a third of a frame. A moving view or an input presents
-  at once; an untouched still view redraws every `present_interval()` (a few times a second:
+  at once; an untouched still view redraws every `present_interval()` (about once a second:
   presenting then costs at most STILL_PRESENT_SHARE of the time), and its frames in between only
   render and read input, so sampling keeps its speed without making an input wait.
 """
@@ -50,16 +50,18 @@ COST_SMOOTHING = 0.35  # weight of the newest measurement in the moving averages
 SCALE_RISE = 0.5  # fraction of the way towards a larger target scale taken per frame
 INITIAL_MOVING_SCALE = 0.25  # before anything was measured
 
-# An untouched still view redraws often enough that presenting takes at most this share of the
-# time (between these bounds, in seconds): with a 13 ms present that is about twice a second.
-STILL_PRESENT_SHARE = 0.03
+# An untouched still view redraws seldom enough that presenting (with the HUD's statistics, which
+# refresh on such frames) takes at most this share of the time, within these bounds in seconds:
+# at 960x540 on a 2-core CPU a present costs ~22 ms (tone mapping 12 ms, canvas, HUD and GGUI's
+# frame 10 ms) and the statistics 10-30 ms, so the still view redraws once a second.
+STILL_PRESENT_SHARE = 0.025
 MIN_PRESENT_INTERVAL = 0.1
-MAX_PRESENT_INTERVAL = 0.5
+MAX_PRESENT_INTERVAL = 1.0
 
 # Seconds between refreshes of the HUD's figures that need a reduction over the film (noise, then
-# work per ray, in turn): ~5-10 ms each at 960x540 on a 2-core CPU, time a still frame's render
-# gives up for them.
-STATS_INTERVAL = 0.5
+# work per ray, in turn): 10-30 ms each at 960x540 on a 2-core CPU, time a still frame's render
+# gives up for them (each figure is then at most two seconds old).
+STATS_INTERVAL = 1.0
 MESSAGE_SECONDS = 4.0
 
 
@@ -113,7 +115,8 @@ class ResolutionController:
         return self._costs.get(self.context)
 
     def record_present(self, seconds: float) -> None:
-        """What presenting a frame took (display update, canvas, HUD, the window's frame)."""
+        """What presenting a frame took (display update, canvas, HUD, the window's frame, and the
+        HUD's statistics refreshed on it)."""
         if math.isfinite(seconds) and seconds >= 0.0:
             self.present_seconds += COST_SMOOTHING * (seconds - self.present_seconds)
 

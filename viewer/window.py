@@ -415,7 +415,7 @@ class ViewerApp:
             self._present(now)
             present_seconds = time.perf_counter() - t0
             if not fresh:
-                s.resolution.record_present(present_seconds)
+                s.resolution.record_present(present_seconds + stats_seconds)
         frame_seconds = time.perf_counter() - start
         self._frame_ms = 1000.0 * frame_seconds
         if not fresh and pixel_samples > 0:  # a compiling frame says nothing about the render cost (nor

@@ -11,12 +11,13 @@ integrator, at 960x540 by default:
              cache is warm after the first run, so the compile is mostly the kernels' warm start.
   still      STILL_SECONDS without input: frame times, presents, and the samples per second of
              those time-sliced frames (an untouched still view presents a few times a second and
-             otherwise only renders: viewer/session.py); then STILL_SECONDS of still frames
-             every third of which gets a key press (Tab toggles the help overlay, a display-only
-             change, and the benchmark checks that the same frame presented it): the times of
-             frames that answer an input. Then the same with every still frame made of whole
-             samples per pixel (the viewer before pixel slices), in the same frame loop: the
-             sliced rate must stay within 5% of it, and its latency is the "before" figure.
+             otherwise only renders: viewer/session.py), alternating in RATE_ROUNDS blocks with
+             as many seconds of still frames made of whole samples per pixel (the viewer before
+             pixel slices), in the same frame loop: the sliced rate must stay within 5% of it.
+             Then STILL_SECONDS / 2 of still frames every third of which gets a key press (Tab
+             toggles the help overlay, a display-only change, and the benchmark checks that the
+             same frame presented it), for each of the two: the times of frames that answer an
+             input (the whole-sample frames' latency is the "before" figure).
   moving     MOVING_SECONDS with W held (the camera flies): frame times (every one presents).
 
 Latency is measured from an input event to the end of the first frame that shows its effect.
@@ -57,6 +58,7 @@ MOVING_SECONDS = 2.0
 SWITCH_FRAMES_LIMIT = 50  # a switch that has not shown an image after this many frames failed
 EVENTS = 2000  # simulated input events per measured phase (their arrival moments; see event_latencies)
 KEY_EVERY = 3  # still frames per key press while measuring the frames that answer an input
+RATE_ROUNDS = 3  # alternating blocks of sliced and whole-sample still frames
 FULL_INTEGRATORS = ("path", "nee", "mis", "sppm", "normals")
 QUICK = {"scenes": ("cornell_box", "showcase"), "integrators": ("path", "mis"), "size": (320, 180),
          "still_seconds": 1.0, "moving_seconds": 0.7}
@@ -117,6 +119,7 @@ def measure_switch(app, scene_path: Path, integrator: str) -> dict:
     t0 = time.perf_counter()
     app.select_scene(scene_path)
     app.session.set_integrator(integrator)
+    app.session.reset_camera()  # the scene's own view: the last combination's flight moved it
     load_s = time.perf_counter() - t0
     app.compile_seconds = None
     notice_frames, frames, longest = 0, 0, 0.0
@@ -133,61 +136,89 @@ def measure_switch(app, scene_path: Path, integrator: str) -> dict:
             "frames": frames, "notice_frames": notice_frames, "longest_frame_s": longest}
 
 
-def measure_still(app, seconds: float, rng: random.Random) -> dict:
-    """Still frames from the first that accumulates at full size (the frames before it are the
-    switch's preview and reset): `seconds` untouched (samples/s, frame times, presents), then
-    `seconds` with a help-overlay toggle (Tab) every KEY_EVERY frames (the frames that answer)."""
+def _settle_still(app) -> None:
+    """Step to the first frame that accumulates at full size (the frames before it are the
+    switch's preview and reset)."""
     from viewer.window import FrameInput
 
     for _ in range(SWITCH_FRAMES_LIMIT):
         if app.last_plan is not None and not app.last_plan.interactive and not app.last_plan.reset:
-            break
+            return
         app.step(FrameInput())
 
-    def still_step(inp) -> tuple[float, float]:
-        slices_before = app.renderer.slices_done
-        seconds_taken = _step_timed(app, inp)
-        if app.last_plan.reset:
-            raise RuntimeError("a still frame reset the accumulation")
-        film = app.renderer.film
-        return seconds_taken, (app.renderer.slices_done - slices_before) * film.width * film.height / ROUND_SLICES
 
-    times, pixel_samples, presents = [], 0.0, app.presents
+def _still_step(app, inp) -> tuple[float, float]:
+    """(seconds, pixel samples) of one still frame."""
+    slices_before = app.renderer.slices_done
+    seconds = _step_timed(app, inp)
+    if app.last_plan.reset:
+        raise RuntimeError("a still frame reset the accumulation")
+    film = app.renderer.film
+    return seconds, (app.renderer.slices_done - slices_before) * film.width * film.height / ROUND_SLICES
+
+
+def untouched_frames(app, seconds: float) -> dict:
+    """Still frames without input for `seconds`: their times, pixel samples and presents."""
+    from viewer.window import FrameInput
+
+    times, samples, presents = [], 0.0, app.presents
     end = time.perf_counter() + seconds
     while time.perf_counter() < end or len(times) < 3:
-        taken, samples = still_step(FrameInput())
+        taken, added = _still_step(app, FrameInput())
         times.append(taken)
-        pixel_samples += samples
-    presents = app.presents - presents
+        samples += added
+    return {"times": times, "pixel_samples": samples, "presents": app.presents - presents}
+
+
+def answering_frames(app, seconds: float) -> tuple[list[float], bool]:
+    """Still frames for `seconds`, a help-overlay toggle (Tab) every KEY_EVERY of them: the times
+    of the frames that got the key, and whether each of them toggled and presented it."""
+    from viewer.window import FrameInput
+
     answers, answered = [], True
     end = time.perf_counter() + seconds
     while time.perf_counter() < end or len(answers) < 3:
         for _ in range(KEY_EVERY - 1):
-            still_step(FrameInput())
+            _still_step(app, FrameInput())
         before_help, presents_before = app.session.help_visible, app.presents
-        answers.append(still_step(FrameInput(pressed=("Tab",)))[0])
-        # The same frame toggled the overlay and presented it.
+        answers.append(_still_step(app, FrameInput(pressed=("Tab",)))[0])
         answered &= app.session.help_visible != before_help and app.presents == presents_before + 1
     if app.session.help_visible:
         app.step(FrameInput(pressed=("Tab",)))
+    return answers, answered
+
+
+def still_summary(blocks: list[dict], answers: list[float], answered: bool, rng: random.Random) -> dict:
+    times = [t for block in blocks for t in block["times"]]
+    total = sum(times)
     return {"frames": len(times), "frame_ms_median": 1000 * statistics.median(times),
-            "frame_ms_max": 1000 * max(times), "presents_per_s": presents / sum(times),
+            "frame_ms_max": 1000 * max(times), "presents_per_s": sum(b["presents"] for b in blocks) / total,
             "answer_ms_median": 1000 * statistics.median(answers),
             "latency_ms": [1000 * v for v in event_latencies(times, rng, answers)],
-            "samples_per_s": pixel_samples / sum(times), "input_seen_in_frame": answered}
+            "samples_per_s": sum(b["pixel_samples"] for b in blocks) / total, "input_seen_in_frame": answered}
 
 
 def measure_still_both(app, seconds: float, rng: random.Random) -> tuple[dict, dict]:
-    """(sliced, whole): still frames as the viewer renders them, then with every still frame made
+    """(sliced, whole): still frames as the viewer renders them, and with every still frame made
     of whole samples per pixel (min_still_slices = a round: the viewer before pixel slices), in
-    the same loop, so the two differ only in how much a frame renders."""
-    sliced = measure_still(app, seconds, rng)
+    the same loop, so the two differ only in how much a frame renders. The untouched frames of
+    the two alternate in RATE_ROUNDS blocks each (a drift of the machine's speed hits both), then
+    each answers keys for `seconds` / 2."""
     resolution = app.session.resolution
-    resolution.min_still_slices = ROUND_SLICES
+    _settle_still(app)
+    blocks = {1: [], ROUND_SLICES: []}
     try:
-        whole = measure_still(app, seconds, rng)
+        for _ in range(RATE_ROUNDS):
+            for fewest in blocks:
+                resolution.min_still_slices = fewest
+                blocks[fewest].append(untouched_frames(app, seconds / RATE_ROUNDS))
+        summaries = {}
+        for fewest in blocks:
+            resolution.min_still_slices = fewest
+            summaries[fewest] = still_summary(blocks[fewest], *answering_frames(app, seconds / 2), rng)
     finally:
         resolution.min_still_slices = 1
+    sliced, whole = summaries[1], summaries[ROUND_SLICES]
     sliced["rate_ratio"] = sliced["samples_per_s"] / whole["samples_per_s"]
     return sliced, whole
 

@@ -155,7 +155,7 @@ def test_a_frame_that_presents_leaves_the_present_out_of_its_render_budget():
     assert ctl.present_seconds == pytest.approx(0.013)
 
 
-@pytest.mark.parametrize("present, interval", [(0.0, MIN_PRESENT_INTERVAL), (0.006, 0.2),
+@pytest.mark.parametrize("present, interval", [(0.0, MIN_PRESENT_INTERVAL), (0.006, 0.006 / STILL_PRESENT_SHARE),
                                                (0.013, 0.013 / STILL_PRESENT_SHARE), (1.0, MAX_PRESENT_INTERVAL)])
 def test_a_still_view_redraws_so_that_presenting_costs_a_small_share(present, interval):
     ctl = ResolutionController(FULL)
