@@ -187,13 +187,19 @@ class Renderer:
 
     def render_slices(self, camera: CameraFrame, slices: int, integrator: str | None = None,
                       max_depth: int | None = None, seed: int | None = None, features: Features | None = None,
-                      sampler: str | None = None) -> None:
+                      sampler: str | None = None, whole_iterations: bool = True) -> None:
         """Render the next `slices` pixel slices (ROUND_SLICES of them make one sample per pixel;
         renderer/pixel_slices.py), continuing the round in progress: at most three launches (the
         rest of that round, whole rounds, the start of the next). An integrator whose passes are
-        global (sppm) renders whole iterations: at least one, `slices` rounded down to rounds."""
+        global (sppm) renders whole iterations: at least one, `slices` rounded down to rounds; or,
+        with whole_iterations False (the viewer's still frames), `slices` steps of its iterations
+        (ROUND_SLICES a whole one), its film changing when an iteration completes."""
         program, seed, max_depth = self._launch(camera, integrator, max_depth, seed, features, sampler)
         width, height = self.film.width, self.film.height
+        if not program.sliced and not whole_iterations and hasattr(program, "advance"):
+            self.slices_done += program.advance(width, height, slices, self.slices_done, seed, max_depth,
+                                                *camera.kernel_args())
+            return
         if not program.sliced:
             spp = max(1, slices // ROUND_SLICES)
             program.render(width, height, spp, self.samples_done, seed, max_depth, *camera.kernel_args())

@@ -68,12 +68,19 @@ class DisplayImages:
             return self.window_image
         return self._reduced[:size[0] * size[1]].reshape(size)  # contiguous, as the canvas needs
 
-    def update(self, film, accumulation: Hashable, slices_done: int, settings: DisplaySettings) -> str:
+    def update(self, film, accumulation: Hashable, slices_done: int, settings: DisplaySettings,
+               pixel_sliced: bool = True) -> str:
         """Make `shown` the film's image (active region, `slices_done` pixel slices since its last
         reset); returns UPDATE_NONE, UPDATE_SLICES (only the pixels the slices rendered since the
-        last update changed) or UPDATE_FULL."""
+        last update changed) or UPDATE_FULL.
+
+        `pixel_sliced` False: the slices are steps of whole-image iterations (sppm), and the film
+        changes everywhere when one completes; until the first has, the canvas keeps what it
+        shows (the last moving frame) rather than an empty film."""
         size = (film.width, film.height)
         state = (size, accumulation, settings)
+        if not pixel_sliced:
+            return self._update_iterations(film, state, slices_done, settings)
         new_slices = slices_done - self.slices_shown if state == self._state else None
         self.shown = self._image_for(size)
         if new_slices == 0:
@@ -96,16 +103,27 @@ class DisplayImages:
         self.slices_shown = slices_done
         return kind
 
+    def _update_iterations(self, film, state: tuple, slices_done: int, settings: DisplaySettings) -> str:
+        if slices_done < ROUND_SLICES:
+            return UPDATE_NONE
+        self.shown = self._image_for(state[0])
+        if state == self._state and slices_done // ROUND_SLICES == self.slices_shown // ROUND_SLICES:
+            return UPDATE_NONE
+        tonemap_packed(film, self.shown, settings.exposure, settings.tonemapper, filled=False)
+        self._state = state
+        self.slices_shown = slices_done
+        return UPDATE_FULL
+
     def window_sized_image(self, film, accumulation: Hashable, slices_done: int,
-                           settings: DisplaySettings) -> np.ndarray:
+                           settings: DisplaySettings, pixel_sliced: bool = True) -> np.ndarray:
         """uint8 (height, width, 3), row 0 at the top: the film as the canvas shows it at the window
         size (a screenshot). While moving the canvas stretches a smaller image: then the film is
         tone-mapped into the window-sized image (bilinear), which is not on the canvas then."""
-        if (film.width, film.height) == self.window_image.shape:
-            self.update(film, accumulation, slices_done, settings)
+        if (film.width, film.height) == self.window_image.shape and (pixel_sliced or slices_done >= ROUND_SLICES):
+            self.update(film, accumulation, slices_done, settings, pixel_sliced)
         else:
             tonemap_packed(film, self.window_image, settings.exposure, settings.tonemapper,
-                           filled=slices_done < ROUND_SLICES)
+                           filled=pixel_sliced and slices_done < ROUND_SLICES)
             if self.shown is self.window_image:
                 self._state = None  # not what it held any more: the next update fills it anew
         return unpack_rgba8(self.window_image)

@@ -262,7 +262,8 @@ class ViewerApp:
         r, s = self.renderer, self.session
         png, exr = screenshot_paths(self.screenshot_folder, r.scene.name, s.integrator, r.samples_done, datetime.now())
         write_png(png, self.display.window_sized_image(r.film, self._accumulation(), r.slices_done,
-                                                       self._display_settings()))
+                                                       self._display_settings(),
+                                                       r.is_sliced(s.integrator, r.features(camera_frame(s.controller.state)))))
         write_exr(exr, r.shown_image())
         saved = f"{png} and {exr.name}"
         denoised = self.shown_denoised
@@ -384,7 +385,8 @@ class ViewerApp:
             renderer.set_adaptive(wanted)
         t0 = time.perf_counter()
         slices_before = renderer.slices_done
-        renderer.render_slices(frame, plan.slices, integrator, s.max_depth, features=features)
+        # sppm's frames take steps of its whole-image iterations (a share of one while still)
+        renderer.render_slices(frame, plan.slices, integrator, s.max_depth, features=features, whole_iterations=False)
         ti.sync()
         self._awaiting_render = False
         render_seconds = time.perf_counter() - t0
@@ -411,7 +413,8 @@ class ViewerApp:
         if asked or plan.interactive or plan.reset or fresh or self._display_key(now) != self._presented_key:
             t0 = time.perf_counter()
             self.last_display_update = self.display.update(renderer.film, self._accumulation(),
-                                                           renderer.slices_done, self._display_settings())
+                                                           renderer.slices_done, self._display_settings(),
+                                                           renderer.is_sliced(integrator, features))
             self._present(now)
             present_seconds = time.perf_counter() - t0
             if not fresh:

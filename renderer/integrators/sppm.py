@@ -73,6 +73,7 @@ from renderer.integrators.photon_grid import PhotonGrid, bucket_of, cell_of, tab
 from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
 from renderer.materials.kinds import LobeFlags
 from renderer.materials.table import Material
+from renderer.pixel_slices import ROUND_SLICES
 from renderer.program import RenderProgram
 from renderer.sampling import dims
 from renderer.sampling.warps import PI
@@ -102,6 +103,16 @@ GLOSSY_ALPHA = 0.1
 # |cos| below which a photon's direction is taken as tangent to the VP's surface (no estimate):
 # f = eval / |cos| is then numerically meaningless.
 MIN_COS = 1e-6
+# An iteration in steps (SppmProgram.advance): as many as a round of pixel slices has, so a viewer
+# frame's budget in slices is a budget in steps; half camera rows, half photons.
+ITERATION_STEPS = ROUND_SLICES
+CAMERA_STEPS = ITERATION_STEPS // 2
+PHOTON_STEPS = ITERATION_STEPS - CAMERA_STEPS
+
+
+def _share(total: int, part: int, parts: int) -> tuple[int, int]:
+    """[start, end) of the part-th of `parts` near-equal runs of range(total)."""
+    return total * part // parts, total * (part + 1) // parts
 
 
 @dataclass
@@ -159,7 +170,7 @@ class SppmState:
         self.row_box = ti.Vector.field(3, ti.f32, shape=(max_height, 4))
         self.photons_emitted = 0  # over all passes since the last clear
         self.iterations = 0
-        self.next_sample = None  # the first_sample a continuing render passes
+        self.next_step = None  # the first step a continuing render passes (SppmProgram.advance)
 
     @ti.kernel
     def clear(self):
@@ -176,7 +187,7 @@ class SppmState:
         self.clear()
         self.photons_emitted = 0
         self.iterations = 0
-        self.next_sample = None
+        self.next_step = None
 
     # --- host views (tests) ------------------------------------------------------------------------
     def _active(self, field, width, height):
@@ -213,37 +224,71 @@ class SppmProgram(RenderProgram):
         return self.options.get("sppm") or SppmOptions()
 
     # --- the passes ------------------------------------------------------------------------------------
+    # An iteration is ITERATION_STEPS steps, so that a viewer frame can take a share of one (the
+    # passes of the other integrators are cut into pixel slices; SPPM's photons need every VP):
+    # CAMERA_STEPS bands of rows of the camera pass (the last one also makes the pass's
+    # statistics and the photon grid), then the photons in PHOTON_STEPS equal runs (the last one
+    # also makes the update). A photon's random numbers depend only on its index, so an
+    # iteration in steps traces the same paths as one in a piece.
     def render(self, width, height, spp, first_sample, seed, max_depth, origin, forward, right, up, tan_half_fov,
                aperture, focus):
-        """`spp` SPPM iterations (Python: four kernel launches each)."""
+        """`spp` whole SPPM iterations (a few kernel launches each)."""
+        self.advance(width, height, spp * ITERATION_STEPS, first_sample * ITERATION_STEPS, seed, max_depth,
+                     origin, forward, right, up, tan_half_fov, aperture, focus)
+
+    def advance(self, width, height, steps, first_step, seed, max_depth, origin, forward, right, up, tan_half_fov,
+                aperture, focus):
+        """Steps [first_step, first_step + steps) of the iterations (step k is step k % ITERATION_STEPS
+        of iteration k // ITERATION_STEPS); the state must have ended at first_step, or first_step
+        starts an iteration (anything else is refused: the steps in between are lost)."""
         state = self.state
         options = self.current_options()
         if options.photon_sampler != self.photon_sampler.name:
             raise ValueError(f"sppm: the photon sampler is chosen when the program is built "
                              f"('{self.photon_sampler.name}'); use a new Renderer for '{options.photon_sampler}'")
-        if first_sample == 0 or state.next_sample != first_sample:
+        if first_step == 0 or state.next_step != first_step:
+            if first_step % ITERATION_STEPS:
+                raise ValueError(f"sppm: step {first_step} does not continue this state (at {state.next_step})")
             state.reset()
         photons = options.photons or width * height
         table = table_size_for(width * height)
-        for i in range(spp):
-            index = first_sample + i
-            self.camera_pass(width, height, index, seed, max_depth, options.radius_pixels, origin, forward, right, up,
-                             tan_half_fov, aperture, focus)
-            self.build_grid(width, height, table)
-            if self.emission.emits:
-                base = state.photons_emitted
-                self.photon_pass(photons, base & 0xFFFFFFFF, (base >> 32) & 0x7FFFFFFF, seed, max_depth, table - 1)
-            state.photons_emitted += photons
-            state.iterations = index + 1
-            self.update(width, height, options.alpha, float(state.photons_emitted), state.iterations)
-        state.next_sample = first_sample + spp
+        camera = (origin, forward, right, up, tan_half_fov, aperture, focus)
+        step, end = first_step, first_step + steps
+        while step < end:  # consecutive steps of one phase in one launch
+            index, part = divmod(step, ITERATION_STEPS)
+            iteration_start = index * ITERATION_STEPS
+            if part < CAMERA_STEPS:
+                last = min(end - iteration_start, CAMERA_STEPS)
+                rows = _share(height, part, CAMERA_STEPS)[0], _share(height, last - 1, CAMERA_STEPS)[1]
+                if rows[1] > rows[0]:
+                    self.camera_rows(width, height, *rows, index, seed, max_depth, options.radius_pixels, *camera)
+                if last == CAMERA_STEPS:
+                    self.camera_statistics(width, height, origin)
+                    self.build_grid(width, height, table)
+            else:
+                last = min(end - iteration_start, ITERATION_STEPS)
+                start = _share(photons, part - CAMERA_STEPS, PHOTON_STEPS)[0]
+                stop = _share(photons, last - 1 - CAMERA_STEPS, PHOTON_STEPS)[1]
+                if self.emission.emits and stop > start:
+                    base = state.photons_emitted + start
+                    self.photon_pass(stop - start, base & 0xFFFFFFFF, (base >> 32) & 0x7FFFFFFF, seed, max_depth,
+                                     table - 1)
+                if last == ITERATION_STEPS:
+                    state.photons_emitted += photons
+                    state.iterations = index + 1
+                    self.update(width, height, options.alpha, float(state.photons_emitted), state.iterations)
+            step = iteration_start + last
+        state.next_step = first_step + steps
+        return steps
 
     @ti.kernel
-    def camera_pass(self, width: ti.i32, height: ti.i32, index: ti.i32, seed: ti.u32, max_depth: ti.i32,
-                    radius_pixels: ti.f32, origin: ti.math.vec3, forward: ti.math.vec3, right: ti.math.vec3,
-                    up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
+    def camera_rows(self, width: ti.i32, height: ti.i32, row_first: ti.i32, row_end: ti.i32, index: ti.i32,
+                    seed: ti.u32, max_depth: ti.i32, radius_pixels: ti.f32, origin: ti.math.vec3,
+                    forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32,
+                    aperture: ti.f32, focus: ti.f32):
+        """The camera pass's paths for rows [row_first, row_end) (a whole pass: 0, height)."""
         st = self.state
-        for x, y in ti.ndrange(width, height):
+        for x, y in ti.ndrange(width, (row_first, row_end)):
             pixel = y * width + x
             sample = self.sampler.start(pixel, index, seed)
             ray = generate_ray(x, y, width, height, self.sampler, sample, origin, forward, right, up, tan_half_fov,
@@ -256,6 +301,11 @@ class SppmProgram(RenderProgram):
             else:
                 self.film.rejected[x, y] = self.film.rejected[x, y] + 1
             self.work[x, y] = self.work[x, y] + stats
+
+    @ti.kernel
+    def camera_statistics(self, width: ti.i32, height: ti.i32, origin: ti.math.vec3):
+        """Once every row of the camera pass is traced."""
+        st = self.state
         # The pass's statistics: the geometric mean of the footprint radii, the VPs' box (with the
         # camera, for the environment's photons on SDF scenes), then initial radii and the cell
         # size. Rows in parallel, each reduced in a local variable, then the rows in order: no

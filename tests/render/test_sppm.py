@@ -43,6 +43,7 @@ from scipy.ndimage import maximum_filter
 from renderer.camera import CameraFrame
 from renderer.luminance import LUMINANCE_WEIGHTS
 from renderer.integrators.sppm import PHOTON_STREAM
+from renderer.pixel_slices import ROUND_SLICES
 from renderer.renderer import Renderer
 from renderer.sampling import dims
 from renderer.scene.catalog import load_any, resolve_scene
@@ -110,6 +111,43 @@ def test_sppm_converges_to_mis(cornell, reference, sppm_renderer):
     for before, after in zip(errors, errors[1:]):
         assert after <= 0.8 * before, errors
     assert errors[-1] < 0.06, errors
+
+
+def test_iterations_in_steps_trace_what_whole_iterations_do(cornell, sppm_renderer):
+    """The viewer's still frames take steps of an iteration (renderer.render_slices with
+    whole_iterations False): in steps of odd sizes, three iterations give the photon counts and
+    radii of three whole ones bit for bit, and the image up to the order of f32 atomic additions
+    into phi (relative 1e-4, as across thread counts below); the film changes only when an
+    iteration completes."""
+    camera = CameraFrame.from_spec(cornell.camera)
+    whole = Renderer(cornell, (SIZE, SIZE))
+    whole.render(camera, 3, "sppm", seed=SPPM_SEED)
+    whole_state = whole.shared("sppm_state", None)
+    expected = (whole.image(), whole_state.photon_counts(SIZE, SIZE), whole_state.radii(SIZE, SIZE))
+
+    r = sppm_renderer
+    r.reset()
+    steps = [1, 37, 90, 3, 255, 200, 130, 52]
+    assert sum(steps) == 3 * ROUND_SLICES
+    shown, completed = r.image(), 0
+    calls = 0
+    while r.slices_done < 3 * ROUND_SLICES:
+        count = min(steps[calls % len(steps)], 3 * ROUND_SLICES - r.slices_done)
+        r.render_slices(camera, count, "sppm", seed=SPPM_SEED, whole_iterations=False)
+        calls += 1
+        image = r.image()
+        if r.samples_done == completed:
+            np.testing.assert_array_equal(image, shown)  # mid-iteration: the film is untouched
+        else:
+            assert not np.array_equal(image, shown)
+            shown, completed = image, r.samples_done
+    state = r.shared("sppm_state", None)
+    assert calls == len(steps) and r.samples_done == 3 == state.iterations
+    np.testing.assert_array_equal(state.photon_counts(SIZE, SIZE), expected[1])
+    np.testing.assert_array_equal(state.radii(SIZE, SIZE), expected[2])
+    np.testing.assert_allclose(r.image(), expected[0], rtol=1e-4, atol=1e-7)
+    with pytest.raises(ValueError, match="does not continue"):
+        r.program("sppm", r.features()).advance(SIZE, SIZE, 1, 5, SPPM_SEED, 8, *camera.kernel_args())
 
 
 def test_radius_never_grows(cornell, sppm_renderer):

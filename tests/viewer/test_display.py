@@ -98,3 +98,31 @@ def test_display_settings_a_reset_or_a_smaller_film_update_everything():
     sliced.render(ROUND_SLICES)
     assert display.update(sliced.film, "c", sliced.slices_done, brighter) == UPDATE_FULL
     assert display.shown is display.window_image
+
+
+def test_iteration_steps_show_the_last_moving_frame_then_each_completed_iteration():
+    """sppm in the viewer (pixel_sliced False): its slices are steps of whole-image iterations.
+    Until the first iteration completes the canvas keeps the last moving frame; afterwards a
+    frame updates everything when an iteration completed, and nothing otherwise."""
+    film = SlicedFilm(SIZE, seed=3)
+    display = DisplayImages(SIZE)
+    settings = DisplaySettings(0.0, "aces")
+    film.reset((17, 10))
+    film.render(ROUND_SLICES)  # a moving frame: one whole iteration at the reduced size
+    assert display.update(film.film, "moving", film.slices_done, settings, pixel_sliced=False) == UPDATE_FULL
+    moving = display.shown.copy()
+    film.reset(SIZE)  # still: full size, steps of the first iteration
+    for steps in (40, 100):
+        film.slices_done += steps  # (steps change no pixel of the film)
+        assert display.update(film.film, "still", film.slices_done, settings, pixel_sliced=False) == UPDATE_NONE
+        assert display.shown.shape == (17, 10)
+        np.testing.assert_array_equal(display.shown, moving)
+    film.slices_done = 0
+    film.render(ROUND_SLICES)  # the iteration completes: the film changed everywhere
+    assert display.update(film.film, "still", film.slices_done, settings, pixel_sliced=False) == UPDATE_FULL
+    assert display.shown is display.window_image
+    np.testing.assert_array_equal(unpack_rgba8(display.shown),
+                                  full_tone_map(film.film, SIZE, settings, ROUND_SLICES))
+    film.slices_done += 70  # steps of the next iteration
+    assert display.update(film.film, "still", film.slices_done, settings, pixel_sliced=False) == UPDATE_NONE
+    assert display.shown is display.window_image

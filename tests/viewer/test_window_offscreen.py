@@ -301,6 +301,36 @@ def test_still_frames_redraw_only_the_pixels_they_rendered(app):
         resolution.target_seconds = target
 
 
+def test_sppm_still_frames_take_steps_of_an_iteration(app):
+    """A still frame whose budget is less than an SPPM iteration renders a share of one (its
+    steps: renderer.render_slices with whole_iterations False); the canvas changes when an
+    iteration completes."""
+    app.select_scene(resolve_scene("cornell_box"))
+    app.session.set_integrator("sppm")
+    app.session.hud_visible = False
+    settle(app, 1)
+    resolution = app.session.resolution
+    target = resolution.target_seconds
+    try:
+        resolution.target_seconds = 1e-6  # a budget of one step per frame
+        app.step()
+        done = app.renderer.slices_done
+        assert done % ROUND_SLICES != 0 or app.last_plan.slices == 1
+        for _ in range(3):
+            app.step()
+            assert app.renderer.slices_done == done + 1 and not app.last_plan.reset
+            done += 1
+        resolution.target_seconds = target
+        while app.renderer.slices_done % ROUND_SLICES:
+            app.step()
+        app.step()
+        shown = window_buffer_to_image(app.last_frame)
+        assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1
+    finally:
+        resolution.target_seconds = target
+        app.session.set_integrator("path")
+
+
 def test_an_untouched_still_view_renders_without_presenting_until_an_input(app):
     """Between redraws a still frame only renders (and reads input); an input presents on its own
     frame, showing every slice rendered so far."""
