@@ -47,6 +47,9 @@ MIN_RENDER_BUDGET_FRACTION = 0.25
 SETTLE_SECONDS = 0.10  # still this long before going back to full resolution (see plan_frame)
 MAX_SPP_PER_FRAME = 64
 COST_SMOOTHING = 0.35  # weight of the newest measurement in the moving averages
+# A render cost that rises is taken at once, one that falls is smoothed: a view that gets dearer
+# (flying into a textured wall, an SPPM iteration reaching its photons) costs one long frame, not
+# a run of them while an average catches up; a long frame is what an input waits for.
 SCALE_RISE = 0.5  # fraction of the way towards a larger target scale taken per frame
 INITIAL_MOVING_SCALE = 0.25  # before anything was measured
 
@@ -132,7 +135,7 @@ class ResolutionController:
             return
         cost = render_seconds / pixel_samples
         old = self._costs.get(self.context)
-        self._costs[self.context] = cost if old is None else old + COST_SMOOTHING * (cost - old)
+        self._costs[self.context] = cost if old is None or cost > old else old + COST_SMOOTHING * (cost - old)
         if frame_seconds is not None and math.isfinite(frame_seconds):
             overhead = max(0.0, frame_seconds - render_seconds)
             self.overhead += COST_SMOOTHING * (overhead - self.overhead)

@@ -101,6 +101,19 @@ def test_costs_are_kept_per_context():
     assert ctl.cost == pytest.approx(2.0 / PIXELS)
 
 
+def test_a_dearer_view_is_taken_at_once_a_cheaper_one_smoothly():
+    """The camera flies into a wall 3x dearer per pixel: the next frame is planned for the new
+    cost at once; a cheaper view is approached by COST_SMOOTHING per frame."""
+    from viewer.session import COST_SMOOTHING
+
+    ctl = ResolutionController(FULL, target_seconds=0.05)
+    ctl.record(1.0, PIXELS)
+    ctl.record(3.0, PIXELS)
+    assert ctl.cost == pytest.approx(3.0 / PIXELS)
+    ctl.record(1.0, PIXELS)
+    assert ctl.cost == pytest.approx((3.0 + COST_SMOOTHING * (1.0 - 3.0)) / PIXELS)
+
+
 def test_still_slices_fill_the_budget():
     ctl = ResolutionController(FULL, target_seconds=0.05)
     assert ctl.still_slices() == 1  # nothing measured: the cheapest frame there is
