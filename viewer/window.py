@@ -459,7 +459,9 @@ class ViewerApp:
             self._denoiser = BackgroundDenoiser(Denoiser().denoise)
         worker, generation = self._denoiser, self._accumulation()
         if not plan.interactive and (renderer.film.width, renderer.film.height) == self.size:
-            worker.offer(generation, renderer.mean_spp, lambda: self._denoise_input(renderer, integrator))
+            # sppm's film holds its completed iterations only (the steps of the next change nothing)
+            spp = renderer.mean_spp if renderer.is_sliced(integrator, self._features) else renderer.samples_done
+            worker.offer(generation, spp, lambda: self._denoise_input(renderer, integrator))
         result = worker.result_for(generation)
         if worker.error:
             self.session.error = f"denoising failed: {worker.error}"
