@@ -60,6 +60,7 @@ not the unbounded scene: environment light that reaches the image only by way of
 that is missed.
 """
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,13 +105,14 @@ GLOSSY_ALPHA = 0.1
 # f = eval / |cos| is then numerically meaningless.
 MIN_COS = 1e-6
 # An iteration in steps (SppmProgram.advance): as many as a round of pixel slices has, so a viewer
-# frame's budget in slices is a budget in steps. The photons take most of an iteration (Cornell
-# box at 960x540: camera pass 178 ms, photons 1,576 ms), so they get most of the steps, which then
-# cost about the same (5.6 and 7.0 ms there): a frame planned from the steps before it does not
-# run long where the camera rows end and the photons begin (with half and half it took 296 ms).
+# frame's budget in slices is a budget in steps. The two phases' shares of an iteration differ by
+# scene (Cornell box at 960x540: camera pass 178 ms, photons 1,576 ms; a glass scene the other
+# way), and a frame planned from the cost of the steps before it runs long where a cheap phase
+# gives way to a dear one (296 ms with half and half there). So each iteration splits its steps
+# in proportion to the phases' measured times in the iteration before (half and half at first,
+# MIN_PHASE_STEPS each at least), and the steps cost about the same throughout.
 ITERATION_STEPS = ROUND_SLICES
-CAMERA_STEPS = ITERATION_STEPS // 8
-PHOTON_STEPS = ITERATION_STEPS - CAMERA_STEPS
+MIN_PHASE_STEPS = 8
 
 
 def _share(total: int, part: int, parts: int) -> tuple[int, int]:
@@ -174,6 +176,8 @@ class SppmState:
         self.photons_emitted = 0  # over all passes since the last clear
         self.iterations = 0
         self.next_step = None  # the first step a continuing render passes (SppmProgram.advance)
+        self.camera_steps = ITERATION_STEPS // 2  # this iteration's split (see ITERATION_STEPS)
+        self.phase_seconds = [0.0, 0.0]  # measured seconds of each phase's whole work, or 0
 
     @ti.kernel
     def clear(self):
@@ -185,6 +189,22 @@ class SppmState:
             self.tau[x, y] = vec3(0.0)
             self.direct[x, y] = vec3(0.0)
             self.vp_depth[x, y] = 0
+
+    def time_phase(self, phase: int, seconds: float, steps_done: int, camera_steps: int) -> None:
+        """`steps_done` steps of `phase` (0 camera, 1 photons) took `seconds`: the phase's whole
+        work is that per step times its steps (a running estimate, the newest weighing half)."""
+        phase_steps = camera_steps if phase == 0 else ITERATION_STEPS - camera_steps
+        whole = seconds / max(steps_done, 1) * phase_steps
+        old = self.phase_seconds[phase]
+        self.phase_seconds[phase] = whole if old == 0.0 else 0.5 * (old + whole)
+
+    def next_camera_steps(self) -> int:
+        """Steps for the camera rows in the next iteration: in proportion to the phases' times."""
+        camera, photons = self.phase_seconds
+        if camera <= 0.0 or photons <= 0.0:
+            return self.camera_steps
+        share = round(ITERATION_STEPS * camera / (camera + photons))
+        return min(max(share, MIN_PHASE_STEPS), ITERATION_STEPS - MIN_PHASE_STEPS)
 
     def reset(self) -> None:
         self.clear()
@@ -229,8 +249,8 @@ class SppmProgram(RenderProgram):
     # --- the passes ------------------------------------------------------------------------------------
     # An iteration is ITERATION_STEPS steps, so that a viewer frame can take a share of one (the
     # passes of the other integrators are cut into pixel slices; SPPM's photons need every VP):
-    # CAMERA_STEPS bands of rows of the camera pass (the last one also makes the pass's
-    # statistics and the photon grid), then the photons in PHOTON_STEPS equal runs (the last one
+    # `camera_steps` bands of rows of the camera pass (the last one also makes the pass's
+    # statistics and the photon grid), then the photons in the other steps' equal runs (the last one
     # also makes the update). A photon's random numbers depend only on its index, so an
     # iteration in steps traces the same paths as one in a piece.
     def render(self, width, height, spp, first_sample, seed, max_depth, origin, forward, right, up, tan_half_fov,
@@ -260,18 +280,24 @@ class SppmProgram(RenderProgram):
         while step < end:  # consecutive steps of one phase in one launch
             index, part = divmod(step, ITERATION_STEPS)
             iteration_start = index * ITERATION_STEPS
-            if part < CAMERA_STEPS:
-                last = min(end - iteration_start, CAMERA_STEPS)
-                rows = _share(height, part, CAMERA_STEPS)[0], _share(height, last - 1, CAMERA_STEPS)[1]
+            if part == 0:
+                state.camera_steps = state.next_camera_steps()
+            cameras = state.camera_steps
+            t0 = time.perf_counter()
+            if part < cameras:
+                last = min(end - iteration_start, cameras)
+                rows = _share(height, part, cameras)[0], _share(height, last - 1, cameras)[1]
                 if rows[1] > rows[0]:
                     self.camera_rows(width, height, *rows, index, seed, max_depth, options.radius_pixels, *camera)
-                if last == CAMERA_STEPS:
+                if last == cameras:
                     self.camera_statistics(width, height, origin)
                     self.build_grid(width, height, table)
+                phase = 0
             else:
                 last = min(end - iteration_start, ITERATION_STEPS)
-                start = _share(photons, part - CAMERA_STEPS, PHOTON_STEPS)[0]
-                stop = _share(photons, last - 1 - CAMERA_STEPS, PHOTON_STEPS)[1]
+                runs = ITERATION_STEPS - cameras
+                start = _share(photons, part - cameras, runs)[0]
+                stop = _share(photons, last - 1 - cameras, runs)[1]
                 if self.emission.emits and stop > start:
                     base = state.photons_emitted + start
                     self.photon_pass(stop - start, base & 0xFFFFFFFF, (base >> 32) & 0x7FFFFFFF, seed, max_depth,
@@ -280,6 +306,10 @@ class SppmProgram(RenderProgram):
                     state.photons_emitted += photons
                     state.iterations = index + 1
                     self.update(width, height, options.alpha, float(state.photons_emitted), state.iterations)
+                phase = 1
+            if steps < ITERATION_STEPS:  # steps of a frame: time the phases for the next split
+                ti.sync()
+                state.time_phase(phase, time.perf_counter() - t0, last - part, cameras)
             step = iteration_start + last
         state.next_step = first_step + steps
         return steps
