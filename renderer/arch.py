@@ -23,7 +23,7 @@ def taichi_options(optimize: str = "compile") -> dict:
 
 
 def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str | None = None,
-                optimize: str = "compile", cpu_threads: int | None = None) -> str:
+                optimize: str = "compile", cpu_threads: int | None = None, cheaper_frontend: bool = True) -> str:
     """Initialise Taichi on `arch` and return the name of the back-end actually in use.
     cpu_threads: the CPU back-end's thread count (default: every core).
 
@@ -43,7 +43,8 @@ def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str |
     if arch == "auto" and cpu_expected(arch):
         arch = "cpu"  # no CUDA driver: skip Taichi's noisy probe-and-fall-back
     wanted = {"auto": ti.cuda, "cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan}[arch]
-    taichi_frontend.install()  # a third less compile time for large kernels
+    if cheaper_frontend:  # a third less compile time for large kernels (False: scripts/frontend_cost.py)
+        taichi_frontend.install()
     ti.init(arch=wanted, **kwargs)
     used = ti.lang.impl.current_cfg().arch
     if arch in ("cuda", "vulkan") and used != wanted:

@@ -6,7 +6,6 @@ Runs in subprocesses, since a process holds one Taichi runtime and the suite's i
 """
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -19,40 +18,10 @@ from tests.test_vulkan import vulkan_available
 
 ROOT = Path(__file__).resolve().parents[2]
 
-HITS = """
-import numpy as np
-from renderer.arch import init_taichi
-init_taichi("vulkan")
-from tests.geometry.test_traversal import mixed_scene, random_rays
-from tests.geometry.mesh_helpers import RayShooter, geometry_from
-rng = np.random.default_rng(1)
-data, (o, d) = mixed_scene(rng), random_rays(rng, 4000)
-out = {}
-for traversal in ("stack", "wide4"):
-    shooter = RayShooter(geometry_from(data, traversal=traversal))
-    out[traversal + "_t"], out[traversal + "_prim"] = shooter.closest(o, d)
-    out[traversal + "_shadow"] = shooter.occluded(o, d, 1.5)
-np.savez(OUT, **out)
-"""
-
-RENDER = """
-import numpy as np
-from renderer.arch import init_taichi
-init_taichi(ARCH)
-from renderer.camera import CameraFrame
-from renderer.renderer import MeshOptions, Renderer
-from renderer.scene.catalog import load_any
-scene = load_any("assets/scenes/cornell_box.toml")
-r = Renderer(scene, (24, 24), mesh_options=MeshOptions(traversal=TRAVERSAL))
-r.render(CameraFrame.from_spec(scene.camera), 32, integrator="mis", seed=SEED)
-np.savez(OUT, mean=r.image(), var=r.film.variance_of_mean_image())
-"""
-
-
-def run(script: str, out: Path, **names):
-    prelude = "".join(f"{k} = {v!r}\n" for k, v in {"OUT": str(out), **names}.items())
-    proc = subprocess.run([sys.executable, "-c", prelude + textwrap.dedent(script)], capture_output=True, text=True,
-                          timeout=900, cwd=ROOT)
+def run(out: Path, *args) -> dict:
+    """tests/geometry/wide_bvh_vulkan_child.py in a process of its own; its arrays."""
+    proc = subprocess.run([sys.executable, "-m", "tests.geometry.wide_bvh_vulkan_child", *map(str, args[:1]), str(out),
+                           *map(str, args[1:])], capture_output=True, text=True, timeout=900, cwd=ROOT)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return np.load(out)
 
@@ -61,7 +30,7 @@ def run(script: str, out: Path, **names):
 def test_wide_traversal_on_vulkan_finds_the_binary_hits(tmp_path):
     if not vulkan_available():
         pytest.skip("no Vulkan driver (install libvulkan1 mesa-vulkan-drivers)")
-    got = run(HITS, tmp_path / "hits.npz")
+    got = run(tmp_path / "hits.npz", "hits")
     rng = np.random.default_rng(1)
     data, (_, d) = mixed_scene(rng), random_rays(rng, 4000)
     # a miss reads t = INF in both; compare as (t, 0, 0) rows (the barycentrics are not read back)
@@ -75,7 +44,7 @@ def test_cornell_box_on_vulkan_with_the_wide_traversal_equals_the_cpu_image(tmp_
     """Different seeds: the two images are independent estimates of the same expected image."""
     if not vulkan_available():
         pytest.skip("no Vulkan driver (install libvulkan1 mesa-vulkan-drivers)")
-    vk = run(RENDER, tmp_path / "vk.npz", ARCH="vulkan", TRAVERSAL="wide4", SEED=1)
-    cpu = run(RENDER, tmp_path / "cpu.npz", ARCH="cpu", TRAVERSAL="stack", SEED=2)
+    vk = run(tmp_path / "vk.npz", "render", "vulkan", "wide4", 1)
+    cpu = run(tmp_path / "cpu.npz", "render", "cpu", "stack", 2)
     assert vk["mean"].mean() > 0.01 and np.isfinite(vk["mean"]).all()
     assert_agree((vk["mean"], vk["var"]), (cpu["mean"], cpu["var"]), ("vulkan wide4", "cpu stack"))
