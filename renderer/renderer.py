@@ -196,14 +196,11 @@ class Renderer:
         (ROUND_SLICES a whole one), its film changing when an iteration completes."""
         program, seed, max_depth = self._launch(camera, integrator, max_depth, seed, features, sampler)
         width, height = self.film.width, self.film.height
-        if not program.sliced and not whole_iterations and hasattr(program, "advance"):
+        if not program.sliced:  # steps of whole-image iterations (SppmProgram.advance)
+            if whole_iterations:
+                slices = max(1, slices // ROUND_SLICES) * ROUND_SLICES
             self.slices_done += program.advance(width, height, slices, self.slices_done, seed, max_depth,
                                                 *camera.kernel_args())
-            return
-        if not program.sliced:
-            spp = max(1, slices // ROUND_SLICES)
-            program.render(width, height, spp, self.samples_done, seed, max_depth, *camera.kernel_args())
-            self.slices_done += spp * ROUND_SLICES
             return
         left = slices
         while left > 0 and self.pixels_active > 0:

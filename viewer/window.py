@@ -262,8 +262,7 @@ class ViewerApp:
         r, s = self.renderer, self.session
         png, exr = screenshot_paths(self.screenshot_folder, r.scene.name, s.integrator, r.samples_done, datetime.now())
         write_png(png, self.display.window_sized_image(r.film, self._accumulation(), r.slices_done,
-                                                       self._display_settings(),
-                                                       r.is_sliced(s.integrator, r.features(camera_frame(s.controller.state)))))
+                                                       self._display_settings(), self._pixel_sliced()))
         write_exr(exr, r.shown_image())
         saved = f"{png} and {exr.name}"
         denoised = self.shown_denoised
@@ -414,7 +413,7 @@ class ViewerApp:
             t0 = time.perf_counter()
             self.last_display_update = self.display.update(renderer.film, self._accumulation(),
                                                            renderer.slices_done, self._display_settings(),
-                                                           renderer.is_sliced(integrator, features))
+                                                           self._pixel_sliced())
             self._present(now)
             present_seconds = time.perf_counter() - t0
             if not fresh:
@@ -460,7 +459,7 @@ class ViewerApp:
         worker, generation = self._denoiser, self._accumulation()
         if not plan.interactive and (renderer.film.width, renderer.film.height) == self.size:
             # sppm's film holds its completed iterations only (the steps of the next change nothing)
-            spp = renderer.mean_spp if renderer.is_sliced(integrator, self._features) else renderer.samples_done
+            spp = renderer.mean_spp if self._pixel_sliced() else renderer.samples_done
             worker.offer(generation, spp, lambda: self._denoise_input(renderer, integrator))
         result = worker.result_for(generation)
         if worker.error:
@@ -502,9 +501,19 @@ class ViewerApp:
     def _display_tonemapper(self) -> str:
         return self.session.display_tonemapper(INTEGRATORS[self.session.integrator].display_tonemapper)
 
+    def _current_features(self):
+        """This frame's Features (those of the camera now, before the frame knows them)."""
+        if self._features is None:
+            return self.renderer.features(camera_frame(self.session.controller.state))
+        return self._features
+
+    def _pixel_sliced(self) -> bool:
+        """Whether the film changes slice by slice (False: sppm's, as its iterations complete)."""
+        return self.renderer.is_sliced(self.session.integrator, self._current_features())
+
     def hud_stats(self) -> hud.HudStats:
         s, r = self.session, self.renderer
-        features = r.features(camera_frame(s.controller.state)) if self._features is None else self._features
+        features = self._current_features()
         return hud.HudStats(
             scene=r.scene.name, scene_position=f"{s.scene_index + 1}/{len(s.scenes)}", integrator=s.integrator,
             effects=features.active_effects(), fps=self._fps.rate(), frame_ms=self._frame_ms,

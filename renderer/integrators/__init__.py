@@ -13,8 +13,9 @@ An integrator is a data-oriented class with
 `state` is the camera sample's sampler state (renderer.sampling.sampler).
 
 A multi-pass integrator (sppm) has no `li`; it provides make_program(renderer, features, sampler,
-lights) returning a RenderProgram subclass with `sliced = False` whose render(width, height, spp,
-first_sample, seed, max_depth, *camera) runs its own whole-image passes, and
+lights) returning a RenderProgram subclass with `sliced = False` whose advance(width, height,
+steps, first_step, seed, max_depth, *camera) runs steps of its own whole-image iterations
+(ROUND_SLICES steps an iteration) and returns how many it ran, and
 `noise_estimate = False` when its film holds an estimate rather than a mean of samples.
 """
 from renderer.integrators.debug import AlbedoView, BvhView, DepthView, NormalsView, StepsView

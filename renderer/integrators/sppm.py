@@ -253,12 +253,6 @@ class SppmProgram(RenderProgram):
     # statistics and the photon grid), then the photons in the other steps' equal runs (the last one
     # also makes the update). A photon's random numbers depend only on its index, so an
     # iteration in steps traces the same paths as one in a piece.
-    def render(self, width, height, spp, first_sample, seed, max_depth, origin, forward, right, up, tan_half_fov,
-               aperture, focus):
-        """`spp` whole SPPM iterations (a few kernel launches each)."""
-        self.advance(width, height, spp * ITERATION_STEPS, first_sample * ITERATION_STEPS, seed, max_depth,
-                     origin, forward, right, up, tan_half_fov, aperture, focus)
-
     def advance(self, width, height, steps, first_step, seed, max_depth, origin, forward, right, up, tan_half_fov,
                 aperture, focus):
         """Steps [first_step, first_step + steps) of the iterations (step k is step k % ITERATION_STEPS
