@@ -455,7 +455,9 @@ class ViewerApp:
         if not (self.session.denoise_view and INTEGRATORS[integrator].denoisable):
             return
         if self._denoiser is None:
-            self._denoiser = BackgroundDenoiser(Denoiser().denoise)
+            denoiser = Denoiser(prefilter_aux=True)
+            self._denoiser = BackgroundDenoiser(denoiser.denoise,
+                                                first=lambda source: denoiser.denoise(source, prefilter_aux=False))
         worker, generation = self._denoiser, self._accumulation()
         if not plan.interactive and (renderer.film.width, renderer.film.height) == self.size:
             # sppm's film holds its completed iterations only (the steps of the next change nothing)
@@ -467,7 +469,8 @@ class ViewerApp:
         if result is not None:
             self._shown = self.denoised_display.update(result, self._display_settings())
             self.shown_denoised = result
-            self.image_label = f"denoised ({spp_text(result.spp)} spp, {1000 * result.seconds:.0f} ms)"
+            quick = ", quick" if result.quick else ""
+            self.image_label = f"denoised ({spp_text(result.spp)} spp, {1000 * result.seconds:.0f} ms{quick})"
         else:
             self.image_label = "raw (denoising...)" if worker.busy else "raw (denoised from 1 spp on)"
 

@@ -247,15 +247,17 @@ def denoise_section(report: dict) -> Section:
     for s in scenes:
         t, match = s["target_denoise"], s["raw_spp_matching_denoised_8"]
         at8 = _point_at(s["curve"], 8)
+        quick8 = at8.get("denoised_quick_corrected", MISSING) if at8 else MISSING
         rows.append([s["scene"], s["reference"]["spp"], at8["raw_corrected"] if at8 else MISSING, t["denoised_8"],
-                     f"{num(t['raw_128'])} ({num(t['raw_spp'])} spp)",
+                     quick8, f"{num(t['raw_128'])} ({num(t['raw_spp'])} spp)",
                      num(match["spp"]) + (" (extrapolated)" if match["extrapolated"] else ""), verdict(t["passed"])])
     config = report.get("config", {})
     w, h = config.get("size", ("?", "?"))
     section.blocks += [
-        f"Raw and denoised (Open Image Denoise with albedo and normal AOVs) against a long reference, mis at "
+        f"Raw and denoised (Open Image Denoise with albedo and normal AOVs; `quick`: the AOVs not "
+        f"prefiltered, the viewer's first denoise) against a long reference, mis at "
         f"{w}x{h}; relMSE less the reference's own noise. Target: denoised at 8 spp below raw at 128 spp.",
-        table(["scene", "reference spp", "raw at 8 spp", "denoised at 8 spp", "raw at 128 spp",
+        table(["scene", "reference spp", "raw at 8 spp", "denoised at 8 spp", "quick at 8 spp", "raw at 128 spp",
                "raw spp to match denoised at 8", "target"], rows)]
     rows = [[s["scene"], s["uniform"]["seconds"], s["uniform"]["spp"], s["uniform"]["rel_mse_corrected"],
              a["threshold"], a["mean_spp"], pct(a["stopped_fraction"], 0), a["rel_mse_corrected"],
@@ -269,7 +271,9 @@ def denoise_section(report: dict) -> Section:
     frame = report.get("denoiser_frame_s")
     if isinstance(frame, (int, float)):
         fw, fh = report.get("frame_size", ("?", "?"))
-        section.blocks.append(f"Denoiser time per {fw}x{fh} frame: {num(1000 * frame)} ms (median of 3).")
+        quick = report.get("denoiser_frame_quick_s")
+        quick_text = f"; quick: {num(1000 * quick)} ms" if isinstance(quick, (int, float)) else ""
+        section.blocks.append(f"Denoiser time per {fw}x{fh} frame: {num(1000 * frame)} ms (median of 3){quick_text}.")
     section.blocks += _skipped_block(entries)
     if scenes:
         passed = sum(s["target_denoise"]["passed"] for s in scenes)

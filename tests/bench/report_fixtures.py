@@ -399,7 +399,8 @@ def _denoise_scene(name: str, gain: float, adaptive_gain: float, config) -> dict
     while spp <= config.max_spp:
         raw = 0.08 / spp
         points.append({"spp": spp, "seconds": 0.1 * spp, "denoise_s": 0.01, "raw": raw, "denoised": gain * raw,
-                       "raw_corrected": max(raw - floor, 0.0), "denoised_corrected": max(gain * raw - floor, 0.0)})
+                       "raw_corrected": max(raw - floor, 0.0), "denoised_corrected": max(gain * raw - floor, 0.0),
+                       "denoised_quick_corrected": max(1.2 * gain * raw - floor, 0.0)})
         spp *= 2
     by_spp = {p["spp"]: p for p in points}
     at8 = by_spp[8]
@@ -433,7 +434,7 @@ def denoise_report(out_dir: Path) -> dict:
               {"scene": "hall", "skipped": "SceneError: made up"}]
     plots = denoise.write_plots(scenes, out_dir)
     return _write(out_dir, "denoise", {
-        **_header("denoise", arch="cpu", config=asdict(config)), "denoiser_frame_s": 0.125,
+        **_header("denoise", arch="cpu", config=asdict(config)), "denoiser_frame_s": 0.125, "denoiser_frame_quick_s": 0.03,
         "frame_size": [960, 540], "scenes": scenes, "plots": [p.name for p in plots], "total_seconds": 80.0})
 
 

@@ -62,3 +62,18 @@ def test_a_failure_is_one_line_and_keeps_the_viewer_running():
     assert worker.offer(1, 1.0, source)
     worker.wait()
     assert worker.error == "OIDN device creation failed" and worker.result_for(1) is None
+
+
+def test_the_first_job_of_an_accumulation_may_use_the_quicker_denoiser():
+    worker = BackgroundDenoiser(lambda s: s.color * 2.0, first=lambda s: s.color * 3.0)
+    assert worker.offer(1, 1.0, source)
+    worker.wait()
+    first = worker.result_for(1)
+    assert first.quick and np.allclose(first.image, 3.0)
+    assert worker.offer(1, 2.0, source)
+    worker.wait()
+    second = worker.result_for(1)
+    assert not second.quick and np.allclose(second.image, 2.0)
+    assert worker.offer(2, 1.0, source)  # a new accumulation starts quick again
+    worker.wait()
+    assert worker.result_for(2).quick
