@@ -52,6 +52,13 @@ COST_SMOOTHING = 0.35  # weight of the newest measurement in the moving averages
 # a run of them while an average catches up; a long frame is what an input waits for.
 SCALE_RISE = 0.5  # fraction of the way towards a larger target scale taken per frame
 INITIAL_MOVING_SCALE = 0.25  # before anything was measured
+# A moving frame's cost per pixel can jump several-fold from one frame to the next (the camera
+# flies into a sphere whose every path then runs to the maximum depth: 1.5 -> 7.9 us a pixel on
+# the textured scene, a 117 ms frame planned as 45), which no measurement of the frames before
+# can predict. So a moving frame renders this many pixel slices first (a quarter: the grid of
+# every other pixel, which the display fills out) and plans the rest from their measured time:
+# a frame that got dearer ends near its budget with fewer pixels, and the next is planned anew.
+MOVING_PROBE_SLICES = ROUND_SLICES // 4
 
 # An untouched still view redraws seldom enough that presenting (with the HUD's statistics, which
 # refresh on such frames) takes at most this share of the time, within these bounds in seconds:
@@ -167,6 +174,15 @@ class ResolutionController:
             self.scale += SCALE_RISE * (target - self.scale)
         self.scale = min(max(self.scale, self.min_scale), 1.0)
         return self.size_for(self.scale)
+
+    def moving_rest_slices(self, probe_seconds: float, probe_slices: int = MOVING_PROBE_SLICES) -> int:
+        """Pixel slices a moving frame renders after its first `probe_slices` took `probe_seconds`:
+        the rest of the round, or as many as fit the render budget at the probe's own cost."""
+        rest = ROUND_SLICES - probe_slices
+        if probe_slices <= 0 or not math.isfinite(probe_seconds) or probe_seconds <= 0.0:
+            return rest
+        left = self.render_budget() - probe_seconds
+        return int(min(max(left * probe_slices / probe_seconds, 0.0), rest))
 
     def size_for(self, scale: float) -> tuple[int, int]:
         w, h = self.full_size

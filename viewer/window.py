@@ -50,8 +50,8 @@ from viewer.camera_state import CameraState
 from viewer.denoise_worker import BackgroundDenoiser
 from viewer.display import DenoisedDisplay, DisplayImages, DisplaySettings, show_on_canvas
 from viewer.hotkeys import KeyMap
-from viewer.session import (DEFAULT_TARGET_SECONDS, SETTLE_SECONDS, STATS_INTERVAL, Every, RateMeter,
-                            ViewerSession, scene_scale, screenshot_dir, screenshot_paths)
+from viewer.session import (DEFAULT_TARGET_SECONDS, MOVING_PROBE_SLICES, SETTLE_SECONDS, STATS_INTERVAL, Every,
+                            RateMeter, ViewerSession, scene_scale, screenshot_dir, screenshot_paths)
 
 TITLE = "Lantern"
 DEFAULT_SIZE = (960, 540)
@@ -148,6 +148,7 @@ class ViewerApp:
         self._presented_key = None  # what the HUD and notices said on the last present
         self._cursor_before = None
         self.last_plan = None
+        self.moving_slices = None  # pixel slices the last moving frame rendered (ROUND_SLICES: all)
         self.last_frame: Optional[np.ndarray] = None  # off-screen: GGUI's image of the last frame
         self.last_screenshot: Optional[tuple[Path, Path]] = None
         # The notice ("loading..." or "compiling...") shown on the frame before a load or compile.
@@ -385,7 +386,11 @@ class ViewerApp:
         t0 = time.perf_counter()
         slices_before = renderer.slices_done
         # sppm's frames take steps of its whole-image iterations (a share of one while still)
-        renderer.render_slices(frame, plan.slices, integrator, s.max_depth, features=features, whole_iterations=False)
+        if plan.interactive and plan.slices == ROUND_SLICES and self._pixel_sliced():
+            self._render_moving(renderer, frame, integrator, features, t0)
+        else:
+            renderer.render_slices(frame, plan.slices, integrator, s.max_depth, features=features,
+                                   whole_iterations=False)
         ti.sync()
         self._awaiting_render = False
         render_seconds = time.perf_counter() - t0
@@ -424,6 +429,17 @@ class ViewerApp:
             # does one where adaptive sampling had stopped every pixel)
             s.resolution.record(render_seconds, pixel_samples, frame_seconds - stats_seconds - present_seconds)
         return self.running
+
+    def _render_moving(self, renderer: Renderer, frame, integrator: str, features, start: float) -> None:
+        """A moving frame: a quarter of its pixel slices, then as many more as its budget allows
+        at what that quarter cost (viewer/session.py, MOVING_PROBE_SLICES); pixels a frame cut
+        short did not reach show from the grid it did (the display's fill)."""
+        renderer.render_slices(frame, MOVING_PROBE_SLICES, integrator, self.session.max_depth, features=features)
+        ti.sync()
+        rest = self.session.resolution.moving_rest_slices(time.perf_counter() - start, MOVING_PROBE_SLICES)
+        self.moving_slices = MOVING_PROBE_SLICES + rest
+        if rest > 0:
+            renderer.render_slices(frame, rest, integrator, self.session.max_depth, features=features)
 
     def _present_asked(self, inp: FrameInput, now: float) -> bool:
         """Whether this frame presents whatever it renders: on input (a key, a held key or button,

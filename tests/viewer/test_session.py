@@ -9,7 +9,8 @@ import pytest
 
 from renderer.pixel_slices import ROUND_SLICES
 from viewer.controller import MAX_SPEED
-from viewer.session import (MAX_PRESENT_INTERVAL, MIN_PRESENT_INTERVAL, MIN_SCALE, STILL_PRESENT_SHARE, Controls, Every, RateMeter, ResolutionController, ViewerSession,
+from viewer.session import (MAX_PRESENT_INTERVAL, MIN_PRESENT_INTERVAL, MIN_SCALE, MOVING_PROBE_SLICES,
+                            STILL_PRESENT_SHARE, Controls, Every, RateMeter, ResolutionController, ViewerSession,
                             fix_max_depth, screenshot_dir, screenshot_paths, screenshot_stem)
 
 FULL = (960, 540)
@@ -112,6 +113,20 @@ def test_a_dearer_view_is_taken_at_once_a_cheaper_one_smoothly():
     assert ctl.cost == pytest.approx(3.0 / PIXELS)
     ctl.record(1.0, PIXELS)
     assert ctl.cost == pytest.approx((3.0 + COST_SMOOTHING * (1.0 - 3.0)) / PIXELS)
+
+
+def test_a_moving_frame_plans_its_rest_from_its_first_quarter():
+    ctl = ResolutionController(FULL, target_seconds=0.05)
+    budget = ctl.render_budget()
+    rest = ROUND_SLICES - MOVING_PROBE_SLICES
+    assert ctl.moving_rest_slices(budget / 10) == rest  # cheap as planned: the whole round
+    # Four times dearer than planned: the quarter took the whole budget, nothing more renders.
+    assert ctl.moving_rest_slices(budget) == 0 and ctl.moving_rest_slices(4 * budget) == 0
+    # In between, as many slices as fit at the quarter's own cost.
+    assert abs(ctl.moving_rest_slices(budget / 2) - MOVING_PROBE_SLICES) <= 1  # (rounding down)
+    assert abs(ctl.moving_rest_slices(budget / 3) - 2 * MOVING_PROBE_SLICES) <= 1
+    for bad in (0.0, -1.0, math.nan, math.inf):
+        assert ctl.moving_rest_slices(bad) == rest  # nothing measured: render as planned
 
 
 def test_still_slices_fill_the_budget():

@@ -16,6 +16,7 @@ from renderer.pixel_slices import ROUND_SLICES, filled_mean_array
 from renderer.tonemap import tonemap_array, unpack_rgba8
 from viewer import hud
 from viewer.display import UPDATE_SLICES
+from viewer.session import MOVING_PROBE_SLICES
 from viewer.window import FrameInput, ViewerApp, window_buffer_to_image
 
 SIZE = (128, 72)
@@ -134,6 +135,33 @@ def test_movement_lowers_the_resolution_then_returns_to_full(app):
     slices = app.renderer.slices_done
     app.step()
     assert not app.last_plan.reset and app.renderer.slices_done > slices
+
+
+def test_a_moving_frame_stops_where_its_budget_ends_and_shows_every_pixel(app):
+    """A moving frame renders a quarter of its pixel slices, then what its budget allows at the
+    cost they measured: a frame that got dearer ends short, its other pixels filled from the grid
+    it rendered; a cheap one renders the whole round."""
+    app.session.hud_visible = False
+    settle(app, 1)
+    resolution = app.session.resolution
+    target = resolution.target_seconds
+    try:
+        resolution.target_seconds = 1e-4  # the quarter alone overruns this budget
+        app.step(FrameInput(held=frozenset({"w"})))
+        assert app.last_plan.interactive and app.last_plan.reset
+        assert app.moving_slices == MOVING_PROBE_SLICES == app.renderer.slices_done
+        film = app.renderer.film
+        counts = film.sample_counts() + film.rejected_counts()
+        assert (film.width, film.height) == (8, 4) and counts.sum() == 8  # every other pixel of every other row
+        shown = window_buffer_to_image(app.last_frame)
+        assert shown.std() > MIN_PIXEL_STD / 2
+        assert np.abs(unpack_rgba8(app.display.shown).astype(int) - expected_display(app).astype(int)).max() <= 1
+        resolution.target_seconds = 10.0  # every frame fits
+        app.step(FrameInput(held=frozenset({"w"})))
+        assert app.last_plan.reset and app.moving_slices == ROUND_SLICES == app.renderer.slices_done
+    finally:
+        resolution.target_seconds = target
+        app.session.hud_visible = True
 
 
 def test_left_drag_on_the_hud_does_not_turn_the_camera(app):
