@@ -16,6 +16,11 @@ For each scene (cornell_box, bunnies, studio, showcase, textured), in one proces
 3. Adaptive against uniform sampling at equal time: the time uniform sampling took for
    `equal_time_spp` spp is the budget; adaptive renders (renderer/adaptive.py) with each threshold
    of `thresholds` (min spp 16) run in passes until that budget, and are compared at the budget.
+   Both renders use the same seed, so a pixel's first samples are the same in both, and the
+   difference of their errors is tested per pixel (common.error_difference: mean difference, its
+   standard error over the pixels, z; |z| > Z_SIGNIFICANT is a difference at the 5% level, two-
+   sided), untrimmed and without the 0.1% of pixels with the largest errors: at these sample counts
+   a handful of fireflies decide the untrimmed relMSE of bunnies, studio and showcase (0.05-0.45).
 4. The denoiser's time for one 960x540 frame in each form (median of 3, after one warm-up call).
 
 The images are 320x180: the denoiser's error depends on how many pixels a feature spans, and at
@@ -40,12 +45,13 @@ from pathlib import Path
 
 import numpy as np
 
-from renderer.bench.common import (describe_error, load_average, load_named_scene, log, print_table, pyplot, rel_mse,
-                                   report_header, save_figure, speed_runtime, verdict, write_json)
-from renderer.bench.integrators import noise_floor, progressive, spp_to_reach
+from renderer.bench.common import (describe_error, error_difference, load_average, load_named_scene, log, print_table,
+                                   pyplot, rel_mse, report_header, save_figure, speed_runtime, verdict, write_json)
+from renderer.bench.integrators import FIREFLY_TRIM, noise_floor, progressive, spp_to_reach
 
 INTEGRATOR = "mis"
 DEFAULT_THRESHOLD = 0.05
+Z_SIGNIFICANT = 1.96  # two-sided 5% level of the paired adaptive-vs-uniform test
 
 
 @dataclass(frozen=True)
@@ -74,8 +80,10 @@ def _sync():
     ti.sync()
 
 
-def denoise_curve(renderer, camera, denoiser, reference, floor, config: DenoiseBenchConfig) -> list[dict]:
-    """Raw and denoised relMSE at 1, 2, 4, ... max_spp spp (cumulative render seconds)."""
+def denoise_curve(renderer, camera, denoiser, reference, floor, config: DenoiseBenchConfig,
+                  kept: dict | None = None) -> list[dict]:
+    """Raw and denoised relMSE at 1, 2, 4, ... max_spp spp (cumulative render seconds); the raw
+    image at equal_time_spp goes to kept["uniform"]."""
     from renderer.denoise import DenoiseInput
 
     renderer.reset()
@@ -88,6 +96,8 @@ def denoise_curve(renderer, camera, denoiser, reference, floor, config: DenoiseB
         seconds += time.perf_counter() - t0
         done += n
         raw = renderer.image()
+        if kept is not None and done == config.equal_time_spp:
+            kept["uniform"] = raw
         albedo, normal = renderer.aov_images()
         source = DenoiseInput(raw, albedo, normal)
         t0 = time.perf_counter()
@@ -103,8 +113,9 @@ def denoise_curve(renderer, camera, denoiser, reference, floor, config: DenoiseB
 
 
 def adaptive_at_equal_time(renderer, camera, reference, floor, budget_s: float, threshold: float,
-                           config: DenoiseBenchConfig) -> dict:
-    """An adaptive render in doubling passes until `budget_s` seconds of render time."""
+                           config: DenoiseBenchConfig, uniform_image=None) -> dict:
+    """An adaptive render in doubling passes until `budget_s` seconds of render time, and its
+    paired comparison with `uniform_image` (the uniform render of the same seed at that time)."""
     from renderer.renderer import AdaptiveSettings
 
     renderer.reset()
@@ -114,10 +125,25 @@ def adaptive_at_equal_time(renderer, camera, reference, floor, budget_s: float, 
     finally:
         renderer.set_adaptive(None)
     counts = renderer.film.sample_counts() + renderer.film.rejected_counts()
-    error = rel_mse(renderer.image(), reference)
-    return {"threshold": threshold, "seconds": run["seconds"], "max_spp": run["spp"],
-            "mean_spp": float(counts.mean()), "stopped_fraction": 1.0 - renderer.pixels_active / counts.size,
-            "rel_mse": error, "rel_mse_corrected": max(error - floor, 0.0)}
+    image = renderer.image()
+    error = rel_mse(image, reference)
+    result = {"threshold": threshold, "seconds": run["seconds"], "max_spp": run["spp"],
+              "mean_spp": float(counts.mean()), "stopped_fraction": 1.0 - renderer.pixels_active / counts.size,
+              "rel_mse": error, "rel_mse_corrected": max(error - floor, 0.0)}
+    if uniform_image is not None:
+        result["paired"] = error_difference(image, uniform_image, reference, "rel_mse").as_dict()
+        result["paired_trimmed"] = error_difference(image, uniform_image, reference, "rel_mse",
+                                                    trim=FIREFLY_TRIM).as_dict()
+    return result
+
+
+def paired_verdict(paired: dict | None) -> str:
+    """'better' / 'worse' where adaptive's error differs from uniform's at the 5% level, else 'tie'."""
+    if not paired:
+        return "n/a"
+    if paired["z"] < -Z_SIGNIFICANT:
+        return "better"
+    return "worse" if paired["z"] > Z_SIGNIFICANT else "tie"
 
 
 def progressive_adaptive(renderer, camera, budget_s: float, config: DenoiseBenchConfig) -> dict:
@@ -171,7 +197,8 @@ def bench_scene(scene, denoiser, config: DenoiseBenchConfig) -> dict:
     result["reference"] = {"spp": run["spp"], "seconds": run["seconds"], "rel_mse_floor": floor}
 
     log(f"[{scene.name}] raw and denoised to {config.max_spp} spp ...")
-    points = denoise_curve(renderer, camera, denoiser, reference, floor, config)
+    kept = {}
+    points = denoise_curve(renderer, camera, denoiser, reference, floor, config, kept)
     result["curve"] = points
     by_spp = {p["spp"]: p for p in points}
     at8 = by_spp.get(8) or points[min(3, len(points) - 1)]
@@ -188,11 +215,14 @@ def bench_scene(scene, denoiser, config: DenoiseBenchConfig) -> dict:
     result["adaptive"] = []
     for threshold in config.thresholds:
         log(f"[{scene.name}] adaptive, threshold {threshold:g}, {budget:.1f} s ...")
-        result["adaptive"].append(adaptive_at_equal_time(renderer, camera, reference, floor, budget, threshold, config))
+        result["adaptive"].append(adaptive_at_equal_time(renderer, camera, reference, floor, budget, threshold, config,
+                                                         kept.get("uniform")))
     default = next((a for a in result["adaptive"] if a["threshold"] == DEFAULT_THRESHOLD), result["adaptive"][0])
     result["target_adaptive"] = {"threshold": default["threshold"], "adaptive": default["rel_mse_corrected"],
                                  "uniform": uniform["raw_corrected"],
-                                 "passed": default["rel_mse_corrected"] < uniform["raw_corrected"]}
+                                 "passed": default["rel_mse_corrected"] < uniform["raw_corrected"],
+                                 "paired": paired_verdict(default.get("paired")),
+                                 "paired_trimmed": paired_verdict(default.get("paired_trimmed"))}
     return result
 
 
@@ -264,17 +294,28 @@ def print_report(results: list[dict], config: DenoiseBenchConfig, frame_s: float
         for a in res["adaptive"]:
             rows.append([res["scene"], u["seconds"], u["spp"], u["rel_mse_corrected"], a["threshold"], a["mean_spp"],
                          a["stopped_fraction"], a["rel_mse_corrected"],
-                         verdict(a["rel_mse_corrected"] < u["rel_mse_corrected"])])
+                         verdict(a["rel_mse_corrected"] < u["rel_mse_corrected"]), paired_text(a.get("paired")),
+                         paired_text(a.get("paired_trimmed"))])
     print_table(["scene", "budget s", "uniform spp", "uniform relMSE", "threshold", "adaptive mean spp", "stopped",
-                 "adaptive relMSE", "adaptive better"], rows, title="Adaptive against uniform sampling at equal time")
+                 "adaptive relMSE", "adaptive better", "paired z", "paired z, trimmed"], rows,
+                title="Adaptive against uniform sampling at equal time")
     wins = sum(r["target_adaptive"]["passed"] for r in done)
     print(f"Target: adaptive (threshold {DEFAULT_THRESHOLD:g}) below uniform at equal time on >= 4 of 5 scenes: "
           f"{wins} of {len(done)}  {verdict(wins >= 4)}")
+    for key, label in (("paired", "all pixels"), ("paired_trimmed", "without the 0.1% largest errors")):
+        verdicts = [r["target_adaptive"].get(key, "n/a") for r in done]
+        print(f"  paired z-test at the 5% level ({label}): better on {verdicts.count('better')}, "
+              f"worse on {verdicts.count('worse')}, no significant difference on {verdicts.count('tie')}")
     passed = all(r["target_denoise"]["passed"] for r in done) and done
     print(f"Target: denoised at 8 spp below raw at 128 spp on every scene: {verdict(bool(passed))}")
     w, h = config.frame_size
     print(f"Denoiser time per {w}x{h} frame: {frame_s * 1000:.0f} ms with the AOVs prefiltered, "
           f"{frame_quick_s * 1000:.0f} ms quick (median of 3)\n")
+
+
+def paired_text(paired: dict | None) -> str:
+    """z of adaptive minus uniform error and its verdict, e.g. '-3.1 better'."""
+    return f"{paired['z']:+.1f} {paired_verdict(paired)}" if paired else "n/a"
 
 
 def write_plots(results: list[dict], out_dir: Path) -> list[Path]:

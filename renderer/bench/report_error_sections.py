@@ -239,6 +239,12 @@ def _point_at(curve: list[dict], spp: int) -> dict | None:
     return next((p for p in curve if p["spp"] == spp), None)
 
 
+def paired_text(paired: dict | None) -> str:
+    from renderer.bench.denoise import paired_text as text
+
+    return text(paired) if paired else MISSING
+
+
 def denoise_section(report: dict) -> Section:
     entries = report.get("scenes", [])
     scenes = [s for s in entries if "curve" in s]
@@ -261,13 +267,16 @@ def denoise_section(report: dict) -> Section:
                "raw spp to match denoised at 8", "target"], rows)]
     rows = [[s["scene"], s["uniform"]["seconds"], s["uniform"]["spp"], s["uniform"]["rel_mse_corrected"],
              a["threshold"], a["mean_spp"], pct(a["stopped_fraction"], 0), a["rel_mse_corrected"],
-             "yes" if a["rel_mse_corrected"] < s["uniform"]["rel_mse_corrected"] else "no"]
+             "yes" if a["rel_mse_corrected"] < s["uniform"]["rel_mse_corrected"] else "no",
+             paired_text(a.get("paired")), paired_text(a.get("paired_trimmed"))]
             for s in scenes for a in s["adaptive"]]
     section.blocks += [
         "Adaptive against uniform sampling at equal time (the budget: uniform sampling's time to "
-        f"{num(config.get('equal_time_spp'))} spp; relMSE less the reference's noise):",
+        f"{num(config.get('equal_time_spp'))} spp; relMSE less the reference's noise; paired z: the "
+        "per-pixel difference of the two errors over its standard error, same seed, |z| > 1.96 a "
+        "difference at the 5% level; trimmed: without the 0.1% of pixels with the largest errors):",
         table(["scene", "budget s", "uniform spp", "uniform relMSE", "threshold", "adaptive mean spp", "stopped",
-               "adaptive relMSE", "adaptive better"], rows)]
+               "adaptive relMSE", "adaptive better", "paired z", "paired z, trimmed"], rows)]
     frame = report.get("denoiser_frame_s")
     if isinstance(frame, (int, float)):
         fw, fh = report.get("frame_size", ("?", "?"))
@@ -286,7 +295,13 @@ def denoise_section(report: dict) -> Section:
         wins = [s for s in scenes if s["target_adaptive"]["passed"]]
         ratios = [s["target_adaptive"]["adaptive"] / s["target_adaptive"]["uniform"] for s in scenes
                   if s["target_adaptive"]["uniform"]]
+        paired = [s["target_adaptive"].get("paired_trimmed") for s in scenes]
+        paired_sentence = ""
+        if all(paired):
+            paired_sentence = (f" (a paired z-test without the 0.1% largest errors: better on {paired.count('better')}, "
+                               f"worse on {paired.count('worse')}, no significant difference on {paired.count('tie')})")
         section.findings.append(
             f"Adaptive sampling (threshold {num(scenes[0]['target_adaptive']['threshold'])}) ends below uniform "
-            f"sampling at equal time on {len(wins)} of {len(scenes)} scenes, at {spread(ratios, times)} its error.")
+            f"sampling at equal time on {len(wins)} of {len(scenes)} scenes, at {spread(ratios, times)} its "
+            f"error{paired_sentence}.")
     return section

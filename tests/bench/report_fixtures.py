@@ -391,7 +391,7 @@ def interactive_report(out_dir: Path) -> dict:
 
 def _denoise_scene(name: str, gain: float, adaptive_gain: float, config) -> dict:
     """gain: denoised relMSE / raw relMSE; adaptive_gain: adaptive relMSE / uniform relMSE at equal time."""
-    from renderer.bench.denoise import DEFAULT_THRESHOLD
+    from renderer.bench.denoise import DEFAULT_THRESHOLD, paired_verdict
     from renderer.bench.integrators import spp_to_reach
 
     floor = 1e-4
@@ -408,8 +408,13 @@ def _denoise_scene(name: str, gain: float, adaptive_gain: float, config) -> dict
     raw128 = by_spp.get(128) or points[-1]
     uniform = by_spp[config.equal_time_spp]
     error = adaptive_gain * uniform["raw"]
+    difference = error - uniform["raw"]
+    paired = {"metric": "rel_mse", "trim": 0.0, "a": error, "b": uniform["raw"], "difference": difference,
+              "relative_difference": difference / uniform["raw"], "standard_error": 0.2 * abs(difference) + 1e-9,
+              "z": difference / (0.2 * abs(difference) + 1e-9)}
     adaptive = [{"threshold": threshold, "seconds": uniform["seconds"], "max_spp": 32, "mean_spp": 6.5,
-                 "stopped_fraction": 0.4, "rel_mse": error, "rel_mse_corrected": max(error - floor, 0.0)}
+                 "stopped_fraction": 0.4, "rel_mse": error, "rel_mse_corrected": max(error - floor, 0.0),
+                 "paired": paired, "paired_trimmed": {**paired, "trim": 1e-3}}
                 for threshold in config.thresholds]
     default = next(a for a in adaptive if a["threshold"] == DEFAULT_THRESHOLD)
     return {"scene": name, "size": list(config.size), "compile_s": 2.0,
@@ -422,7 +427,8 @@ def _denoise_scene(name: str, gain: float, adaptive_gain: float, config) -> dict
             "adaptive": adaptive,
             "target_adaptive": {"threshold": default["threshold"], "adaptive": default["rel_mse_corrected"],
                                 "uniform": uniform["raw_corrected"],
-                                "passed": default["rel_mse_corrected"] < uniform["raw_corrected"]}}
+                                "passed": default["rel_mse_corrected"] < uniform["raw_corrected"],
+                                "paired": paired_verdict(paired), "paired_trimmed": paired_verdict(paired)}}
 
 
 def denoise_report(out_dir: Path) -> dict:

@@ -39,7 +39,23 @@ def test_tiny_run_writes_curves_targets_and_a_plot(tmp_path, capsys):
     loose = max(scene["adaptive"], key=lambda a: a["threshold"])
     if loose["max_spp"] >= 2 * TINY.min_spp:
         assert loose["stopped_fraction"] > 0.0, loose
+    # The paired test compares the adaptive image with the uniform one at the budget's spp.
+    for adaptive in scene["adaptive"]:
+        paired = adaptive["paired"]
+        assert paired["a"] == pytest.approx(adaptive["rel_mse"], rel=1e-6)
+        assert paired["b"] == pytest.approx(scene["uniform"]["rel_mse"], rel=1e-6)
+        assert paired["standard_error"] > 0.0 and paired["z"] == pytest.approx(
+            paired["difference"] / paired["standard_error"])
+        assert adaptive["paired_trimmed"]["trim"] == 1e-3
+    assert scene["target_adaptive"]["paired"] in ("better", "worse", "tie")
+    assert all(p["denoised_quick_corrected"] >= 0.0 for p in curve)
     assert (tmp_path / "bench_denoise_cornell_box.png").stat().st_size > 0
-    assert report["denoiser_frame_s"] > 0.0
+    assert report["denoiser_frame_s"] > 0.0 and report["denoiser_frame_quick_s"] > 0.0
     out = capsys.readouterr().out
     assert "Adaptive against uniform sampling at equal time" in out and "Denoiser time per 64x36 frame" in out
+
+
+def test_the_paired_verdict_needs_a_difference_at_the_five_percent_level():
+    verdict = denoise.paired_verdict
+    assert verdict({"z": -2.5}) == "better" and verdict({"z": 2.5}) == "worse"
+    assert verdict({"z": -1.5}) == verdict({"z": 1.9}) == "tie" and verdict(None) == "n/a"
