@@ -242,6 +242,15 @@ class Renderer:
         seed = (settings.seed if seed is None else seed) & 0xFFFFFFFF
         return program, seed, settings.max_depth if max_depth is None else max_depth
 
+    def steps_within(self, integrator: str, features: Features, seconds: float) -> int | None:
+        """For an integrator whose passes are steps of whole-image iterations (sppm): how many of
+        the next steps fit `seconds` at their measured costs; None for the others, or before
+        anything was measured."""
+        program = self.program(integrator, features, self.scene.render.sampler)
+        if program.sliced or not hasattr(program, "steps_within"):
+            return None
+        return program.steps_within(seconds, self.slices_done, self.film.height)
+
     def is_sliced(self, integrator: str, features: Features, sampler: str = "independent") -> bool:
         """Whether the integrator's passes can be cut into pixel slices (all but sppm's)."""
         return self.program(integrator, features, sampler).sliced

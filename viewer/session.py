@@ -188,6 +188,10 @@ class ResolutionController:
         w, h = self.full_size
         return max(1, min(w, round(w * scale))), max(1, min(h, round(h * scale)))
 
+    def still_budget(self, reserved_seconds: float = 0.0, presenting: bool = True) -> float:
+        """Seconds a still frame renders for: the render budget less `reserved_seconds`."""
+        return max(self.render_budget(presenting) - reserved_seconds, 0.0)
+
     def still_slices(self, reserved_seconds: float = 0.0, presenting: bool = True) -> int:
         """Pixel slices for a full-resolution frame that takes about the render budget, less
         `reserved_seconds` the frame spends on something else (before anything is measured: one
@@ -196,8 +200,7 @@ class ResolutionController:
         if cost is None:
             return self.min_still_slices
         slice_cost = cost * self.full_size[0] * self.full_size[1] / ROUND_SLICES
-        budget = max(self.render_budget(presenting) - reserved_seconds, 0.0)
-        slices = min(budget // slice_cost, self.max_spp * ROUND_SLICES)
+        slices = min(self.still_budget(reserved_seconds, presenting) // slice_cost, self.max_spp * ROUND_SLICES)
         return int(max(slices, self.min_still_slices))
 
 

@@ -389,8 +389,11 @@ class ViewerApp:
         if plan.interactive and plan.slices == ROUND_SLICES and self._pixel_sliced():
             self._render_moving(renderer, frame, integrator, features, t0)
         else:
-            renderer.render_slices(frame, plan.slices, integrator, s.max_depth, features=features,
-                                   whole_iterations=False)
+            slices = plan.slices
+            if not plan.interactive:  # sppm's steps are planned from their own measured costs
+                steps = renderer.steps_within(integrator, features, s.resolution.still_budget(reserved, asked))
+                slices = slices if steps is None else steps
+            renderer.render_slices(frame, slices, integrator, s.max_depth, features=features, whole_iterations=False)
         ti.sync()
         self._awaiting_render = False
         render_seconds = time.perf_counter() - t0

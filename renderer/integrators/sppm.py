@@ -138,6 +138,14 @@ class SppmOptions:
             raise ValueError(f"sppm photons must be positive, got {self.photons}")
 
 
+def _synced_clock(sync: bool) -> float:
+    """perf_counter after the device's work so far (0.0, and no wait, when not timing)."""
+    if not sync:
+        return 0.0
+    ti.sync()
+    return time.perf_counter()
+
+
 @ti.data_oriented
 class SppmState:
     """Per-pixel SPPM state at the film's maximum size (the active region is a kernel argument),
@@ -177,7 +185,14 @@ class SppmState:
         self.iterations = 0
         self.next_step = None  # the first step a continuing render passes (SppmProgram.advance)
         self.camera_steps = ITERATION_STEPS // 2  # this iteration's split (see ITERATION_STEPS)
-        self.phase_seconds = [0.0, 0.0]  # measured seconds of each phase's whole work, or 0
+        self.phase_seconds = [0.0, 0.0]  # measured seconds of each phase's steps, or 0
+        # measured seconds of what each phase's last step does besides: the camera pass's
+        # statistics and photon grid (10-20 ms at 960x540 on a 2-core CPU), the update (2-3 ms)
+        self.finish_seconds = [0.0, 0.0]
+        # measured seconds of each row of the camera pass (nan: not yet): rows differ severalfold
+        # (a band of mirrors against one of sky), and while the view is still the last iteration's
+        # rows predict the next one's
+        self.row_seconds = np.full(max_height, np.nan)
 
     @ti.kernel
     def clear(self):
@@ -198,13 +213,59 @@ class SppmState:
         old = self.phase_seconds[phase]
         self.phase_seconds[phase] = whole if old == 0.0 else 0.5 * (old + whole)
 
+    def time_rows(self, first: int, end: int, seconds: float) -> None:
+        if end > first:
+            self.row_seconds[first:end] = seconds / (end - first)
+
+    def band_seconds(self, first: int, end: int) -> float | None:
+        """Predicted seconds of camera rows [first, end), None if a row was not measured."""
+        rows = self.row_seconds[first:end]
+        return None if np.isnan(rows).any() else float(rows.sum())
+
+    def time_finish(self, phase: int, seconds: float) -> None:
+        old = self.finish_seconds[phase]
+        self.finish_seconds[phase] = seconds if old == 0.0 else 0.5 * (old + seconds)
+
     def next_camera_steps(self) -> int:
         """Steps for the camera rows in the next iteration: in proportion to the phases' times."""
-        camera, photons = self.phase_seconds
-        if camera <= 0.0 or photons <= 0.0:
+        camera, photons = (p + f for p, f in zip(self.phase_seconds, self.finish_seconds))
+        if self.phase_seconds[0] <= 0.0 or self.phase_seconds[1] <= 0.0:
             return self.camera_steps
         share = round(ITERATION_STEPS * camera / (camera + photons))
         return min(max(share, MIN_PHASE_STEPS), ITERATION_STEPS - MIN_PHASE_STEPS)
+
+    def steps_within(self, seconds: float, first_step: int, height: int,
+                     limit: int = 4 * ITERATION_STEPS) -> int | None:
+        """How many steps from `first_step` fit in `seconds` at the measured costs (at least one,
+        at most `limit`), the finishing work of a phase's last step counted where it falls; None
+        before both phases were timed. A frame then stops short of a dear last step it could not
+        afford, rather than overrunning by it."""
+        if min(self.phase_seconds) <= 0.0:
+            return None
+        cameras = self.camera_steps if first_step % ITERATION_STEPS else self.next_camera_steps()
+        spent, count = 0.0, 0
+        while count < limit:
+            part = (first_step + count) % ITERATION_STEPS
+            if part == 0 and count:
+                cameras = self.next_camera_steps()
+            phase = 0 if part < cameras else 1
+            phase_steps = cameras if phase == 0 else ITERATION_STEPS - cameras
+            cost = self.phase_seconds[phase] / max(phase_steps, 1)
+            if phase == 0:
+                band = self.band_seconds(*_share(height, part, cameras))
+                cost = cost if band is None else band
+            if part == (cameras - 1 if phase == 0 else ITERATION_STEPS - 1):
+                cost += self.finish_seconds[phase]
+            if count and spent + cost > seconds:
+                break
+            spent += cost
+            count += 1
+        # A frame that reaches past this iteration ends on an iteration's end: the image changes
+        # when one completes, and the frames after start whole iterations.
+        to_end = -first_step % ITERATION_STEPS or ITERATION_STEPS
+        if count > to_end:
+            count = to_end + (count - to_end) // ITERATION_STEPS * ITERATION_STEPS
+        return count
 
     def reset(self) -> None:
         self.clear()
@@ -253,6 +314,10 @@ class SppmProgram(RenderProgram):
     # statistics and the photon grid), then the photons in the other steps' equal runs (the last one
     # also makes the update). A photon's random numbers depend only on its index, so an
     # iteration in steps traces the same paths as one in a piece.
+    def steps_within(self, seconds: float, first_step: int, height: int) -> int | None:
+        """Steps from `first_step` that fit `seconds` at this state's measured costs (SppmState)."""
+        return self.state.steps_within(seconds, first_step, height)
+
     def advance(self, width, height, steps, first_step, seed, max_depth, origin, forward, right, up, tan_half_fov,
                 aperture, focus):
         """Steps [first_step, first_step + steps) of the iterations (step k is step k % ITERATION_STEPS
@@ -277,15 +342,21 @@ class SppmProgram(RenderProgram):
             if part == 0:
                 state.camera_steps = state.next_camera_steps()
             cameras = state.camera_steps
+            timed = steps < ITERATION_STEPS  # steps of a frame: time the phases for the next split
             t0 = time.perf_counter()
+            finish = 0.0
             if part < cameras:
                 last = min(end - iteration_start, cameras)
                 rows = _share(height, part, cameras)[0], _share(height, last - 1, cameras)[1]
                 if rows[1] > rows[0]:
                     self.camera_rows(width, height, *rows, index, seed, max_depth, options.radius_pixels, *camera)
+                    if timed:
+                        state.time_rows(*rows, _synced_clock(True) - t0)
                 if last == cameras:
+                    finish = _synced_clock(timed)
                     self.camera_statistics(width, height, origin)
                     self.build_grid(width, height, table)
+                    finish = _synced_clock(timed) - finish
                 phase = 0
             else:
                 last = min(end - iteration_start, ITERATION_STEPS)
@@ -299,11 +370,18 @@ class SppmProgram(RenderProgram):
                 if last == ITERATION_STEPS:
                     state.photons_emitted += photons
                     state.iterations = index + 1
+                    finish = _synced_clock(timed)
                     self.update(width, height, options.alpha, float(state.photons_emitted), state.iterations)
+                    finish = _synced_clock(timed) - finish
                 phase = 1
-            if steps < ITERATION_STEPS:  # steps of a frame: time the phases for the next split
-                ti.sync()
-                state.time_phase(phase, time.perf_counter() - t0, last - part, cameras)
+            if timed:
+                total = _synced_clock(True) - t0
+                state.time_phase(phase, total - finish, last - part, cameras)
+                whole_pass = state.band_seconds(0, height) if phase == 0 else None
+                if whole_pass is not None:  # every row measured: the camera pass is their sum
+                    state.phase_seconds[0] = whole_pass
+                if finish > 0.0:
+                    state.time_finish(phase, finish)
             step = iteration_start + last
         state.next_step = first_step + steps
         return steps

@@ -320,3 +320,31 @@ def test_sppm_runs_on_vulkan(tmp_path):
 
     image = read_exr(out)
     assert np.isfinite(image).all() and image.mean() > 0.05
+
+
+def test_a_frame_takes_the_steps_that_fit_its_time_counting_each_phase_s_finishing_work():
+    """SppmState.steps_within: the viewer's still frames take as many steps as their budget holds
+    at the measured costs, the camera pass's statistics and grid (or the update) counted on the
+    step that does them, and a camera step costs what its rows cost in the iteration before."""
+    from renderer.integrators.sppm import ITERATION_STEPS, SppmState
+
+    height = 256  # two rows a camera step
+    state = SppmState(4, height)
+    assert state.steps_within(1.0, 1, height) is None  # nothing measured yet
+    state.camera_steps = ITERATION_STEPS // 2
+    state.phase_seconds = [0.128, 0.128]  # 1 ms a step in either phase
+    state.finish_seconds = [0.010, 0.002]
+    assert state.steps_within(0.0055, 1, height) == 5
+    assert state.steps_within(0.0, 1, height) == 1  # at least one
+    # steps 120-127: 8 ms, of which the last also makes the grid (10 ms): 18 ms, and no more
+    assert state.steps_within(0.0185, 120, height) == 8
+    assert state.steps_within(0.010, 126, height) == 1  # the grid's step would overrun
+    # the photons' last steps (the update: +2 ms); what fits beyond them (8 steps of the next
+    # iteration) is left for the next frame: a frame that crosses an iteration's end stops there
+    assert state.steps_within(0.0125, 254, height) == 2
+    # (a frame takes at most 4 iterations of steps: here the 2, then 3 whole ones)
+    assert state.steps_within(1.0, 254, height) == 2 + 3 * ITERATION_STEPS
+    # Measured rows: rows 10 and 11 (camera step 5) took 4 ms each; unmeasured rows cost the average.
+    state.row_seconds[10:12] = 0.004
+    assert state.band_seconds(10, 12) == pytest.approx(0.008) and state.band_seconds(0, 12) is None
+    assert state.steps_within(0.010, 1, height) == 4
