@@ -43,8 +43,11 @@ def slice_pixel(i, slice_first, slice_count, width, height):
 
     A whole round (slice_count == ROUND_SLICES) visits the pixels in raster order (neighbouring
     loop indices are neighbouring pixels, as a plain full pass); a partial one visits cell after
-    cell of each slice. (x, y) may fall outside the image in a partial pass (the last row and
-    column of cells are cut by the image's edge): callers skip those.
+    cell, each cell's pixels of those slices together (neighbouring loop indices lie within one
+    16x16 cell: taking each slice across the image in turn instead, the Cornell box's rays lost
+    their coherence and a pass of 255 slices cost 1.02 ms a slice against a whole round's 0.81 at
+    960x540 on two threads). (x, y) may fall outside the image in a partial pass (the last row
+    and column of cells are cut by the image's edge): callers skip those.
     """
     x = 0
     y = 0
@@ -53,12 +56,17 @@ def slice_pixel(i, slice_first, slice_count, width, height):
         y = i // width
     else:
         cells_x = (width + CELL - 1) >> CELL_BITS
-        cells = cells_x * ((height + CELL - 1) >> CELL_BITS)
-        ox, oy = slice_offset(slice_first + i // cells)
-        cell = i % cells
+        ox, oy = slice_offset(slice_rank(i, slice_first, slice_count))
+        cell = i // slice_count
         x = ((cell % cells_x) << CELL_BITS) + ox
         y = ((cell // cells_x) << CELL_BITS) + oy
     return x, y
+
+
+@ti.func
+def slice_rank(i, slice_first, slice_count):
+    """The slice of loop index i of a partial pass (see slice_pixel)."""
+    return slice_first + i % slice_count
 
 
 @ti.func

@@ -9,7 +9,8 @@ import numpy as np
 import taichi as ti
 
 from renderer.film import is_finite_f32
-from renderer.pixel_slices import CELL, CELL_BITS, ROUND_SLICES, filled_mean, pass_length, slice_pixel
+from renderer.pixel_slices import (CELL, CELL_BITS, ROUND_SLICES, filled_mean, pass_length, slice_pixel,
+                                   slice_rank)
 from renderer.luminance import LUMINANCE_WEIGHTS, luminance
 
 TONEMAPPERS = ("aces", "reinhard", "none")
@@ -187,12 +188,11 @@ def _tonemap_packed_kernel(
     # partial one only the pixels of those slices (1:1 with the film, the ones a render of the
     # same slices changed), with `blocks` (a first round) each one's fill block.
     out_width, out_height = out.shape[0], out.shape[1]
-    cells = ((out_width + CELL - 1) >> CELL_BITS) * ((out_height + CELL - 1) >> CELL_BITS)
     for i in range(pass_length(slice_count, out_width, out_height)):
         x, y = slice_pixel(i, slice_first, slice_count, out_width, out_height)
         side = 1
         if blocks:
-            side = fill_block_side(slice_first + i // cells)  # the loop index's slice (slice_pixel)
+            side = fill_block_side(slice_rank(i, slice_first, slice_count))  # the loop index's slice
         for dy, dx in ti.ndrange(side, side):
             qx, qy = x + dx, y + dy
             if qx < out_width and qy < out_height:
