@@ -9,8 +9,9 @@ reference's noise) with the noisy AOVs passed straight in: at 320x180 and 8 spp,
 0.00117 -> 0.00092, studio 0.00571 -> 0.00533, textured 0.00778 -> 0.00556, showcase 0.00521 ->
 0.00473, bunnies 0.00853 -> 0.00982 (better on four of five); at 160x90 from 8 to 512 spp on
 cornell_box, studio and textured, better at 9 of 12 points and 4-7% worse at the other three
-(cornell_box at 8 and 32 spp, textured at 128). It costs about three filter passes instead of one (960x540 on two cores: ~0.44 s
-without, ~2.7 s with), so the viewer asks for the quick form first (`prefilter_aux=False`).
+(cornell_box at 8 and 32 spp, textured at 128). It costs about three filter passes instead of
+one (`bench denoise`, 960x540 on two cores: 0.43 s without, 2.8 s with), so the viewer asks for
+the quick form first (`prefilter_aux=False`).
 
 Non-finite values never reach the library: the film drops non-finite samples, and the inputs are
 checked again here, since one NaN would spread over the filter's whole receptive field.
@@ -97,12 +98,6 @@ class OidnFilters:
             for name in bound:
                 flt.unset_image(name)
         return output
-
-    def release(self) -> None:
-        for flt in self._filters.values():
-            flt.release()
-        self._filters.clear()
-        self._device.release()
 
 
 class Denoiser:

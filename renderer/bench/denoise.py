@@ -259,7 +259,8 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, confi
     print_report(results, config, frame_s, frame_quick_s)
     plots = write_plots(results, out_dir)
     report = {**report_header("denoise", quick, load_before, arch=arch, config=asdict(config)),
-              "denoiser_frame_s": frame_s, "denoiser_frame_quick_s": frame_quick_s, "frame_size": list(config.frame_size), "scenes": results,
+              "denoiser_frame_s": frame_s, "denoiser_frame_quick_s": frame_quick_s,
+              "frame_size": list(config.frame_size), "scenes": results,
               "plots": [p.name for p in plots], "total_seconds": time.perf_counter() - t_start}
     path = write_json(Path(out_dir) / "bench_denoise.json", report)
     print(f"wrote {path}  (total {report['total_seconds']:.0f} s)")
