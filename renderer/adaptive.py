@@ -1,8 +1,12 @@
 """Adaptive sampling: pixels whose estimate is already precise stop taking samples.
 
-The film keeps Welford's variance per pixel, so each pixel knows the relative standard error of
-its mean, e = luminance(sqrt(s^2 / n)) / max(luminance(mean), 1e-3) (the measure `Film.stats`
-reports). The stopping rule, applied at checks after min_spp, 2 min_spp, 4 min_spp ... samples
+The film keeps Welford's variance per pixel, so each pixel knows the standard error of its mean;
+the rule measures it relative to the pixel's level, e = luminance(sqrt(s^2 / n)) /
+sqrt(luminance(mean)^2 + 0.1^2): relative where the pixel is brighter than 0.1, absolute below,
+the weighting of the relMSE (0.01 added to the squared reference) every benchmark reports. (A
+floor of 1e-3, as the HUD's noise figure has, kept dark pixels sampling long after their error
+stopped mattering: measured at equal time, 320x180, threshold 0.05, the Cornell box's adaptive
+render went from no better than uniform to significantly better.) The stopping rule, applied at checks after min_spp, 2 min_spp, 4 min_spp ... samples
 per pixel (whole rounds):
 
 - a pixel's error at a check is the largest e over its 3x3 neighbourhood, so a pixel next to a
@@ -19,7 +23,6 @@ adaptive render continues exactly. `--spp` stays the maximum.
 """
 import taichi as ti
 
-from renderer.film import NOISE_LUMINANCE_FLOOR
 from renderer.luminance import luminance
 
 SAMPLING = 0
@@ -27,6 +30,9 @@ ONCE_BELOW = 1  # below the threshold at the last check: stops if it is again at
 STOPPED = 2
 
 DEFAULT_MIN_SPP = 16
+# The luminance below which a pixel's error counts as absolute rather than relative: the same
+# 0.1 (0.01 added to the squared reference) as the relMSE every benchmark reports.
+ERROR_FLOOR = 0.1
 
 
 def check_points(min_spp: int):
@@ -76,7 +82,8 @@ class AdaptiveSampling:
         if n >= 2:
             nf = ti.cast(n, ti.f32)
             standard_error = ti.sqrt(ti.max(film.m2[x, y] / ((nf - 1.0) * nf), 0.0))
-            error = luminance(standard_error) / ti.max(luminance(film.mean[x, y]), NOISE_LUMINANCE_FLOOR)
+            level = luminance(film.mean[x, y])
+            error = luminance(standard_error) / ti.sqrt(level * level + ERROR_FLOOR * ERROR_FLOOR)
         return error
 
     @ti.kernel

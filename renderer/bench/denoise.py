@@ -14,9 +14,11 @@ For each scene (cornell_box, bunnies, studio, showcase, textured), in one proces
    Derived: the spp at which raw reaches the error of denoised-at-8-spp (log-log interpolation,
    extrapolated as relMSE ~ 1/spp past the last point and flagged).
 3. Adaptive against uniform sampling at equal time: the time uniform sampling took for
-   `equal_time_spp` spp is the budget; adaptive renders (renderer/adaptive.py) with each threshold
-   of `thresholds` (min spp 16) run in passes until that budget, and are compared at the budget.
-   Both renders use the same seed, so a pixel's first samples are the same in both, and the
+   `equal_time_spp` spp (256: with min spp 16 and a stop confirmed at the next doubling, nothing
+   stops before 32 spp, so a budget of 64 left the rule a quarter of it) is the budget; a uniform
+   render and adaptive renders (renderer/adaptive.py) with each threshold of `thresholds` run in
+   the same growing passes until that budget, and are compared at the budget.
+   All use the same seed, so a pixel's first samples are the same in both, and the
    difference of their errors is tested per pixel (common.error_difference: mean difference, its
    standard error over the pixels, z; |z| > Z_SIGNIFICANT is a difference at the 5% level, two-
    sided), untrimmed and without the 0.1% of pixels with the largest errors: at these sample counts
@@ -60,7 +62,7 @@ class DenoiseBenchConfig:
     reference_s: float = 120.0
     reference_launch_s: float = 3.0
     max_spp: int = 256
-    equal_time_spp: int = 64
+    equal_time_spp: int = 256
     thresholds: tuple[float, ...] = (0.02, DEFAULT_THRESHOLD, 0.1)
     min_spp: int = 16
     seed: int = 1
@@ -80,10 +82,8 @@ def _sync():
     ti.sync()
 
 
-def denoise_curve(renderer, camera, denoiser, reference, floor, config: DenoiseBenchConfig,
-                  kept: dict | None = None) -> list[dict]:
-    """Raw and denoised relMSE at 1, 2, 4, ... max_spp spp (cumulative render seconds); the raw
-    image at equal_time_spp goes to kept["uniform"]."""
+def denoise_curve(renderer, camera, denoiser, reference, floor, config: DenoiseBenchConfig) -> list[dict]:
+    """Raw and denoised relMSE at 1, 2, 4, ... max_spp spp (cumulative render seconds)."""
     from renderer.denoise import DenoiseInput
 
     renderer.reset()
@@ -96,8 +96,6 @@ def denoise_curve(renderer, camera, denoiser, reference, floor, config: DenoiseB
         seconds += time.perf_counter() - t0
         done += n
         raw = renderer.image()
-        if kept is not None and done == config.equal_time_spp:
-            kept["uniform"] = raw
         albedo, normal = renderer.aov_images()
         source = DenoiseInput(raw, albedo, normal)
         t0 = time.perf_counter()
@@ -112,16 +110,18 @@ def denoise_curve(renderer, camera, denoiser, reference, floor, config: DenoiseB
     return points
 
 
-def adaptive_at_equal_time(renderer, camera, reference, floor, budget_s: float, threshold: float,
-                           config: DenoiseBenchConfig, uniform_image=None) -> dict:
-    """An adaptive render in doubling passes until `budget_s` seconds of render time, and its
-    paired comparison with `uniform_image` (the uniform render of the same seed at that time)."""
+def at_equal_time(renderer, camera, reference, floor, budget_s: float, threshold: float | None,
+                  config: DenoiseBenchConfig, uniform_image=None) -> tuple[dict, np.ndarray]:
+    """A render from an empty film in growing passes until `budget_s` seconds of render time:
+    adaptive at `threshold`, or uniform (threshold None); with its paired comparison against
+    `uniform_image` (the uniform render of the same seed and budget) where given. Returns (the
+    figures, the image)."""
     from renderer.renderer import AdaptiveSettings
 
     renderer.reset()
-    renderer.set_adaptive(AdaptiveSettings(threshold, config.min_spp))
+    renderer.set_adaptive(None if threshold is None else AdaptiveSettings(threshold, config.min_spp))
     try:
-        run = progressive_adaptive(renderer, camera, budget_s, config)
+        run = progressive_passes(renderer, camera, budget_s, config)
     finally:
         renderer.set_adaptive(None)
     counts = renderer.film.sample_counts() + renderer.film.rejected_counts()
@@ -134,7 +134,7 @@ def adaptive_at_equal_time(renderer, camera, reference, floor, budget_s: float, 
         result["paired"] = error_difference(image, uniform_image, reference, "rel_mse").as_dict()
         result["paired_trimmed"] = error_difference(image, uniform_image, reference, "rel_mse",
                                                     trim=FIREFLY_TRIM).as_dict()
-    return result
+    return result, image
 
 
 def paired_verdict(paired: dict | None) -> str:
@@ -146,8 +146,9 @@ def paired_verdict(paired: dict | None) -> str:
     return "worse" if paired["z"] > Z_SIGNIFICANT else "tie"
 
 
-def progressive_adaptive(renderer, camera, budget_s: float, config: DenoiseBenchConfig) -> dict:
-    # The renderer's own progressive loop (bench/integrators.py) resets the film: not here.
+def progressive_passes(renderer, camera, budget_s: float, config: DenoiseBenchConfig) -> dict:
+    """Passes of growing size (at most about a second each) until `budget_s` render seconds.
+    (The renderer's own progressive loop, bench/integrators.py, resets the film: not here.)"""
     seconds, n = 0.0, 1
     while seconds < budget_s and renderer.pixels_active > 0:
         before = renderer.slices_done
@@ -197,8 +198,7 @@ def bench_scene(scene, denoiser, config: DenoiseBenchConfig) -> dict:
     result["reference"] = {"spp": run["spp"], "seconds": run["seconds"], "rel_mse_floor": floor}
 
     log(f"[{scene.name}] raw and denoised to {config.max_spp} spp ...")
-    kept = {}
-    points = denoise_curve(renderer, camera, denoiser, reference, floor, config, kept)
+    points = denoise_curve(renderer, camera, denoiser, reference, floor, config)
     result["curve"] = points
     by_spp = {p["spp"]: p for p in points}
     at8 = by_spp.get(8) or points[min(3, len(points) - 1)]
@@ -208,19 +208,20 @@ def bench_scene(scene, denoiser, config: DenoiseBenchConfig) -> dict:
     result["target_denoise"] = {"denoised_8": at8["denoised_corrected"], "raw_128": raw128["raw_corrected"],
                                 "raw_spp": raw128["spp"], "passed": at8["denoised_corrected"] < raw128["raw_corrected"]}
 
-    uniform = by_spp.get(config.equal_time_spp) or points[-1]
-    budget = uniform["seconds"]
-    result["uniform"] = {"spp": uniform["spp"], "seconds": budget, "rel_mse": uniform["raw"],
-                         "rel_mse_corrected": uniform["raw_corrected"]}
-    result["adaptive"] = []
-    for threshold in config.thresholds:
-        log(f"[{scene.name}] adaptive, threshold {threshold:g}, {budget:.1f} s ...")
-        result["adaptive"].append(adaptive_at_equal_time(renderer, camera, reference, floor, budget, threshold, config,
-                                                         kept.get("uniform")))
+    # Equal time: the budget is what uniform sampling took for equal_time_spp in the curve; the
+    # uniform render compared is made again in the same passes as the adaptive ones, right
+    # before them, so both pay the same launches and see the same machine.
+    budget = (by_spp.get(config.equal_time_spp) or points[-1])["seconds"]
+    log(f"[{scene.name}] uniform and adaptive at equal time, {budget:.1f} s each ...")
+    uniform, uniform_image = at_equal_time(renderer, camera, reference, floor, budget, None, config)
+    result["uniform"] = {"spp": uniform["max_spp"], "seconds": uniform["seconds"], "rel_mse": uniform["rel_mse"],
+                         "rel_mse_corrected": uniform["rel_mse_corrected"]}
+    result["adaptive"] = [at_equal_time(renderer, camera, reference, floor, budget, threshold, config,
+                                        uniform_image)[0] for threshold in config.thresholds]
     default = next((a for a in result["adaptive"] if a["threshold"] == DEFAULT_THRESHOLD), result["adaptive"][0])
     result["target_adaptive"] = {"threshold": default["threshold"], "adaptive": default["rel_mse_corrected"],
-                                 "uniform": uniform["raw_corrected"],
-                                 "passed": default["rel_mse_corrected"] < uniform["raw_corrected"],
+                                 "uniform": uniform["rel_mse_corrected"],
+                                 "passed": default["rel_mse_corrected"] < uniform["rel_mse_corrected"],
                                  "paired": paired_verdict(default.get("paired")),
                                  "paired_trimmed": paired_verdict(default.get("paired_trimmed"))}
     return result

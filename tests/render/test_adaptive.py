@@ -64,7 +64,7 @@ def test_adaptive_render_is_unbiased_where_it_stopped(renderer):
     """Pixels adaptive sampling stopped, against a uniform render with another seed: the suite's
     per-pixel z-test (Sidak-corrected, 99.75% of pixel channels) and the z of the image mean over
     those pixels, at ALPHA."""
-    rendered(renderer, 256, 11, AdaptiveSettings(0.15, 16))
+    rendered(renderer, 256, 11, AdaptiveSettings(0.08, 16))
     counts = renderer.film.sample_counts() + renderer.film.rejected_counts()
     # Stopped before the maximum (a pixel the check at 256 spp stops took every sample anyway).
     stopped = (renderer.film.state().adaptive == STOPPED) & (counts < 256)
