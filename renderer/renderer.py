@@ -35,8 +35,22 @@ class MeshOptions:
     # "stackless" (renderer/geometry/mesh_geometry.py; `bench bvh` compares them)
     traversal: str = "wide4"
     triangle_test: str = "watertight"
+    # "packets" (leaves tested four slots at a time, triangles structure-of-arrays), "scalar"
+    # (renderer/geometry/triangle_packets.py; `bench bvh` compares them), or "auto": packets where
+    # triangles are at least half the primitives (analytic quads, spheres and discs are tested
+    # lane by lane in a packet, which cost the Cornell box's quads 5 %)
+    leaves: str = "auto"
     max_leaf_size: int = 4
     instancing: bool = True  # False: every instance flattened into world triangles (a reference)
+
+
+def leaf_layout(leaves: str, data) -> str:
+    """MeshOptions.leaves for mesh data: "auto" resolved by the share of triangles."""
+    if leaves != "auto":
+        return leaves
+    counts = data.counts
+    total = sum(counts.values())
+    return "packets" if total and 2 * counts.get("triangle", 0) >= total else "scalar"
 
 
 def build_world(scene: Scene, mesh_options: MeshOptions):
@@ -55,7 +69,8 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
         bvh = build_scene_bvh(mesh.data, strategy=mesh_options.strategy, max_leaf_size=mesh_options.max_leaf_size)
         materials = MaterialTable(mesh.rows, TextureTable(mesh.atlas, mesh.texture_slots), mesh.volume_media)
         # The geometry tests alpha coverage during traversal: it reads the material table.
-        geometry = MeshGeometry(mesh.data, bvh, mesh_options.traversal, mesh_options.triangle_test, materials)
+        geometry = MeshGeometry(mesh.data, bvh, mesh_options.traversal, mesh_options.triangle_test, materials,
+                                leaf_layout(mesh_options.leaves, mesh.data))
         return geometry, materials, mesh.features(scene)
     raise ValueError(f"unknown geometry kind '{scene.geometry}'")
 

@@ -1,11 +1,15 @@
-"""What LLVM makes of the wide BVH's node test: compiles it (and the whole closest-hit traversal)
-with Taichi's optimised LLVM IR and assembly written out, and counts the 4-lane instructions.
+"""What LLVM makes of the wide BVH's node test and the packet leaves' triangle test: compiles them
+(and the whole closest-hit traversal) with Taichi's optimised LLVM IR and assembly written out,
+and counts the 4-lane instructions.
 
-    python scripts/wide_bvh_ir.py [--keep DIR] [--optimize compile|run]
+    python scripts/wide_bvh_ir.py [--keep DIR] [--optimize compile|run] [--only node,leaf,traversal]
 
-Two kernels, each on Taichi's CPU back-end with the offline cache off (so the files are written):
+Kernels, each on Taichi's CPU back-end with the offline cache off (so the files are written):
   node:      a stand-alone loop over rays that visits one wide node each (WideNodes.visit)
-  traversal: renderer.bench.ray_batch's closest-hit kernel over a small "wide4" mesh
+  leaf:      a stand-alone loop over rays that tests one packet of four triangles each
+             (TrianglePackets.watertight and nearest_lane, as the packet leaves call them)
+  traversal: renderer.bench.ray_batch's closest-hit kernel over a small "wide4" mesh with
+             packet leaves
 For each: `<4 x float>` values in the optimised IR (loads, fsub/fmul, minnum/maxnum, fcmp) and
 packed (`ps`) against scalar (`ss`) subtract/multiply/min/max instructions in the assembly. The
 node test has vectorised when its subtractions, multiplications, minima and maxima are packed.
@@ -80,6 +84,36 @@ def compile_node_kernel():
               np.zeros((n, WIDTH - 1), np.float32), np.zeros((n, WIDTH), np.int32))
 
 
+def compile_leaf_kernel():
+    import taichi as ti
+
+    from renderer.geometry.intersect import watertight_setup
+    from renderer.geometry.triangle_packets import TrianglePackets, build_packets, nearest_lane, permuted_origin
+    from renderer.upload import upload_fields
+
+    rng = np.random.default_rng(0)
+    tris = rng.normal(size=(64, 3, 3)).astype(np.float32)
+    packets = TrianglePackets(build_packets(np.arange(64), tris))
+
+    @ti.kernel
+    def leaf_test(o: ti.types.ndarray(), d: ti.types.ndarray(), out: ti.types.ndarray()):
+        for i in range(o.shape[0]):
+            origin = ti.math.vec3(o[i, 0], o[i, 1], o[i, 2])
+            direction = ti.math.vec3(d[i, 0], d[i, 1], d[i, 2])
+            k, s = watertight_setup(direction)
+            found, t, b1, b2 = packets.watertight(i % packets.count, permuted_origin(origin, k), k, s, 1e30)
+            t_near, lane, u, v = nearest_lane(found & packets.lane_mask(i % packets.count, 1, 4 * packets.count), t,
+                                              b1, b2)
+            out[i, 0] = t_near
+            out[i, 1] = lane
+            out[i, 2] = u
+            out[i, 3] = v
+
+    n = 16
+    leaf_test(rng.normal(size=(n, 3)).astype(np.float32), rng.normal(size=(n, 3)).astype(np.float32),
+              np.zeros((n, 4), np.float32))
+
+
 def compile_traversal_kernel():
     from renderer.bench.ray_batch import RayBatch
     from renderer.geometry.mesh_data import MeshData
@@ -90,7 +124,7 @@ def compile_traversal_kernel():
     tris = (rng.uniform(-1, 1, (200, 1, 3)) + rng.normal(0, 0.1, (200, 3, 3))).astype(np.float32)
     data = MeshData(tri_vertices=tris, tri_material=np.zeros(200, np.int32))
     lo, hi = data.bounds()
-    geometry = MeshGeometry(data, build_bvh(lo, hi, 0.5 * (lo + hi)), "wide4")
+    geometry = MeshGeometry(data, build_bvh(lo, hi, 0.5 * (lo + hi)), "wide4", leaves="packets")
     n = 16
     RayBatch(geometry).closest(rng.normal(size=(n, 3)).astype(np.float32) * 3,
                                rng.normal(size=(n, 3)).astype(np.float32), np.full(n, 1e30, np.float32),
@@ -110,7 +144,7 @@ def run_in(directory: Path, which: str, optimize: str = "run") -> dict:
 
         ti.init(arch=ti.cpu, offline_cache=False, print_kernel_llvm_ir_optimized=True, print_kernel_asm=True,
                 log_level=ti.WARN, **taichi_options(optimize))
-        (compile_node_kernel if which == "node" else compile_traversal_kernel)()
+        {"node": compile_node_kernel, "leaf": compile_leaf_kernel, "traversal": compile_traversal_kernel}[which]()
         ti.reset()
     finally:
         os.chdir(cwd)
@@ -123,10 +157,11 @@ def main(argv=None) -> int:
     parser.add_argument("--optimize", choices=("compile", "run"), default="run",
                         help="Taichi's optimisation level (renderer/arch.py): run (benchmarks, long renders) or "
                              "compile (the viewer's and the tests'); LLVM optimises both")
+    parser.add_argument("--only", default="node,leaf,traversal", help="which kernels (comma-separated)")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         root = args.keep or Path(tmp)
-        for which in ("node", "traversal"):
+        for which in args.only.split(","):
             counts = run_in(root / which, which, args.optimize)
             print(f"{which}: " + ", ".join(f"{k} {v}" for k, v in counts.items()))
         if args.keep:

@@ -10,11 +10,14 @@ terrain), in one process so that ratios are meaningful:
    Issue targets: at most 64 bytes per triangle (the Renderer's configuration: SAH, leaves of 4),
    and the SAH build of the 1M mesh in at most 2 s.
 2. Trace: closest-hit Mrays/s for every split strategy x traversal (stack, stackless: the binary
-   tree; wide4: the tree collapsed into 4-wide nodes) x triangle test (watertight, moller), on
+   tree; wide4: the tree collapsed into 4-wide nodes; with "+packets": leaves tested four slots
+   at a time from structure-of-arrays triangles, on the sah trees) x triangle test (watertight,
+   moller), on
    coherent rays (a pinhole camera grid on the mesh) and on incoherent rays (origins on a sphere
    around the mesh, aimed at uniform random points in its box), with the mean node visits (a
    wide4 visit tests four boxes) and primitive tests per ray (`Hit.work`, `Hit.tests`), and
-   wide4 / stack per strategy and triangle test (medians of the same interleaved runs).
+   wide4 / stack per strategy and triangle test, and packet / scalar leaves (medians of the same
+   interleaved runs).
    Any-hit (`occluded`) rays on the Renderer's configuration (and on the binary "stack"
    traversal): the incoherent rays as segments ending at their random target points (shadow
    rays), against closest-hit on the same segments.

@@ -25,10 +25,13 @@ SAH_BUILD_TARGET_MIN_TRIANGLES = 1_000_000
 EMBREE_RATIO_TARGET = 0.3  # Lantern / Embree incoherent closest-hit rays per second
 
 STRATEGIES = ("sah", "midpoint", "equal_count")
-TRAVERSALS = ("stack", "stackless", "wide4")
+# A traversal name with PACKETS appended uses the packet leaves (four slots tested at a time,
+# triangles structure-of-arrays: renderer/geometry/triangle_packets.py) instead of the scalar ones.
+PACKETS = "+packets"
+TRAVERSALS = ("stack", "stackless", "wide4", "stack" + PACKETS, "wide4" + PACKETS)
 WIDE = "wide4"  # the 4-wide BVH's traversal, compared with the binary "stack" one on the same rays
 TRIANGLE_TESTS = ("watertight", "moller")
-DEFAULT = ("sah", "wide4", "watertight")  # the Renderer's MeshOptions
+DEFAULT = ("sah", "wide4+packets", "watertight")  # the Renderer's MeshOptions (traversal and leaves)
 DEFAULT_LEAF = 4  # the Renderer's MeshOptions.max_leaf_size
 # Leaf sizes whose rays/s lie within this fraction of the best are reported as ties: run-to-run
 # noise on a shared machine is a few per cent.
@@ -117,6 +120,16 @@ class OccludedCall:
         self.batch.occluded(self.rays.origins, self.rays.directions, self.rays.t_max, self.out)
 
 
+def traversal_and_leaves(name: str) -> tuple[str, str]:
+    """("wide4", "packets") for "wide4+packets", ("stack", "scalar") for "stack"."""
+    return (name[: -len(PACKETS)], "packets") if name.endswith(PACKETS) else (name, "scalar")
+
+
+def make_geometry(data: MeshData, bvh, traversal: str, test: str) -> MeshGeometry:
+    base, leaves = traversal_and_leaves(traversal)
+    return MeshGeometry(data, bvh, base, test, leaves=leaves)
+
+
 def mesh_data(tris: np.ndarray) -> MeshData:
     return MeshData(tri_vertices=np.ascontiguousarray(tris, np.float32),
                     tri_material=np.zeros(len(tris), np.int32))
@@ -174,15 +187,19 @@ def _build_all(name, data, n_tris, config, build_runs, log):
                "timing": timing.as_dict(), "triangles_per_s": n_tris / timing.median,
                "builder_threads": builder_threads, **build_stats(bvh)}
         for traversal in config.traversals:
+            if traversal.endswith(PACKETS) and strategy != DEFAULT[0]:
+                continue  # the leaf layouts are compared on the Renderer's split strategy only
             for test in config.triangle_tests:
                 t0 = time.perf_counter()
-                geometries[(strategy, traversal, test)] = MeshGeometry(data, bvh, traversal, test)
+                geometries[(strategy, traversal, test)] = make_geometry(data, bvh, traversal, test)
                 row.setdefault("upload_s", time.perf_counter() - t0)
         own = {k[1]: g for k, g in geometries.items() if k[0] == strategy}
-        binary = next((t for t in own if t != WIDE), None)
+        binary = next((t for t in own if t != WIDE and not t.endswith(PACKETS)), None)
         row["device_bytes"] = bytes_of(own[binary] if binary else own[WIDE], n_tris)
         if WIDE in own:
             row["wide_device_bytes"] = bytes_of(own[WIDE], n_tris)
+        if WIDE + PACKETS in own:
+            row["wide_packets_device_bytes"] = bytes_of(own[WIDE + PACKETS], n_tris)
         rows.append(row)
         log(f"  {name}: {strategy} build {timing.median:.3f} s, SAH cost {row['sah_cost']:.2f}, "
             f"{row['device_bytes']['per_triangle']:.1f} bytes/triangle")
@@ -336,10 +353,13 @@ def measure_mesh(name: str, tris: np.ndarray, config: BvhBenchConfig, embree=Non
         result["agreement_all_configs"] = per_kind
 
     result["wide_vs_binary"] = wide_vs_binary(result["configs"])
+    result["packets_vs_scalar"] = packets_vs_scalar(result["configs"])
     # any-hit (shadow) segments on the Renderer's configuration, and on the other tree (binary
-    # "stack" against wide, or wide against a binary traversal)
+    # "stack" against wide, or wide against a binary traversal), each with the default leaves
     if config.shadow_rays:
-        other_key = (default_key[0], "stack" if default_key[1] == WIDE else WIDE, default_key[2])
+        base, leaves = traversal_and_leaves(default_key[1])
+        other = ("stack" if base == WIDE else WIDE) + (PACKETS if leaves == "packets" else "")
+        other_key = (default_key[0], other, default_key[2])
         other = (other_key, batches[other_key]) if other_key in batches else None
         result["shadow"] = _shadow_rays(batches[default_key], default_key, shadow, emb, config, other)
     return result
@@ -364,6 +384,25 @@ def wide_vs_binary(configs: list) -> list:
     return rows
 
 
+def packets_vs_scalar(configs: list) -> list:
+    """Per strategy x traversal x triangle test measured with both leaf layouts: the packet
+    leaves' rays/s over the scalar ones' (medians of the same interleaved runs)."""
+    by_key = {(c["strategy"], c["traversal"], c["triangle_test"]): c for c in configs}
+    rows = []
+    for (strategy, traversal, test), packed in by_key.items():
+        base, leaves = traversal_and_leaves(traversal)
+        scalar = by_key.get((strategy, base, test))
+        if leaves != "packets" or scalar is None:
+            continue
+        row = {"strategy": strategy, "traversal": base, "triangle_test": test}
+        for kind in ("coherent", "incoherent"):
+            row[kind] = {"speedup": packed[kind]["mrays_per_s"] / scalar[kind]["mrays_per_s"],
+                         "speedup_fastest_runs": packed[kind]["mrays_per_s_best"] / scalar[kind]["mrays_per_s_best"],
+                         "tests_per_ray": packed[kind]["tests_per_ray"]}
+        rows.append(row)
+    return rows
+
+
 def leaf_size_sweep(name: str, tris: np.ndarray, config: BvhBenchConfig, log=print) -> dict:
     """SAH builds with each max_leaf_size: build time, bytes/triangle, incoherent Mrays/s."""
     n_tris = int(len(tris))
@@ -375,7 +414,7 @@ def leaf_size_sweep(name: str, tris: np.ndarray, config: BvhBenchConfig, log=pri
     rows, calls = [], {}
     for leaf in config.leaf_sizes:
         bvh, timing = timed_builds(lo, hi, centroids, "sah", leaf, runs)
-        geometry = MeshGeometry(data, bvh, DEFAULT[1], DEFAULT[2])
+        geometry = make_geometry(data, bvh, DEFAULT[1], DEFAULT[2])
         batch, compile_s = _compiled_batch(geometry, rays)
         calls[leaf] = ClosestCall(batch, rays)
         rows.append({"max_leaf_size": leaf, "build_s": timing.median, "timing": timing.as_dict(),

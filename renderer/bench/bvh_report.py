@@ -95,6 +95,11 @@ def print_report(report: dict) -> None:
                           f"({hits['incoherent']:.0%} hit); nodes/tests = mean per ray; =embree = rays agreeing "
                           f"with Embree (same miss, or t within {embree_side.AGREEMENT_RTOL:g} relative); 1st call = compile "
                           f"(or load from Taichi's offline cache) + 64 rays")
+        for w in m.get("packets_vs_scalar", ()):
+            co, inc = w["coherent"], w["incoherent"]
+            print(f"  packet / scalar leaves ({w['strategy']}, {w['traversal']}, {w['triangle_test']}): coherent "
+                  f"{co['speedup']:.2f}x (fastest runs {co['speedup_fastest_runs']:.2f}x), incoherent "
+                  f"{inc['speedup']:.2f}x (fastest runs {inc['speedup_fastest_runs']:.2f}x)")
         for w in m.get("wide_vs_binary", ()):
             co, inc = w["coherent"], w["incoherent"]
             print(f"  wide4 / stack ({w['strategy']}, {w['triangle_test']}): coherent {co['speedup']:.2f}x "

@@ -9,6 +9,8 @@ Three traversals (a compile-time choice, benchmarked against each other):
                four child boxes are tested together, ordered as "stack" (wide_traversal.py); the
                Renderer's default (MeshOptions).
 Two triangle tests: "watertight" (Woop et al. 2013, the default) and "moller" (Moller-Trumbore).
+Two leaf layouts: "scalar" (a leaf's primitives tested one by one from the slot array) and
+"packets" (four slots at a time, triangles structure-of-arrays: triangle_packets.py).
 Only the primitive kinds the scene has are compiled in, and each of these only where the scene
 needs it: vertex colours, alpha coverage (renderer/geometry/coverage.py, which needs the material
 table) and instances (a two-level BVH, renderer/geometry/instance_bvh.py: on entering an instance
@@ -26,6 +28,7 @@ from renderer.geometry.instances import InstanceTable
 from renderer.geometry.interface import INF, EmitterPoint, Hit, Ray, Surface
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.shading import consistent_shading_normal
+from renderer.geometry.triangle_packets import TrianglePackets, build_packets, nearest_lane, permuted_origin
 from renderer.geometry.wide_bvh import collapse, empty_wide_bvh
 from renderer.geometry.wide_traversal import WideNodes, stack_size
 from renderer.materials.table import ALPHA_OPAQUE
@@ -37,22 +40,29 @@ STACK_SIZE = 64  # deeper than any tree the builder makes (its depth is bounded 
 RESUME_WORLD = -2  # the stack entry below an instance's nodes: the world ray comes back there
 TRAVERSALS = ("stack", "stackless", "wide4")
 TRIANGLE_TESTS = ("watertight", "moller")
+LEAF_LAYOUTS = ("scalar", "packets")
 
 
 @ti.data_oriented
 class MeshGeometry:
     kind = "mesh"
 
-    def __init__(self, data: MeshData, bvh, traversal="stack", triangle_test="watertight", materials=None):
+    def __init__(self, data: MeshData, bvh, traversal="stack", triangle_test="watertight", materials=None,
+                 leaves="scalar"):
         """bvh: instance_bvh.build_scene_bvh's result for `data` (a FlatBVH where the data has no
         instances). materials: the MaterialTable, needed where a material uses alpha coverage."""
         if traversal not in TRAVERSALS:
             raise ValueError(f"unknown traversal '{traversal}' (choose from {', '.join(TRAVERSALS)})")
         if triangle_test not in TRIANGLE_TESTS:
             raise ValueError(f"unknown triangle test '{triangle_test}' (choose from {', '.join(TRIANGLE_TESTS)})")
+        if leaves not in LEAF_LAYOUTS:
+            raise ValueError(f"unknown leaf layout '{leaves}' (choose from {', '.join(LEAF_LAYOUTS)})")
         self.traversal = traversal
         self.triangle_test = triangle_test
+        self.packed = leaves == "packets"
+        self.leaves = leaves
         self.kinds = data.kinds()
+        self.has_other_kinds = bool(self.kinds - {"triangle"})  # (packets test those lane by lane)
         self.has_normals = data.tri_normals is not None and len(data.tri_vertices) > 0
         self.has_uvs = data.tri_uvs is not None and len(data.tri_vertices) > 0
         self.has_uv1 = data.tri_uvs1 is not None and len(data.tri_vertices) > 0
@@ -72,9 +82,10 @@ class MeshGeometry:
         uploads = []  # (field, array): copied in one launch (renderer.upload)
         mesh_root = bvh.mesh_root if self.has_instances else np.zeros(0, np.int32)
         if traversal == "wide4":
-            mesh_root = self._upload_wide(nodes, mesh_root, uploads)
+            mesh_root, prim_order = self._upload_wide(nodes, mesh_root, uploads)
         else:
-            self._upload_bvh(nodes, uploads)
+            prim_order = self._upload_bvh(nodes, uploads)
+        self._upload_slots(data, prim_order, uploads)
         self._upload_primitives(data, nodes, uploads)
         if self.has_instances:
             self.instances = InstanceTable(mesh_root[data.instance_mesh], data.instance_to_world, uploads)
@@ -91,9 +102,7 @@ class MeshGeometry:
                         (self.node_link, np.stack([bvh.node_a, bvh.node_count, bvh.node_skip], axis=1))]
         else:  # an empty box no ray can enter
             uploads += [(self.node_lo, np.full((1, 3), 1e30)), (self.node_hi, np.full((1, 3), -1e30))]
-        self.slot_prim = ti.field(ti.i32, shape=max(1, len(bvh.prim_order)))
-        if len(bvh.prim_order):
-            uploads.append((self.slot_prim, bvh.prim_order))
+        return bvh.prim_order
 
     def _upload_wide(self, bvh, mesh_root, uploads):
         """The binary tree collapsed into wide nodes, uploaded; returns the wide root of each
@@ -102,10 +111,21 @@ class MeshGeometry:
         self.node_total = wide.num_nodes
         self.stack_size = stack_size(wide)
         self.wide = WideNodes(wide, uploads)
-        self.slot_prim = ti.field(ti.i32, shape=max(1, len(wide.prim_order)))
-        if len(wide.prim_order):
-            uploads.append((self.slot_prim, wide.prim_order))
-        return wide.roots[1:]
+        return wide.roots[1:], wide.prim_order
+
+    def _upload_slots(self, data: MeshData, prim_order, uploads):
+        """The leaves' primitives: the slot array and the triangles' corners, or the packets
+        that hold both."""
+        if self.packed:
+            self.packets = TrianglePackets(build_packets(prim_order, data.tri_vertices))
+            return
+        self.slot_prim = ti.field(ti.i32, shape=max(1, len(prim_order)))
+        if len(prim_order):
+            uploads.append((self.slot_prim, prim_order))
+        t = len(data.tri_vertices)
+        self.tri_v = ti.Vector.field(3, ti.f32, shape=(max(1, t), 3))
+        if t:
+            uploads.append((self.tri_v, data.tri_vertices))
 
     def _upload_primitives(self, data: MeshData, bvh, uploads):
         def vec_field(n, array, width=3, rows=()):
@@ -115,7 +135,6 @@ class MeshGeometry:
             return f
 
         t = len(data.tri_vertices)
-        self.tri_v = vec_field(t, data.tri_vertices, 3, (3,))
         if self.has_normals:
             self.tri_n = vec_field(t, data.tri_normals, 3, (3,))
         if self.has_uvs:
@@ -147,8 +166,11 @@ class MeshGeometry:
         shading attributes (normals, texture coordinates, tangents, colours), the instance table,
         and the total of these with the other primitives and the material ids."""
         nodes = self.wide.device_bytes() if self.traversal == "wide4" else self.node_total * (12 + 12 + 12)
-        slots = self.slot_prim.shape[0] * 4
-        triangles = self.tri_v.shape[0] * 36
+        if self.packed:
+            packets = self.packets.device_bytes()
+            slots, triangles = packets["ids"], packets["triangles"]
+        else:
+            slots, triangles = self.slot_prim.shape[0] * 4, self.tri_v.shape[0] * 36
         attributes = sum(_field_bytes(getattr(self, name)) for name in ("tri_n", "tri_uv", "tri_uv1", "tri_tangent",
                                                                         "tri_color") if hasattr(self, name))
         instances = self.instances.device_bytes() if self.has_instances else 0
@@ -160,14 +182,16 @@ class MeshGeometry:
     # --- traversal -----------------------------------------------------------------------------
     @ti.func
     def _test_prim(self, g, o, d, k, s, t_max):
-        """Test primitive g; returns (hit, t, b1, b2) with primitive-specific surface coordinates."""
+        """Test primitive g; returns (hit, t, b1, b2) with primitive-specific surface coordinates.
+        (Also the brute-force reference of the tests.)"""
         hit, t, b1, b2 = 0, 0.0, 0.0, 0.0
         if ti.static("triangle" in self.kinds):
             if g < self.range_end[0]:
+                v0, v1, v2 = self.corners_of(g)
                 if ti.static(self.triangle_test == "watertight"):
-                    hit, t, b1, b2 = isect.triangle_watertight(o, k, s, self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2], t_max)
+                    hit, t, b1, b2 = isect.triangle_watertight(o, k, s, v0, v1, v2, t_max)
                 else:
-                    hit, t, b1, b2 = isect.triangle_moller_trumbore(o, d, self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2], t_max)
+                    hit, t, b1, b2 = isect.triangle_moller_trumbore(o, d, v0, v1, v2, t_max)
         if ti.static("sphere" in self.kinds):
             if g >= self.range_end[0] and g < self.range_end[1]:
                 sp = self.spheres[g - self.range_end[0]]
@@ -190,6 +214,14 @@ class MeshGeometry:
         """Test a leaf's primitives (slots first .. first + count - 1) with the ray (o, d) of the
         current frame; `ray` is the world ray and `instance` the instance whose frame o, d are in
         (-1: the world)."""
+        if ti.static(self.packed):
+            self._test_packets(first, count, o, d, k, s, hit, any_hit, ray, instance)
+        else:
+            self._test_slots(first, count, o, d, k, s, hit, any_hit, ray, instance)
+
+    @ti.func
+    def _test_slots(self, first, count, o, d, k, s, hit: ti.template(), any_hit, ray, instance):
+        """The scalar leaf layout: slot after slot."""
         for j in range(first, first + count):
             g = self.slot_prim[j]
             h, t, b1, b2 = self._test_prim(g, o, d, k, s, hit.t)
@@ -206,6 +238,68 @@ class MeshGeometry:
                     hit.instance = instance
                 if any_hit:
                     break
+
+    @ti.func
+    def _test_packets(self, first, count, o, d, k, s, hit: ti.template(), any_hit, ray, instance):
+        """The packet leaf layout: the packets the leaf's slots touch, four lanes at a time, each
+        masked to the leaf's own slots; a packet's hits are taken nearest-last-wins in lane order
+        against the closest hit so far (as the scalar layout takes slots)."""
+        end = first + count
+        ok = permuted_origin(o, k)
+        for p in range(first >> 2, ((end - 1) >> 2) + 1):
+            mask = self.packets.lane_mask(p, first, end)
+            hit.tests += mask.sum()
+            prims = self.packets.prims[p]
+            if ti.static("triangle" in self.kinds):
+                found, t, b1, b2 = ti.math.ivec4(0), ti.math.vec4(0.0), ti.math.vec4(0.0), ti.math.vec4(0.0)
+                if ti.static(self.triangle_test == "watertight"):
+                    found, t, b1, b2 = self.packets.watertight(p, ok, k, s, hit.t)
+                else:
+                    found, t, b1, b2 = self.packets.moller_trumbore(p, o, d, hit.t)
+                found &= mask
+                if ti.static(self.has_alpha):  # lane by lane: the nearest hit may be uncovered
+                    for lane in ti.static(range(4)):
+                        if found[lane] == 1:
+                            if t[lane] < hit.t:
+                                if coverage.covered(self, prims[lane], ti.math.vec2(b1[lane], b2[lane]), ray.o, ray.d,
+                                                    instance) == 1:
+                                    self._take(hit, t[lane], prims[lane], b1[lane], b2[lane], instance)
+                else:
+                    t_near, lane, u, v = nearest_lane(found, t, b1, b2)
+                    if t_near < hit.t:
+                        self._take(hit, t_near, prims[lane], u, v, instance)
+            if ti.static(self.has_other_kinds):  # the lanes of other primitives, one by one
+                for lane in ti.static(range(4)):
+                    g = prims[lane]
+                    if mask[lane] == 1 and g >= self.range_end[0]:
+                        h, t1, c1, c2 = self._test_prim(g, o, d, k, s, hit.t)
+                        if ti.static(self.has_alpha):
+                            if h == 1:
+                                h = coverage.covered(self, g, ti.math.vec2(c1, c2), ray.o, ray.d, instance)
+                        if h == 1:
+                            self._take(hit, t1, g, c1, c2, instance)
+            if any_hit:
+                if hit.hit == 1:
+                    break
+
+    @ti.func
+    def _take(self, hit: ti.template(), t, g, b1, b2, instance):
+        hit.hit = 1
+        hit.t = t
+        hit.prim = g
+        hit.bary = ti.math.vec2(b1, b2)
+        if ti.static(self.has_instances):
+            hit.instance = instance
+
+    @ti.func
+    def corners_of(self, g):
+        """Triangle g's three corners (in its mesh's frame)."""
+        v0, v1, v2 = vec3(0.0), vec3(0.0), vec3(0.0)
+        if ti.static(self.packed):
+            v0, v1, v2 = self.packets.corner(g, 0), self.packets.corner(g, 1), self.packets.corner(g, 2)
+        else:
+            v0, v1, v2 = self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2]
+        return v0, v1, v2
 
     @ti.func
     def _ray_setup(self, d):
@@ -351,7 +445,7 @@ class MeshGeometry:
             if g < self.range_end[0]:
                 bary = hit.bary
                 b0 = 1.0 - bary.x - bary.y
-                v0, v1, v2 = self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2]
+                v0, v1, v2 = self.corners_of(g)
                 if ti.static(self.has_instances):
                     if hit.instance >= 0:  # the corners in the world, where a world mesh has them
                         v0 = self.instances.point_to_world(hit.instance, v0)
@@ -494,7 +588,8 @@ class MeshGeometry:
         result = EmitterPoint(p=ref, n=vec3(0.0, 1.0, 0.0), uv=ti.math.vec2(0.0), pdf=0.0)
         if ti.static("triangle" in self.kinds):
             if g < self.range_end[0]:
-                result = shapes.triangle_sample(self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2], ref, u)
+                v0, v1, v2 = self.corners_of(g)
+                result = shapes.triangle_sample(v0, v1, v2, ref, u)
                 if ti.static(self.has_uvs):
                     result.uv = self.corners(self.tri_uv, g, result.uv)  # uv held the barycentrics
         if ti.static("sphere" in self.kinds):
@@ -516,7 +611,8 @@ class MeshGeometry:
         pdf = 0.0
         if ti.static("triangle" in self.kinds):
             if g < self.range_end[0]:
-                pdf = shapes.triangle_pdf(self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2], ref, p, n)
+                v0, v1, v2 = self.corners_of(g)
+                pdf = shapes.triangle_pdf(v0, v1, v2, ref, p, n)
         if ti.static("sphere" in self.kinds):
             if g >= self.range_end[0] and g < self.range_end[1]:
                 sp = self.spheres[g - self.range_end[0]]

@@ -1,6 +1,6 @@
-"""`bench bvh` with the 4-wide traversal among its knobs: the wide4 / stack figures it reports are
-the ratios of its own measurements, and the wide traversal's shadow rays agree with the binary
-one's."""
+"""`bench bvh` with the 4-wide traversal and the packet leaves among its knobs: the wide4 / stack
+and packet / scalar figures it reports are the ratios of its own measurements, and the default's
+shadow rays agree with the binary tree's."""
 import pytest
 
 from renderer.bench import bvh_measure
@@ -8,10 +8,12 @@ from tests.bench.test_bench_bvh import TINY, tiny_config
 
 
 def test_wide_traversal_is_measured_against_the_binary_one():
-    config = tiny_config(strategies=("sah",), traversals=("stack", bvh_measure.WIDE))
+    packets = bvh_measure.PACKETS
+    traversals = ("stack", bvh_measure.WIDE, "stack" + packets, bvh_measure.WIDE + packets)
+    config = tiny_config(strategies=("sah",), traversals=traversals)
     res = bvh_measure.measure_mesh(TINY.name, TINY.load(), config, None, None, log=lambda *a: None)
     configs = {c["traversal"]: c for c in res["configs"]}
-    assert set(configs) == {"stack", bvh_measure.WIDE}
+    assert set(configs) == set(traversals)
     (row,) = res["wide_vs_binary"]
     assert (row["strategy"], row["triangle_test"]) == ("sah", "watertight")
     for kind in ("coherent", "incoherent"):
@@ -26,5 +28,15 @@ def test_wide_traversal_is_measured_against_the_binary_one():
     # shadow rays on the Renderer's configuration (wide4) and on the binary tree, the same answers
     shadow = res["shadow"]
     assert shadow["config"] == bvh_measure.config_name(*bvh_measure.DEFAULT)
-    assert shadow["other"]["config"] == "sah/stack/watertight"
+    assert shadow["other"]["config"] == "sah/stack+packets/watertight"
     assert shadow["other"]["occluded_mrays_per_s"] > 0 and shadow["other"]["agreement"] == 1.0
+    # packet / scalar leaves per traversal: the ratio of the two rows, the same hits and tests
+    rows = {r["traversal"]: r for r in res["packets_vs_scalar"]}
+    assert set(rows) == {"stack", bvh_measure.WIDE}
+    for base, r in rows.items():
+        for kind in ("coherent", "incoherent"):
+            packed, scalar = configs[base + packets][kind], configs[base][kind]
+            assert r[kind]["speedup"] == pytest.approx(packed["mrays_per_s"] / scalar["mrays_per_s"])
+            assert packed["hit_fraction"] == scalar["hit_fraction"]
+            assert packed["tests_per_ray"] == scalar["tests_per_ray"]
+    assert build["wide_packets_device_bytes"]["per_triangle"] <= bvh_measure.BYTES_PER_TRIANGLE_TARGET

@@ -11,9 +11,10 @@ from renderer.geometry.mesh_geometry import MeshGeometry
 
 
 def geometry_from(data: MeshData, strategy="sah", traversal="stack", triangle_test="watertight", leaf=4,
-                  materials=None):
+                  materials=None, leaves="scalar"):
     bvh = build_scene_bvh(data, strategy=strategy, max_leaf_size=leaf)
-    return MeshGeometry(data, bvh, traversal=traversal, triangle_test=triangle_test, materials=materials)
+    return MeshGeometry(data, bvh, traversal=traversal, triangle_test=triangle_test, materials=materials,
+                        leaves=leaves)
 
 
 def trimesh_data(mesh, material=0) -> MeshData:

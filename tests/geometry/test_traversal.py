@@ -101,8 +101,11 @@ def edge_and_vertex_rays(mesh, rng, per_edge=40):
     return o32[keep], d32[keep]
 
 
-@pytest.mark.parametrize("transform", ["identity", "rotated_scaled_moved"])
-def test_watertight_no_ray_passes_through_shared_edges_or_vertices(transform):
+@pytest.mark.parametrize("transform, traversal, leaves", [("identity", "stack", "scalar"),
+                                                         ("rotated_scaled_moved", "stack", "scalar"),
+                                                         ("identity", "wide4", "packets"),
+                                                         ("rotated_scaled_moved", "wide4", "packets")])
+def test_watertight_no_ray_passes_through_shared_edges_or_vertices(transform, traversal, leaves):
     rng = np.random.default_rng(2)
     mesh = trimesh.creation.icosphere(subdivisions=3)
     if transform != "identity":
@@ -110,7 +113,7 @@ def test_watertight_no_ray_passes_through_shared_edges_or_vertices(transform):
         m[:3, :3] *= 37.0
         m[:3, 3] = [1234.5, -250.25, 88.0]
         mesh.apply_transform(m)
-    shooter = RayShooter(geometry_from(trimesh_data(mesh)))
+    shooter = RayShooter(geometry_from(trimesh_data(mesh), traversal=traversal, leaves=leaves))
     o, d = edge_and_vertex_rays(mesh, rng)
     assert len(o) > 50000
     o = np.tile(o, (17, 1))  # over a million rays per case (jittered copies of the aimed rays)

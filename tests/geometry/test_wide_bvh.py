@@ -365,9 +365,9 @@ def test_device_bytes_count_the_wide_nodes(mixed):
 # a whole render
 
 
-def render(path, traversal, seed, spp=4, size=(40, 30)):
+def render(path, traversal, seed, spp=4, size=(40, 30), leaves="scalar"):
     scene = load_any(path)
-    r = Renderer(scene, size, mesh_options=MeshOptions(traversal=traversal))
+    r = Renderer(scene, size, mesh_options=MeshOptions(traversal=traversal, leaves=leaves))
     r.render(CameraFrame.from_spec(scene.camera), spp, integrator="mis", seed=seed)
     return r.image(), r.film.variance_of_mean_image()
 

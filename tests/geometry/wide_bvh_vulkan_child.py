@@ -1,13 +1,15 @@
 """The wide BVH on a back-end of its own, in a process of its own (the suite's runtime is on the
 CPU): `python -m tests.geometry.wide_bvh_vulkan_child hits OUT` or
-`... render OUT ARCH TRAVERSAL SEED`. Writes its arrays to OUT (.npz)."""
+`... render OUT ARCH TRAVERSAL SEED` (TRAVERSAL: a MeshOptions traversal, "+packets" for the packet
+leaves). Writes its arrays to OUT (.npz)."""
 import sys
 
 import numpy as np
 
 
 def hits(out: str) -> None:
-    """Closest hits and shadow tests of the stack and wide4 traversals on Vulkan."""
+    """Closest hits and shadow tests of the stack and wide4 traversals on Vulkan, wide4 with the
+    scalar and the packet leaves."""
     from renderer.arch import init_taichi
 
     init_taichi("vulkan")
@@ -17,8 +19,9 @@ def hits(out: str) -> None:
     rng = np.random.default_rng(1)
     data, (o, d) = mixed_scene(rng), random_rays(rng, 4000)
     arrays = {}
-    for traversal in ("stack", "wide4"):
-        shooter = RayShooter(geometry_from(data, traversal=traversal))
+    for traversal in ("stack", "wide4", "wide4+packets"):
+        base, _, packets = traversal.partition("+")
+        shooter = RayShooter(geometry_from(data, traversal=base, leaves=packets or "scalar"))
         arrays[traversal + "_t"], arrays[traversal + "_prim"] = shooter.closest(o, d)
         arrays[traversal + "_shadow"] = shooter.occluded(o, d, 1.5)
     np.savez(out, **arrays)
@@ -34,7 +37,8 @@ def render(out: str, arch: str, traversal: str, seed: int) -> None:
     from renderer.scene.catalog import load_any
 
     scene = load_any("assets/scenes/cornell_box.toml")
-    r = Renderer(scene, (24, 24), mesh_options=MeshOptions(traversal=traversal))
+    base, _, packets = traversal.partition("+")
+    r = Renderer(scene, (24, 24), mesh_options=MeshOptions(traversal=base, leaves=packets or "scalar"))
     r.render(CameraFrame.from_spec(scene.camera), 32, integrator="mis", seed=seed)
     np.savez(out, mean=r.image(), var=r.film.variance_of_mean_image())
 
