@@ -31,7 +31,7 @@ class MeshOptions:
     """Compile-time and build-time choices of the mesh world (benchmarked knobs)."""
 
     strategy: str = "sah"
-    # "wide4" (the binary tree collapsed into 4-wide nodes), or the binary tree's "stack" or
+    # "wide4" (the binary tree collapsed into 4-wide nodes), "wide8", or the binary tree's "stack" or
     # "stackless" (renderer/geometry/mesh_geometry.py; `bench bvh` compares them)
     traversal: str = "wide4"
     triangle_test: str = "watertight"

@@ -2,10 +2,11 @@
 (and the whole closest-hit traversal) with Taichi's optimised LLVM IR and assembly written out,
 and counts the 4-lane instructions.
 
-    python scripts/wide_bvh_ir.py [--keep DIR] [--optimize compile|run] [--only node,leaf,traversal]
+    python scripts/wide_bvh_ir.py [--keep DIR] [--optimize compile|run] [--only node,node8,leaf,traversal]
 
 Kernels, each on Taichi's CPU back-end with the offline cache off (so the files are written):
   node:      a stand-alone loop over rays that visits one wide node each (WideNodes.visit)
+  node8:     the same with 8-wide nodes (`<8 x float>` counts)
   leaf:      a stand-alone loop over rays that tests one packet of four triangles each
              (TrianglePackets.watertight and nearest_lane, as the packet leaves call them)
   traversal: renderer.bench.ray_batch's closest-hit kernel over a small "wide4" mesh with
@@ -32,6 +33,9 @@ IR_PATTERNS = {
     "minnum/maxnum <4 x float>": r"= call [a-z ]*<4 x float> @llvm\.(?:min|max)num\.v4f32\(",
     "fcmp <4 x float>": r"= fcmp [a-z ]*<4 x float>",
     "fsub/fmul <2 x float>": r"= f(?:sub|mul) [a-z ]*<2 x float>",
+    "load <8 x float>": r"= load <8 x float>",
+    "fsub/fmul <8 x float>": r"= f(?:sub|mul) [a-z ]*<8 x float>",
+    "fcmp <8 x float>": r"= fcmp [a-z ]*<8 x float>",
     "minnum/maxnum <2 x float>": r"= call [a-z ]*<2 x float> @llvm\.(?:min|max)num\.v2f32\(",
 }
 ASM_OPS = ("vsub", "vmul", "vmin", "vmax", "vcmp")
@@ -49,17 +53,17 @@ def count_files(directory: Path) -> dict:
     return out
 
 
-def compile_node_kernel():
+def compile_node_kernel(width: int = 4):
     import taichi as ti
 
-    from renderer.geometry.wide_bvh import WIDTH, collapse
+    from renderer.geometry.wide_bvh import collapse
     from renderer.geometry.bvh_build import build_bvh
     from renderer.geometry.wide_traversal import WideNodes, plane_rows
     from renderer.upload import upload_fields
 
     rng = np.random.default_rng(0)
     lo = rng.uniform(-1, 1, (64, 3))
-    wide = collapse(build_bvh(lo, lo + 0.1, lo + 0.05))
+    wide = collapse(build_bvh(lo, lo + 0.1, lo + 0.05), width=width)
     uploads = []
     nodes = WideNodes(wide, uploads)
     upload_fields(uploads)
@@ -71,17 +75,17 @@ def compile_node_kernel():
             direction = ti.math.vec3(d[i, 0], d[i, 1], d[i, 2])
             inv_d = 1.0 / ti.select(ti.abs(direction) > 1e-30, direction, 1e-30)
             near, far = plane_rows(direction)
-            stack_ref = ti.Vector([0] * (2 * WIDTH), dt=ti.i32)
-            stack_t = ti.Vector([0.0] * (2 * WIDTH), dt=ti.f32)
+            stack_ref = ti.Vector([0] * (2 * width), dt=ti.i32)
+            stack_t = ti.Vector([0.0] * (2 * width), dt=ti.f32)
             ref, found, sp = nodes.visit(i % nodes.count, origin, inv_d, near, far, 1e30, stack_ref, stack_t, 0)
             refs[i, 0] = ref if found else -1
-            for c in ti.static(range(WIDTH - 1)):
+            for c in ti.static(range(width - 1)):
                 out[i, c] = stack_t[c] if c < sp else -1.0
                 refs[i, c + 1] = stack_ref[c] if c < sp else -1
 
     n = 16
     node_test(rng.normal(size=(n, 3)).astype(np.float32), rng.normal(size=(n, 3)).astype(np.float32),
-              np.zeros((n, WIDTH - 1), np.float32), np.zeros((n, WIDTH), np.int32))
+              np.zeros((n, width - 1), np.float32), np.zeros((n, width), np.int32))
 
 
 def compile_leaf_kernel():
@@ -144,7 +148,8 @@ def run_in(directory: Path, which: str, optimize: str = "run") -> dict:
 
         ti.init(arch=ti.cpu, offline_cache=False, print_kernel_llvm_ir_optimized=True, print_kernel_asm=True,
                 log_level=ti.WARN, **taichi_options(optimize))
-        {"node": compile_node_kernel, "leaf": compile_leaf_kernel, "traversal": compile_traversal_kernel}[which]()
+        {"node": compile_node_kernel, "node8": lambda: compile_node_kernel(8), "leaf": compile_leaf_kernel,
+         "traversal": compile_traversal_kernel}[which]()
         ti.reset()
     finally:
         os.chdir(cwd)
@@ -157,7 +162,7 @@ def main(argv=None) -> int:
     parser.add_argument("--optimize", choices=("compile", "run"), default="run",
                         help="Taichi's optimisation level (renderer/arch.py): run (benchmarks, long renders) or "
                              "compile (the viewer's and the tests'); LLVM optimises both")
-    parser.add_argument("--only", default="node,leaf,traversal", help="which kernels (comma-separated)")
+    parser.add_argument("--only", default="node,node8,leaf,traversal", help="which kernels (comma-separated)")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         root = args.keep or Path(tmp)

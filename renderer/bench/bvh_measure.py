@@ -28,7 +28,7 @@ STRATEGIES = ("sah", "midpoint", "equal_count")
 # A traversal name with PACKETS appended uses the packet leaves (four slots tested at a time,
 # triangles structure-of-arrays: renderer/geometry/triangle_packets.py) instead of the scalar ones.
 PACKETS = "+packets"
-TRAVERSALS = ("stack", "stackless", "wide4", "stack" + PACKETS, "wide4" + PACKETS)
+TRAVERSALS = ("stack", "stackless", "wide4", "wide8", "stack" + PACKETS, "wide4" + PACKETS, "wide8" + PACKETS)
 WIDE = "wide4"  # the 4-wide BVH's traversal, compared with the binary "stack" one on the same rays
 TRIANGLE_TESTS = ("watertight", "moller")
 DEFAULT = ("sah", "wide4+packets", "watertight")  # the Renderer's MeshOptions (traversal and leaves)
@@ -194,12 +194,13 @@ def _build_all(name, data, n_tris, config, build_runs, log):
                 geometries[(strategy, traversal, test)] = make_geometry(data, bvh, traversal, test)
                 row.setdefault("upload_s", time.perf_counter() - t0)
         own = {k[1]: g for k, g in geometries.items() if k[0] == strategy}
-        binary = next((t for t in own if t != WIDE and not t.endswith(PACKETS)), None)
+        binary = next((t for t in own if not t.startswith("wide") and not t.endswith(PACKETS)), None)
         row["device_bytes"] = bytes_of(own[binary] if binary else own[WIDE], n_tris)
         if WIDE in own:
             row["wide_device_bytes"] = bytes_of(own[WIDE], n_tris)
         if WIDE + PACKETS in own:
             row["wide_packets_device_bytes"] = bytes_of(own[WIDE + PACKETS], n_tris)
+        row["device_bytes_by_traversal"] = {t: bytes_of(g, n_tris) for t, g in own.items()}
         rows.append(row)
         log(f"  {name}: {strategy} build {timing.median:.3f} s, SAH cost {row['sah_cost']:.2f}, "
             f"{row['device_bytes']['per_triangle']:.1f} bytes/triangle")
@@ -366,15 +367,16 @@ def measure_mesh(name: str, tris: np.ndarray, config: BvhBenchConfig, embree=Non
 
 
 def wide_vs_binary(configs: list) -> list:
-    """Per strategy x triangle test measured with both: the 4-wide traversal's rays/s over the
-    binary "stack" traversal's (medians of the same interleaved runs), and their node visits."""
+    """Per strategy x triangle test x wide traversal (wide4, wide8; scalar leaves) measured with
+    the binary "stack" traversal too: the wide traversal's rays/s over the binary one's (medians
+    of the same interleaved runs), and their node visits."""
     by_key = {(c["strategy"], c["traversal"], c["triangle_test"]): c for c in configs}
     rows = []
     for (strategy, traversal, test), wide in by_key.items():
         binary = by_key.get((strategy, "stack", test))
-        if traversal != WIDE or binary is None:
+        if not traversal.startswith("wide") or traversal.endswith(PACKETS) or binary is None:
             continue
-        row = {"strategy": strategy, "triangle_test": test}
+        row = {"strategy": strategy, "triangle_test": test, "traversal": traversal}
         for kind in ("coherent", "incoherent"):
             row[kind] = {"speedup": wide[kind]["mrays_per_s"] / binary[kind]["mrays_per_s"],
                          "speedup_fastest_runs": wide[kind]["mrays_per_s_best"] / binary[kind]["mrays_per_s_best"],

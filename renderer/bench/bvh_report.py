@@ -102,7 +102,8 @@ def print_report(report: dict) -> None:
                   f"{inc['speedup']:.2f}x (fastest runs {inc['speedup_fastest_runs']:.2f}x)")
         for w in m.get("wide_vs_binary", ()):
             co, inc = w["coherent"], w["incoherent"]
-            print(f"  wide4 / stack ({w['strategy']}, {w['triangle_test']}): coherent {co['speedup']:.2f}x "
+            print(f"  {w.get('traversal', 'wide4')} / stack ({w['strategy']}, {w['triangle_test']}): coherent "
+                  f"{co['speedup']:.2f}x "
                   f"(fastest runs {co['speedup_fastest_runs']:.2f}x; nodes {co['wide_nodes_per_ray']:.1f} vs "
                   f"{co['binary_nodes_per_ray']:.1f}), incoherent {inc['speedup']:.2f}x (fastest runs "
                   f"{inc['speedup_fastest_runs']:.2f}x; nodes {inc['wide_nodes_per_ray']:.1f} vs "

@@ -156,16 +156,25 @@ def bvh_section(report: dict) -> Section:
         table(["mesh", "coherent", "incoherent", "fastest incoherent", "Embree incoherent", "vs Embree",
                "all agree with Embree"], rows)]
     section.blocks += [_bvh_trace_details(m) for m in meshes]
-    wide_rows = [[m["name"], f"{w['strategy']}/{w['triangle_test']}", times(w["coherent"]["speedup"]),
+    wide_rows = [[m["name"], f"{w['strategy']}/{w.get('traversal', 'wide4')}/{w['triangle_test']}",
+                  times(w["coherent"]["speedup"]),
                   times(w["incoherent"]["speedup"]),
                   f"{num(w['incoherent']['wide_nodes_per_ray'])} / {num(w['incoherent']['binary_nodes_per_ray'])}"]
                  for m in meshes for w in m.get("wide_vs_binary", [])]
     if wide_rows:
         section.blocks += [
-            "The 4-wide BVH (traversal `wide4`) against the binary tree's `stack` traversal, rays/s of the same "
-            "interleaved runs (a wide node visit tests four boxes):",
-            table(["mesh", "strategy/test", "coherent", "incoherent", "incoherent node visits, wide / binary"],
-                  wide_rows)]
+            "The wide BVHs (traversals `wide4`, `wide8`) against the binary tree's `stack` traversal, rays/s of the "
+            "same interleaved runs (a wide node visit tests four or eight boxes):",
+            table(["mesh", "strategy/traversal/test", "coherent", "incoherent",
+                   "incoherent node visits, wide / binary"], wide_rows)]
+    packet_rows = [[m["name"], f"{w['strategy']}/{w['traversal']}/{w['triangle_test']}", times(w["coherent"]["speedup"]),
+                    times(w["incoherent"]["speedup"])]
+                   for m in meshes for w in m.get("packets_vs_scalar", [])]
+    if packet_rows:
+        section.blocks += [
+            "Packet leaves (`+packets`: four slots tested at a time, triangles structure-of-arrays) against the "
+            "scalar leaves on the same tree, rays/s of the same interleaved runs:",
+            table(["mesh", "strategy/traversal/test", "coherent", "incoherent"], packet_rows)]
     shadow = [m for m in meshes if "shadow" in m]
     if shadow:
         section.blocks.append(details("Shadow rays: any-hit against closest-hit on the same segments", table(

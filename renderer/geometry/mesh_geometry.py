@@ -8,6 +8,7 @@ Three traversals (a compile-time choice, benchmarked against each other):
   "wide4":     the binary tree collapsed into 4-wide nodes (renderer/geometry/wide_bvh.py), whose
                four child boxes are tested together, ordered as "stack" (wide_traversal.py); the
                Renderer's default (MeshOptions).
+  "wide8":     the same with 8-wide nodes.
 Two triangle tests: "watertight" (Woop et al. 2013, the default) and "moller" (Moller-Trumbore).
 Two leaf layouts: "scalar" (a leaf's primitives tested one by one from the slot array) and
 "packets" (four slots at a time, triangles structure-of-arrays: triangle_packets.py).
@@ -38,7 +39,8 @@ from renderer.upload import upload_fields
 vec3 = ti.math.vec3
 STACK_SIZE = 64  # deeper than any tree the builder makes (its depth is bounded well below this)
 RESUME_WORLD = -2  # the stack entry below an instance's nodes: the world ray comes back there
-TRAVERSALS = ("stack", "stackless", "wide4")
+TRAVERSALS = ("stack", "stackless", "wide4", "wide8")
+WIDE_TRAVERSALS = {"wide4": 4, "wide8": 8}  # traversal -> node width
 TRIANGLE_TESTS = ("watertight", "moller")
 LEAF_LAYOUTS = ("scalar", "packets")
 
@@ -81,8 +83,8 @@ class MeshGeometry:
         self.data = data  # kept for emitter_info (the device has its own copy)
         uploads = []  # (field, array): copied in one launch (renderer.upload)
         mesh_root = bvh.mesh_root if self.has_instances else np.zeros(0, np.int32)
-        if traversal == "wide4":
-            mesh_root, prim_order = self._upload_wide(nodes, mesh_root, uploads)
+        if traversal in WIDE_TRAVERSALS:
+            mesh_root, prim_order = self._upload_wide(nodes, mesh_root, uploads, WIDE_TRAVERSALS[traversal])
         else:
             prim_order = self._upload_bvh(nodes, uploads)
         self._upload_slots(data, prim_order, uploads)
@@ -104,10 +106,11 @@ class MeshGeometry:
             uploads += [(self.node_lo, np.full((1, 3), 1e30)), (self.node_hi, np.full((1, 3), -1e30))]
         return bvh.prim_order
 
-    def _upload_wide(self, bvh, mesh_root, uploads):
+    def _upload_wide(self, bvh, mesh_root, uploads, width):
         """The binary tree collapsed into wide nodes, uploaded; returns the wide root of each
-        instanced mesh's tree."""
-        wide = collapse(bvh, np.concatenate([[0], mesh_root])) if self.node_total else empty_wide_bvh()
+        instanced mesh's tree and the primitive order."""
+        wide = (collapse(bvh, np.concatenate([[0], mesh_root]), width) if self.node_total
+                else empty_wide_bvh(width))
         self.node_total = wide.num_nodes
         self.stack_size = stack_size(wide)
         self.wide = WideNodes(wide, uploads)
@@ -165,7 +168,7 @@ class MeshGeometry:
         """Bytes on the device: the BVH (every level), the triangles' intersection data, their
         shading attributes (normals, texture coordinates, tangents, colours), the instance table,
         and the total of these with the other primitives and the material ids."""
-        nodes = self.wide.device_bytes() if self.traversal == "wide4" else self.node_total * (12 + 12 + 12)
+        nodes = self.wide.device_bytes() if self.traversal in WIDE_TRAVERSALS else self.node_total * (12 + 12 + 12)
         if self.packed:
             packets = self.packets.device_bytes()
             slots, triangles = packets["ids"], packets["triangles"]
@@ -314,7 +317,7 @@ class MeshGeometry:
     def _traverse(self, ray, t_max, any_hit):
         """Closest hit, or (any_hit: a constant or a per-ray value) the first hit found."""
         hit = Hit(hit=0, t=t_max, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0), instance=-1)
-        if ti.static(self.traversal == "wide4"):
+        if ti.static(self.traversal in WIDE_TRAVERSALS):
             self.wide.traverse(self, ray, hit, any_hit)
         else:
             self._traverse_binary(ray, hit, any_hit)

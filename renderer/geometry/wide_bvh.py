@@ -1,6 +1,7 @@
-"""A binary BVH collapsed into 4-wide nodes whose child boxes sit side by side (numpy only).
+"""A binary BVH collapsed into 4-wide (or 8-wide) nodes whose child boxes sit side by side (numpy
+only).
 
-One wide node holds up to four children. Their boxes are stored structure-of-arrays: six rows
+One wide node holds up to four (eight) children. Their boxes are stored structure-of-arrays: six rows
 (lo x, lo y, lo z, hi x, hi y, hi z) of four floats each, so the device tests the four children
 with one set of 4-lane operations (renderer/geometry/wide_traversal.py). Per child slot:
 
@@ -30,17 +31,18 @@ import numpy as np
 from renderer.geometry.bvh_build import FlatBVH
 from renderer.geometry.instance_bvh import INSTANCE_NODE
 
-WIDTH = 4
+WIDTH = 4  # the default width; collapse(..., width=8) makes 8-wide nodes
+WIDTHS = (4, 8)
 EMPTY_CHILD = -2  # child_count of an unused slot
 F32_MAX = float(np.finfo(np.float32).max)
 
 
 @dataclass
 class WideBVH:
-    """M wide nodes of WIDTH children each (module docs).
+    """M wide nodes of W (4 or 8) children each (module docs).
 
-    bounds:      (M, 6, WIDTH) f32, rows lo x, lo y, lo z, hi x, hi y, hi z of the children.
-    child_a:     (M, WIDTH) i32, child_count: (M, WIDTH) i32 (module docs).
+    bounds:      (M, 6, W) f32, rows lo x, lo y, lo z, hi x, hi y, hi z of the children.
+    child_a:     (M, W) i32, child_count: (M, W) i32 (module docs).
     prim_order:  (N,) i32, the binary tree's primitive order (leaves cover ranges of it).
     roots:       (R,) i32, the wide node of each collapsed root (root i is node i).
     depth:       (R,) i32, levels of wide nodes below each root (1: the root alone).
@@ -54,6 +56,10 @@ class WideBVH:
     depth: np.ndarray
 
     @property
+    def width(self) -> int:
+        return int(self.bounds.shape[2])
+
+    @property
     def num_nodes(self) -> int:
         return int(self.child_a.shape[0])
 
@@ -62,7 +68,7 @@ class WideBVH:
         return self.bounds.nbytes + self.child_a.nbytes + self.child_count.nbytes + self.prim_order.nbytes
 
     def packed_refs(self) -> tuple[np.ndarray, int]:
-        """(refs (M, WIDTH) i32, bits): each child in one i32, as the device stacks it. An inner
+        """(refs (M, W) i32, bits): each child in one i32, as the device stacks it. An inner
         child is its node (>= 0); a leaf is ~(first << bits | count), an instance
         ~(instance << bits), so count 0 there (the empty slot's ~0 reads so too, but no ray
         enters an empty slot). bits holds the largest leaf count."""
@@ -82,9 +88,11 @@ def _surface_area(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return e[:, 0] * e[:, 1] + e[:, 1] * e[:, 2] + e[:, 2] * e[:, 0]
 
 
-def collapse(bvh: FlatBVH, roots=(0,)) -> WideBVH:
-    """The 4-wide BVH of the binary `bvh`'s subtrees below `roots` (node indices; the first is
-    usually 0, the world's root)."""
+def collapse(bvh: FlatBVH, roots=(0,), width: int = WIDTH) -> WideBVH:
+    """The `width`-wide BVH (4 or 8) of the binary `bvh`'s subtrees below `roots` (node indices;
+    the first is usually 0, the world's root)."""
+    if width not in WIDTHS:
+        raise ValueError(f"wide BVH width {width} (choose from {', '.join(map(str, WIDTHS))})")
     roots = np.asarray(roots, np.int64)
     if roots.ndim != 1 or len(roots) == 0:
         raise ValueError("collapse needs at least one root")
@@ -95,7 +103,7 @@ def collapse(bvh: FlatBVH, roots=(0,)) -> WideBVH:
     right = bvh.node_a.astype(np.int64)
 
     # level 0: each root's two children, or the root itself where it is a leaf
-    slots = np.full((len(roots), WIDTH), -1, np.int64)
+    slots = np.full((len(roots), width), -1, np.int64)
     slots[:, 0] = np.where(inner[roots], roots + 1, roots)
     slots[:, 1] = np.where(inner[roots], right[roots], -1)
     owner = np.arange(len(roots))  # the root each wide node descends from
@@ -107,7 +115,7 @@ def collapse(bvh: FlatBVH, roots=(0,)) -> WideBVH:
         is_inner = (slots >= 0) & inner[np.maximum(slots, 0)]
         row, _ = np.nonzero(is_inner)
         nxt = slots[is_inner]
-        slots = np.full((len(nxt), WIDTH), -1, np.int64)
+        slots = np.full((len(nxt), width), -1, np.int64)
         slots[:, 0] = nxt + 1
         slots[:, 1] = right[nxt]
         owner = owner[row]
@@ -118,12 +126,13 @@ def _open_largest(slots: np.ndarray, inner: np.ndarray, area: np.ndarray, right:
     """Fill the free slots of every row (in place): open the largest inner child while one is
     there. Rows hold binary node indices, -1 for a free slot, filled from the left."""
     rows = np.arange(len(slots))
-    for _ in range(WIDTH - 2):
+    width = slots.shape[1]
+    for _ in range(width - 2):
         filled = (slots >= 0).sum(axis=1)
         node = np.maximum(slots, 0)
         score = np.where((slots >= 0) & inner[node], area[node], -1.0)
         pick = np.argmax(score, axis=1)
-        opened = (score[rows, pick] >= 0.0) & (filled < WIDTH)
+        opened = (score[rows, pick] >= 0.0) & (filled < width)
         r = rows[opened]
         c = slots[r, pick[opened]]
         slots[r, pick[opened]] = c + 1
@@ -155,10 +164,10 @@ def _encode(bvh: FlatBVH, levels, owners, n_roots: int, inner: np.ndarray) -> Wi
                    depth=depth)
 
 
-def empty_wide_bvh() -> WideBVH:
+def empty_wide_bvh(width: int = WIDTH) -> WideBVH:
     """One wide node without children: no ray enters anything (a mesh without primitives)."""
-    bounds = np.concatenate([np.full((1, 3, WIDTH), F32_MAX, np.float32),
-                             np.full((1, 3, WIDTH), -F32_MAX, np.float32)], axis=1)
-    return WideBVH(bounds=bounds, child_a=np.zeros((1, WIDTH), np.int32),
-                   child_count=np.full((1, WIDTH), EMPTY_CHILD, np.int32), prim_order=np.zeros(0, np.int32),
+    bounds = np.concatenate([np.full((1, 3, width), F32_MAX, np.float32),
+                             np.full((1, 3, width), -F32_MAX, np.float32)], axis=1)
+    return WideBVH(bounds=bounds, child_a=np.zeros((1, width), np.int32),
+                   child_count=np.full((1, width), EMPTY_CHILD, np.int32), prim_order=np.zeros(0, np.int32),
                    roots=np.zeros(1, np.int32), depth=np.ones(1, np.int32))

@@ -1,12 +1,13 @@
-"""The 4-wide BVH on the device (renderer/geometry/wide_bvh.py) and its ordered traversal.
+"""The 4-wide (or 8-wide) BVH on the device (renderer/geometry/wide_bvh.py) and its ordered
+traversal.
 
-A visit tests the node's four children together, written so that LLVM's SLP vectoriser turns
-the test into 4-lane instructions on the CPU (docs/architecture.md, "Decisions worth knowing",
+A visit tests the node's children together, written so that LLVM's SLP vectoriser turns the test
+into 4-lane (8-lane) instructions on the CPU (docs/architecture.md, "Decisions worth knowing",
 has the evidence; scripts/wide_bvh_ir.py shows it): every child's entry and exit distances and
 the hit mask are computed unconditionally and folded into one key per child (its entry
 distance, or MISS_KEY) before the first branch, and the keys are also stored to a local array
 that a dynamic index reads (that store is what LLVM vectorises from). Only then are the keys
-sorted (a five-comparison network carrying the child slots) and the children entered: the
+sorted (a sorting network carrying the child slots: 5 comparators for 4 keys, 19 for 8) and the children entered: the
 nearest next, the others pushed farthest first with their entry distance, and skipped on pop
 once a closer hit is known. Shadow rays stop at their first hit, as in the binary traversals.
 
@@ -23,7 +24,7 @@ the world ray back.
 """
 import taichi as ti
 
-from renderer.geometry.wide_bvh import WIDTH, WideBVH
+from renderer.geometry.wide_bvh import WideBVH
 
 MISS_KEY = 3.0e38  # a child's key when the ray does not enter it; above every t_max (INF = 1e30)
 RESUME_WORLD = 2**31 - 1  # the stack entry below an instance's nodes (never a node index)
@@ -51,17 +52,23 @@ def _ordered(ka, sa, kb, sb):
     return ti.select(swap, kb, ka), ti.select(swap, sb, sa), ti.select(swap, ka, kb), ti.select(swap, sa, sb)
 
 
+# Sorting networks by width: Batcher's odd-even merge sort (optimal for 4 and 8 keys).
+SORTING_NETWORKS = {
+    4: ((0, 1), (2, 3), (0, 2), (1, 3), (1, 2)),
+    8: ((0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (1, 2), (5, 6), (0, 4), (1, 5),
+        (2, 6), (3, 7), (2, 4), (3, 5), (1, 2), (3, 4), (5, 6)),
+}
+
+
 @ti.func
 def sort_keys(key):
-    """The four keys in ascending order and the child slot of each (a sorting network)."""
-    k0, k1, k2, k3 = key[0], key[1], key[2], key[3]
-    s0, s1, s2, s3 = 0, 1, 2, 3
-    k0, s0, k1, s1 = _ordered(k0, s0, k1, s1)
-    k2, s2, k3, s3 = _ordered(k2, s2, k3, s3)
-    k0, s0, k2, s2 = _ordered(k0, s0, k2, s2)
-    k1, s1, k3, s3 = _ordered(k1, s1, k3, s3)
-    k1, s1, k2, s2 = _ordered(k1, s1, k2, s2)
-    return vec4(k0, k1, k2, k3), ti.math.ivec4(s0, s1, s2, s3)
+    """The keys (4 or 8) in ascending order and the child slot of each (a sorting network)."""
+    width = ti.static(key.n)
+    k = key
+    s = ti.Vector([c for c in range(width)], dt=ti.i32)
+    for i, j in ti.static(SORTING_NETWORKS[width]):
+        k[i], s[i], k[j], s[j] = _ordered(k[i], s[i], k[j], s[j])
+    return k, s
 
 
 @ti.func
@@ -78,26 +85,30 @@ class WideNodes:
     """The wide nodes on the device: child boxes as (node, row) vec4s, one lane per child, and
     each child as one packed i32 (WideBVH.packed_refs: a node >= 0, or a leaf or an instance)."""
 
-    BYTES_PER_NODE = 6 * WIDTH * 4 + WIDTH * 4
-
     def __init__(self, wide: WideBVH, uploads: list):
         """Appends its (field, array) pairs to `uploads` (one launch for the whole mesh)."""
         if wide.num_nodes >= RESUME_WORLD:
             raise ValueError("the wide BVH has too many nodes for i32 references")
         self.count = wide.num_nodes
+        self.width = wide.width
         refs, self.count_bits = wide.packed_refs()
         self.count_mask = (1 << self.count_bits) - 1
-        self.bounds = ti.Vector.field(WIDTH, ti.f32, shape=(self.count, 6))
-        self.child = ti.field(ti.i32, shape=(self.count, WIDTH))
+        self.bounds = ti.Vector.field(self.width, ti.f32, shape=(self.count, 6))
+        self.child = ti.field(ti.i32, shape=(self.count, self.width))
         uploads += [(self.bounds, wide.bounds), (self.child, refs)]
 
+    @staticmethod
+    def bytes_per_node(width: int) -> int:
+        """Six rows of child bounds and a reference per child."""
+        return 6 * width * 4 + width * 4
+
     def device_bytes(self) -> int:
-        return self.count * self.BYTES_PER_NODE
+        return self.count * self.bytes_per_node(self.width)
 
     @ti.func
     def child_keys(self, node, o, inv_d, near, far, t_max):
         """Each child's entry distance if the ray (origin o, 1 / direction inv_d) enters its box
-        before t_max, else MISS_KEY; all four lanes at once, no branch."""
+        before t_max, else MISS_KEY; all lanes at once, no branch."""
         tnx = (self.bounds[node, near.x] - o.x) * inv_d.x
         tny = (self.bounds[node, near.y] - o.y) * inv_d.y
         tnz = (self.bounds[node, near.z] - o.z) * inv_d.z
@@ -117,11 +128,11 @@ class WideNodes:
         # one 4-lane store, from which LLVM vectorises the node test 4 lanes wide. Without it, or
         # with other code after the test (an argmin and branches on the hit count instead of the
         # network and these pushes, for one), it chose 2 lanes.
-        keys = ti.Vector([MISS_KEY] * WIDTH, dt=ti.f32)
-        for c in ti.static(range(WIDTH)):
+        keys = ti.Vector([MISS_KEY] * self.width, dt=ti.f32)
+        for c in ti.static(range(self.width)):
             keys[c] = entry[c]
         key, slot = sort_keys(entry)
-        for j in ti.static((3, 2, 1)):  # farthest first: the nearest is popped first
+        for j in ti.static(range(self.width - 1, 0, -1)):  # farthest first: the nearest is popped first
             if key[j] < MISS_KEY:
                 stack_ref[sp] = self.child[node, slot[j]]
                 stack_t[sp] = keys[slot[j]]
@@ -185,7 +196,7 @@ class WideNodes:
 
 
 def stack_size(wide: WideBVH) -> int:
-    """Stack entries the traversal needs: the world's levels and the deepest mesh's, WIDTH - 1
+    """Stack entries the traversal needs: the world's levels and the deepest mesh's, width - 1
     siblings each, and the marker below an instance's nodes."""
     meshes = int(wide.depth[1:].max()) if len(wide.depth) > 1 else 0
-    return (WIDTH - 1) * (int(wide.depth[0]) + meshes) + 1
+    return (wide.width - 1) * (int(wide.depth[0]) + meshes) + 1

@@ -56,7 +56,7 @@ def test_device_bytes_count_the_packets_and_stay_under_64_a_triangle():
     wide = collapse(build_scene_bvh(data))
     sizes = geometry.device_bytes()
     assert sizes["triangles"] == packets * ROWS * LANES * 4 + len(data.tri_vertices) * 4
-    assert sizes["bvh"] == wide.num_nodes * WideNodes.BYTES_PER_NODE + packets * LANES * 4
+    assert sizes["bvh"] == wide.num_nodes * WideNodes.bytes_per_node(4) + packets * LANES * 4
     assert TrianglePackets.BYTES_PER_PACKET == 160
     assert (sizes["bvh"] + sizes["triangles"]) / len(data.tri_vertices) <= 64.0
 
@@ -103,7 +103,8 @@ def mixed():
 
 
 @pytest.mark.parametrize("traversal, triangle_test", [("wide4", "watertight"), ("wide4", "moller"),
-                                                      ("stack", "watertight"), ("stackless", "moller")])
+                                                      ("wide8", "watertight"), ("stack", "watertight"),
+                                                      ("stackless", "moller")])
 def test_closest_hit_equals_brute_force_and_the_scalar_leaves(mixed, traversal, triangle_test):
     """Triangles, spheres, quads and discs in one tree (other kinds share packets with
     triangles): t, primitive and barycentrics equal brute force's and the scalar layout's."""

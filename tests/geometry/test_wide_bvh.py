@@ -56,11 +56,11 @@ def degenerate_inputs():
 INPUTS = degenerate_inputs()
 
 
-def wide_of(tris, leaf=4, strategy="sah"):
+def wide_of(tris, leaf=4, strategy="sah", width=WIDTH):
     data = data_of(tris)
     lo, hi = data.bounds()
     binary = build_bvh(lo, hi, 0.5 * (lo + hi), strategy=strategy, max_leaf_size=leaf)
-    return binary, collapse(binary), lo, hi
+    return binary, collapse(binary, width=width), lo, hi
 
 
 def reachable(wide, root=0):
@@ -76,8 +76,10 @@ def reachable(wide, root=0):
 
 @pytest.mark.parametrize("name", INPUTS)
 @pytest.mark.parametrize("leaf", [1, 4])
-def test_every_primitive_is_referenced_once_and_every_node_once(name, leaf):
-    binary, wide, _, _ = wide_of(INPUTS[name], leaf)
+@pytest.mark.parametrize("width", [4, 8])
+def test_every_primitive_is_referenced_once_and_every_node_once(name, leaf, width):
+    binary, wide, _, _ = wide_of(INPUTS[name], leaf, width=width)
+    assert wide.width == width
     nodes = reachable(wide)
     assert np.array_equal(np.sort(nodes), np.arange(wide.num_nodes)), "each wide node reached exactly once"
     leaves = wide.child_count[nodes] > 0
@@ -91,13 +93,14 @@ def test_every_primitive_is_referenced_once_and_every_node_once(name, leaf):
 
 
 @pytest.mark.parametrize("name", INPUTS)
-def test_child_boxes_hold_their_subtrees_and_empty_slots_are_inverted(name):
-    _, wide, lo, hi = wide_of(INPUTS[name])
-    box_lo, box_hi = wide.bounds[:, 0:3], wide.bounds[:, 3:6]  # (M, 3, WIDTH)
+@pytest.mark.parametrize("width", [4, 8])
+def test_child_boxes_hold_their_subtrees_and_empty_slots_are_inverted(name, width):
+    _, wide, lo, hi = wide_of(INPUTS[name], width=width)
+    box_lo, box_hi = wide.bounds[:, 0:3], wide.bounds[:, 3:6]  # (M, 3, width)
     count, a = wide.child_count, wide.child_a
     lo32, hi32 = lo.astype(np.float32), hi.astype(np.float32)  # MeshData bounds are f32 already
     for node in range(wide.num_nodes):
-        for c in range(WIDTH):
+        for c in range(width):
             if count[node, c] == EMPTY_CHILD:
                 assert (box_lo[node, :, c] == F32_MAX).all() and (box_hi[node, :, c] == -F32_MAX).all()
             elif count[node, c] == 0:  # an inner child: holds every box of its node's children
@@ -109,18 +112,19 @@ def test_child_boxes_hold_their_subtrees_and_empty_slots_are_inverted(name):
             else:  # a leaf: holds its primitives' boxes
                 prims = wide.prim_order[a[node, c]:a[node, c] + count[node, c]]
                 assert (lo32[prims] >= box_lo[node, :, c]).all() and (hi32[prims] <= box_hi[node, :, c]).all()
-    # empty slots only where a node has fewer than four children: every node opens what it can
+    # empty slots only where a node has fewer children than slots: every node opens what it can
     inner_slots = (count == 0).sum(axis=1)
     empties = (count == EMPTY_CHILD).sum(axis=1)
     assert ((empties == 0) | (inner_slots == 0)).all()
 
 
-def test_roots_and_depths_of_several_trees():
+@pytest.mark.parametrize("width", [4, 8])
+def test_roots_and_depths_of_several_trees(width):
     rng = np.random.default_rng(12)
     instanced, _, _, _ = paired_scenes(rng)
     scene = build_scene_bvh(instanced)
     roots = np.concatenate([[0], scene.mesh_root])
-    wide = collapse(scene.nodes, roots)
+    wide = collapse(scene.nodes, roots, width)
     assert list(wide.roots) == list(range(len(roots)))
     seen = np.concatenate([reachable(wide, r) for r in wide.roots])
     assert np.array_equal(np.sort(seen), np.arange(wide.num_nodes)), "the trees share no node"
@@ -134,7 +138,7 @@ def test_roots_and_depths_of_several_trees():
             rows = np.asarray(frontier)
             frontier = list(wide.child_a[rows][wide.child_count[rows] == 0])
         assert wide.depth[r] == levels
-    assert stack_size(wide) == (WIDTH - 1) * (wide.depth[0] + wide.depth[1:].max()) + 1
+    assert stack_size(wide) == (width - 1) * (wide.depth[0] + wide.depth[1:].max()) + 1
 
 
 @pytest.mark.parametrize("name", ["one", "random", "at_one_point"])
@@ -156,6 +160,16 @@ def test_collapse_refuses_roots_outside_the_tree():
         collapse(binary, [binary.num_nodes])
     with pytest.raises(ValueError, match="root"):
         collapse(binary, [])
+    with pytest.raises(ValueError, match="width 6"):
+        collapse(binary, width=6)
+
+
+def test_eight_wide_nodes_are_fuller_and_fewer():
+    binary, wide4, _, _ = wide_of(INPUTS["random"])
+    _, wide8, _, _ = wide_of(INPUTS["random"], width=8)
+    assert wide8.num_nodes < wide4.num_nodes and wide8.depth[0] < wide4.depth[0]
+    used4, used8 = ((w.child_count != EMPTY_CHILD).sum(axis=1).mean() for w in (wide4, wide8))
+    assert used8 > used4 > 3.0
 
 
 # ------------------------------------------------------------------------------------------------
@@ -244,21 +258,22 @@ def mixed():
     return mixed_scene(rng), random_rays(rng, 20000)
 
 
-@pytest.mark.parametrize("strategy", ["sah", "midpoint"])
-def test_closest_hit_equals_brute_force_and_the_binary_traversal(mixed, strategy):
+@pytest.mark.parametrize("strategy, traversal", [("sah", "wide4"), ("midpoint", "wide4"), ("sah", "wide8")])
+def test_closest_hit_equals_brute_force_and_the_binary_traversal(mixed, strategy, traversal):
     """Triangles, spheres, quads and discs in one tree: t, primitive and barycentrics of the wide
     traversal equal brute force's and the stack traversal's."""
     data, (o, d) = mixed
-    wide = HitRecorder(geometry_from(data, strategy=strategy, traversal="wide4"))
+    wide = HitRecorder(geometry_from(data, strategy=strategy, traversal=traversal))
     got = wide.trace(o, d)
     assert_same_hits(got, wide.trace(o, d, brute=True), data, d, 10000)
     stack = HitRecorder(geometry_from(data, strategy=strategy, traversal="stack"))
     assert_same_hits(got, stack.trace(o, d), data, d, 10000)
 
 
-def test_any_hit_equals_brute_force(mixed):
+@pytest.mark.parametrize("traversal", ["wide4", "wide8"])
+def test_any_hit_equals_brute_force(mixed, traversal):
     data, (o, d) = mixed
-    shooter = RayShooter(geometry_from(data, traversal="wide4"))
+    shooter = RayShooter(geometry_from(data, traversal=traversal))
     t_ref, _ = shooter.closest(o, d, brute=True)
     for t_max in (0.5, 1.5, 4.0, INF):
         blocked = shooter.occluded(o, d, t_max) == 1
@@ -314,15 +329,15 @@ def paired():
     return instanced, flat, tw, tm, instancing_rays(rng, 20000)
 
 
-@pytest.mark.parametrize("loose", [40, 0])
-def test_instanced_scene_traces_as_the_binary_traversal(loose):
+@pytest.mark.parametrize("loose, traversal", [(40, "wide4"), (0, "wide4"), (40, "wide8")])
+def test_instanced_scene_traces_as_the_binary_traversal(loose, traversal):
     """Two-level scenes (with world triangles, and instances alone): the wide traversal finds the
     stack traversal's primitive and instance, and t and barycentrics within rounding (each
     within test_instancing's point_bound of the exact hit, so within twice it of each other)."""
     rng = np.random.default_rng(7 + loose)
     instanced, flat, tw, tm = paired_scenes(rng, loose=loose)
     o, d = instancing_rays(rng, 20000)
-    got = HitProbe(geometry_from(instanced, traversal="wide4")).shoot(o, d)
+    got = HitProbe(geometry_from(instanced, traversal=traversal)).shoot(o, d)
     ref = HitProbe(geometry_from(instanced, traversal="stack")).shoot(o, d)
     np.testing.assert_array_equal(got[:, HitProbe.HIT], ref[:, HitProbe.HIT])
     hit = ref[:, HitProbe.HIT] == 1
@@ -352,12 +367,13 @@ def test_instanced_any_hit_equals_flattened(paired):
         assert blocked.sum() > 1000
 
 
-def test_device_bytes_count_the_wide_nodes(mixed):
+@pytest.mark.parametrize("width", [4, 8])
+def test_device_bytes_count_the_wide_nodes(mixed, width):
     data, _ = mixed
     binary = build_scene_bvh(data)
-    geometry = geometry_from(data, traversal="wide4")
-    wide = collapse(binary)
-    assert geometry.device_bytes()["bvh"] == wide.num_nodes * (6 * WIDTH * 4 + WIDTH * 4) + binary.num_prims * 4
+    geometry = geometry_from(data, traversal=f"wide{width}")
+    wide = collapse(binary, width=width)
+    assert geometry.device_bytes()["bvh"] == wide.num_nodes * (6 * width * 4 + width * 4) + binary.num_prims * 4
     assert wide.num_nodes < binary.num_nodes / 2
 
 
