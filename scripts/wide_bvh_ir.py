@@ -100,12 +100,14 @@ def compile_leaf_kernel():
     packets = TrianglePackets(build_packets(np.arange(64), tris))
 
     @ti.kernel
-    def leaf_test(o: ti.types.ndarray(), d: ti.types.ndarray(), out: ti.types.ndarray()):
+    def leaf_test(o: ti.types.ndarray(), d: ti.types.ndarray(), t_max: ti.types.ndarray(), out: ti.types.ndarray()):
         for i in range(o.shape[0]):
             origin = ti.math.vec3(o[i, 0], o[i, 1], o[i, 2])
             direction = ti.math.vec3(d[i, 0], d[i, 1], d[i, 2])
             k, s = watertight_setup(direction)
-            found, t, b1, b2 = packets.watertight(i % packets.count, permuted_origin(origin, k), k, s, 1e30)
+            # t_max read at run time, as the traversal's closest hit so far is (a constant would
+            # let the compiler fold what the test keeps opaque)
+            found, t, b1, b2 = packets.watertight(i % packets.count, permuted_origin(origin, k), k, s, t_max[i])
             t_near, lane, u, v = nearest_lane(found & packets.lane_mask(i % packets.count, 1, 4 * packets.count), t,
                                               b1, b2)
             out[i, 0] = t_near
@@ -115,7 +117,7 @@ def compile_leaf_kernel():
 
     n = 16
     leaf_test(rng.normal(size=(n, 3)).astype(np.float32), rng.normal(size=(n, 3)).astype(np.float32),
-              np.zeros((n, 4), np.float32))
+              np.full(n, 1e30, np.float32), np.zeros((n, 4), np.float32))
 
 
 def compile_traversal_kernel():

@@ -79,6 +79,16 @@ def build_packets(prim_order: np.ndarray, tri_vertices: np.ndarray) -> PacketArr
 
 
 @ti.func
+def _kept(x, zero):
+    """x unchanged, but opaque to floating-point reassociation and contraction: its bits pass an
+    integer OR with `zero` (0 at run time, not known to be at compile time)."""
+    out = x
+    for c in ti.static(range(LANES)):
+        out[c] = ti.bit_cast(ti.bit_cast(x[c], ti.i32) | zero, ti.f32)
+    return out
+
+
+@ti.func
 def _pick(k, v):
     """v[k] for k in 0..2 without indexing a local vector dynamically (which spills it)."""
     return ti.select(k == 0, v.x, ti.select(k == 1, v.y, v.z))
@@ -128,21 +138,30 @@ class TrianglePackets:
     def watertight(self, p, ok, k, s, t_max):
         """Woop et al.'s test of packet p's four triangles: (hit mask, t, b1, b2), 4 lanes each.
         ok = the origin permuted as k (ok.x = o[k.x] ...), k and s from watertight_setup."""
-        ax = self.rows[p, k.x] - ok.x
-        ay = self.rows[p, k.y] - ok.y
-        az = self.rows[p, k.z] - ok.z
-        bx = self.rows[p, 3 + k.x] - ok.x
-        by = self.rows[p, 3 + k.y] - ok.y
-        bz = self.rows[p, 3 + k.z] - ok.z
-        cx = self.rows[p, 6 + k.x] - ok.x
-        cy = self.rows[p, 6 + k.y] - ok.y
-        cz = self.rows[p, 6 + k.z] - ok.z
+        # The corners relative to the origin, each difference kept as computed (_kept): fast math
+        # lets LLVM reassociate (v - o) - s (w - o') into v - s w + (s o' - o), hoisting the ray's
+        # part, which cancels catastrophically far from the origin (measured: hits 1.5e-3 in
+        # barycentrics off on a triangle 0.25 across at 1e4, and rays through the gaps).
+        zero = ti.cast(t_max < 0.0, ti.i32)  # 0 at run time, unknown to the compiler
+        ax = _kept(self.rows[p, k.x] - ok.x, zero)
+        ay = _kept(self.rows[p, k.y] - ok.y, zero)
+        az = _kept(self.rows[p, k.z] - ok.z, zero)
+        bx = _kept(self.rows[p, 3 + k.x] - ok.x, zero)
+        by = _kept(self.rows[p, 3 + k.y] - ok.y, zero)
+        bz = _kept(self.rows[p, 3 + k.z] - ok.z, zero)
+        cx = _kept(self.rows[p, 6 + k.x] - ok.x, zero)
+        cy = _kept(self.rows[p, 6 + k.y] - ok.y, zero)
+        cz = _kept(self.rows[p, 6 + k.z] - ok.z, zero)
         ax, ay = ax - s.x * az, ay - s.y * az
         bx, by = bx - s.x * bz, by - s.y * bz
         cx, cy = cx - s.x * cz, cy - s.y * cz
-        u = cx * by - cy * bx
-        v = ax * cy - ay * cx
-        w = bx * ay - by * ax
+        # Each edge function's products rounded on their own (_kept): the backend fuses one product
+        # of a difference into an FMA in this vector code, and the two triangles of an edge, which
+        # take its corners in opposite orders, would then round it differently (not to exactly
+        # opposite values), letting rays through the edge.
+        u = _kept(cx * by, zero) - _kept(cy * bx, zero)
+        v = _kept(ax * cy, zero) - _kept(ay * cx, zero)
+        w = _kept(bx * ay, zero) - _kept(by * ax, zero)
         # Inside unless the edge functions have mixed signs (zero counts as inside, as in the
         # scalar test); a back face has u, v, w, tt all of det's sign.
         neg = ti.cast(u < 0.0, ti.i32) | ti.cast(v < 0.0, ti.i32) | ti.cast(w < 0.0, ti.i32)

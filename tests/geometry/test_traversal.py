@@ -127,7 +127,8 @@ def test_watertight_no_ray_passes_through_shared_edges_or_vertices(transform, tr
 
 @pytest.mark.parametrize("scale", [1e-3, 1e-1, 1.0, 1e2, 1e4])
 @pytest.mark.parametrize("offset", [0.0, 1e2, 1e4])
-def test_spawned_rays_never_hit_their_own_surface(scale, offset):
+@pytest.mark.parametrize("traversal, leaves", [("stack", "scalar"), ("wide4", "packets"), ("wide4", "scalar"), ("stack", "packets")])
+def test_spawned_rays_never_hit_their_own_surface(scale, offset, traversal, leaves):
     # float32 spacing at |offset| is offset * 2^-23; an object a few ulps across cannot be
     # represented at all (1 mm at 10 km is 1 ulp), so such pairs are not meaningful cases.
     ulps_across = scale / (max(offset, scale) * 2.0**-23)
@@ -137,7 +138,7 @@ def test_spawned_rays_never_hit_their_own_surface(scale, offset):
     mesh = trimesh.creation.icosphere(subdivisions=2)
     mesh.apply_scale(scale)
     mesh.apply_translation([offset, -offset * 0.5, offset * 0.25])
-    geometry = geometry_from(trimesh_data(mesh))
+    geometry = geometry_from(trimesh_data(mesh), traversal=traversal, leaves=leaves)
     shooter = RayShooter(geometry)
     n = 20000
     centre = np.asarray(mesh.vertices).mean(axis=0)
