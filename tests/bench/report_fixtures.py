@@ -172,8 +172,9 @@ def _bvh_mesh(name: str, triangles: int, speed: dict) -> dict:
                                         "target_passed": per <= bvh_measure.BYTES_PER_TRIANGLE_TARGET}})
         for traversal in bvh_measure.TRAVERSALS:
             for test in bvh_measure.TRIANGLE_TESTS:
-                rate = (speed[strategy] * {"stack": 1.0, "stackless": 0.8}.get(traversal, 1.25)
-                        * (1.0 if test == "watertight" else 1.1))
+                base, leaves = bvh_measure.traversal_and_leaves(traversal)
+                rate = (speed[strategy] * {"stack": 1.0, "stackless": 0.8}.get(base, 1.25)
+                        * (1.0 if test == "watertight" else 1.1) * (1.2 if leaves == "packets" else 1.0))
                 entry = {"strategy": strategy, "traversal": traversal, "triangle_test": test, "compile_s": 1.5}
                 for kind, scale in (("coherent", 3.0), ("incoherent", 1.0)):
                     entry[kind] = {**_rates(1 << 16, (1 << 16) / (rate * scale * 1e6)), "nodes_per_ray": 30.0,
@@ -194,6 +195,7 @@ def _bvh_mesh(name: str, triangles: int, speed: dict) -> dict:
     mesh["embree_target_passed"] = mesh["ratio_to_embree"]["incoherent"]["default"] >= bvh_measure.EMBREE_RATIO_TARGET
     mesh["agreement_all_configs"] = {"coherent": 1.0, "incoherent": 0.9995}
     mesh["wide_vs_binary"] = bvh_measure.wide_vs_binary(configs)
+    mesh["packets_vs_scalar"] = bvh_measure.packets_vs_scalar(configs)
     mesh["shadow"] = {"config": mesh["default_config"], "rays": 1 << 16, "occluded_mrays_per_s": 5.0,
                       "closest_mrays_per_s": 3.0, "occluded_fraction": 0.4, "closest_hit_fraction": 0.4,
                       "closest_nodes_per_ray": 25.0, "timing": {}, "consistent_with_closest": 1.0,

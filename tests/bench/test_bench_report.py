@@ -97,6 +97,10 @@ def test_tables_are_rendered_from_the_json(reports, tmp_path):
     wide = next(w for w in large["wide_vs_binary"] if (w["strategy"], w["triangle_test"]) == ("sah", "moller"))
     assert row(text["bvh"], "large", f"sah/{wide['traversal']}/moller")["incoherent"] == \
         f"{wide['incoherent']['speedup']:.2f}x"
+    packed = next(w for w in large["packets_vs_scalar"]
+                  if (w["strategy"], w["traversal"], w["triangle_test"]) == ("sah", "wide4", "watertight"))
+    assert f"packet leaves run at {packed['incoherent']['speedup']:.2f}x the scalar leaves'" in text["bvh"]
+    assert "Packet leaves (`+packets`" in text["bvh"]
     warm = data["startup"]["measurements"][1]["warm"]
     cells = row(text["startup"], "viewer, kernels for compile")
     assert cells["warm: to first frame"] == num(warm["start_to_first_frame"])
