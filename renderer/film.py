@@ -279,12 +279,13 @@ class Film:
     @ti.kernel
     def _copy_variance_of_mean(self, out: ti.types.ndarray(), width: ti.i32, height: ti.i32):
         for x, y in ti.ndrange(width, height):
-            variance = self._variance_of_mean(x, y)
+            variance = self.variance_of_mean_at(x, y)
             for c in ti.static(range(3)):
                 out[height - 1 - y, x, c] = variance[c]
 
     @ti.func
-    def _variance_of_mean(self, x, y):
+    def variance_of_mean_at(self, x, y):
+        """The variance of pixel (x, y)'s mean, per channel (inf with fewer than two samples)."""
         n = self.count[x, y]
         result = ti.math.vec3(ti.math.inf)
         if n >= 2:
@@ -309,7 +310,7 @@ class Film:
                 rejected += self.rejected[x, y]
                 spp_sum += ti.cast(n, ti.f32)
                 if n >= 2:
-                    standard_error = ti.sqrt(ti.max(self._variance_of_mean(x, y), 0.0))
+                    standard_error = ti.sqrt(ti.max(self.variance_of_mean_at(x, y), 0.0))
                     relative = luminance(standard_error) / ti.max(luminance(self.mean[x, y]), NOISE_LUMINANCE_FLOOR)
                     squared_errors += relative * relative
                     noise_pixels += 1

@@ -36,14 +36,16 @@ def _multi_index(local, shape):
 
 @ti.func
 def _store(field: ti.template(), I, value_base, element: ti.template(), buffer: ti.template()):
+    # A vector or matrix element is stored whole: stored component by component, Taichi 1.7.4's
+    # optimised CPU code crashed for some sets of fields (wide BVH node bounds (M, 6) vec4, child
+    # references (M, 4) i32, then any vec4 f32 field, in that order; right under debug=True).
     if ti.static(element == ()):
         field[I] = buffer[value_base]
     elif ti.static(len(element) == 1):
-        for c in ti.static(range(element[0])):
-            field[I][c] = buffer[value_base + c]
+        field[I] = ti.Vector([buffer[value_base + c] for c in ti.static(range(element[0]))])
     else:
-        for r, c in ti.static(ti.ndrange(element[0], element[1])):
-            field[I][r, c] = buffer[value_base + r * element[1] + c]
+        field[I] = ti.Matrix([[buffer[value_base + r * element[1] + c] for c in ti.static(range(element[1]))]
+                              for r in ti.static(range(element[0]))])
 
 
 @ti.kernel

@@ -97,7 +97,9 @@ def compile_leaf_kernel():
 
     rng = np.random.default_rng(0)
     tris = rng.normal(size=(64, 3, 3)).astype(np.float32)
-    packets = TrianglePackets(build_packets(np.arange(64), tris))
+    uploads = []
+    packets = TrianglePackets(build_packets(np.arange(64), tris), uploads)
+    upload_fields(uploads)
 
     @ti.kernel
     def leaf_test(o: ti.types.ndarray(), d: ti.types.ndarray(), t_max: ti.types.ndarray(), out: ti.types.ndarray()):

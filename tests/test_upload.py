@@ -28,6 +28,20 @@ def test_every_element_kind_lands_where_from_numpy_puts_it():
         np.testing.assert_array_equal(got[name], array.astype(got[name].dtype))
 
 
+def test_wide_node_fields_then_packet_rows_in_one_launch():
+    """The set of fields on which component-by-component stores crashed Taichi 1.7.4's optimised
+    CPU code (a wide BVH's node bounds and child references, then a packet's corner rows): copied
+    exactly, in this order, in one launch."""
+    rng = np.random.default_rng(5)
+    pairs = [(ti.Vector.field(4, ti.f32, shape=(238, 6)), rng.random((238, 6, 4))),
+             (ti.field(ti.i32, shape=(238, 4)), rng.integers(-1000, 1000, (238, 4))),
+             (ti.Vector.field(4, ti.f32, shape=(320, 9)), rng.random((320, 9, 4))),
+             (ti.Vector.field(4, ti.i32, shape=320), rng.integers(-1, 1000, (320, 4)))]
+    upload_fields(pairs)
+    for field, array in pairs:
+        np.testing.assert_array_equal(field.to_numpy(), array.astype(field.to_numpy().dtype))
+
+
 def test_wrong_shape_is_refused():
     field = ti.Vector.field(3, ti.f32, shape=4)
     with pytest.raises(ValueError, match="shape"):

@@ -179,6 +179,24 @@ def error_difference(image_a, image_b, reference, metric: str = "rel_mse", trim:
     return ErrorDifference(metric, float(ea.mean()), float(eb.mean()), float(d.mean()), se, trim)
 
 
+Z_SIGNIFICANT = 1.96  # two-sided 5% level of a paired comparison (error_difference's z)
+
+
+def paired_verdict(paired: dict | None) -> str:
+    """'better' / 'worse' where image a's error (ErrorDifference.as_dict()) differs from image b's
+    at the 5% level, else 'tie'; 'n/a' without a comparison."""
+    if not paired:
+        return "n/a"
+    if paired["z"] < -Z_SIGNIFICANT:
+        return "better"
+    return "worse" if paired["z"] > Z_SIGNIFICANT else "tie"
+
+
+def paired_text(paired: dict | None) -> str:
+    """z of the comparison and its verdict, e.g. '-3.1 better' ('n/a' without one)."""
+    return f"{paired['z']:+.1f} {paired_verdict(paired)}" if paired else "n/a"
+
+
 def image_errors(image, reference, trim: float = 1e-3) -> dict:
     return {"rmse": rmse(image, reference), "rel_mse": rel_mse(image, reference),
             "rel_mse_trimmed": rel_mse_trimmed(image, reference, trim)}

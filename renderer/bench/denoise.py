@@ -20,7 +20,7 @@ For each scene (cornell_box, bunnies, studio, showcase, textured), in one proces
    the same growing passes until that budget, and are compared at the budget.
    All use the same seed, so a pixel's first samples are the same in both, and the
    difference of their errors is tested per pixel (common.error_difference: mean difference, its
-   standard error over the pixels, z; |z| > Z_SIGNIFICANT is a difference at the 5% level, two-
+   standard error over the pixels, z; |z| > common.Z_SIGNIFICANT is a difference at the 5% level, two-
    sided), untrimmed and without the 0.1% of pixels with the largest errors: at these sample counts
    a handful of fireflies decide the untrimmed relMSE of bunnies, studio and showcase (0.05-0.45).
 4. The denoiser's time for one 960x540 frame in each form (median of 3, after one warm-up call).
@@ -47,13 +47,13 @@ from pathlib import Path
 
 import numpy as np
 
-from renderer.bench.common import (describe_error, error_difference, load_average, load_named_scene, log, print_table,
-                                   pyplot, rel_mse, report_header, save_figure, speed_runtime, verdict, write_json)
+from renderer.bench.common import (describe_error, error_difference, load_average, load_named_scene, log, paired_text,
+                                   paired_verdict, print_table, pyplot, rel_mse, report_header, save_figure, speed_runtime,
+                                   verdict, write_json)
 from renderer.bench.integrators import FIREFLY_TRIM, noise_floor, progressive, spp_to_reach
 
 INTEGRATOR = "mis"
 DEFAULT_THRESHOLD = 0.05
-Z_SIGNIFICANT = 1.96  # two-sided 5% level of the paired adaptive-vs-uniform test
 
 
 @dataclass(frozen=True)
@@ -135,15 +135,6 @@ def at_equal_time(renderer, camera, reference, floor, budget_s: float, threshold
         result["paired_trimmed"] = error_difference(image, uniform_image, reference, "rel_mse",
                                                     trim=FIREFLY_TRIM).as_dict()
     return result, image
-
-
-def paired_verdict(paired: dict | None) -> str:
-    """'better' / 'worse' where adaptive's error differs from uniform's at the 5% level, else 'tie'."""
-    if not paired:
-        return "n/a"
-    if paired["z"] < -Z_SIGNIFICANT:
-        return "better"
-    return "worse" if paired["z"] > Z_SIGNIFICANT else "tie"
 
 
 def progressive_passes(renderer, camera, budget_s: float, config: DenoiseBenchConfig) -> dict:
@@ -313,11 +304,6 @@ def print_report(results: list[dict], config: DenoiseBenchConfig, frame_s: float
     w, h = config.frame_size
     print(f"Denoiser time per {w}x{h} frame: {frame_s * 1000:.0f} ms with the AOVs prefiltered, "
           f"{frame_quick_s * 1000:.0f} ms quick (median of 3)\n")
-
-
-def paired_text(paired: dict | None) -> str:
-    """z of adaptive minus uniform error and its verdict, e.g. '-3.1 better'."""
-    return f"{paired['z']:+.1f} {paired_verdict(paired)}" if paired else "n/a"
 
 
 def write_plots(results: list[dict], out_dir: Path) -> list[Path]:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections import Counter
 
+from renderer.bench.common import Z_SIGNIFICANT, paired_text
 from renderer.bench.report_markdown import (
     MISSING,
     Section,
@@ -239,10 +240,8 @@ def _point_at(curve: list[dict], spp: int) -> dict | None:
     return next((p for p in curve if p["spp"] == spp), None)
 
 
-def paired_text(paired: dict | None) -> str:
-    from renderer.bench.denoise import paired_text as text
-
-    return text(paired) if paired else MISSING
+def _paired(paired: dict | None) -> str:
+    return paired_text(paired) if paired else MISSING
 
 
 def denoise_section(report: dict) -> Section:
@@ -268,12 +267,12 @@ def denoise_section(report: dict) -> Section:
     rows = [[s["scene"], s["uniform"]["seconds"], s["uniform"]["spp"], s["uniform"]["rel_mse_corrected"],
              a["threshold"], a["mean_spp"], pct(a["stopped_fraction"], 0), a["rel_mse_corrected"],
              "yes" if a["rel_mse_corrected"] < s["uniform"]["rel_mse_corrected"] else "no",
-             paired_text(a.get("paired")), paired_text(a.get("paired_trimmed"))]
+             _paired(a.get("paired")), _paired(a.get("paired_trimmed"))]
             for s in scenes for a in s["adaptive"]]
     section.blocks += [
         "Adaptive against uniform sampling at equal time (the budget: uniform sampling's time to "
         f"{num(config.get('equal_time_spp'))} spp; relMSE less the reference's noise; paired z: the "
-        "per-pixel difference of the two errors over its standard error, same seed, |z| > 1.96 a "
+        f"per-pixel difference of the two errors over its standard error, same seed, |z| > {Z_SIGNIFICANT} a "
         "difference at the 5% level; trimmed: without the 0.1% of pixels with the largest errors):",
         table(["scene", "budget s", "uniform spp", "uniform relMSE", "threshold", "adaptive mean spp", "stopped",
                "adaptive relMSE", "adaptive better", "paired z", "paired z, trimmed"], rows)]

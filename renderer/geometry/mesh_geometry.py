@@ -62,7 +62,6 @@ class MeshGeometry:
         self.traversal = traversal
         self.triangle_test = triangle_test
         self.packed = leaves == "packets"
-        self.leaves = leaves
         self.kinds = data.kinds()
         self.has_other_kinds = bool(self.kinds - {"triangle"})  # (packets test those lane by lane)
         self.has_normals = data.tri_normals is not None and len(data.tri_vertices) > 0
@@ -120,7 +119,7 @@ class MeshGeometry:
         """The leaves' primitives: the slot array and the triangles' corners, or the packets
         that hold both."""
         if self.packed:
-            self.packets = TrianglePackets(build_packets(prim_order, data.tri_vertices))
+            self.packets = TrianglePackets(build_packets(prim_order, data.tri_vertices), uploads)
             return
         self.slot_prim = ti.field(ti.i32, shape=max(1, len(prim_order)))
         if len(prim_order):
@@ -229,24 +228,17 @@ class MeshGeometry:
             g = self.slot_prim[j]
             h, t, b1, b2 = self._test_prim(g, o, d, k, s, hit.t)
             hit.tests += 1
-            if ti.static(self.has_alpha):
-                if h == 1:
-                    h = coverage.covered(self, g, ti.math.vec2(b1, b2), ray.o, ray.d, instance)
-            if h == 1:
-                hit.hit = 1
-                hit.t = t
-                hit.prim = g
-                hit.bary = ti.math.vec2(b1, b2)
-                if ti.static(self.has_instances):
-                    hit.instance = instance
+            if self._covered(h, g, b1, b2, ray, instance) == 1:
+                self._take(hit, t, g, b1, b2, instance)
                 if any_hit:
                     break
 
     @ti.func
     def _test_packets(self, first, count, o, d, k, s, hit: ti.template(), any_hit, ray, instance):
         """The packet leaf layout: the packets the leaf's slots touch, four lanes at a time, each
-        masked to the leaf's own slots; a packet's hits are taken nearest-last-wins in lane order
-        against the closest hit so far (as the scalar layout takes slots)."""
+        masked to the leaf's own slots; of a packet's triangle hits the nearest is taken (the
+        lowest lane on a tie, as the scalar layout's slot order would), lanes of other kinds after
+        it, each only if nearer than the closest hit so far."""
         end = first + count
         ok = permuted_origin(o, k)
         for p in range(first >> 2, ((end - 1) >> 2) + 1):
@@ -262,11 +254,9 @@ class MeshGeometry:
                 found &= mask
                 if ti.static(self.has_alpha):  # lane by lane: the nearest hit may be uncovered
                     for lane in ti.static(range(4)):
-                        if found[lane] == 1:
-                            if t[lane] < hit.t:
-                                if coverage.covered(self, prims[lane], ti.math.vec2(b1[lane], b2[lane]), ray.o, ray.d,
-                                                    instance) == 1:
-                                    self._take(hit, t[lane], prims[lane], b1[lane], b2[lane], instance)
+                        if found[lane] == 1 and t[lane] < hit.t:
+                            if self._covered(1, prims[lane], b1[lane], b2[lane], ray, instance) == 1:
+                                self._take(hit, t[lane], prims[lane], b1[lane], b2[lane], instance)
                 else:
                     t_near, lane, u, v = nearest_lane(found, t, b1, b2)
                     if t_near < hit.t:
@@ -276,17 +266,25 @@ class MeshGeometry:
                     g = prims[lane]
                     if mask[lane] == 1 and g >= self.range_end[0]:
                         h, t1, c1, c2 = self._test_prim(g, o, d, k, s, hit.t)
-                        if ti.static(self.has_alpha):
-                            if h == 1:
-                                h = coverage.covered(self, g, ti.math.vec2(c1, c2), ray.o, ray.d, instance)
-                        if h == 1:
+                        if self._covered(h, g, c1, c2, ray, instance) == 1:
                             self._take(hit, t1, g, c1, c2, instance)
             if any_hit:
                 if hit.hit == 1:
                     break
 
     @ti.func
+    def _covered(self, h, g, b1, b2, ray, instance):
+        """h (a primitive test's hit flag), cleared where alpha coverage lets the ray pass there;
+        h itself in scenes without alpha materials (no coverage code compiled)."""
+        out = h
+        if ti.static(self.has_alpha):
+            if h == 1:
+                out = coverage.covered(self, g, ti.math.vec2(b1, b2), ray.o, ray.d, instance)
+        return out
+
+    @ti.func
     def _take(self, hit: ti.template(), t, g, b1, b2, instance):
+        """Make (t, primitive g, barycentrics) the closest hit so far."""
         hit.hit = 1
         hit.t = t
         hit.prim = g
@@ -299,7 +297,7 @@ class MeshGeometry:
         """Triangle g's three corners (in its mesh's frame)."""
         v0, v1, v2 = vec3(0.0), vec3(0.0), vec3(0.0)
         if ti.static(self.packed):
-            v0, v1, v2 = self.packets.corner(g, 0), self.packets.corner(g, 1), self.packets.corner(g, 2)
+            v0, v1, v2 = self.packets.corners(g)
         else:
             v0, v1, v2 = self.tri_v[g, 0], self.tri_v[g, 1], self.tri_v[g, 2]
         return v0, v1, v2

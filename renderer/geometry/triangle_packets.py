@@ -31,6 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 import taichi as ti
 
+from renderer.geometry.wide_traversal import MISS_KEY  # a lane's key where it has no hit
+
 LANES = 4
 ROWS = 9  # three corners x three coordinates
 NO_PRIM = -1  # the primitive id of a padding lane
@@ -39,7 +41,6 @@ vec3 = ti.math.vec3
 vec4 = ti.math.vec4
 ivec4 = ti.math.ivec4
 LANE = ivec4(0, 1, 2, 3)
-MISS_KEY = 3.0e38  # a lane's key where it has no hit: above every t_max (INF = 1e30)
 
 
 @dataclass
@@ -100,19 +101,15 @@ class TrianglePackets:
 
     BYTES_PER_PACKET = ROWS * LANES * 4 + LANES * 4
 
-    def __init__(self, arrays: PacketArrays):
+    def __init__(self, arrays: PacketArrays, uploads: list):
+        """Appends its (field, array) pairs to `uploads` (one launch for the whole mesh)."""
         self.count = arrays.num_packets
         self.rows = ti.Vector.field(LANES, ti.f32, shape=(self.count, ROWS))
         self.prims = ti.Vector.field(LANES, ti.i32, shape=self.count)
         self.tri_slot = ti.field(ti.i32, shape=max(1, len(arrays.tri_slot)))
-        # Copied by Taichi's own from_numpy: in renderer.upload's one scatter kernel, with the wide
-        # nodes' fields or with other meshes' fields before them, Taichi 1.7.4's optimised CPU
-        # code crashed (reproduced in a fresh process with the node bounds, the child refs and any
-        # vec4 f32 field after them, in that order; correct under debug=True).
-        self.rows.from_numpy(arrays.rows)
-        self.prims.from_numpy(arrays.prims)
+        uploads += [(self.rows, arrays.rows), (self.prims, arrays.prims)]
         if len(arrays.tri_slot):
-            self.tri_slot.from_numpy(arrays.tri_slot)
+            uploads.append((self.tri_slot, arrays.tri_slot))
 
     def device_bytes(self) -> dict:
         """{"ids": the primitive ids (what the BVH's slot array was), "triangles": the corners
@@ -121,12 +118,15 @@ class TrianglePackets:
                 "triangles": self.count * ROWS * LANES * 4 + self.tri_slot.shape[0] * 4}
 
     @ti.func
-    def corner(self, g, i):
-        """Corner i (0..2) of triangle g."""
+    def corners(self, g):
+        """Triangle g's three corners, read from its packet's lane."""
         slot = self.tri_slot[g]
         p = slot >> 2
         lane = slot & 3
-        return vec3(self.rows[p, 3 * i][lane], self.rows[p, 3 * i + 1][lane], self.rows[p, 3 * i + 2][lane])
+        rows = ti.static(self.rows)
+        return (vec3(rows[p, 0][lane], rows[p, 1][lane], rows[p, 2][lane]),
+                vec3(rows[p, 3][lane], rows[p, 4][lane], rows[p, 5][lane]),
+                vec3(rows[p, 6][lane], rows[p, 7][lane], rows[p, 8][lane]))
 
     @ti.func
     def lane_mask(self, p, first, end):

@@ -13,6 +13,7 @@ def hits(out: str) -> None:
     from renderer.arch import init_taichi
 
     init_taichi("vulkan")
+    from renderer.bench.bvh_measure import traversal_and_leaves
     from tests.geometry.mesh_helpers import RayShooter, geometry_from
     from tests.geometry.test_traversal import mixed_scene, random_rays
 
@@ -20,8 +21,8 @@ def hits(out: str) -> None:
     data, (o, d) = mixed_scene(rng), random_rays(rng, 4000)
     arrays = {}
     for traversal in ("stack", "wide4", "wide4+packets"):
-        base, _, packets = traversal.partition("+")
-        shooter = RayShooter(geometry_from(data, traversal=base, leaves=packets or "scalar"))
+        base, leaves = traversal_and_leaves(traversal)
+        shooter = RayShooter(geometry_from(data, traversal=base, leaves=leaves))
         arrays[traversal + "_t"], arrays[traversal + "_prim"] = shooter.closest(o, d)
         arrays[traversal + "_shadow"] = shooter.occluded(o, d, 1.5)
     np.savez(out, **arrays)
@@ -32,13 +33,14 @@ def render(out: str, arch: str, traversal: str, seed: int) -> None:
     from renderer.arch import init_taichi
 
     init_taichi(arch)
+    from renderer.bench.bvh_measure import traversal_and_leaves
     from renderer.camera import CameraFrame
     from renderer.renderer import MeshOptions, Renderer
     from renderer.scene.catalog import load_any
 
     scene = load_any("assets/scenes/cornell_box.toml")
-    base, _, packets = traversal.partition("+")
-    r = Renderer(scene, (24, 24), mesh_options=MeshOptions(traversal=base, leaves=packets or "scalar"))
+    base, leaves = traversal_and_leaves(traversal)
+    r = Renderer(scene, (24, 24), mesh_options=MeshOptions(traversal=base, leaves=leaves))
     r.render(CameraFrame.from_spec(scene.camera), 32, integrator="mis", seed=seed)
     np.savez(out, mean=r.image(), var=r.film.variance_of_mean_image())
 
