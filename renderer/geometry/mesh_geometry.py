@@ -149,6 +149,7 @@ class MeshGeometry:
             self.tri_color = vec_field(t, data.tri_colors, 4, (3,))
         self.spheres = vec_field(len(data.spheres), data.spheres, 4)
         self.quads = vec_field(len(data.quads), data.quads, 3, (3,))
+        self.quad_frames = vec_field(len(data.quads), isect.quad_frames(data.quads), 3, (3,))
         discs = data.discs
         self.discs_a = vec_field(len(discs), discs[:, [0, 1, 2, 6]], 4)  # centre xyz, radius
         self.discs_n = vec_field(len(discs), discs[:, 3:6], 3)
@@ -176,7 +177,7 @@ class MeshGeometry:
         attributes = sum(_field_bytes(getattr(self, name)) for name in ("tri_n", "tri_uv", "tri_uv1", "tri_tangent",
                                                                         "tri_color") if hasattr(self, name))
         instances = self.instances.device_bytes() if self.has_instances else 0
-        others = sum(_field_bytes(f) for f in (self.spheres, self.quads, self.discs_a, self.discs_n,
+        others = sum(_field_bytes(f) for f in (self.spheres, self.quads, self.quad_frames, self.discs_a, self.discs_n,
                                                self.prim_material, self.range_end))
         return {"bvh": nodes + slots, "triangles": triangles, "attributes": attributes, "instances": instances,
                 "total": nodes + slots + triangles + attributes + instances + others}
@@ -201,7 +202,8 @@ class MeshGeometry:
         if ti.static("quad" in self.kinds):
             if g >= self.range_end[1] and g < self.range_end[2]:
                 i = g - self.range_end[1]
-                hit, t, b1, b2 = isect.quad(o, d, self.quads[i, 0], self.quads[i, 1], self.quads[i, 2], t_max)
+                hit, t, b1, b2 = isect.quad_framed(o, d, self.quads[i, 0], self.quad_frames[i, 0],
+                                                   self.quad_frames[i, 1], self.quad_frames[i, 2], t_max)
         if ti.static("disc" in self.kinds):
             if g >= self.range_end[2] and g < self.range_end[3]:
                 i = g - self.range_end[2]
