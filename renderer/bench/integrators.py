@@ -43,6 +43,10 @@ note), in one process so that ratios are meaningful:
    interpolation; past the curve extrapolated, and marked so) at their curves' own speed.
    Target: Lantern's `mis` reaches Mitsuba's RMSE no later than Mitsuba does (PASS/FAIL).
    Without Mitsuba (not installed, or no usable variant) the column is skipped with a note.
+5. Whole process against Mitsuba (renderer/bench/whole_process.py): Lantern's `render` command and
+   a Mitsuba process on the Cornell box at 256x256, 256 spp, max depth 8, timed from start to exit,
+   alternating, 3 runs each after a warm-up run each (caches filled), both images read against a
+   Mitsuba reference of 1,024 spp at that size. Target: Lantern at most 1.5x Mitsuba's time.
 
 Writes <out_dir>/bench_integrators.json and PNG plots (error against seconds, log-log, one line per
 integrator x sampler, per scene; and Lantern against Mitsuba), and prints tables. The '-floor'
@@ -113,12 +117,20 @@ class IntegratorBenchConfig:
     mitsuba_target_spp: int = 64  # the target RMSE is Mitsuba's at this spp
     mitsuba_curve_max_spp: int = 512  # Mitsuba's error curve: 1, 2, 4, ... spp, each a separate render
     mitsuba_target_renders: int = 8  # round-robin runs (seeds) of the equal-spp comparison
+    # Whole-process time (renderer/bench/whole_process.py): both commands, start to exit
+    whole_process: bool = True
+    whole_process_size: int = 256
+    whole_process_spp: int = 256
+    whole_process_runs: int = 3
+    whole_process_reference_spp: int = 1024
 
 
 FULL = IntegratorBenchConfig()
 QUICK = IntegratorBenchConfig(square_size=(64, 64), wide_size=(96, 54), budget_s=2.0, reference_s=8.0,
                               reference_launch_s=2.0, mitsuba_reference_spp=1024, mitsuba_pass_spp=256,
-                              mitsuba_target_spp=32, mitsuba_curve_max_spp=256, mitsuba_target_renders=8)
+                              mitsuba_target_spp=32, mitsuba_curve_max_spp=256, mitsuba_target_renders=8,
+                              whole_process_size=64, whole_process_spp=64, whole_process_runs=2,
+                              whole_process_reference_spp=512)
 
 def _sync() -> None:
     import taichi as ti
@@ -477,9 +489,25 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
             "passed": passed}
 
 
+def whole_process_comparison(config: IntegratorBenchConfig, max_depth: int) -> dict:
+    """Lantern's `render` command against a Mitsuba process on the Cornell box, start to exit
+    (renderer/bench/whole_process.py), both read against a Mitsuba reference of that size."""
+    from renderer.bench import whole_process as wp
+
+    size = config.whole_process_size
+    log(f"[whole process] Mitsuba reference {size}x{size}, {config.whole_process_reference_spp} spp ...")
+    reference = mitsuba_reference(replace(config, mitsuba_reference_spp=config.whole_process_reference_spp),
+                                  (size, size), max_depth)
+    whole = wp.WholeProcessConfig(size=size, spp=config.whole_process_spp, max_depth=max_depth,
+                                  runs=config.whole_process_runs, threads=config.mitsuba_threads)
+    log(f"[whole process] {whole.runs} runs of each command, alternating, after a warm-up run each ...")
+    return wp.compare_or_note(whole, reference["image"].astype(np.float64), reference["spp"])
+
+
 # --- report ------------------------------------------------------------------------------------
 
-def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBenchConfig) -> None:
+def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBenchConfig,
+                 whole: dict | None = None) -> None:
     print()
     compile_rows = []
     for res in results:
@@ -560,6 +588,13 @@ def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBe
     if mitsuba.get("note"):
         print(f"   note: {mitsuba['note']}")
     print(flush=True)
+    if whole is not None:
+        from renderer.bench import whole_process as wp
+
+        if whole.get("available"):
+            print_table(wp.SUMMARY_HEADERS, wp.summary_rows(whole), title=wp.caption(whole))
+        else:
+            print(f"Whole-process comparison not measured: {whole.get('note')}\n")
 
 
 _STYLE = {"path": "C0", "nee": "C1", "mis": "C2"}
@@ -678,9 +713,13 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
         elif mitsuba_info["available"]:
             mitsuba["note"] = "the Cornell box did not render, nothing to compare"
 
+    whole = None
+    if config.whole_process and mitsuba is not None and mitsuba_info["available"] and mitsuba_ref is not None:
+        cornell = next(r for r in results if r["scene"] == MITSUBA_SCENE)
+        whole = whole_process_comparison(config, cornell["max_depth"])
     for res in results:
         res.pop("renderer", None)
-    print_report(results, mitsuba, config)
+    print_report(results, mitsuba, config, whole)
     plots = write_plots(results, mitsuba, out_dir, config)
     total = time.perf_counter() - t_start
     report = {
@@ -693,6 +732,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
                   "reference; seconds_to_target = spp needed (from the curves) x measured seconds per spp."),
         "scenes": results,
         "mitsuba": {k: v for k, v in (mitsuba or {}).items()},
+        "whole_process": whole,
         "plots": [p.name for p in plots],
         "total_seconds": total,
     }

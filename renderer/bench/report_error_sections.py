@@ -153,6 +153,16 @@ def _mitsuba_block(mitsuba: dict) -> list[str]:
                             "speed"], rows)]
 
 
+def _whole_process_block(whole: dict | None) -> list[str]:
+    if not whole:
+        return []
+    if not whole.get("available"):
+        return [f"Whole-process time against Mitsuba 3: not measured ({whole.get('note')})."]
+    from renderer.bench import whole_process as wp
+
+    return [wp.caption(whole), table(wp.SUMMARY_HEADERS, wp.summary_rows(whole))]
+
+
 def integrators_section(report: dict) -> Section:
     entries = report.get("scenes", [])
     scenes = [s for s in entries if s.get("curves")]
@@ -171,6 +181,7 @@ def integrators_section(report: dict) -> Section:
             table(["integrator/sampler", "spp at T", "Msamples/s", "RMSE", "relMSE", "relMSE −floor", "relMSE*",
                    "relMSE / best"], rows)]
     section.blocks += _mitsuba_block(report.get("mitsuba") or {})
+    section.blocks += _whole_process_block(report.get("whole_process"))
     compile_rows = [[s["scene"], name, seconds] for s in scenes for name, seconds in s.get("compile_s", {}).items()]
     if compile_rows:
         section.blocks.append(details("Compile times (first 1 spp launch: compilation or offline-cache load)",
@@ -197,6 +208,12 @@ def integrators_section(report: dict) -> Section:
             f"On the Cornell box, Lantern's mis reaches Mitsuba's {mitsuba['target_spp']}-spp RMSE in "
             f"{num(ours['seconds_to_target'])} s against Mitsuba's {num(theirs['seconds_to_target'])} s "
             f"({verdict(mitsuba.get('passed'))}).")
+    whole = report.get("whole_process") or {}
+    if whole.get("available"):
+        section.findings.append(
+            f"As whole processes (Cornell box {whole['size']}x{whole['size']}, {whole['spp']} spp), Lantern's render "
+            f"command takes {num(whole['lantern']['median_s'])} s against Mitsuba's {num(whole['mitsuba']['median_s'])} s: "
+            f"{times(whole['ratio'])} (target at most {times(whole['target_ratio'])}: {verdict(whole['passed'])}).")
     return section
 
 

@@ -87,6 +87,11 @@ def test_tables_are_rendered_from_the_json(reports, tmp_path):
     cells = row(text["integrators"], "nee/sobol")
     assert cells["relMSE"] == num(curve["at_budget"]["rel_mse"])
     assert cells["spp at T"] == num(round(curve["at_budget"]["spp"]))
+    whole = data["integrators"]["whole_process"]
+    cells = row(text["integrators"], "Lantern render mis")
+    assert cells["median s"] == num(whole["lantern"]["median_s"]) and cells["RMSE"] == num(whole["lantern"]["rmse"])
+    assert cells["time vs Mitsuba"] == f"{whole['ratio']:.2f}x"
+    assert f"Lantern's render command takes {num(whole['lantern']['median_s'])} s" in text["integrators"]
     alpha = data["sdf"]["scenes"][0]
     cells = row(text["sdf"], "alpha")
     assert cells["fewer steps"] == pct(alpha["target"]["step_reduction"])

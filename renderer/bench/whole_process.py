@@ -1,0 +1,149 @@
+"""Whole-process time against Mitsuba 3: what a user waits for, from the command to the image.
+
+Lantern's `python app.py render cornell_box --size S --spp N --max-depth D --integrator mis` and a
+Mitsuba process rendering `mi.cornell_box()` at the same size, spp and depth
+(renderer/bench/mitsuba_process.py: its LLVM variant, the same thread count) run one after the
+other, alternating, `runs` times each, after one untimed run each that fills Taichi's offline cache
+and Dr.Jit's kernel cache (so both are timed as a user's second run is: interpreter start, imports,
+scene loading, kernel loading from the caches, rendering, writing the image). Each time is the
+wall clock of the whole child process. Lantern's own "N spp in T s" line splits its time into the
+render and the rest (start-up, scene, kernels).
+
+Both images are compared with a Mitsuba reference at the same size (many more spp, another seed):
+RMSE as the root of the mean squared error over the runs, so the two renderers' speed is read at
+the error each reaches.
+
+Target (issue: closer to the hardware): Lantern's median at most WHOLE_PROCESS_TARGET times
+Mitsuba's.
+"""
+from __future__ import annotations
+
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from renderer.bench.common import REPO_ROOT, describe_error, log
+
+WHOLE_PROCESS_TARGET = 1.5  # Lantern's whole-process time over Mitsuba's, at most
+PROCESS_TIMEOUT_S = 900.0
+_RENDER_LINE = re.compile(r"\(([\d.]+) spp in ([\d.]+) s\)")
+
+
+@dataclass(frozen=True)
+class WholeProcessConfig:
+    size: int = 256
+    spp: int = 256
+    max_depth: int = 8
+    integrator: str = "mis"
+    runs: int = 3  # timed runs of each renderer, alternating (after one untimed run each)
+    threads: int = 2  # Mitsuba's threads; Lantern's CPU back-end uses every core (2 here)
+    seed: int = 1
+
+
+def lantern_command(config: WholeProcessConfig, seed: int, out: Path) -> list[str]:
+    return [sys.executable, "app.py", "render", "cornell_box", "--size", f"{config.size}x{config.size}",
+            "--spp", str(config.spp), "--max-depth", str(config.max_depth), "--integrator", config.integrator,
+            "--seed", str(seed), "--out", str(out)]
+
+
+def mitsuba_command(config: WholeProcessConfig, seed: int, out: Path) -> list[str]:
+    return [sys.executable, "-m", "renderer.bench.mitsuba_process", "--size", str(config.size), "--spp",
+            str(config.spp), "--max-depth", str(config.max_depth), "--seed", str(seed), "--threads",
+            str(config.threads), "--out", str(out)]
+
+
+def timed_process(command: list[str]) -> tuple[float, subprocess.CompletedProcess]:
+    """Wall-clock seconds of the child process, start to exit, and its result."""
+    start = time.perf_counter()
+    done = subprocess.run(command, cwd=REPO_ROOT, capture_output=True, text=True, timeout=PROCESS_TIMEOUT_S)
+    return time.perf_counter() - start, done
+
+
+def render_seconds(output: str) -> float | None:
+    """Lantern's own render time from its last "(N spp in T s)" line, None without one."""
+    found = _RENDER_LINE.findall(output)
+    return float(found[-1][1]) if found else None
+
+
+def _failure(name: str, done: subprocess.CompletedProcess) -> str:
+    tail = " | ".join((done.stderr or done.stdout or "").strip().splitlines()[-2:])
+    return f"{name} exited with {done.returncode}: {tail}"
+
+
+def compare(config: WholeProcessConfig, reference: np.ndarray, reference_spp: int) -> dict:
+    """Time both renderers' processes alternately and read their images' error (see the module
+    docstring). `reference`: linear RGB (size, size, 3), row 0 = top."""
+    from renderer.image_io import read_exr
+
+    sides = {
+        "lantern": (lantern_command, ".exr", lambda path: read_exr(path)),
+        "mitsuba": (mitsuba_command, ".npy", lambda path: np.load(path)),
+    }
+    results = {name: {"seconds": [], "squared_errors": [], "render_s": []} for name in sides}
+    with tempfile.TemporaryDirectory(prefix="lantern_whole_process_") as tmp:
+        for run in range(config.runs + 1):  # run 0 warms the caches, untimed
+            for name, (command_of, suffix, read) in sides.items():
+                out = Path(tmp) / f"{name}_{run}{suffix}"
+                command = command_of(config, config.seed + run, out)
+                seconds, done = timed_process(command)
+                if done.returncode != 0 or not out.is_file():
+                    raise RuntimeError(_failure(name, done))
+                if run == 0:
+                    results[name]["command"] = " ".join(Path(c).name if c == sys.executable else c for c in command)
+                    results[name]["warmup_s"] = seconds
+                    continue
+                image = np.asarray(read(out), dtype=np.float64)[..., :3]
+                results[name]["seconds"].append(seconds)
+                results[name]["squared_errors"].append(float(np.mean((image - reference) ** 2)))
+                if name == "lantern":
+                    results[name]["render_s"].append(render_seconds(done.stdout + done.stderr))
+                log(f"[whole process] run {run}: {name} {seconds:.2f} s")
+    for side in results.values():
+        side["median_s"] = statistics.median(side["seconds"])
+        side["rmse"] = float(np.sqrt(np.mean(side.pop("squared_errors"))))
+    results["mitsuba"].pop("render_s")
+    renders = [s for s in results["lantern"].pop("render_s") if s is not None]
+    if renders:
+        results["lantern"]["render_median_s"] = statistics.median(renders)
+        results["lantern"]["outside_render_median_s"] = results["lantern"]["median_s"] - statistics.median(renders)
+    ratio = results["lantern"]["median_s"] / results["mitsuba"]["median_s"]
+    return {"size": config.size, "spp": config.spp, "max_depth": config.max_depth, "integrator": config.integrator,
+            "runs": config.runs, "threads": config.threads, "reference_spp": reference_spp, **results,
+            "ratio": ratio, "target_ratio": WHOLE_PROCESS_TARGET, "passed": ratio <= WHOLE_PROCESS_TARGET}
+
+
+def compare_or_note(config: WholeProcessConfig, reference: np.ndarray, reference_spp: int) -> dict:
+    """compare(), or {"available": False, "note": why} when a process fails."""
+    try:
+        return {"available": True, **compare(config, reference, reference_spp)}
+    except Exception as error:  # noqa: BLE001 - a failed child is reported, the benchmark goes on
+        return {"available": False, "note": describe_error(error)}
+
+
+def summary_rows(result: dict) -> list[list]:
+    """Table rows: renderer, median s, each run, render s (Lantern), RMSE, ratio to Mitsuba."""
+    rows = []
+    for name, label in (("mitsuba", "Mitsuba (process)"), ("lantern", f"Lantern render {result['integrator']}")):
+        side = result[name]
+        rows.append([label, side["median_s"], " / ".join(f"{s:.2f}" for s in side["seconds"]),
+                     side.get("render_median_s", "-"), side["rmse"],
+                     f"{side['median_s'] / result['mitsuba']['median_s']:.2f}x"])
+    return rows
+
+
+SUMMARY_HEADERS = ["renderer", "median s", "runs (s)", "of which render s", "RMSE", "time vs Mitsuba"]
+
+
+def caption(result: dict) -> str:
+    return (f"Whole process, Cornell box {result['size']}x{result['size']}, {result['spp']} spp, max depth "
+            f"{result['max_depth']}: each renderer's command from start to exit, alternating, {result['runs']} runs "
+            f"each after one warm-up run (caches filled); RMSE against a Mitsuba reference of "
+            f"{result['reference_spp']} spp. Target: Lantern at most {result['target_ratio']:g}x Mitsuba's time: "
+            f"{'PASS' if result['passed'] else 'FAIL'} ({result['ratio']:.2f}x).")
