@@ -40,8 +40,23 @@ class MeshOptions:
     # triangles are at least half the primitives (analytic quads, spheres and discs are tested
     # lane by lane in a packet, which cost the Cornell box's quads 5 %)
     leaves: str = "auto"
-    max_leaf_size: int = 4
+    # None: the leaf layout's own (MAX_LEAF_SIZE): packet leaves pay for larger leaves (four
+    # triangles cost about one), scalar ones do not
+    max_leaf_size: int | None = None
     instancing: bool = True  # False: every instance flattened into world triangles (a reference)
+
+
+# Measured (docs/architecture.md, "Leaves tested four at a time"): with packet leaves, bench bvh's
+# leaf sweep on the 100k terrain gave 3.99/3.88/4.36/4.92/4.85 Mrays/s incoherent at max leaf
+# 1/2/4/8/16, and whole `mis` renders ran 1.02-1.05x (stress) and 1.01x (bunnies) at 8 against 4;
+# scalar leaves keep 4.
+MAX_LEAF_SIZE = {"scalar": 4, "packets": 8}
+
+
+def max_leaf_size(options: MeshOptions, layout: str) -> int:
+    """The BVH's max leaf size for a leaf layout ("scalar" or "packets"): the options' own, or
+    the layout's (MAX_LEAF_SIZE)."""
+    return options.max_leaf_size if options.max_leaf_size is not None else MAX_LEAF_SIZE[layout]
 
 
 def leaf_layout(leaves: str, data) -> str:
@@ -66,11 +81,13 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
         from renderer.mesh_world import prepare_mesh_scene as assemble
 
         mesh = assemble(scene, instancing=mesh_options.instancing)
-        bvh = build_scene_bvh(mesh.data, strategy=mesh_options.strategy, max_leaf_size=mesh_options.max_leaf_size)
+        layout = leaf_layout(mesh_options.leaves, mesh.data)
+        bvh = build_scene_bvh(mesh.data, strategy=mesh_options.strategy,
+                              max_leaf_size=max_leaf_size(mesh_options, layout))
         materials = MaterialTable(mesh.rows, TextureTable(mesh.atlas, mesh.texture_slots), mesh.volume_media)
         # The geometry tests alpha coverage during traversal: it reads the material table.
         geometry = MeshGeometry(mesh.data, bvh, mesh_options.traversal, mesh_options.triangle_test, materials,
-                                leaf_layout(mesh_options.leaves, mesh.data))
+                                layout)
         return geometry, materials, mesh.features(scene)
     raise ValueError(f"unknown geometry kind '{scene.geometry}'")
 

@@ -11,7 +11,8 @@ terrain), in one process so that ratios are meaningful:
    and the SAH build of the 1M mesh in at most 2 s.
 2. Trace: closest-hit Mrays/s for every split strategy x traversal (stack, stackless: the binary
    tree; wide4: the tree collapsed into 4-wide nodes; with "+packets": leaves tested four slots
-   at a time from structure-of-arrays triangles, on the sah trees) x triangle test (watertight,
+   at a time from structure-of-arrays triangles, on sah trees with the Renderer's leaf size for
+   packets, 8, where the others have 4) x triangle test (watertight,
    moller), on
    coherent rays (a pinhole camera grid on the mesh) and on incoherent rays (origins on a sphere
    around the mesh, aimed at uniform random points in its box), with the mean node visits (a

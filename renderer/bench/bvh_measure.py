@@ -15,6 +15,7 @@ from renderer.bench.rays import Rays, camera_rays, random_rays, ray_rates
 from renderer.geometry import bvh_build
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.mesh_geometry import MeshGeometry
+from renderer.renderer import MAX_LEAF_SIZE
 
 ROOT = Path(__file__).resolve().parents[2]
 BUNNY = ROOT / "assets" / "models" / "bunny.glb"
@@ -33,7 +34,8 @@ TRAVERSALS = ("stack", "stackless", "wide4", "wide8", "stack" + PACKETS, "wide4"
 WIDE = "wide4"  # the 4-wide BVH's traversal, compared with the binary "stack" one on the same rays
 TRIANGLE_TESTS = ("watertight", "moller")
 DEFAULT = ("sah", "wide4+packets", "watertight")  # the Renderer's MeshOptions (traversal and leaves)
-DEFAULT_LEAF = 4  # the Renderer's MeshOptions.max_leaf_size
+DEFAULT_LEAF = MAX_LEAF_SIZE["scalar"]  # the Renderer's max leaf size with scalar leaves (4)
+PACKET_LEAF = MAX_LEAF_SIZE["packets"]  # and with packet leaves (8): the "+packets" configurations' trees
 # Leaf sizes whose rays/s lie within this fraction of the best are reported as ties: run-to-run
 # noise on a shared machine is a few per cent.
 LEAF_TIE = 0.03
@@ -187,12 +189,20 @@ def _build_all(name, data, n_tris, config, build_runs, log):
         row = {"strategy": strategy, "max_leaf_size": DEFAULT_LEAF, "seconds": timing.median,
                "timing": timing.as_dict(), "triangles_per_s": n_tris / timing.median,
                "builder_threads": builder_threads, **build_stats(bvh)}
+        packet_bvh = None
         for traversal in config.traversals:
             if traversal.endswith(PACKETS) and strategy != DEFAULT[0]:
                 continue  # the leaf layouts are compared on the Renderer's split strategy only
+            tree = bvh
+            if traversal.endswith(PACKETS) and PACKET_LEAF != DEFAULT_LEAF:
+                # packet leaves on the tree the Renderer builds for them (its leaf size for packets)
+                if packet_bvh is None:
+                    packet_bvh = bvh_build.build_bvh(lo, hi, centroids, strategy=strategy, max_leaf_size=PACKET_LEAF)
+                    row["packet_tree"] = {"max_leaf_size": PACKET_LEAF, **build_stats(packet_bvh)}
+                tree = packet_bvh
             for test in config.triangle_tests:
                 t0 = time.perf_counter()
-                geometries[(strategy, traversal, test)] = make_geometry(data, bvh, traversal, test)
+                geometries[(strategy, traversal, test)] = make_geometry(data, tree, traversal, test)
                 row.setdefault("upload_s", time.perf_counter() - t0)
         own = {k[1]: g for k, g in geometries.items() if k[0] == strategy}
         binary = next((t for t in own if not t.startswith("wide") and not t.endswith(PACKETS)), None)
@@ -432,4 +442,4 @@ def leaf_size_sweep(name: str, tris: np.ndarray, config: BvhBenchConfig, log=pri
     near = [r["max_leaf_size"] for r in rows if r["incoherent"]["mrays_per_s"] >= (1.0 - LEAF_TIE) * top]
     return {"mesh": name, "triangles": n_tris, "config": config_name("sah", *DEFAULT[1:]), "rays": len(rays),
             "rows": rows, "best_max_leaf_size": best["max_leaf_size"], "within_tie_of_best": near,
-            "tie_fraction": LEAF_TIE, "renderer_default": DEFAULT_LEAF}
+            "tie_fraction": LEAF_TIE, "renderer_default": PACKET_LEAF if DEFAULT[1].endswith(PACKETS) else DEFAULT_LEAF}

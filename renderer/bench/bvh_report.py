@@ -9,6 +9,7 @@ from renderer.bench import embree_side
 from renderer.bench.bvh_measure import (
     BYTES_PER_TRIANGLE_TARGET,
     DEFAULT_LEAF,
+    PACKET_LEAF,
     EMBREE_RATIO_TARGET,
     SAH_BUILD_TARGET_S,
     config_name,
@@ -66,7 +67,8 @@ def print_report(report: dict) -> None:
     print_table(["mesh", "tris", "strategy", "build s", "Mtris/s", "SAH cost", "nodes", "depth", "leaf avg",
                  "B/tri bvh", "B/tri all", f"<= {BYTES_PER_TRIANGLE_TARGET:g} B"], rows,
                 title=f"BVH build (median of {report['config']['build_runs']} builds, "
-                      f"{report['config']['build_runs_large']} for 1M; max_leaf_size {DEFAULT_LEAF}; boxes and "
+                      f"{report['config']['build_runs_large']} for 1M; max_leaf_size {DEFAULT_LEAF}, and "
+                      f"{PACKET_LEAF} for the +packets configurations' trees; boxes and "
                       f"centroids prepared beforehand; embree = scene commit)")
     for m in meshes:
         print(f"  {m['name']}: per-triangle boxes + centroids {m['bounds_s']:.3f} s (not in the build times)")
@@ -140,7 +142,8 @@ def print_report(report: dict) -> None:
         rows = []
         for r in leaf["rows"]:
             inc = r["incoherent"]
-            rows.append([("*" if r["max_leaf_size"] == DEFAULT_LEAF else "") + str(r["max_leaf_size"]), r["build_s"],
+            rows.append([("*" if r["max_leaf_size"] == leaf["renderer_default"] else "") + str(r["max_leaf_size"]),
+                         r["build_s"],
                          r["nodes"], r["mean_leaf_size"], r["largest_leaf"], r["depth"], r["sah_cost"],
                          r["device_bytes"]["per_triangle"], inc["mrays_per_s"], inc["nodes_per_ray"],
                          inc["tests_per_ray"]])

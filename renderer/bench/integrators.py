@@ -47,6 +47,8 @@ note), in one process so that ratios are meaningful:
    a Mitsuba process on the Cornell box at 256x256, 256 spp, max depth 8, timed from start to exit,
    alternating, 3 runs each after a warm-up run each (caches filled), both images read against a
    Mitsuba reference of 1,024 spp at that size. Target: Lantern at most 1.5x Mitsuba's time.
+6. A mesh-heavy scene against Mitsuba (renderer/bench/mesh_heavy.py): the stress scene's million
+   triangles, each renderer at equal error against its own reference, best sampler against best.
 
 Writes <out_dir>/bench_integrators.json and PNG plots (error against seconds, log-log, one line per
 integrator x sampler, per scene; and Lantern against Mitsuba), and prints tables. The '-floor'
@@ -123,6 +125,8 @@ class IntegratorBenchConfig:
     whole_process_spp: int = 256
     whole_process_runs: int = 3
     whole_process_reference_spp: int = 1024
+    # The mesh-heavy comparison with Mitsuba (renderer/bench/mesh_heavy.py): "full", "quick" or "off"
+    mesh_heavy: str = "full"
 
 
 FULL = IntegratorBenchConfig()
@@ -130,7 +134,7 @@ QUICK = IntegratorBenchConfig(square_size=(64, 64), wide_size=(96, 54), budget_s
                               reference_launch_s=2.0, mitsuba_reference_spp=1024, mitsuba_pass_spp=256,
                               mitsuba_target_spp=32, mitsuba_curve_max_spp=256, mitsuba_target_renders=8,
                               whole_process_size=64, whole_process_spp=64, whole_process_runs=2,
-                              whole_process_reference_spp=512)
+                              whole_process_reference_spp=512, mesh_heavy="quick")
 
 def _sync() -> None:
     import taichi as ti
@@ -507,7 +511,7 @@ def whole_process_comparison(config: IntegratorBenchConfig, max_depth: int) -> d
 # --- report ------------------------------------------------------------------------------------
 
 def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBenchConfig,
-                 whole: dict | None = None) -> None:
+                 whole: dict | None = None, mesh: dict | None = None) -> None:
     print()
     compile_rows = []
     for res in results:
@@ -595,13 +599,21 @@ def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBe
             print_table(wp.SUMMARY_HEADERS, wp.summary_rows(whole), title=wp.caption(whole))
         else:
             print(f"Whole-process comparison not measured: {whole.get('note')}\n")
+    if mesh is not None:
+        from renderer.bench import mesh_heavy
+
+        if mesh.get("available"):
+            print_table(mesh_heavy.HEADERS, mesh_heavy.summary_rows(mesh), title=mesh_heavy.caption(mesh))
+        else:
+            print(f"Mesh-heavy comparison not measured: {mesh.get('note')}\n")
 
 
 _STYLE = {"path": "C0", "nee": "C1", "mis": "C2"}
 _LINE = {"independent": "-", "sobol": "--"}
 
 
-def write_plots(results: list[dict], mitsuba: dict | None, out_dir: Path, config: IntegratorBenchConfig) -> list[Path]:
+def write_plots(results: list[dict], mitsuba: dict | None, out_dir: Path, config: IntegratorBenchConfig,
+                mesh: dict | None = None) -> list[Path]:
     plt = pyplot()
     written = []
     for res in results:
@@ -639,6 +651,18 @@ def write_plots(results: list[dict], mitsuba: dict | None, out_dir: Path, config
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
         written.append(save_figure(fig, out_dir / "bench_integrators_mitsuba.png"))
+    if mesh and mesh.get("available"):
+        fig, ax = plt.subplots(figsize=(6.5, 4.5))
+        for name, points in mesh["curves"].items():
+            ax.loglog([p["seconds"] for p in points], [p["rel_mse_floor"] for p in points],
+                      "-" if name.startswith("Lantern") else "--", marker=".", label=name)
+        ax.axhline(mesh["target_rel_mse"], color="grey", ls=":", lw=1, label=f"target (Mitsuba {mesh['target_spp']} spp)")
+        ax.set_xlabel("render seconds")
+        ax.set_ylabel("relMSE vs own reference, its noise subtracted")
+        ax.set_title(f"{mesh['scene']} {mesh['size'][0]}x{mesh['size'][1]}: Lantern vs Mitsuba 3")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+        written.append(save_figure(fig, out_dir / "bench_integrators_mesh_heavy.png"))
     return written
 
 
@@ -717,10 +741,17 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
     if config.whole_process and mitsuba is not None and mitsuba_info["available"] and mitsuba_ref is not None:
         cornell = next(r for r in results if r["scene"] == MITSUBA_SCENE)
         whole = whole_process_comparison(config, cornell["max_depth"])
+    mesh = None
+    if config.mesh_heavy != "off" and mitsuba_info is not None and mitsuba_info["available"]:
+        from renderer.bench import mesh_heavy
+
+        log("[mesh-heavy] Lantern and Mitsuba on the stress scene ...")
+        mesh = mesh_heavy.compare_or_note(mesh_heavy.QUICK if config.mesh_heavy == "quick"
+                                          else mesh_heavy.MeshHeavyConfig())
     for res in results:
         res.pop("renderer", None)
-    print_report(results, mitsuba, config, whole)
-    plots = write_plots(results, mitsuba, out_dir, config)
+    print_report(results, mitsuba, config, whole, mesh)
+    plots = write_plots(results, mitsuba, out_dir, config, mesh)
     total = time.perf_counter() - t_start
     report = {
         **report_header("integrators", quick, load_before, arch=arch, config=asdict(config)),
@@ -733,6 +764,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None,
         "scenes": results,
         "mitsuba": {k: v for k, v in (mitsuba or {}).items()},
         "whole_process": whole,
+        "mesh_heavy": mesh,
         "plots": [p.name for p in plots],
         "total_seconds": total,
     }

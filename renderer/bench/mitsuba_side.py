@@ -150,6 +150,49 @@ def glass_scene_dict(width: int = 48, height: int = 48, max_depth: int = 16) -> 
     }
 
 
+STRESS_SCENE = Path(__file__).resolve().parents[2] / "assets" / "scenes" / "stress.toml"
+
+
+def stress_scene_dict(width: int = 320, height: int = 180, max_depth: int = 8) -> dict:
+    """assets/scenes/stress.toml in Mitsuba's terms: the same million-triangle terrain (Lantern's
+    own generator, with its vertex normals), spheres, camera (vertical field of view, box filter)
+    and sunset.exr (identity orientation, as in glass_scene_dict). The materials are Mitsuba's
+    nearest: `principled` for the principled earth (specular 0.5 = ior 1.5), a smooth `dielectric`
+    of ior 1.5, and for the gold conductor (base colour and GGX roughness 0.15 in Lantern, which
+    adds Kulla-Conty multiple scattering) Mitsuba's `roughconductor` of measured gold ("Au") with
+    alpha 0.15^2. So the two images differ a little, and the mesh-heavy comparison reads each
+    renderer against its own reference (renderer/bench/integrators.py)."""
+    mi, _, _ = _import_mitsuba()
+    from renderer.scene.generators import generate
+
+    T = mi.ScalarTransform4f
+    positions, indices, normals = generate("terrain", (("resolution", 708), ("size", 40.0), ("height", 3.0),
+                                                       ("seed", 7)))
+    terrain = mi.Mesh("terrain", len(positions), len(indices), has_vertex_normals=True)
+    params = mi.traverse(terrain)
+    params["vertex_positions"] = np.ascontiguousarray(positions, np.float32).ravel()
+    params["vertex_normals"] = np.ascontiguousarray(normals, np.float32).ravel()
+    params["faces"] = np.ascontiguousarray(indices, np.uint32).ravel()
+    params.update()
+    earth = {"type": "principled", "base_color": {"type": "rgb", "value": [0.36, 0.3, 0.22]}, "metallic": 0.0,
+             "roughness": 0.85, "specular": 0.5}
+    terrain.set_bsdf(mi.load_dict(earth))
+    return {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": int(max_depth)},
+        "sensor": {"type": "perspective", "fov": 45.0, "fov_axis": "y",
+                   "to_world": T().look_at(origin=[0.0, 2.2, 17.0], target=[0.0, 0.6, 0.0], up=[0.0, 1.0, 0.0]),
+                   "film": {"type": "hdrfilm", "width": int(width), "height": int(height), "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": 16}},
+        "environment": {"type": "envmap", "filename": str(STRESS_SCENE.parents[1] / "envmaps" / "sunset.exr")},
+        "terrain": terrain,
+        "glass": {"type": "sphere", "center": [-2.0, 0.86, 4.0], "radius": 1.2,
+                  "bsdf": {"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0}},
+        "gold": {"type": "sphere", "center": [3.0, 0.74, 0.0], "radius": 1.5,
+                 "bsdf": {"type": "roughconductor", "material": "Au", "distribution": "ggx", "alpha": 0.15 ** 2}},
+    }
+
+
 def render_scene(scene, spp: int, seed: int = 0) -> np.ndarray:
     """One render of a loaded Mitsuba scene: linear RGB float32 (height, width, 3), row 0 = top."""
     mi, _, _ = _import_mitsuba()

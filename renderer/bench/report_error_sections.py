@@ -163,6 +163,16 @@ def _whole_process_block(whole: dict | None) -> list[str]:
     return [wp.caption(whole), table(wp.SUMMARY_HEADERS, wp.summary_rows(whole))]
 
 
+def _mesh_heavy_block(mesh: dict | None) -> list[str]:
+    if not mesh:
+        return []
+    if not mesh.get("available"):
+        return [f"Lantern against Mitsuba 3 on a mesh-heavy scene: not measured ({mesh.get('note')})."]
+    from renderer.bench import mesh_heavy
+
+    return [mesh_heavy.caption(mesh), table(mesh_heavy.HEADERS, mesh_heavy.summary_rows(mesh))]
+
+
 def integrators_section(report: dict) -> Section:
     entries = report.get("scenes", [])
     scenes = [s for s in entries if s.get("curves")]
@@ -182,6 +192,7 @@ def integrators_section(report: dict) -> Section:
                    "relMSE / best"], rows)]
     section.blocks += _mitsuba_block(report.get("mitsuba") or {})
     section.blocks += _whole_process_block(report.get("whole_process"))
+    section.blocks += _mesh_heavy_block(report.get("mesh_heavy"))
     compile_rows = [[s["scene"], name, seconds] for s in scenes for name, seconds in s.get("compile_s", {}).items()]
     if compile_rows:
         section.blocks.append(details("Compile times (first 1 spp launch: compilation or offline-cache load)",
@@ -214,6 +225,12 @@ def integrators_section(report: dict) -> Section:
             f"As whole processes (Cornell box {whole['size']}x{whole['size']}, {whole['spp']} spp), Lantern's render "
             f"command takes {num(whole['lantern']['median_s'])} s against Mitsuba's {num(whole['mitsuba']['median_s'])} s: "
             f"{times(whole['ratio'])} (target at most {times(whole['target_ratio'])}: {verdict(whole['passed'])}).")
+    mesh = report.get("mesh_heavy") or {}
+    if mesh.get("available"):
+        section.findings.append(
+            f"On the mesh-heavy {mesh['scene']} scene, Lantern's best ({mesh['best_lantern']}) reaches Mitsuba's "
+            f"{mesh['target_spp']}-spp error at {times(mesh['best_ratio'])} the speed of Mitsuba's best "
+            f"({mesh['best_mitsuba']}) ({verdict(mesh['passed'])}).")
     return section
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from renderer.bench import BENCHMARKS
 from renderer.bench.report import PAGE_NAME, PLOT_FOLDER, build_page, how_to_produce, run
-from renderer.bench.report_markdown import listing, num, pct, table
+from renderer.bench.report_markdown import listing, num, pct, table, times
 from tests.bench.report_fixtures import WRITERS, integrators_report
 
 
@@ -92,6 +92,10 @@ def test_tables_are_rendered_from_the_json(reports, tmp_path):
     assert cells["median s"] == num(whole["lantern"]["median_s"]) and cells["RMSE"] == num(whole["lantern"]["rmse"])
     assert cells["time vs Mitsuba"] == f"{whole['ratio']:.2f}x"
     assert f"Lantern's render command takes {num(whole['lantern']['median_s'])} s" in text["integrators"]
+    mesh = data["integrators"]["mesh_heavy"]
+    cells = row(text["integrators"], "Lantern mis/sobol")
+    assert cells["seconds to target"] == num(mesh["rows"]["Lantern mis/sobol"]["seconds_to_target"])
+    assert f"at {times(mesh['best_ratio'])} the speed of Mitsuba's best" in text["integrators"]
     alpha = data["sdf"]["scenes"][0]
     cells = row(text["sdf"], "alpha")
     assert cells["fewer steps"] == pct(alpha["target"]["step_reduction"])
