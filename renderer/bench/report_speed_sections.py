@@ -133,8 +133,11 @@ def bvh_section(report: dict) -> Section:
     bytes_ok = targets.get("bytes_per_triangle_passed", {})
     big_build = targets.get("sah_build_1m")
     big_said = f"{verdict(big_build['passed'])}: {num(big_build['seconds'])} s" if big_build else "not measured"
+    packet_leaf = next((b["packet_tree"]["max_leaf_size"] for m in meshes for b in m["builds"] if "packet_tree" in b),
+                       None)
+    leaves = f"leaves of at most 4, {packet_leaf} for the packet configurations" if packet_leaf else "leaves of at most 4"
     section.blocks += [
-        f"Builds (leaves of at most 4; median of repeats). Targets: ≤ {num(targets.get('bytes_per_triangle'))} "
+        f"Builds ({leaves}; median of repeats). Targets: ≤ {num(targets.get('bytes_per_triangle'))} "
         f"device bytes per triangle with SAH ({verdict(all(bytes_ok.values()) if bytes_ok else None)}) and the SAH "
         f"build of the 1M mesh in ≤ {num(targets.get('sah_build_seconds'))} s ({big_said}).",
         table(["mesh", "triangles", "strategy", "build s", "Mtriangles/s", "SAH cost", "depth", "bytes/triangle"],
