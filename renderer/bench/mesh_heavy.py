@@ -86,7 +86,7 @@ def mitsuba_side_of(config: MeshHeavyConfig) -> dict:
             image = ms.render_scene(scene, spp, seed=config.seed + spp)
             seconds = time.perf_counter() - t0
             error = rel_mse(image, reference)
-            points.append({"spp": spp, "seconds": seconds, "rel_mse": error,
+            points.append({"spp": ms.samples_taken(scene), "seconds": seconds, "rel_mse": error,
                            "rel_mse_floor": _corrected(error, floor["rel_mse"])})
             spp *= 2
         out["curves"][sampler] = points

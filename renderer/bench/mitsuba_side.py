@@ -200,6 +200,12 @@ def render_scene(scene, spp: int, seed: int = 0) -> np.ndarray:
     return np.ascontiguousarray(image[..., :3])
 
 
+def samples_taken(scene) -> int:
+    """The samples per pixel of the scene's last render: what its sampler made of the spp asked
+    for (Mitsuba's multijitter rounds it up to a product of two near-equal factors: 32 -> 35)."""
+    return int(scene.sensors()[0].sampler().sample_count())
+
+
 def render_cornell_box(width: int = 256, height: int = 256, spp: int = 64, seed: int = 0,
                        threads: int | None = None, warmup: bool = True, max_depth: int = 8) -> MitsubaRender:
     """Render Mitsuba's Cornell box (box filter) and time it.

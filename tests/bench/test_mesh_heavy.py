@@ -47,5 +47,5 @@ def test_mitsuba_renders_its_stress_scene():
     mi, _, _ = ms._import_mitsuba()
     scene = mi.load_dict(ms.stress_scene_dict(32, 18, 8))
     image = ms.render_scene(scene, 4, seed=0)
-    assert image.shape == (18, 32, 3) and np.isfinite(image).all()
+    assert image.shape == (18, 32, 3) and np.isfinite(image).all() and ms.samples_taken(scene) == 4
     assert 0.05 < float(image.mean()) < 50.0  # lit by the sunset, not black, not blown out
