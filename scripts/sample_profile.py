@@ -128,8 +128,6 @@ def stub_leaf_tests() -> None:
 
 
 def profile(scene_name: str, args) -> None:
-    import taichi as ti
-
     from renderer.camera import CameraFrame
     from renderer.renderer import Renderer
     from renderer.scene.catalog import load_any, resolve_scene

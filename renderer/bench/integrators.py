@@ -598,7 +598,7 @@ def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBe
         from renderer.bench import whole_process as wp
 
         if whole.get("available"):
-            print_table(wp.SUMMARY_HEADERS, wp.summary_rows(whole), title=wp.caption(whole))
+            print_table(wp.HEADERS, wp.summary_rows(whole), title=wp.caption(whole))
         else:
             print(f"Whole-process comparison not measured: {whole.get('note')}\n")
     if mesh is not None:

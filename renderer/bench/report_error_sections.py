@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections import Counter
 
+from renderer.bench import mesh_heavy, whole_process
 from renderer.bench.common import Z_SIGNIFICANT, paired_text
 from renderer.bench.report_markdown import (
     MISSING,
@@ -153,24 +154,14 @@ def _mitsuba_block(mitsuba: dict) -> list[str]:
                             "speed"], rows)]
 
 
-def _whole_process_block(whole: dict | None) -> list[str]:
-    if not whole:
+def _comparison_block(result: dict | None, what: str, module) -> list[str]:
+    """A Mitsuba comparison's caption and table (module: whole_process or mesh_heavy, each with
+    caption, HEADERS and summary_rows), or why it was not measured."""
+    if not result:
         return []
-    if not whole.get("available"):
-        return [f"Whole-process time against Mitsuba 3: not measured ({whole.get('note')})."]
-    from renderer.bench import whole_process as wp
-
-    return [wp.caption(whole), table(wp.SUMMARY_HEADERS, wp.summary_rows(whole))]
-
-
-def _mesh_heavy_block(mesh: dict | None) -> list[str]:
-    if not mesh:
-        return []
-    if not mesh.get("available"):
-        return [f"Lantern against Mitsuba 3 on a mesh-heavy scene: not measured ({mesh.get('note')})."]
-    from renderer.bench import mesh_heavy
-
-    return [mesh_heavy.caption(mesh), table(mesh_heavy.HEADERS, mesh_heavy.summary_rows(mesh))]
+    if not result.get("available"):
+        return [f"{what}: not measured ({result.get('note')})."]
+    return [module.caption(result), table(module.HEADERS, module.summary_rows(result))]
 
 
 def integrators_section(report: dict) -> Section:
@@ -191,8 +182,10 @@ def integrators_section(report: dict) -> Section:
             table(["integrator/sampler", "spp at T", "Msamples/s", "RMSE", "relMSE", "relMSE −floor", "relMSE*",
                    "relMSE / best"], rows)]
     section.blocks += _mitsuba_block(report.get("mitsuba") or {})
-    section.blocks += _whole_process_block(report.get("whole_process"))
-    section.blocks += _mesh_heavy_block(report.get("mesh_heavy"))
+    section.blocks += _comparison_block(report.get("whole_process"), "Whole-process time against Mitsuba 3",
+                                        whole_process)
+    section.blocks += _comparison_block(report.get("mesh_heavy"), "Lantern against Mitsuba 3 on a mesh-heavy scene",
+                                        mesh_heavy)
     compile_rows = [[s["scene"], name, seconds] for s in scenes for name, seconds in s.get("compile_s", {}).items()]
     if compile_rows:
         section.blocks.append(details("Compile times (first 1 spp launch: compilation or offline-cache load)",

@@ -138,7 +138,7 @@ def summary_rows(result: dict) -> list[list]:
     return rows
 
 
-SUMMARY_HEADERS = ["renderer", "median s", "runs (s)", "of which render s", "RMSE", "time vs Mitsuba"]
+HEADERS = ["renderer", "median s", "runs (s)", "of which render s", "RMSE", "time vs Mitsuba"]
 
 
 def caption(result: dict) -> str:

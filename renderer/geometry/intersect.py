@@ -128,25 +128,11 @@ def sphere(o, d, center, radius, t_max):
 
 @ti.func
 def quad(o, d, corner, edge_u, edge_v, t_max):
-    """Parallelogram corner + a edge_u + b edge_v, a, b in [0, 1]. Returns (hit, t, a, b)."""
+    """Parallelogram corner + a edge_u + b edge_v, a, b in [0, 1]. Returns (hit, t, a, b).
+    The plane's rows (quad_frames) computed in the kernel; leaves read them precomputed."""
     n = edge_u.cross(edge_v)
-    denom = n.dot(d)
-    hit = 0
-    t = 0.0
-    a = 0.0
-    b = 0.0
-    if denom != 0.0:
-        tt = n.dot(corner - o) / denom
-        if tt > 0.0 and tt < t_max:
-            p = o + tt * d - corner
-            # Coordinates in the (possibly non-orthogonal) edge basis via the normal's cross terms.
-            nn = n.dot(n)
-            a = n.dot(p.cross(edge_v)) / nn
-            b = n.dot(edge_u.cross(p)) / nn
-            if a >= 0.0 and a <= 1.0 and b >= 0.0 and b <= 1.0:
-                hit = 1
-                t = tt
-    return hit, t, a, b
+    nn = n.dot(n)
+    return quad_framed(o, d, corner, n, edge_v.cross(n) / nn, n.cross(edge_u) / nn, t_max)
 
 
 def quad_frames(quads: np.ndarray) -> np.ndarray:
