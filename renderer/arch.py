@@ -13,6 +13,13 @@ ARCHES = ("auto", "cpu", "cuda", "vulkan")
 # renderer/optimize_choice.py) and benchmarks. Kernels of both levels live side by side in the
 # offline cache.
 OPTIMIZE_FOR = ("compile", "run")
+# Taichi's offline cache keeps 100 MB by default and, past that, drops the least recently used
+# quarter. One compiled render kernel takes 0.1-2 MB (a scene's features x integrator x
+# optimisation level), so a few dozen scenes overflowed it: the viewer compiled again scenes it had
+# compiled the day before, and the test suite evicted kernels its later modules needed (one test
+# file took 119 s with its kernels cached, 306 s compiling them). Taichi holds the cap in a 32-bit
+# int: 2 GiB is the most it takes.
+OFFLINE_CACHE_MAX_BYTES = 2**31 - 1
 
 
 def taichi_options(optimize: str = "compile") -> dict:
@@ -20,6 +27,14 @@ def taichi_options(optimize: str = "compile") -> dict:
     if optimize not in OPTIMIZE_FOR:
         raise ValueError(f"unknown optimisation level '{optimize}' (choose from {', '.join(OPTIMIZE_FOR)})")
     return {"advanced_optimization": optimize == "run"}
+
+
+def offline_cache_options(enabled: bool = True, cache_dir: str | None = None) -> dict:
+    """ti.init keyword arguments of the offline cache (also used by the tests' runtime)."""
+    kwargs = {"offline_cache": enabled, "offline_cache_max_size_of_files": OFFLINE_CACHE_MAX_BYTES}
+    if cache_dir:
+        kwargs["offline_cache_file_path"] = cache_dir
+    return kwargs
 
 
 def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str | None = None,
@@ -33,9 +48,7 @@ def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str |
     """
     if arch not in ARCHES:
         raise ValueError(f"unknown arch '{arch}' (choose from {', '.join(ARCHES)})")
-    kwargs = {"offline_cache": offline_cache, "log_level": ti.WARN, **taichi_options(optimize)}
-    if cache_dir:
-        kwargs["offline_cache_file_path"] = cache_dir
+    kwargs = {"log_level": ti.WARN, **offline_cache_options(offline_cache, cache_dir), **taichi_options(optimize)}
     if cpu_threads is not None:
         kwargs["cpu_max_num_threads"] = cpu_threads
     if os.environ.get("LANTERN_TAICHI_DEBUG"):

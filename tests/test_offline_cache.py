@@ -1,0 +1,19 @@
+"""The offline cache holds a whole session's kernels (renderer/arch.py): Taichi's default cap of
+100 MB evicted kernels that scenes and test modules had compiled moments earlier."""
+import taichi as ti
+
+from renderer.arch import OFFLINE_CACHE_MAX_BYTES, init_taichi
+
+
+def test_the_suite_runtime_keeps_every_kernel_it_compiles():
+    # the runtime conftest made for this module (the next test re-initialises it)
+    config = ti.lang.impl.current_cfg()
+    assert config.offline_cache
+    assert config.offline_cache_max_size_of_files == OFFLINE_CACHE_MAX_BYTES > 100 * 1024**2
+
+
+def test_init_taichi_raises_the_cap_and_keeps_the_folder_asked_for(tmp_path):
+    init_taichi("cpu", cache_dir=str(tmp_path))
+    config = ti.lang.impl.current_cfg()
+    assert config.offline_cache and config.offline_cache_max_size_of_files == OFFLINE_CACHE_MAX_BYTES
+    assert config.offline_cache_file_path == str(tmp_path)
