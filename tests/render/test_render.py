@@ -102,14 +102,3 @@ def test_mirror_furnace_is_exact(tmp_path):
     np.testing.assert_allclose(r.image(), 0.5, rtol=1e-6)
 
 
-@pytest.mark.parametrize("name", ["showcase", "hard_cases", "mirror_field"])
-def test_shipped_scenes_render_finite_and_not_blank(name):
-    from renderer.scene import load_scene
-    from renderer.scene.catalog import resolve_scene
-
-    scene = load_scene(resolve_scene(name))
-    r = Renderer(scene, (48, 27))
-    r.render(CameraFrame.from_spec(scene.camera), 2)
-    img = r.image()
-    assert r.film.stats()["rejected"] == 0, "no NaN/inf sample may be produced by the shipped scenes"
-    assert np.all(np.isfinite(img)) and img.std() > 0.01

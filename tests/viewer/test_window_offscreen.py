@@ -64,6 +64,8 @@ def test_each_scene_shows_the_film(app, path):
     settle(app)
     assert app.renderer.scene.path.resolve() == path.resolve()
     assert (app.renderer.film.width, app.renderer.film.height) == SIZE
+    # no NaN or infinite sample anywhere in a shipped scene (the film counts those it rejects)
+    assert app.renderer.film.stats()["rejected"] == 0
     shown = window_buffer_to_image(app.last_frame)
     assert shown.shape == (SIZE[1], SIZE[0], 3)
     assert shown.std() > MIN_PIXEL_STD
