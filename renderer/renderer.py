@@ -12,7 +12,7 @@ import taichi as ti
 from renderer.adaptive import DEFAULT_MIN_SPP, AdaptiveSampling, is_check_point, next_check
 from renderer.aovs import AovFilm
 from renderer.camera import CameraFrame
-from renderer.film import Film, FilmState
+from renderer.film import Film, FilmState, allocation_size
 from renderer.image_io import read_environment
 from renderer.integrators import make_integrator
 from renderer.lights.environment import Environment
@@ -115,12 +115,15 @@ class Renderer:
         self.media = MediaTable(scene, self.materials.volume_media)
         self._env_image = image
         self._lights = None
-        self.film = Film(width, height)
-        self.aovs = AovFilm(width, height) if aovs else None
+        if width < 1 or height < 1:
+            raise ValueError(f"film size must be positive, got {width}x{height}")
+        allocated = allocation_size(width, height)  # shared compiled programs across nearby sizes
+        self.film = Film(*allocated)
+        self.aovs = AovFilm(*allocated) if aovs else None
         self.adaptive: AdaptiveSettings | None = None  # set_adaptive()
         self._adaptive_rule = None
         self.pixels_active = width * height  # pixels adaptive sampling has not stopped
-        self.work = ti.Vector.field(3, ti.f32, shape=(width, height))
+        self.work = ti.Vector.field(3, ti.f32, shape=allocated)
         self._probe_out = ti.field(ti.f32, shape=())
         self._programs: dict[tuple[str, Features], RenderProgram] = {}
         # Per-integrator knobs that are data, not compile-time (e.g. "sppm": SppmOptions), and

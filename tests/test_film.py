@@ -117,3 +117,33 @@ def test_reset_rejects_sizes_above_max():
         film.reset(5, 4)
     with pytest.raises(ValueError):
         film.reset(4, 0)
+
+
+def test_allocations_round_up_to_whole_steps():
+    from renderer.film import ALLOCATION_STEP, allocation_size
+
+    assert ALLOCATION_STEP == 64
+    assert allocation_size(1, 1) == (64, 64)
+    assert allocation_size(64, 65) == (64, 128)
+    assert allocation_size(1920, 1080) == (1920, 1088)
+
+
+def test_a_render_is_the_same_in_any_allocation(tmp_path):
+    """Renderers of nearby sizes share an allocation (and so their compiled programs); one of
+    another allocation, reset to the same active size, renders the same pixels bit for bit."""
+    from renderer.camera import CameraFrame
+    from renderer.renderer import Renderer
+    from tests.scene_builder import furnace_toml, scene_from_toml
+
+    scene = scene_from_toml(tmp_path, furnace_toml(ball_kind="dielectric", floor=True))
+    small, large = Renderer(scene, (20, 10)), Renderer(scene, (70, 40))
+    assert small.film.mean.shape == (64, 64) and large.film.mean.shape == (128, 64)
+    assert (small.film.width, small.film.height) == (20, 10)
+    large.reset(20, 10)
+    images = []
+    for r in (small, large):
+        r.render(CameraFrame.from_spec(scene.camera), 3, integrator="mis", seed=4)
+        images.append((r.image(), r.film.variance_of_mean_image(), r.film.stats()))
+    assert images[0][0].shape == (10, 20, 3) and images[0][0].mean() > 0.01
+    np.testing.assert_array_equal(images[0][0], images[1][0])
+    np.testing.assert_array_equal(images[0][1], images[1][1])

@@ -56,5 +56,5 @@ def test_vulkan_renders_instances_alpha_and_vertex_colors(tmp_path):
     gpu = render("vulkan", "albedo", tmp_path / "vk.exr", 2, scene=str(scene), size="48x27")
     close = np.all(np.abs(cpu - gpu) < 1e-3, axis=-1)
     assert close.mean() > 0.97, f"only {close.mean():.1%} of pixels agree"
-    path = render("vulkan", "mis", tmp_path / "vk_mis.exr", 2, scene=str(scene), size="48x27")
-    assert np.all(np.isfinite(path)) and path.mean() > 0.01
+    # (`mis` on Vulkan: tests/test_vulkan.py. Its shadow rays take the one traversal call site the
+    # albedo view's camera rays take here: renderer/integrators/tracer.py.)

@@ -186,6 +186,10 @@ def test_screenshot_writes_png_and_exr(app, tmp_path):
     app.screenshot_folder = tmp_path
     app.session.hud_visible = True  # the HUD is not part of the screenshot
     settle(app, 2)
+    for _ in range(50):  # still frames may render a share of a round each: wait for a whole sample
+        if app.renderer.slices_done >= ROUND_SLICES:
+            break
+        app.step()
     app.step(FrameInput(pressed=("p",)))
     s = app.session
     pngs = sorted(tmp_path.glob("*.png"))
