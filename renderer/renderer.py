@@ -11,8 +11,9 @@ import taichi as ti
 
 from renderer.adaptive import DEFAULT_MIN_SPP, AdaptiveSampling, is_check_point, next_check
 from renderer.aovs import AovFilm
+from renderer.allocation import allocation_size
 from renderer.camera import CameraFrame
-from renderer.film import Film, FilmState, allocation_size
+from renderer.film import Film, FilmState
 from renderer.image_io import read_environment
 from renderer.integrators import make_integrator
 from renderer.lights.environment import Environment

@@ -120,7 +120,7 @@ def test_reset_rejects_sizes_above_max():
 
 
 def test_allocations_round_up_to_whole_steps():
-    from renderer.film import ALLOCATION_STEP, allocation_size
+    from renderer.allocation import ALLOCATION_STEP, allocation_size
 
     assert ALLOCATION_STEP == 64
     assert allocation_size(1, 1) == (64, 64)

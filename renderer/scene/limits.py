@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Optional
 
+from renderer.allocation import allocation_size
 from renderer.scene.errors import PathLike, SceneError
 
 ENVIRONMENT_VARIABLE = "LANTERN_MEMORY_LIMIT"
@@ -116,7 +117,9 @@ class MemoryLedger:
 # count, rejected and the adaptive-sampling state, i32 each), the renderer's work buffer (3 x f32),
 # and the mean and variance images downloaded at the end (3 x f32 each). tests/scene/
 # test_input_limits.py checks the film's share against a real Film. A render that keeps the
-# denoising AOVs (renderer/aovs.py) adds their two fields and their two downloaded images.
+# denoising AOVs (renderer/aovs.py) adds their two fields and their two downloaded images. The
+# fields are allocated in whole steps (renderer/allocation.py): the estimate counts the pixels
+# allocated, a little more than the images' (at most a step's width of rows and columns).
 FILM_FIELD_BYTES = 3 * 4 + 3 * 4 + 4 + 4 + 4
 RENDER_BYTES_PER_PIXEL = FILM_FIELD_BYTES + 3 * 4 + 2 * 3 * 4
 AOV_BYTES_PER_PIXEL = 2 * 3 * 4 + 2 * 3 * 4
@@ -127,4 +130,6 @@ def check_film(path: PathLike, width: int, height: int, budget: MemoryBudget, so
     """Refuse a film whose buffers would not fit the budget; `source` says where the size came
     from (e.g. "render.width x height", "--size"); `aovs`: the render keeps denoising AOVs."""
     per_pixel = RENDER_BYTES_PER_PIXEL + (AOV_BYTES_PER_PIXEL if aovs else 0)
-    budget.check(path, f"a {width}x{height} film ({source}, {per_pixel} bytes per pixel)", width * height * per_pixel)
+    allocated_width, allocated_height = allocation_size(width, height)
+    budget.check(path, f"a {width}x{height} film ({source}, {per_pixel} bytes per pixel)",
+                 allocated_width * allocated_height * per_pixel)

@@ -293,6 +293,7 @@ def test_film_bytes_per_pixel_match_the_film_and_the_renderer(tmp_path):
     the renderer's work buffer is the 3 x f32 the budget assumes."""
     import taichi as ti
 
+    from renderer.allocation import allocation_size
     from renderer.film import Film
     from renderer.renderer import Renderer
     from renderer.scene.toml_loader import load_scene
@@ -307,7 +308,9 @@ def test_film_bytes_per_pixel_match_the_film_and_the_renderer(tmp_path):
                  if isinstance(v, ti.Field) and tuple(v.shape) == (width, height)]
     assert len(per_pixel) == 5 and sum(per_pixel) == limits.FILM_FIELD_BYTES
     renderer = Renderer(load_scene(h.huge_film_scene(tmp_path, width, height)))
-    assert tuple(renderer.work.shape) == (width, height) and cell_bytes(renderer.work) == 3 * 4
+    # the renderer allocates whole steps (renderer/allocation.py), which the budget counts
+    assert tuple(renderer.work.shape) == allocation_size(width, height) and cell_bytes(renderer.work) == 3 * 4
+    assert tuple(renderer.film.mean.shape) == allocation_size(width, height)
     assert limits.RENDER_BYTES_PER_PIXEL == limits.FILM_FIELD_BYTES + 3 * 4 + 2 * 3 * 4
     from renderer.aovs import AovFilm
 
