@@ -46,3 +46,15 @@ def test_a_compile_error_still_names_the_file_line_and_source():
     text = str(raised.value)
     assert __file__ in text and "undefined_name_here + 1.0" in text and "in broken" in text
     assert "^" in text
+
+
+def test_source_lines_are_wrapped_as_textwrap_does_and_remembered():
+    import textwrap
+
+    from taichi.lang import kernel_impl
+
+    assert taichi_frontend.install() is True
+    lines = ["\tx = 1", "    y = [a,\tb]  # a comment", "", "z" * 20000]
+    for line in lines + lines:  # the second round comes from the cache
+        assert kernel_impl.textwrap.fill(line, tabsize=4, width=9999) == textwrap.fill(line, tabsize=4, width=9999)
+    assert kernel_impl.textwrap.dedent("  a\n  b") == "a\nb"  # everything else is the module's own
