@@ -14,10 +14,10 @@ ARCHES = ("auto", "cpu", "cuda", "vulkan")
 # offline cache.
 OPTIMIZE_FOR = ("compile", "run")
 # Taichi's offline cache keeps 100 MB by default and, past that, drops the least recently used
-# quarter. One compiled render kernel takes 0.1-2 MB (a scene's features x integrator x
-# optimisation level), so a few dozen scenes overflowed it: the viewer compiled again scenes it had
-# compiled the day before, and the test suite evicted kernels its later modules needed (one test
-# file took 119 s with its kernels cached, 306 s compiling them). Taichi holds the cap in a 32-bit
+# quarter, to be compiled again when next needed. One compiled render kernel takes 0.1-2 MB (a
+# scene's features x integrator x optimisation level x field shapes): the test suite's kernels
+# alone come to ~99 MB, and a few dozen scenes fill the default. Compiling costs far more than
+# loading (one test file: 306 s on a clean cache, 119 s cached). Taichi holds the cap in a 32-bit
 # int: 2 GiB is the most it takes.
 OFFLINE_CACHE_MAX_BYTES = 2**31 - 1
 

@@ -116,8 +116,6 @@ class Renderer:
         self.media = MediaTable(scene, self.materials.volume_media)
         self._env_image = image
         self._lights = None
-        if width < 1 or height < 1:
-            raise ValueError(f"film size must be positive, got {width}x{height}")
         allocated = allocation_size(width, height)  # shared compiled programs across nearby sizes
         self.film = Film(*allocated)
         self.aovs = AovFilm(*allocated) if aovs else None

@@ -9,7 +9,8 @@ scene's features), ~70,000 AST nodes. Profiling a cold compile of the studio sce
   (`ASTTransformerContext.get_pos_info`): ~35% of the compile's CPU time.
 - Every call of a `ti.func` inside a kernel reads the function's source again (`inspect` finds
   the block by tokenising the file: ~1,800 times per kernel), and re-wraps each of its lines
-  through `textwrap.fill` (~17,000 lines per kernel, ~8 % of a cached compile).
+  through `textwrap.fill` (~17,000 calls in the textured scene's first render from the cache,
+  ~8 % of its profiled time).
 
 `install()` replaces the first by a plain excerpt (file, line, function, the source line and a
 caret under single-line nodes: the same facts, still in every compile error) and caches the

@@ -126,6 +126,8 @@ def test_allocations_round_up_to_whole_steps():
     assert allocation_size(1, 1) == (64, 64)
     assert allocation_size(64, 65) == (64, 128)
     assert allocation_size(1920, 1080) == (1920, 1088)
+    with pytest.raises(ValueError, match="positive"):
+        allocation_size(0, 10)
 
 
 def test_a_render_is_the_same_in_any_allocation(tmp_path):
