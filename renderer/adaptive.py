@@ -25,6 +25,7 @@ adaptive render continues exactly. `--spp` stays the maximum.
 import taichi as ti
 
 from renderer.luminance import luminance
+from renderer.pixel_fields import pixel_scalar
 
 SAMPLING = 0
 ONCE_BELOW = 1  # below the threshold at the last check: stops if it is again at the next
@@ -63,7 +64,7 @@ class AdaptiveSampling:
 
     def __init__(self, film):
         self.film = film
-        self.error = ti.field(ti.f32, shape=(film.max_width, film.max_height))
+        self.error = pixel_scalar(ti.f32, (film.max_width, film.max_height))
         self.active = ti.field(ti.i32, shape=())
 
     def check(self, threshold: float, min_spp: int) -> int:
@@ -87,10 +88,10 @@ class AdaptiveSampling:
 
     @ti.kernel
     def _check(self, width: ti.i32, height: ti.i32, threshold: ti.f32, min_spp: ti.i32):
-        for x, y in ti.ndrange(width, height):
+        for y, x in ti.ndrange(height, width):
             self.error[x, y] = self._relative_error(x, y)
         self.active[None] = 0
-        for x, y in ti.ndrange(width, height):
+        for y, x in ti.ndrange(height, width):
             state = self.film.adaptive[x, y]
             if state != STOPPED:
                 worst = 0.0
@@ -110,6 +111,6 @@ class AdaptiveSampling:
     @ti.kernel
     def _count(self, width: ti.i32, height: ti.i32):
         self.active[None] = 0
-        for x, y in ti.ndrange(width, height):
+        for y, x in ti.ndrange(height, width):
             if self.film.adaptive[x, y] != STOPPED:
                 self.active[None] += 1

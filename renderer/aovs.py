@@ -14,6 +14,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.film import is_finite_vec3
+from renderer.pixel_fields import pixel_vector
 
 vec3 = ti.math.vec3
 
@@ -34,8 +35,8 @@ class AovFilm:
 
     def __init__(self, max_width: int, max_height: int):
         shape = (max_width, max_height)
-        self.albedo = ti.Vector.field(3, ti.f32, shape=shape)
-        self.normal = ti.Vector.field(3, ti.f32, shape=shape)
+        self.albedo = pixel_vector(3, ti.f32, shape)
+        self.normal = pixel_vector(3, ti.f32, shape)
         self.width = max_width
         self.height = max_height
 
@@ -103,14 +104,14 @@ class AovFilm:
 
     @ti.kernel
     def _download(self, albedo: ti.types.ndarray(), normal: ti.types.ndarray(), width: ti.i32, height: ti.i32):
-        for x, y in ti.ndrange(width, height):
+        for y, x in ti.ndrange(height, width):
             for c in ti.static(range(3)):
                 albedo[height - 1 - y, x, c] = self.albedo[x, y][c]
                 normal[height - 1 - y, x, c] = self.normal[x, y][c]
 
     @ti.kernel
     def _upload(self, albedo: ti.types.ndarray(), normal: ti.types.ndarray(), width: ti.i32, height: ti.i32):
-        for x, y in ti.ndrange(width, height):
+        for y, x in ti.ndrange(height, width):
             for c in ti.static(range(3)):
                 self.albedo[x, y][c] = albedo[height - 1 - y, x, c]
                 self.normal[x, y][c] = normal[height - 1 - y, x, c]

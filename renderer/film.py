@@ -15,6 +15,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.luminance import luminance
+from renderer.pixel_fields import pixel_scalar, pixel_vector
 
 NOISE_LUMINANCE_FLOOR = 1e-3  # relative error of near-black pixels would blow up without it
 
@@ -82,15 +83,15 @@ class Film:
         self.max_width = max_width
         self.max_height = max_height
         shape = (max_width, max_height)
-        self.mean = ti.Vector.field(3, ti.f32, shape=shape)
-        self.m2 = ti.Vector.field(3, ti.f32, shape=shape)
-        self.count = ti.field(ti.i32, shape=shape)
-        self.rejected = ti.field(ti.i32, shape=shape)
-        self.adaptive = ti.field(ti.i32, shape=shape)  # adaptive sampling's state (renderer/adaptive.py)
-        # stats()' partial reductions, one row per film column (summed on the host): [min spp,
+        self.mean = pixel_vector(3, ti.f32, shape)
+        self.m2 = pixel_vector(3, ti.f32, shape)
+        self.count = pixel_scalar(ti.i32, shape)
+        self.rejected = pixel_scalar(ti.i32, shape)
+        self.adaptive = pixel_scalar(ti.i32, shape)  # adaptive sampling's state (renderer/adaptive.py)
+        # stats()' partial reductions, one entry per film row (summed on the host): [min spp,
         # rejected, pixels with a noise estimate], [spp sum, sum of squared relative errors].
-        self._column_ints = ti.field(ti.i32, shape=(max_width, 3))
-        self._column_floats = ti.field(ti.f32, shape=(max_width, 2))
+        self._row_ints = ti.field(ti.i32, shape=(max_height, 3))
+        self._row_floats = ti.field(ti.f32, shape=(max_height, 2))
         self.width = max_width
         self.height = max_height
 
@@ -135,7 +136,7 @@ class Film:
     def _load_state(self, mean: ti.types.ndarray(), m2: ti.types.ndarray(), count: ti.types.ndarray(),
                     rejected: ti.types.ndarray(), adaptive: ti.types.ndarray(), width: ti.i32, height: ti.i32):
         # One kernel for the five fields (from_numpy would compile one per field).
-        for x, y in ti.ndrange(width, height):
+        for y, x in ti.ndrange(height, width):
             row = height - 1 - y
             for c in ti.static(range(3)):
                 self.mean[x, y][c] = mean[row, x, c]
@@ -254,8 +255,8 @@ class Film:
         has one, noise is +inf.
         """
         self._reduce_stats(self.width, self.height)
-        ints = self._column_ints.to_numpy()[: self.width].astype(np.int64)
-        floats = self._column_floats.to_numpy()[: self.width].astype(np.float64)
+        ints = self._row_ints.to_numpy()[: self.height].astype(np.int64)
+        floats = self._row_floats.to_numpy()[: self.height].astype(np.float64)
         min_spp, rejected, noise_pixels = int(ints[:, 0].min()), int(ints[:, 1].sum()), int(ints[:, 2].sum())
         spp_sum, squared_error_sum = (float(v) for v in floats.sum(axis=0))
         noise = math.sqrt(squared_error_sum / noise_pixels) if noise_pixels else math.inf
@@ -272,13 +273,13 @@ class Film:
 
     @ti.kernel
     def _copy_vec3(self, source: ti.template(), out: ti.types.ndarray(), width: ti.i32, height: ti.i32):
-        for x, y in ti.ndrange(width, height):
+        for y, x in ti.ndrange(height, width):
             for c in ti.static(range(3)):
                 out[height - 1 - y, x, c] = source[x, y][c]
 
     @ti.kernel
     def _copy_variance_of_mean(self, out: ti.types.ndarray(), width: ti.i32, height: ti.i32):
-        for x, y in ti.ndrange(width, height):
+        for y, x in ti.ndrange(height, width):
             variance = self.variance_of_mean_at(x, y)
             for c in ti.static(range(3)):
                 out[height - 1 - y, x, c] = variance[c]
@@ -295,16 +296,17 @@ class Film:
 
     @ti.kernel
     def _reduce_stats(self, width: ti.i32, height: ti.i32):
-        # One loop index per column, its pixels summed serially: no atomics on shared totals. With
-        # them (five global accumulators per pixel, two threads) this took 15-95 ms at 960x540 on a
-        # 2-core CPU, the HUD's refresh then making still frames 2-3 times their budget.
-        for x in range(width):
+        # One loop index per row (its pixels adjacent in memory), summed serially: no atomics on
+        # shared totals. With them (five global accumulators per pixel, two threads) this took
+        # 15-95 ms at 960x540 on a 2-core CPU, the HUD's refresh then making still frames 2-3 times
+        # their budget.
+        for y in range(height):
             least = 2147483647
             rejected = 0
             noise_pixels = 0
             spp_sum = 0.0
             squared_errors = 0.0
-            for y in range(height):
+            for x in range(width):
                 n = self.count[x, y]
                 least = ti.min(least, n)
                 rejected += self.rejected[x, y]
@@ -314,8 +316,8 @@ class Film:
                     relative = luminance(standard_error) / ti.max(luminance(self.mean[x, y]), NOISE_LUMINANCE_FLOOR)
                     squared_errors += relative * relative
                     noise_pixels += 1
-            self._column_ints[x, 0] = least
-            self._column_ints[x, 1] = rejected
-            self._column_ints[x, 2] = noise_pixels
-            self._column_floats[x, 0] = spp_sum
-            self._column_floats[x, 1] = squared_errors
+            self._row_ints[y, 0] = least
+            self._row_ints[y, 1] = rejected
+            self._row_ints[y, 2] = noise_pixels
+            self._row_floats[y, 0] = spp_sum
+            self._row_floats[y, 1] = squared_errors

@@ -20,6 +20,7 @@ from renderer.lights.environment import Environment
 from renderer.materials.table import MaterialTable
 from renderer.materials.texture_sampler import TextureTable
 from renderer.media.table import MediaTable
+from renderer.pixel_fields import pixel_vector
 from renderer.pixel_slices import ROUND_SLICES, filled_mean_array
 from renderer.program import RenderProgram
 from renderer.sampling.sampler import make_sampler
@@ -122,7 +123,7 @@ class Renderer:
         self.adaptive: AdaptiveSettings | None = None  # set_adaptive()
         self._adaptive_rule = None
         self.pixels_active = width * height  # pixels adaptive sampling has not stopped
-        self.work = ti.Vector.field(3, ti.f32, shape=allocated)
+        self.work = pixel_vector(3, ti.f32, allocated)
         self._probe_out = ti.field(ti.f32, shape=())
         self._programs: dict[tuple[str, Features], RenderProgram] = {}
         # Per-integrator knobs that are data, not compile-time (e.g. "sppm": SppmOptions), and
