@@ -38,11 +38,12 @@ class RenderProgram:
 
     @ti.kernel
     def render(self, width: ti.i32, height: ti.i32, spp: ti.i32, slice_first: ti.i32, slice_count: ti.i32,
-               seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3, right: ti.math.vec3,
-               up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
-        """`spp` samples for each pixel of slices [slice_first, slice_first + slice_count)."""
-        for i in range(pass_length(slice_count, width, height)):
-            x, y = slice_pixel(i, slice_first, slice_count, width, height)
+               order: ti.i32, seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3,
+               right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
+        """`spp` samples for each pixel of slices [slice_first, slice_first + slice_count) of a round
+        cut in `order` (pixel_slices: INTERLEAVED or BANDS)."""
+        for i in range(pass_length(slice_count, width, height, slice_first, order)):
+            x, y = slice_pixel(i, slice_first, slice_count, width, height, order)
             if x < width and y < height:
                 # A pixel adaptive sampling has stopped (renderer/adaptive.py) takes no more samples;
                 # a nested test: Taichi's `and` evaluates both sides, and (x, y) may lie outside the film.

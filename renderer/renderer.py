@@ -21,7 +21,7 @@ from renderer.materials.table import MaterialTable
 from renderer.materials.texture_sampler import TextureTable
 from renderer.media.table import MediaTable
 from renderer.pixel_fields import pixel_vector
-from renderer.pixel_slices import ROUND_SLICES, filled_mean_array
+from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES, filled_mean_array
 from renderer.program import RenderProgram
 from renderer.sampling.sampler import make_sampler
 from renderer.scene.features import Features, scene_features
@@ -132,6 +132,10 @@ class Renderer:
         self._shared: dict[str, object] = {}
         self._launched: set[tuple[str, Features]] = set()
         self.slices_done = 0  # pixel slices rendered since the last reset (renderer/pixel_slices.py)
+        # Rounds after the first cut into bands of rows (pixel_slices.BANDS) rather than interleaved:
+        # the viewer's still frames, whose passes are a few slices each. Renders that save or share
+        # partial rounds (checkpoints, distributed groups) keep the interleaved order throughout.
+        self.bands_after_first_round = False
         self.reset(width, height)
 
     # --- programs ------------------------------------------------------------------------------
@@ -246,7 +250,8 @@ class Renderer:
                     spp = min(spp, next_check(self.samples_done, self.adaptive.min_spp) - self.samples_done)
             else:
                 spp, first, count = 1, cursor, min(left, ROUND_SLICES - cursor)
-            program.render(width, height, spp, first, count, seed, max_depth, *camera.kernel_args())
+            program.render(width, height, spp, first, count, self.round_order(), seed, max_depth,
+                           *camera.kernel_args())
             self.slices_done += spp * count
             left -= spp * count
             if (self.adaptive is not None and self.slices_done % ROUND_SLICES == 0
@@ -263,8 +268,14 @@ class Renderer:
         program, seed, max_depth = self._launch(camera, integrator, max_depth, seed, None, sampler)
         if not program.sliced:
             raise ValueError("an integrator with whole-image passes (sppm) cannot render a group of pixels")
-        program.render(self.film.width, self.film.height, spp, slice_first, slice_count, seed, max_depth,
-                       *camera.kernel_args())
+        program.render(self.film.width, self.film.height, spp, slice_first, slice_count, INTERLEAVED, seed,
+                       max_depth, *camera.kernel_args())
+
+    def round_order(self, slices_done: int | None = None) -> int:
+        """How the round holding slice `slices_done` (default: the next one) is cut into slices
+        (pixel_slices.INTERLEAVED or BANDS)."""
+        done = self.slices_done if slices_done is None else slices_done
+        return BANDS if self.bands_after_first_round and done >= ROUND_SLICES else INTERLEAVED
 
     def _launch(self, camera, integrator, max_depth, seed, features, sampler):
         """(program, seed, max depth) of a launch, the scene's settings where none are given."""

@@ -9,8 +9,8 @@ import numpy as np
 import taichi as ti
 
 from renderer.film import is_finite_f32
-from renderer.pixel_slices import (CELL, CELL_BITS, ROUND_SLICES, filled_mean, pass_length, slice_pixel,
-                                   slice_rank)
+from renderer.pixel_slices import (CELL, CELL_BITS, INTERLEAVED, ROUND_SLICES, filled_mean, pass_length,
+                                   slice_pixel, slice_rank)
 from renderer.luminance import LUMINANCE_WEIGHTS, luminance
 
 TONEMAPPERS = ("aces", "reinhard", "none")
@@ -182,14 +182,15 @@ def fill_block_side(rank):
 def _tonemap_packed_kernel(
     mean: ti.template(), count: ti.template(), rejected: ti.template(),
     out: ti.types.ndarray(dtype=ti.u32, ndim=2), source_width: ti.i32, source_height: ti.i32,
-    slice_first: ti.i32, slice_count: ti.i32, scale: ti.f32, mapper: ti.i32, filled: ti.i32, blocks: ti.i32,
+    slice_first: ti.i32, slice_count: ti.i32, order: ti.i32, scale: ti.f32, mapper: ti.i32, filled: ti.i32,
+    blocks: ti.i32,
 ):
     # The output's pixels in pixel-slice order: a whole round is every pixel (raster order), a
     # partial one only the pixels of those slices (1:1 with the film, the ones a render of the
     # same slices changed), with `blocks` (a first round) each one's fill block.
     out_width, out_height = out.shape[0], out.shape[1]
-    for i in range(pass_length(slice_count, out_width, out_height)):
-        x, y = slice_pixel(i, slice_first, slice_count, out_width, out_height)
+    for i in range(pass_length(slice_count, out_width, out_height, slice_first, order)):
+        x, y = slice_pixel(i, slice_first, slice_count, out_width, out_height, order)
         side = 1
         if blocks:
             side = fill_block_side(slice_rank(i, slice_first, slice_count))  # the loop index's slice
@@ -217,7 +218,7 @@ def tonemap_into(film, out: np.ndarray, exposure_ev: float, tonemapper_name: str
 
 
 def tonemap_packed(film, out: np.ndarray, exposure_ev: float, tonemapper_name: str, filled: bool = True,
-                   slices: tuple[int, int] | None = None, first_round: bool = False) -> None:
+                   slices: tuple[int, int] | None = None, first_round: bool = False, order: int = INTERLEAVED) -> None:
     """Fill `out` (uint32 (width, height), [x, y] y-up) with the display image packed as RGBA8
     (pack_rgba8): the bytes of quantize(tonemap_into(...)), in the layout GGUI's canvas shows
     without a conversion of its own.
@@ -226,7 +227,8 @@ def tonemap_packed(film, out: np.ndarray, exposure_ev: float, tonemapper_name: s
     slices, for an output the film's size; the rest of `out` is left as it is. A viewer whose
     film gained those slices since `out` was filled updates it so at a fraction of the cost.
     With `first_round` (those slices belong to the film's first round), each slice's pixel brings
-    its fill block (fill_block_side): the pixels shown filled from it.
+    its fill block (fill_block_side): the pixels shown filled from it. `order`: how the round the
+    slices belong to was cut (pixel_slices: INTERLEAVED, or BANDS after a first round).
     """
     first, count = (0, ROUND_SLICES) if slices is None else (int(slices[0]), int(slices[1]))
     if count < ROUND_SLICES and out.shape[:2] != (film.width, film.height):
@@ -235,9 +237,9 @@ def tonemap_packed(film, out: np.ndarray, exposure_ev: float, tonemapper_name: s
     if not (0 <= first and 0 < count and (count >= ROUND_SLICES or first + count <= ROUND_SLICES)):
         raise ValueError(f"slices ({first}, {count}) are not a range within a round of {ROUND_SLICES}")
     _tonemap_packed_kernel(
-        film.mean, film.count, film.rejected, out, film.width, film.height, first, count,
+        film.mean, film.count, film.rejected, out, film.width, film.height, first, count, int(order),
         exposure_scale(exposure_ev), tonemapper_index(tonemapper_name), int(filled),
-        int(first_round and count < ROUND_SLICES),
+        int(first_round and count < ROUND_SLICES and order == INTERLEAVED),
     )
 
 

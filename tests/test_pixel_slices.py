@@ -6,8 +6,8 @@ import pytest
 import taichi as ti
 
 from renderer.film import Film, FilmState
-from renderer.pixel_slices import (CELL, ROUND_SLICES, bayer_matrix, filled_mean_array, pass_length, slice_mask,
-                                   slice_pixel, spp_text)
+from renderer.pixel_slices import (BANDS, CELL, INTERLEAVED, ROUND_SLICES, bayer_matrix, filled_mean_array,
+                                   pass_length, slice_mask, slice_pixel, spp_text)
 from renderer.tonemap import display_array, tonemap_into
 
 
@@ -22,25 +22,34 @@ def test_the_bayer_order_is_a_permutation_whose_prefixes_are_regular_grids():
 
 
 @ti.kernel
-def _visit(visits: ti.types.ndarray(), first: ti.i32, count: ti.i32, width: ti.i32, height: ti.i32):
-    for i in range(pass_length(count, width, height)):
-        x, y = slice_pixel(i, first, count, width, height)
+def _visit(visits: ti.types.ndarray(), first: ti.i32, count: ti.i32, width: ti.i32, height: ti.i32, order: ti.i32):
+    for i in range(pass_length(count, width, height, first, order)):
+        x, y = slice_pixel(i, first, count, width, height, order)
         if x < width and y < height:
             ti.atomic_add(visits[height - 1 - y, x], 1)  # row 0 at the top, as the film's arrays
 
 
-@pytest.mark.parametrize("width, height", [(67, 45), (16, 16), (5, 3), (1, 1)])
-def test_passes_over_slices_visit_their_pixels_and_a_round_visits_each_once(width, height):
+@pytest.mark.parametrize("order", [INTERLEAVED, BANDS], ids=["interleaved", "bands"])
+@pytest.mark.parametrize("width, height", [(67, 45), (16, 16), (5, 3), (1, 1), (9, 300)])
+def test_passes_over_slices_visit_their_pixels_and_a_round_visits_each_once(width, height, order):
     total = np.zeros((height, width), np.int32)
     for first, count in ((0, 1), (1, 6), (7, 100), (107, 149)):  # a round cut into unequal passes
         visits = np.zeros((height, width), np.int32)
-        _visit(visits, first, count, width, height)
-        np.testing.assert_array_equal(visits, slice_mask(first, count, width, height)[::-1].astype(np.int32))
+        _visit(visits, first, count, width, height, order)
+        np.testing.assert_array_equal(visits, slice_mask(first, count, width, height, order)[::-1].astype(np.int32))
         total += visits
     np.testing.assert_array_equal(total, 1)
     whole = np.zeros((height, width), np.int32)
-    _visit(whole, 0, ROUND_SLICES, width, height)  # a whole round, in raster order
+    _visit(whole, 0, ROUND_SLICES, width, height, order)  # a whole round, in raster order
     np.testing.assert_array_equal(whole, 1)
+
+
+def test_bands_are_whole_rows_from_the_top():
+    width, height = 7, 512  # two rows a band
+    for rank in (0, 1, 200, 255):
+        rows = np.nonzero(slice_mask(rank, 1, width, height, BANDS)[::-1].any(axis=1))[0]  # row 0 at the top
+        np.testing.assert_array_equal(rows, [2 * rank, 2 * rank + 1])
+        assert slice_mask(rank, 1, width, height, BANDS)[::-1][rows].all()
 
 
 def test_the_display_fills_unreached_pixels_from_the_nearest_sampled_grid_point():

@@ -181,7 +181,11 @@ class ViewerApp:
         path = Path(path).resolve()
         if path not in self.renderers:
             # With AOVs: the denoised view needs them, and toggling it must not recompile.
-            self.renderers[path] = Renderer(load_any(path, self.load_options), max_size=self.size, aovs=True)
+            renderer = Renderer(load_any(path, self.load_options), max_size=self.size, aovs=True)
+            # Still frames render a few slices each: after the first round, bands of rows (cheaper
+            # per sample than interleaved pixels: renderer/pixel_slices.py)
+            renderer.bands_after_first_round = True
+            self.renderers[path] = renderer
         return self.renderers[path]
 
     def select_scene(self, path) -> None:
@@ -263,7 +267,8 @@ class ViewerApp:
         r, s = self.renderer, self.session
         png, exr = screenshot_paths(self.screenshot_folder, r.scene.name, s.integrator, r.samples_done, datetime.now())
         write_png(png, self.display.window_sized_image(r.film, self._accumulation(), r.slices_done,
-                                                       self._display_settings(), self._pixel_sliced()))
+                                                       self._display_settings(), self._pixel_sliced(),
+                                                       r.bands_after_first_round))
         write_exr(exr, r.shown_image())
         saved = f"{png} and {exr.name}"
         denoised = self.shown_denoised
@@ -421,7 +426,7 @@ class ViewerApp:
             t0 = time.perf_counter()
             self.last_display_update = self.display.update(renderer.film, self._accumulation(),
                                                            renderer.slices_done, self._display_settings(),
-                                                           self._pixel_sliced())
+                                                           self._pixel_sliced(), renderer.bands_after_first_round)
             self._present(now)
             present_seconds = time.perf_counter() - t0
             if not fresh:

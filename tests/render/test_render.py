@@ -9,6 +9,7 @@ import pytest
 from scipy import stats
 
 from renderer.camera import CameraFrame
+from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES, slice_mask
 from renderer.renderer import Renderer
 from tests.scene_builder import furnace_toml, scene_from_toml
 
@@ -49,6 +50,21 @@ def test_same_seed_same_image_and_split_passes_equal_one_pass(tmp_path):
     r.render(camera, 3, integrator="path", seed=7)
     r.render(camera, 5, integrator="path", seed=7)
     assert np.array_equal(one, r.image()), "counter-based sampling: 3+5 spp must equal 8 spp bit for bit"
+    # Passes of 37 slices, rounds after the first cut into bands of rows (the viewer's still
+    # frames): each pass samples its band's rows, and the film ends the same bit for bit.
+    r.reset()
+    r.bands_after_first_round = True
+    width, height = r.film.width, r.film.height
+    while r.slices_done < 8 * ROUND_SLICES:
+        first, before = r.slices_done % ROUND_SLICES, r.film.sample_counts()
+        order = r.round_order()
+        assert order == (BANDS if r.slices_done >= ROUND_SLICES else INTERLEAVED)
+        count = min(37, ROUND_SLICES - first)
+        r.render_slices(camera, count, integrator="path", seed=7)
+        changed = r.film.sample_counts() != before
+        np.testing.assert_array_equal(changed, slice_mask(first, count, width, height, order)[::-1])
+    assert np.array_equal(one, r.image())
+    r.bands_after_first_round = False
     r.reset()
     r.render(camera, 8, integrator="path", seed=8)
     assert not np.array_equal(one, r.image())

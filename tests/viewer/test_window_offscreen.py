@@ -12,7 +12,7 @@ import pytest
 from renderer.image_io import read_exr
 from renderer.integrators import INTEGRATORS
 from renderer.scene.catalog import resolve_scene, scene_files
-from renderer.pixel_slices import ROUND_SLICES, filled_mean_array
+from renderer.pixel_slices import BANDS, ROUND_SLICES, filled_mean_array, slice_mask
 from renderer.tonemap import tonemap_array, unpack_rgba8
 from viewer import hud
 from viewer.display import UPDATE_SLICES
@@ -323,11 +323,17 @@ def test_still_frames_redraw_only_the_pixels_they_rendered(app):
         while app.renderer.slices_done < ROUND_SLICES:
             app.step()
         resolution.target_seconds = 1e-6  # a budget of one slice per frame
-        for _ in range(3):
-            slices = app.renderer.slices_done
+        banded_rows = 0
+        for _ in range(4):  # 4 consecutive slices hold at least one row of 72 (a band is 72/256 rows)
+            slices, counts = app.renderer.slices_done, app.renderer.film.sample_counts()
             app.step()
             assert app.renderer.slices_done == slices + 1 and not app.last_plan.reset
             assert app.last_display_update == UPDATE_SLICES
+            # past the first round a still frame's slice is a band of rows (renderer/pixel_slices.py)
+            band = slice_mask(slices % ROUND_SLICES, 1, *SIZE, BANDS)[::-1]
+            np.testing.assert_array_equal(app.renderer.film.sample_counts() != counts, band)
+            banded_rows += band.any(axis=1).sum()
+        assert banded_rows >= 1
         shown = window_buffer_to_image(app.last_frame)
         np.testing.assert_array_equal(shown, unpack_rgba8(app.display.shown))
         assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1
