@@ -184,14 +184,6 @@ class ResolutionController:
         left = self.render_budget() - probe_seconds
         return int(min(max(left * probe_slices / probe_seconds, 0.0), rest))
 
-    def still_rest_slices(self, probe_seconds: float, probe_slices: int, budget: float) -> int:
-        """Pixel slices a still frame renders after its first `probe_slices` took `probe_seconds`:
-        as many as fit the rest of `budget` at the probe's own cost (none if it used it up)."""
-        if probe_slices <= 0 or not math.isfinite(probe_seconds) or probe_seconds <= 0.0:
-            return 0
-        rest = (budget - probe_seconds) * probe_slices / probe_seconds
-        return int(min(max(rest, 0.0), self.max_spp * ROUND_SLICES - probe_slices))
-
     def size_for(self, scale: float) -> tuple[int, int]:
         w, h = self.full_size
         return max(1, min(w, round(w * scale))), max(1, min(h, round(h * scale)))

@@ -41,7 +41,7 @@ from renderer.camera import CameraFrame
 from renderer.denoise import DenoiseInput, Denoiser, unavailable_reason
 from renderer.image_io import write_exr, write_png
 from renderer.integrators import INTEGRATORS, integrator_names
-from renderer.pixel_slices import BANDS, ROUND_SLICES, spp_text
+from renderer.pixel_slices import ROUND_SLICES, spp_text
 from renderer.renderer import AdaptiveSettings, Renderer
 from renderer.scene.catalog import load_any, scene_files
 from renderer.tonemap import TONEMAPPERS, quantize
@@ -393,10 +393,6 @@ class ViewerApp:
         # sppm's frames take steps of its whole-image iterations (a share of one while still)
         if plan.interactive and plan.slices == ROUND_SLICES and self._pixel_sliced():
             self._render_moving(renderer, frame, integrator, features, t0)
-        elif (not plan.interactive and 2 <= plan.slices < ROUND_SLICES and renderer.round_order() == BANDS
-              and self._pixel_sliced()):
-            self._render_still_bands(renderer, frame, integrator, features, plan.slices, t0,
-                                     s.resolution.still_budget(reserved, asked))
         else:
             slices = plan.slices
             if not plan.interactive:  # sppm's steps are planned from their own measured costs
@@ -450,19 +446,6 @@ class ViewerApp:
         ti.sync()
         rest = self.session.resolution.moving_rest_slices(time.perf_counter() - start, MOVING_PROBE_SLICES)
         self.moving_slices = MOVING_PROBE_SLICES + rest
-        if rest > 0:
-            renderer.render_slices(frame, rest, integrator, self.session.max_depth, features=features)
-
-    def _render_still_bands(self, renderer: Renderer, frame, integrator: str, features, slices: int, start: float,
-                            budget: float) -> None:
-        """A still frame past the first round (bands of rows): half its planned slices, then as
-        many more as the budget allows at what that half cost. Bands differ in cost (one holds the
-        model, the next sky), and the next band costs about what its neighbour did, whereas the
-        plan's cost is the image's average: planned alone, frames over expensive bands ran long."""
-        probe = slices // 2
-        renderer.render_slices(frame, probe, integrator, self.session.max_depth, features=features)
-        ti.sync()
-        rest = self.session.resolution.still_rest_slices(time.perf_counter() - start, probe, budget)
         if rest > 0:
             renderer.render_slices(frame, rest, integrator, self.session.max_depth, features=features)
 

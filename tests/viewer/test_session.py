@@ -129,16 +129,6 @@ def test_a_moving_frame_plans_its_rest_from_its_first_quarter():
         assert ctl.moving_rest_slices(bad) == rest  # nothing measured: render as planned
 
 
-def test_a_still_band_frame_plans_its_rest_from_its_first_half():
-    ctl = ResolutionController(FULL, target_seconds=0.05, max_spp=2)
-    budget = 0.04
-    assert ctl.still_rest_slices(0.01, 8, budget) == 24  # a quarter of the budget: three times as many more
-    assert ctl.still_rest_slices(0.04, 8, budget) == 0 and ctl.still_rest_slices(0.1, 8, budget) == 0  # dear band
-    assert ctl.still_rest_slices(1e-9, 8, budget) == 2 * ROUND_SLICES - 8  # at most max_spp samples a frame
-    for bad in (0.0, -1.0, math.nan, math.inf):
-        assert ctl.still_rest_slices(bad, 8, budget) == 0  # nothing measured: only the probe
-
-
 def test_still_slices_fill_the_budget():
     ctl = ResolutionController(FULL, target_seconds=0.05)
     assert ctl.still_slices() == 1  # nothing measured: the cheapest frame there is
