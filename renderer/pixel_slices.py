@@ -12,17 +12,20 @@ sequence of samples is the same however the rounds were cut into passes. A rende
 bit-identical whatever slices its passes took (frames of the viewer, chunks of `render`, a
 resumed checkpoint).
 
-A round may also be cut into bands of rows (BANDS): slice r is the rows [r h / ROUND_SLICES,
-(r + 1) h / ROUND_SLICES) counted from the top, so a pass over a few slices is a block of whole
-rows, visited in raster order. The viewer renders its still frames so after the first round
-(which keeps the interleaved order: an image refining evenly from a coarse one): a partial pass
-over interleaved slices costs more per sample than the same pixels as rows (their neighbours in
-the loop are 2-16 pixels apart, in memory and in the scene), measured in one process, passes of
-one 40 ms frame's slices alternated: bunnies / mis 1.33x, textured / mis 1.53x, pool / mis 1.14x,
-Cornell box / path 1.03x, showcase / path 1.02x. Which pixels a pass takes never changes their
-values (each continues at its own sample index), so either order gives the same film; an order
-is a property of a render, and everything that maps its slices to pixels (the display's partial
-redraws) is told which.
+A round may also be cut into bands of rows (BANDS): the image's rows, counted from the top, in
+ROUND_SLICES bands [b h / ROUND_SLICES, (b + 1) h / ROUND_SLICES), slice r being band
+bit_reverse(r). A band is whole rows visited in raster order; the bit reversal spreads the bands
+of consecutive slices over the image as the Bayer order spreads its pixels, so a pass over a few
+slices meets the scene's cheap and dear rows alike and costs what the image's average says (with
+bands taken top to bottom a frame over the model ran 2-6x its budget). The viewer renders its
+still frames so after the first round (which keeps the interleaved order: an image refining
+evenly from a coarse one): a partial pass over interleaved slices costs more per sample than the
+same pixels as rows (their neighbours in the loop are 2-16 pixels apart, in memory and in the
+scene), measured in one process, passes of one 40 ms frame's slices alternated, contiguous bands:
+bunnies / mis 1.33x, textured / mis 1.53x, pool / mis 1.14x, Cornell box / path 1.03x,
+showcase / path 1.02x. Which pixels a pass takes never changes their values (each continues at
+its own sample index), so either order gives the same film; an order is a property of a render,
+and everything that maps its slices to pixels (the display's partial redraws) is told which.
 """
 import numpy as np
 import taichi as ti
@@ -31,16 +34,23 @@ CELL_BITS = 4
 CELL = 1 << CELL_BITS  # cells of 16 x 16 pixels
 ROUND_SLICES = CELL * CELL  # 256 slices make one sample per pixel
 INTERLEAVED = 0  # slice r: the pixel of Bayer rank r in every CELL x CELL cell
-BANDS = 1  # slice r: a band of whole rows (band_start)
+BANDS = 1  # slice r: the band of whole rows bit_reverse(r) (band_start)
+
+
+@ti.func
+def bit_reverse(rank):
+    """rank's 2 * CELL_BITS bits reversed (the band of slice `rank` under BANDS)."""
+    reversed_rank = 0
+    for b in ti.static(range(2 * CELL_BITS)):
+        reversed_rank |= ((rank >> b) & 1) << (2 * CELL_BITS - 1 - b)
+    return reversed_rank
 
 
 @ti.func
 def slice_offset(rank):
     """(x, y) in the cell of slice `rank` in [0, ROUND_SLICES): the inverse of the Bayer matrix
     B(x, y) = bit_reverse(interleave(x ^ y, y)) (x ^ y on the odd bits, y on the even bits)."""
-    reversed_rank = 0
-    for b in ti.static(range(2 * CELL_BITS)):
-        reversed_rank |= ((rank >> b) & 1) << (2 * CELL_BITS - 1 - b)
+    reversed_rank = bit_reverse(rank)
     x = 0
     y = 0
     for i in ti.static(range(CELL_BITS)):
@@ -52,9 +62,15 @@ def slice_offset(rank):
 
 
 @ti.func
-def band_start(rank, height):
-    """The first row, counted from the top, of band `rank` (BANDS); band_start(ROUND_SLICES) = height."""
-    return rank * height // ROUND_SLICES
+def band_start(band, height):
+    """The first row, counted from the top, of band `band` (BANDS); band_start(ROUND_SLICES) = height."""
+    return band * height // ROUND_SLICES
+
+
+@ti.func
+def band_rows(height):
+    """Rows of the tallest band (BANDS)."""
+    return (height + ROUND_SLICES - 1) // ROUND_SLICES
 
 
 @ti.func
@@ -68,7 +84,8 @@ def slice_pixel(i, slice_first, slice_count, width, height, order=INTERLEAVED):
     their coherence and a pass of 255 slices cost 1.02 ms a slice against a whole round's 0.81 at
     960x540 on two threads). (x, y) may fall outside the image in a partial pass (the last row
     and column of cells are cut by the image's edge): callers skip those. With `order` BANDS a
-    partial pass is its bands' rows, top to bottom, each left to right.
+    partial pass visits its slices' bands in turn, each row by row, left to right; each band has
+    the loop indices of the tallest (band_rows), those beyond its own rows falling outside.
     """
     x = 0
     y = 0
@@ -76,8 +93,13 @@ def slice_pixel(i, slice_first, slice_count, width, height, order=INTERLEAVED):
         x = i % width
         y = i // width
     elif order == BANDS:
+        per_band = band_rows(height) * width
+        band = bit_reverse(slice_first + i // per_band)
+        row = band_start(band, height) + (i % per_band) // width
         x = i % width
-        y = height - 1 - (band_start(slice_first, height) + i // width)
+        y = height  # outside: a row past this band's own
+        if row < band_start(band + 1, height):
+            y = height - 1 - row
     else:
         cells_x = (width + CELL - 1) >> CELL_BITS
         ox, oy = slice_offset(slice_rank(i, slice_first, slice_count))
@@ -94,17 +116,26 @@ def slice_rank(i, slice_first, slice_count):
 
 
 @ti.func
-def pass_length(slice_count, width, height, slice_first=0, order=INTERLEAVED):
-    """Loop indices of a pass over `slice_count` slices from `slice_first` (see slice_pixel)."""
+def pass_length(slice_count, width, height, order=INTERLEAVED):
+    """Loop indices of a pass over `slice_count` slices (see slice_pixel)."""
     n = width * height
     if slice_count < ROUND_SLICES and order == BANDS:
-        n = (band_start(slice_first + slice_count, height) - band_start(slice_first, height)) * width
+        n = slice_count * band_rows(height) * width
     elif slice_count < ROUND_SLICES:
         n = slice_count * ((width + CELL - 1) >> CELL_BITS) * ((height + CELL - 1) >> CELL_BITS)
     return n
 
 
 # --- numpy (tests, and the host's view of which pixels a slice holds) -----------------------------
+
+
+def bit_reverse_array(ranks: np.ndarray) -> np.ndarray:
+    """numpy twin of bit_reverse."""
+    ranks = np.asarray(ranks)
+    out = np.zeros_like(ranks)
+    for b in range(2 * CELL_BITS):
+        out |= ((ranks >> b) & 1) << (2 * CELL_BITS - 1 - b)
+    return out
 
 
 def bayer_matrix() -> np.ndarray:
@@ -114,10 +145,7 @@ def bayer_matrix() -> np.ndarray:
     for i in range(CELL_BITS):
         mixed |= (((x ^ y) >> i) & 1) << (2 * i + 1)
         mixed |= ((y >> i) & 1) << (2 * i)
-    reversed_rank = np.zeros_like(mixed)
-    for b in range(2 * CELL_BITS):
-        reversed_rank |= ((mixed >> b) & 1) << (2 * CELL_BITS - 1 - b)
-    return reversed_rank
+    return bit_reverse_array(mixed)
 
 
 def slice_mask(slice_first: int, slice_count: int, width: int, height: int, order: int = INTERLEAVED) -> np.ndarray:
@@ -126,8 +154,9 @@ def slice_mask(slice_first: int, slice_count: int, width: int, height: int, orde
         return np.ones((height, width), bool)
     if order == BANDS:
         mask = np.zeros((height, width), bool)
-        top_rows = slice(slice_first * height // ROUND_SLICES, (slice_first + slice_count) * height // ROUND_SLICES)
-        mask[::-1][top_rows] = True  # bands count rows from the top, the mask's row 0 is y 0
+        from_top = mask[::-1]  # bands count rows from the top, the mask's row 0 is y 0
+        for band in bit_reverse_array(np.arange(slice_first, slice_first + slice_count)):
+            from_top[band * height // ROUND_SLICES:(band + 1) * height // ROUND_SLICES] = True
         return mask
     ranks = np.tile(bayer_matrix(), ((height + CELL - 1) // CELL, (width + CELL - 1) // CELL))[:height, :width]
     return (ranks >= slice_first) & (ranks < slice_first + slice_count)

@@ -42,7 +42,7 @@ class RenderProgram:
                right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
         """`spp` samples for each pixel of slices [slice_first, slice_first + slice_count) of a round
         cut in `order` (pixel_slices: INTERLEAVED or BANDS)."""
-        for i in range(pass_length(slice_count, width, height, slice_first, order)):
+        for i in range(pass_length(slice_count, width, height, order)):
             x, y = slice_pixel(i, slice_first, slice_count, width, height, order)
             if x < width and y < height:
                 # A pixel adaptive sampling has stopped (renderer/adaptive.py) takes no more samples;

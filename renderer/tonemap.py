@@ -189,7 +189,7 @@ def _tonemap_packed_kernel(
     # partial one only the pixels of those slices (1:1 with the film, the ones a render of the
     # same slices changed), with `blocks` (a first round) each one's fill block.
     out_width, out_height = out.shape[0], out.shape[1]
-    for i in range(pass_length(slice_count, out_width, out_height, slice_first, order)):
+    for i in range(pass_length(slice_count, out_width, out_height, order)):
         x, y = slice_pixel(i, slice_first, slice_count, out_width, out_height, order)
         side = 1
         if blocks:

@@ -23,7 +23,7 @@ def test_the_bayer_order_is_a_permutation_whose_prefixes_are_regular_grids():
 
 @ti.kernel
 def _visit(visits: ti.types.ndarray(), first: ti.i32, count: ti.i32, width: ti.i32, height: ti.i32, order: ti.i32):
-    for i in range(pass_length(count, width, height, first, order)):
+    for i in range(pass_length(count, width, height, order)):
         x, y = slice_pixel(i, first, count, width, height, order)
         if x < width and y < height:
             ti.atomic_add(visits[height - 1 - y, x], 1)  # row 0 at the top, as the film's arrays
@@ -44,12 +44,16 @@ def test_passes_over_slices_visit_their_pixels_and_a_round_visits_each_once(widt
     np.testing.assert_array_equal(whole, 1)
 
 
-def test_bands_are_whole_rows_from_the_top():
+def test_bands_are_whole_rows_spread_over_the_image():
     width, height = 7, 512  # two rows a band
-    for rank in (0, 1, 200, 255):
-        rows = np.nonzero(slice_mask(rank, 1, width, height, BANDS)[::-1].any(axis=1))[0]  # row 0 at the top
-        np.testing.assert_array_equal(rows, [2 * rank, 2 * rank + 1])
-        assert slice_mask(rank, 1, width, height, BANDS)[::-1][rows].all()
+    for rank, band in ((0, 0), (1, 128), (2, 64), (3, 192), (255, 255)):  # band = rank's 8 bits reversed
+        mask = slice_mask(rank, 1, width, height, BANDS)[::-1]  # row 0 at the top
+        np.testing.assert_array_equal(np.nonzero(mask.any(axis=1))[0], [2 * band, 2 * band + 1])
+        assert mask[2 * band:2 * band + 2].all()
+    # The first 2^k slices of a round are bands evenly spaced over the image.
+    for k in range(1, 9):
+        tops = np.nonzero(slice_mask(0, 2**k, width, height, BANDS)[::-1][:, 0])[0][::2]
+        assert np.all(np.diff(tops) == height // 2**k)
 
 
 def test_the_display_fills_unreached_pixels_from_the_nearest_sampled_grid_point():

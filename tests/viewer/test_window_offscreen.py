@@ -337,6 +337,13 @@ def test_still_frames_redraw_only_the_pixels_they_rendered(app):
         shown = window_buffer_to_image(app.last_frame)
         np.testing.assert_array_equal(shown, unpack_rgba8(app.display.shown))
         assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1
+        resolution.target_seconds = target  # frames of several bands, spread over the image
+        for _ in range(3):
+            app.step()
+        assert not app.last_plan.reset and app.renderer.slices_done % ROUND_SLICES != 0
+        shown = window_buffer_to_image(app.last_frame)
+        np.testing.assert_array_equal(shown, unpack_rgba8(app.display.shown))
+        assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1
     finally:
         resolution.target_seconds = target
 
