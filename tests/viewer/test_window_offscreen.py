@@ -324,7 +324,7 @@ def test_still_frames_redraw_only_the_pixels_they_rendered(app):
             app.step()
         resolution.target_seconds = 1e-6  # a budget of one slice per frame
         banded_rows = 0
-        for _ in range(4):  # 4 consecutive slices hold at least one row of 72 (a band is 72/256 rows)
+        for _ in range(64):  # until three bands held rows (at 72 rows, a band holds 72/256 on average)
             slices, counts = app.renderer.slices_done, app.renderer.film.sample_counts()
             app.step()
             assert app.renderer.slices_done == slices + 1 and not app.last_plan.reset
@@ -333,7 +333,9 @@ def test_still_frames_redraw_only_the_pixels_they_rendered(app):
             band = slice_mask(slices % ROUND_SLICES, 1, *SIZE, BANDS)[::-1]
             np.testing.assert_array_equal(app.renderer.film.sample_counts() != counts, band)
             banded_rows += band.any(axis=1).sum()
-        assert banded_rows >= 1
+            if banded_rows >= 3:
+                break
+        assert banded_rows >= 3
         shown = window_buffer_to_image(app.last_frame)
         np.testing.assert_array_equal(shown, unpack_rgba8(app.display.shown))
         assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1
