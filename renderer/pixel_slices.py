@@ -17,13 +17,16 @@ ROUND_SLICES bands [b h / ROUND_SLICES, (b + 1) h / ROUND_SLICES), slice r being
 bit_reverse(r). A band is whole rows visited in raster order; the bit reversal spreads the bands
 of consecutive slices over the image as the Bayer order spreads its pixels, so a pass over a few
 slices meets the scene's cheap and dear rows alike and costs what the image's average says (with
-bands taken top to bottom a frame over the model ran 2-6x its budget). The viewer renders its
-still frames so after the first round (which keeps the interleaved order: an image refining
-evenly from a coarse one): a partial pass over interleaved slices costs more per sample than the
-same pixels as rows (their neighbours in the loop are 2-16 pixels apart, in memory and in the
-scene), measured in one process, passes of one 40 ms frame's slices alternated, contiguous bands:
-bunnies / mis 1.33x, textured / mis 1.53x, pool / mis 1.14x, Cornell box / path 1.03x,
-showcase / path 1.02x. Which pixels a pass takes never changes their values (each continues at
+bands taken top to bottom, frames planned at the average ran long over the model: bunnies / mis
+p95 input latency 106-120 ms in a `bench interactive` run). The viewer renders its still frames
+so after the first round (which keeps the interleaved order: an image refining evenly from a
+coarse one): a partial pass over interleaved slices costs more per sample than the same pixels
+as rows (their neighbours in the loop are 2-16 pixels apart, in memory and in the scene).
+`python scripts/slice_order_cost.py 3 cornell_box/path bunnies/mis textured/mis` (passes of one
+40 ms frame's slices, alternated in one process), interleaved / bands: 1.06, 1.38, 1.29. A band
+pass has the loop indices of the tallest band for each (3 rows at 540, 2.1 on average): the
+indices past a band's rows only compute their pixel and skip. Which pixels a pass takes never
+changes their values (each continues at
 its own sample index), so either order gives the same film; an order is a property of a render,
 and everything that maps its slices to pixels (the display's partial redraws) is told which.
 """
@@ -80,9 +83,9 @@ def slice_pixel(i, slice_first, slice_count, width, height, order=INTERLEAVED):
     A whole round (slice_count == ROUND_SLICES) visits the pixels in raster order (neighbouring
     loop indices are neighbouring pixels, as a plain full pass); a partial one visits cell after
     cell, each cell's pixels of those slices together (neighbouring loop indices lie within one
-    16x16 cell: taking each slice across the image in turn instead, the Cornell box's rays lost
-    their coherence and a pass of 255 slices cost 1.02 ms a slice against a whole round's 0.81 at
-    960x540 on two threads). (x, y) may fall outside the image in a partial pass (the last row
+    16x16 cell: taking each slice across the image in turn instead, a pass of 255 slices of the
+    Cornell box cost 1.02 ms a slice against a whole round's 0.81 at 960x540 on two threads, with
+    the film then stored y fastest: renderer/pixel_fields.py). (x, y) may fall outside the image in a partial pass (the last row
     and column of cells are cut by the image's edge): callers skip those. With `order` BANDS a
     partial pass visits its slices' bands in turn, each row by row, left to right; each band has
     the loop indices of the tallest (band_rows), those beyond its own rows falling outside.

@@ -272,8 +272,8 @@ class Renderer:
                        max_depth, *camera.kernel_args())
 
     def round_order(self, slices_done: int | None = None) -> int:
-        """How the round holding slice `slices_done` (default: the next one) is cut into slices
-        (pixel_slices.INTERLEAVED or BANDS)."""
+        """How the round holding slice `slices_done` since the last reset (default: the next one)
+        is cut into slices (pixel_slices.INTERLEAVED or BANDS): the display redraws by it."""
         done = self.slices_done if slices_done is None else slices_done
         return BANDS if self.bands_after_first_round and done >= ROUND_SLICES else INTERLEAVED
 

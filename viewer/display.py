@@ -13,12 +13,12 @@ a frame that rendered nothing and changed no display setting tone-maps nothing.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Hashable, Optional
+from typing import Callable, Hashable, Optional
 
 import numpy as np
 from taichi.ui.utils import get_field_info
 
-from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
+from renderer.pixel_slices import INTERLEAVED, ROUND_SLICES
 from renderer.tonemap import tonemap_array, tonemap_packed, unpack_rgba8
 
 # What update() did, for the frame loop's accounting and for tests.
@@ -69,15 +69,15 @@ class DisplayImages:
         return self._reduced[:size[0] * size[1]].reshape(size)  # contiguous, as the canvas needs
 
     def update(self, film, accumulation: Hashable, slices_done: int, settings: DisplaySettings,
-               pixel_sliced: bool = True, bands_after_first_round: bool = False) -> str:
+               pixel_sliced: bool = True, round_order: Optional[Callable[[int], int]] = None) -> str:
         """Make `shown` the film's image (active region, `slices_done` pixel slices since its last
         reset); returns UPDATE_NONE, UPDATE_SLICES (only the pixels the slices rendered since the
         last update changed) or UPDATE_FULL.
 
         `pixel_sliced` False: the slices are steps of whole-image iterations (sppm), and the film
         changes everywhere when one completes; until the first has, the canvas keeps what it
-        shows (the last moving frame) rather than an empty film. `bands_after_first_round`: the
-        renderer cut its rounds after the first into bands of rows (Renderer.round_order)."""
+        shows (the last moving frame) rather than an empty film. `round_order(slices_done)`: how
+        the renderer cut the round holding that slice (Renderer.round_order; None: interleaved)."""
         size = (film.width, film.height)
         state = (size, accumulation, settings)
         if not pixel_sliced:
@@ -90,13 +90,12 @@ class DisplayImages:
             first = self.slices_shown % ROUND_SLICES
             head = min(new_slices, ROUND_SLICES - first)
             first_round = self.slices_shown < ROUND_SLICES
-            later = BANDS if bands_after_first_round else INTERLEAVED  # the order of rounds after the first
+            order_of = round_order or (lambda _done: INTERLEAVED)
             tonemap_packed(film, self.shown, settings.exposure, settings.tonemapper, filled=first_round,
-                           slices=(first, head), first_round=first_round,
-                           order=INTERLEAVED if first_round else later)
+                           slices=(first, head), first_round=first_round, order=order_of(self.slices_shown))
             if new_slices > head:  # the frame's slices ran on into the next round
                 tonemap_packed(film, self.shown, settings.exposure, settings.tonemapper, filled=False,
-                               slices=(0, new_slices - head), order=later)
+                               slices=(0, new_slices - head), order=order_of(self.slices_shown + head))
             kind = UPDATE_SLICES
         else:
             tonemap_packed(film, self.shown, settings.exposure, settings.tonemapper,
@@ -118,12 +117,13 @@ class DisplayImages:
         return UPDATE_FULL
 
     def window_sized_image(self, film, accumulation: Hashable, slices_done: int, settings: DisplaySettings,
-                           pixel_sliced: bool = True, bands_after_first_round: bool = False) -> np.ndarray:
+                           pixel_sliced: bool = True, round_order: Optional[Callable[[int], int]] = None
+                           ) -> np.ndarray:
         """uint8 (height, width, 3), row 0 at the top: the film as the canvas shows it at the window
         size (a screenshot). While moving the canvas stretches a smaller image: then the film is
         tone-mapped into the window-sized image (bilinear), which is not on the canvas then."""
         if (film.width, film.height) == self.window_image.shape and (pixel_sliced or slices_done >= ROUND_SLICES):
-            self.update(film, accumulation, slices_done, settings, pixel_sliced, bands_after_first_round)
+            self.update(film, accumulation, slices_done, settings, pixel_sliced, round_order)
         else:
             tonemap_packed(film, self.window_image, settings.exposure, settings.tonemapper,
                            filled=pixel_sliced and slices_done < ROUND_SLICES)

@@ -268,7 +268,7 @@ class ViewerApp:
         png, exr = screenshot_paths(self.screenshot_folder, r.scene.name, s.integrator, r.samples_done, datetime.now())
         write_png(png, self.display.window_sized_image(r.film, self._accumulation(), r.slices_done,
                                                        self._display_settings(), self._pixel_sliced(),
-                                                       r.bands_after_first_round))
+                                                       r.round_order))
         write_exr(exr, r.shown_image())
         saved = f"{png} and {exr.name}"
         denoised = self.shown_denoised
@@ -426,7 +426,7 @@ class ViewerApp:
             t0 = time.perf_counter()
             self.last_display_update = self.display.update(renderer.film, self._accumulation(),
                                                            renderer.slices_done, self._display_settings(),
-                                                           self._pixel_sliced(), renderer.bands_after_first_round)
+                                                           self._pixel_sliced(), renderer.round_order)
             self._present(now)
             present_seconds = time.perf_counter() - t0
             if not fresh:
