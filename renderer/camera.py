@@ -40,10 +40,19 @@ class CameraFrame:
         return cls.look_at(spec.position, spec.look_at, spec.up, spec.fov, spec.aperture, spec.focus_distance)
 
     def kernel_args(self):
-        """The values `generate_ray` takes, in order."""
-        v = ti.math.vec3
-        return (v(*self.position), v(*self.forward), v(*self.right), v(*self.up),
-                math.tan(math.radians(self.fov) * 0.5), self.aperture, self.focus_distance)
+        """The values `generate_ray` takes, in order; made once per frame (a still view launches
+        every frame with the same camera, and building Taichi vectors in Python costs ~0.1 ms each)."""
+        args = self.__dict__.get("_kernel_args")
+        if args is None:
+            v = ti.math.vec3
+            args = (v(*self.position), v(*self.forward), v(*self.right), v(*self.up),
+                    math.tan(math.radians(self.fov) * 0.5), self.aperture, self.focus_distance)
+            object.__setattr__(self, "_kernel_args", args)  # a cache, not a field: eq and hash ignore it
+        return args
+
+    def __getstate__(self):
+        """Pickled (to a distributed worker) without the cached Taichi values."""
+        return {k: v for k, v in self.__dict__.items() if k != "_kernel_args"}
 
 
 @ti.func

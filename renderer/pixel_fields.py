@@ -22,3 +22,24 @@ def pixel_scalar(dtype, shape: tuple[int, int]):
 def pixel_vector(n: int, dtype, shape: tuple[int, int]):
     """A per-pixel n-vector field of `shape` (width, height), x varying fastest in memory."""
     return ti.Vector.field(n, dtype, shape=shape, order=PIXEL_ORDER)
+
+
+@ti.kernel
+def _row_sums(field: ti.template(), width: ti.i32, height: ti.i32, out: ti.types.ndarray(dtype=ti.f32, ndim=2)):
+    for y in range(height):
+        for c in ti.static(range(field.n)):
+            total = 0.0
+            for x in range(width):
+                total += field[x, y][c]
+            out[y, c] = total
+
+
+def row_sums(field, width: int, height: int):
+    """Per-row sums, float32 (height, n), of a per-pixel n-vector field's [0:width, 0:height]:
+    a reduction on the device (a row of f32 sums keeps ~7 digits), the rows summed in float64 by
+    the caller. Downloading the field to sum it took ~35 ms at 960x540, a frame of the viewer."""
+    import numpy as np
+
+    out = np.zeros((height, field.n), np.float32)
+    _row_sums(field, width, height, out)
+    return out

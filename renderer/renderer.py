@@ -20,7 +20,7 @@ from renderer.lights.environment import Environment
 from renderer.materials.table import MaterialTable
 from renderer.materials.texture_sampler import TextureTable
 from renderer.media.table import MediaTable
-from renderer.pixel_fields import pixel_vector
+from renderer.pixel_fields import pixel_vector, row_sums
 from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES, bit_reverse_array, filled_mean_array
 from renderer.program import RenderProgram
 from renderer.sampling.sampler import make_sampler
@@ -329,7 +329,7 @@ class Renderer:
     def work_stats(self) -> dict:
         """Mean geometry work per ray (march steps on SDF scenes, BVH node visits on mesh scenes),
         primitive tests per ray (mesh scenes), and rays per sample."""
-        totals = self.work.to_numpy()[: self.film.width, : self.film.height].reshape(-1, 3).sum(axis=0, dtype=np.float64)
+        totals = row_sums(self.work, self.film.width, self.film.height).sum(axis=0, dtype=np.float64)
         samples = max(1.0, self.mean_spp * self.film.width * self.film.height)
         rays = max(totals[2], 1.0)
         return {"work_per_ray": totals[0] / rays, "tests_per_ray": totals[1] / rays,

@@ -10,6 +10,7 @@ MAX_DT = 0.25  # seconds; a longer stall must not teleport the camera
 SHIFT_MULTIPLIER = 4.0
 MIN_SPEED, MAX_SPEED = 0.01, 1000.0  # m/s
 SPEED_STEP = 1.25
+MOVEMENT_AXES = ("w", "s", "a", "d", "e", "q")  # the keys that move the camera (update: axis)
 
 
 class FreeLookController:
@@ -53,6 +54,9 @@ class FreeLookController:
             self._last_cursor = None
 
         # Move: along the (new) view frame, speed * dt metres in total.
+        moving = dt > 0.0 and any(k in keys for k in MOVEMENT_AXES)
+        if not moving and yaw == old.yaw and pitch == old.pitch:
+            return False  # a still frame: nothing to recompute
         forward, right, _ = old.replace(yaw=yaw, pitch=pitch).basis()
         axis = lambda pos, neg: int(pos in keys) - int(neg in keys)
         direction = axis("w", "s") * forward + axis("d", "a") * right + axis("e", "q") * WORLD_UP

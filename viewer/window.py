@@ -157,6 +157,7 @@ class ViewerApp:
         self._pending_cycle: Optional[tuple[int, bool]] = None  # (step, notice shown) of a scene to load
         self.compile_seconds: Optional[float] = None  # the last compiling frame's render call
         self._features = None  # this frame's Features (None until the frame knows them)
+        self._camera = (None, None)  # (CameraState, its CameraFrame): still frames reuse the frame
         self._last_time: Optional[float] = None
         self._frame_ms = 0.0
         self._fps = RateMeter()
@@ -170,6 +171,13 @@ class ViewerApp:
         self._stats = {"noise": None, "rejected": 0, "work_per_ray": None, "tests_per_ray": None}
         self._drag_blocked = False
         self._buttons_before: frozenset = frozenset()
+
+    def _camera_frame(self) -> CameraFrame:
+        """The controller's camera as the renderer takes it, made again only when it changed."""
+        state = self.session.controller.state
+        if self._camera[0] != state:
+            self._camera = (state, camera_frame(state))
+        return self._camera[1]
 
     # --- scenes -------------------------------------------------------------------------------
     @property
@@ -288,7 +296,7 @@ class ViewerApp:
         if cursor is None:
             return
         u, v = (min(max(float(c), 0.0), 1.0) for c in cursor)  # GGUI: y up, like the probe
-        frame = camera_frame(self.session.controller.state)
+        frame = self._camera_frame()
         try:
             distance = self.renderer.focus_distance_at(frame, u, v, self.session.integrator)
         except Exception as error:  # e.g. the probe kernel failing to compile: report, go on
@@ -362,7 +370,7 @@ class ViewerApp:
 
         renderer = self.renderer
         integrator = s.integrator
-        frame = camera_frame(s.controller.state)
+        frame = self._camera_frame()
         features = self._features = renderer.features(frame)
         key = (id(renderer), integrator, features)
         fresh = not renderer.is_compiled(integrator, features)
@@ -514,7 +522,7 @@ class ViewerApp:
         self._stats.update(noise=noise, rejected=stats["rejected"])
 
     def _refresh_work(self, renderer: Renderer, integrator: str) -> None:
-        """The HUD's geometry work per ray: a download and sum of the work field (~10 ms)."""
+        """The HUD's geometry work per ray: a per-row reduction of the work field on the device."""
         work = renderer.work_stats()
         self._stats.update(work_per_ray=work["work_per_ray"], tests_per_ray=work["tests_per_ray"])
 
@@ -531,7 +539,7 @@ class ViewerApp:
     def _current_features(self):
         """This frame's Features (those of the camera now, before the frame knows them)."""
         if self._features is None:
-            return self.renderer.features(camera_frame(self.session.controller.state))
+            return self.renderer.features(self._camera_frame())
         return self._features
 
     def _pixel_sliced(self) -> bool:

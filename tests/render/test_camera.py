@@ -59,3 +59,16 @@ def test_thin_lens_rays_of_a_pixel_meet_on_the_focus_plane():
     footprint = 2 * focus * math.tan(math.radians(20.0)) / 32
     spread = np.ptp(hits[..., :2], axis=1).max()
     assert spread <= footprint * 1.01, (spread, footprint)
+
+
+def test_kernel_args_are_made_once_and_left_out_of_pickles_and_equality():
+    import pickle
+
+    frame = CameraFrame.look_at((1.0, 2.0, 3.0), (0.0, 0.0, 0.0), fov=50.0, aperture=0.1, focus_distance=2.5)
+    args = frame.kernel_args()
+    assert frame.kernel_args() is args  # a still view's frames reuse them
+    copy = pickle.loads(pickle.dumps(frame))  # as a distributed worker receives a camera
+    assert copy == frame and hash(copy) == hash(frame) and "_kernel_args" not in copy.__dict__
+    again = copy.kernel_args()
+    assert [list(a) if hasattr(a, "__len__") else a for a in again] == \
+           [list(a) if hasattr(a, "__len__") else a for a in args]

@@ -72,6 +72,22 @@ def test_same_seed_same_image_and_split_passes_equal_one_pass(tmp_path):
     assert not np.array_equal(one, r.image())
 
 
+def test_work_stats_reduce_the_active_region_of_the_work_field(furnace_diffuse):
+    """The HUD's work per ray is reduced on the device row by row: it equals the sums of the
+    downloaded field over the active region (a smaller one after a reset to a lower size)."""
+    r = Renderer(furnace_diffuse)
+    camera = CameraFrame.from_spec(furnace_diffuse.camera)
+    for width, height in ((r.film.width, r.film.height), (r.film.width - 5, r.film.height - 3)):
+        r.reset(width, height)
+        r.render(camera, 3, integrator="path", seed=2)
+        totals = r.work.to_numpy()[:width, :height].reshape(-1, 3).sum(axis=0, dtype=np.float64)
+        stats = r.work_stats()
+        assert totals[2] > 0
+        assert stats["work_per_ray"] == pytest.approx(totals[0] / totals[2], rel=1e-6)
+        assert stats["tests_per_ray"] == pytest.approx(totals[1] / totals[2], rel=1e-6)
+        assert stats["rays_per_sample"] == pytest.approx(totals[2] / (3 * width * height), rel=1e-6)
+
+
 def test_white_furnace_diffuse_is_exactly_the_environment(furnace_diffuse):
     """Albedo 1 under a constant sky: every path returns the sky radiance, 0.5, exactly."""
     r = render(furnace_diffuse, 16)

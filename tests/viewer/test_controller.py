@@ -60,6 +60,16 @@ def test_idle_frames_report_no_change():
     assert ctl.state == ORIGIN
 
 
+def test_a_still_frame_keeps_the_very_same_state():
+    """Nothing held, no drag: the controller returns at once (a still view's frames recompute no
+    camera basis), keeping the state object itself."""
+    state = CameraState(position=(1, 2, 3), yaw=0.4, pitch=-0.2)
+    ctl = FreeLookController(state)
+    assert not ctl.update(1 / 60, {"shift", "x"}, (5.0, 5.0), False)
+    assert ctl.state is state
+    assert ctl.update(1 / 60, {"w"}, None, False) and ctl.state is not state
+
+
 def drag(path, dt):
     ctl = FreeLookController(ORIGIN)
     for p in path:
