@@ -9,6 +9,7 @@ touches). Measured in one process, layouts alternated (Cornell box, path, 960x54
 median of 5): a whole round cost 0.996 ms a slice with y fastest, 0.846 with x fastest; passes of
 16 slices 1.320 against 1.169. Loops over these fields go row by row (y outer, x inner) to match.
 """
+import numpy as np
 import taichi as ti
 
 PIXEL_ORDER = "ji"  # x fastest
@@ -38,8 +39,6 @@ def row_sums(field, width: int, height: int):
     """Per-row sums, float32 (height, n), of a per-pixel n-vector field's [0:width, 0:height]:
     a reduction on the device (a row of f32 sums keeps ~7 digits), the rows summed in float64 by
     the caller. Downloading the field to sum it took ~35 ms at 960x540, a frame of the viewer."""
-    import numpy as np
-
     out = np.zeros((height, field.n), np.float32)
     _row_sums(field, width, height, out)
     return out

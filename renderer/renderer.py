@@ -21,7 +21,8 @@ from renderer.materials.table import MaterialTable
 from renderer.materials.texture_sampler import TextureTable
 from renderer.media.table import MediaTable
 from renderer.pixel_fields import pixel_vector, row_sums
-from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES, bit_reverse_array, filled_mean_array
+from renderer.pixel_slices import (BANDS, INTERLEAVED, ROUND_SLICES, band_rows_array, bit_reverse_array,
+                                   filled_mean_array)
 from renderer.program import RenderProgram
 from renderer.sampling.sampler import make_sampler
 from renderer.scene.features import Features, scene_features
@@ -313,10 +314,8 @@ class Renderer:
         cursor = self.slices_done % ROUND_SLICES
         if cursor == 0 or self.round_order() == INTERLEAVED:
             return self.slices_done / ROUND_SLICES
-        height = self.film.height
-        band_rows = [(band + 1) * height // ROUND_SLICES - band * height // ROUND_SLICES
-                     for band in bit_reverse_array(np.arange(cursor))]
-        return self.samples_done + sum(band_rows) / height
+        top, bottom = band_rows_array(bit_reverse_array(np.arange(cursor)), self.film.height)
+        return self.samples_done + int((bottom - top).sum()) / self.film.height
 
     def focus_distance_at(self, camera: CameraFrame, u: float, v: float, integrator: str | None = None) -> float | None:
         """Distance along the view direction to the surface under (u, v) in [0,1]^2 (y up)."""

@@ -33,22 +33,29 @@ def round_seconds(program, args, order: int, slices_per_pass: int) -> float:
     return time.perf_counter() - start
 
 
-def measure(case: str, rounds: int) -> str:
+def compiled(case: str):
+    """(program, its render arguments after the pass's own) of "scene/integrator" at SIZE, compiled,
+    with the viewer's Renderer (AOVs kept)."""
     import taichi as ti
 
     from renderer.bench.common import load_named_scene
     from renderer.camera import CameraFrame
-    from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
     from renderer.renderer import Renderer
 
     name, integrator = case.split("/")
     scene = load_named_scene(name)
-    renderer = Renderer(scene, SIZE, aovs=True)  # as the viewer's
+    renderer = Renderer(scene, SIZE, aovs=True)
     camera = CameraFrame.from_spec(scene.camera)
     renderer.render(camera, 1, integrator)  # compiles
     ti.sync()
     program, seed, max_depth = renderer._launch(camera, integrator, None, None, None, None)
-    args = (seed, max_depth, *camera.kernel_args())
+    return program, (seed, max_depth, *camera.kernel_args())
+
+
+def measure(case: str, rounds: int) -> str:
+    from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
+
+    program, args = compiled(case)
     whole = round_seconds(program, args, INTERLEAVED, ROUND_SLICES)
     per_pass = max(1, min(ROUND_SLICES - 1, round(FRAME_SECONDS / (whole / ROUND_SLICES))))
     times = {"whole": [], "interleaved": [], "bands": []}

@@ -12,55 +12,28 @@ import copy
 import statistics
 import sys
 import warnings
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-SIZE = (960, 540)
+from slice_order_cost import ROOT, compiled, round_seconds  # the same passes, at the viewer's SIZE
+
 DEFAULT_CASES = ("cornell_box/mis", "bunnies/mis", "textured/mis", "showcase/mis")
 PASSES = (1, 12, 256)
 
 
-def round_ms_per_slice(program, args, slices_per_pass: int) -> float:
-    import time
-
-    import taichi as ti
-
+def measure(case: str, rounds: int) -> list[str]:
     from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
 
-    order = INTERLEAVED if slices_per_pass >= ROUND_SLICES else BANDS
-    start = time.perf_counter()
-    for first in range(0, ROUND_SLICES, slices_per_pass):
-        program.render(*SIZE, 1, first, min(slices_per_pass, ROUND_SLICES - first), order, *args)
-        ti.sync()
-    return (time.perf_counter() - start) / ROUND_SLICES * 1e3
-
-
-def measure(case: str, rounds: int) -> list[str]:
-    import taichi as ti
-
-    from renderer.bench.common import load_named_scene
-    from renderer.camera import CameraFrame
-    from renderer.renderer import Renderer
-
-    name, integrator = case.split("/")
-    scene = load_named_scene(name)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        renderer = Renderer(scene, SIZE)
-    camera = CameraFrame.from_spec(scene.camera)
-    renderer.render(camera, 1, integrator)
-    ti.sync()
-    spread = renderer.program(integrator, renderer.features(camera), scene.render.sampler)
+    spread, args = compiled(case)
     if not spread.spread:
         raise SystemExit("this back-end does not spread loops (CPU only)")
     plain = copy.copy(spread)  # another instance: Taichi compiles its kernels again, with spread off
     plain.spread = False
-    args = (scene.render.seed, scene.render.max_depth, *camera.kernel_args())
+    round_seconds(plain, args, BANDS, ROUND_SLICES - 1)  # compiles it outside the timings
     times = {(k, p): [] for k in PASSES for p in ("spread", "plain")}
     for _ in range(rounds):
         for k in PASSES:
-            times[(k, "spread")].append(round_ms_per_slice(spread, args, k))
-            times[(k, "plain")].append(round_ms_per_slice(plain, args, k))
+            order = INTERLEAVED if k >= ROUND_SLICES else BANDS
+            for name, program in (("spread", spread), ("plain", plain)):
+                times[(k, name)].append(round_seconds(program, args, order, k) / ROUND_SLICES * 1e3)
     lines = []
     for k in PASSES:
         a, b = times[(k, "spread")], times[(k, "plain")]
@@ -77,6 +50,7 @@ def main(argv: list[str]) -> int:
     rounds = int(argv[0]) if argv and argv[0].isdigit() else 3
     cases = [a for a in argv if not a.isdigit()] or list(DEFAULT_CASES)
     init_taichi("cpu")
+    warnings.simplefilter("ignore")
     for case in cases:
         for line in measure(case, rounds):
             print(line, flush=True)
