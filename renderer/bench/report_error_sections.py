@@ -271,6 +271,17 @@ def _paired(paired: dict | None) -> str:
     return paired_text(paired) if paired else MISSING
 
 
+def _adaptive_row(scene: dict, adaptive: dict) -> list:
+    """One adaptive render against the uniform render it was compared with (reports before
+    renders could end early compared every one with the scene's budget)."""
+    uniform = adaptive.get("uniform", scene["uniform"])
+    seconds = num(uniform["seconds"]) + (" (ended early)" if adaptive.get("ended_early") else "")
+    return [scene["scene"], seconds, uniform["spp"], uniform["rel_mse_corrected"], adaptive["threshold"],
+            adaptive["mean_spp"], pct(adaptive["stopped_fraction"], 0), adaptive["rel_mse_corrected"],
+            "yes" if adaptive["rel_mse_corrected"] < uniform["rel_mse_corrected"] else "no",
+            _paired(adaptive.get("paired")), _paired(adaptive.get("paired_trimmed"))]
+
+
 def denoise_section(report: dict) -> Section:
     entries = report.get("scenes", [])
     scenes = [s for s in entries if "curve" in s]
@@ -291,17 +302,14 @@ def denoise_section(report: dict) -> Section:
         f"{w}x{h}; relMSE less the reference's own noise. Target: denoised at 8 spp below raw at 128 spp.",
         table(["scene", "reference spp", "raw at 8 spp", "denoised at 8 spp", "quick at 8 spp", "raw at 128 spp",
                "raw spp to match denoised at 8", "target"], rows)]
-    rows = [[s["scene"], s["uniform"]["seconds"], s["uniform"]["spp"], s["uniform"]["rel_mse_corrected"],
-             a["threshold"], a["mean_spp"], pct(a["stopped_fraction"], 0), a["rel_mse_corrected"],
-             "yes" if a["rel_mse_corrected"] < s["uniform"]["rel_mse_corrected"] else "no",
-             _paired(a.get("paired")), _paired(a.get("paired_trimmed"))]
-            for s in scenes for a in s["adaptive"]]
+    rows = [_adaptive_row(s, a) for s in scenes for a in s["adaptive"]]
     section.blocks += [
         "Adaptive against uniform sampling at equal time (the budget: uniform sampling's time to "
-        f"{num(config.get('equal_time_spp'))} spp; relMSE less the reference's noise; paired z: the "
+        f"{num(config.get('equal_time_spp'))} spp, or the adaptive render's own time where it stopped every "
+        "pixel before it, \"ended early\"; relMSE less the reference's noise; paired z: the "
         f"per-pixel difference of the two errors over its standard error, same seed, |z| > {Z_SIGNIFICANT} a "
         "difference at the 5% level; trimmed: without the 0.1% of pixels with the largest errors):",
-        table(["scene", "budget s", "uniform spp", "uniform relMSE", "threshold", "adaptive mean spp", "stopped",
+        table(["scene", "equal time s", "uniform spp", "uniform relMSE", "threshold", "adaptive mean spp", "stopped",
                "adaptive relMSE", "adaptive better", "paired z", "paired z, trimmed"], rows)]
     frame = report.get("denoiser_frame_s")
     if isinstance(frame, (int, float)):

@@ -1,6 +1,7 @@
 """`bench denoise` on a tiny configuration: its curves, targets and report hold together."""
 import json
 
+import numpy as np
 import pytest
 
 from renderer.bench import denoise
@@ -39,11 +40,17 @@ def test_tiny_run_writes_curves_targets_and_a_plot(tmp_path, capsys):
     loose = max(scene["adaptive"], key=lambda a: a["threshold"])
     if loose["max_spp"] >= 2 * TINY.min_spp:
         assert loose["stopped_fraction"] > 0.0, loose
-    # The paired test compares the adaptive image with the uniform one at the budget's spp.
+    # The paired test compares the adaptive image with the uniform one at equal time: the budget's,
+    # or, where the adaptive render stopped every pixel before the budget, one of its own length.
     for adaptive in scene["adaptive"]:
-        paired = adaptive["paired"]
+        paired, uniform = adaptive["paired"], adaptive["uniform"]
         assert paired["a"] == pytest.approx(adaptive["rel_mse"], rel=1e-6)
-        assert paired["b"] == pytest.approx(scene["uniform"]["rel_mse"], rel=1e-6)
+        assert paired["b"] == pytest.approx(uniform["rel_mse"], rel=1e-6)
+        if adaptive["ended_early"]:
+            assert adaptive["stopped_fraction"] == 1.0
+            assert uniform["seconds"] < scene["uniform"]["seconds"] and uniform["spp"] <= scene["uniform"]["spp"]
+        else:
+            assert uniform == scene["uniform"]
         assert paired["standard_error"] > 0.0 and paired["z"] == pytest.approx(
             paired["difference"] / paired["standard_error"])
         assert adaptive["paired_trimmed"]["trim"] == 1e-3
@@ -59,3 +66,28 @@ def test_the_paired_verdict_needs_a_difference_at_the_five_percent_level():
     verdict = denoise.paired_verdict
     assert verdict({"z": -2.5}) == "better" and verdict({"z": 2.5}) == "worse"
     assert verdict({"z": -1.5}) == verdict({"z": 1.9}) == "tie" and verdict(None) == "n/a"
+
+
+def test_raced_renders_equal_renders_made_alone():
+    """Taking turns keeps each film aside between passes: a contestant's image is bit for bit the
+    render of as many slices made in one go, and every contestant gets at least its budget (or
+    stops every pixel first)."""
+    from renderer.bench.common import load_named_scene
+    from renderer.camera import CameraFrame
+    from renderer.renderer import AdaptiveSettings, Renderer
+
+    scene = load_named_scene("cornell_box")
+    renderer = Renderer(scene, (16, 9), aovs=True)
+    camera = CameraFrame.from_spec(scene.camera)
+    config = denoise.DenoiseBenchConfig(thresholds=(0.2,), min_spp=2)
+    contestants = [denoise.Contestant(None, 0.3), denoise.Contestant(0.2, 0.3)]
+    denoise.race(renderer, camera, contestants, config)
+    for contestant in contestants:
+        assert contestant.seconds >= contestant.budget_s or contestant.pixels_active == 0
+        renderer.restore(contestant.state, contestant.slices_done)
+        raced = renderer.image()
+        renderer.reset()
+        renderer.set_adaptive(None if contestant.threshold is None else AdaptiveSettings(contestant.threshold, 2))
+        renderer.render_slices(camera, contestant.slices_done, denoise.INTEGRATOR, seed=config.seed)
+        renderer.set_adaptive(None)
+        np.testing.assert_array_equal(raced, renderer.image())
