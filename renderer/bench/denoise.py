@@ -20,8 +20,8 @@ For each scene (cornell_box, bunnies, studio, showcase, textured), in one proces
    growing passes until that budget, and are compared at the budget. They take turns pass by pass
    (race(): each film is kept aside between its turns), so a change of the machine's speed hits
    all of them alike; run one after the other, that decided the verdicts. An adaptive render
-   that stops every pixel before the budget has taken less time: it is compared with a uniform
-   render of its own length instead (the table says "ended early").
+   that stops every pixel before the budget has taken less time: it is compared with the uniform
+   render as it was at about that time instead (the table says "ended early").
    All use the same seed, so a pixel's first samples are the same in both, and the
    difference of their errors is tested per pixel (common.error_difference: mean difference, its
    standard error over the pixels, z; |z| > common.Z_SIGNIFICANT is a difference at the 5% level, two-
@@ -46,7 +46,7 @@ from __future__ import annotations
 import statistics
 import time
 import warnings
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -129,10 +129,19 @@ class Contestant:
     seconds: float = 0.0
     pass_slices: int = 1
     pixels_active: int = 0
+    # With keep_turns, the film after each turn: (seconds, state, slices_done, pixels_active).
+    keep_turns: bool = False
+    turns: list = field(default_factory=list)
 
     @property
     def finished(self) -> bool:
         return self.state is not None and (self.seconds >= self.budget_s or self.pixels_active == 0)
+
+    def at(self, seconds: float) -> "Contestant":
+        """The contestant as it was after the kept turn that ended nearest `seconds`."""
+        when, state, slices_done, active = min(self.turns, key=lambda turn: abs(turn[0] - seconds))
+        return replace(self, state=state, slices_done=slices_done, seconds=when, pixels_active=active,
+                       keep_turns=False, turns=[])
 
 
 def take_turn(renderer, camera, contestant: Contestant, config: DenoiseBenchConfig) -> None:
@@ -160,6 +169,9 @@ def take_turn(renderer, camera, contestant: Contestant, config: DenoiseBenchConf
     contestant.pass_slices = max(1, min(4 * contestant.pass_slices, int(left / rate) + 1, int(PASS_S / rate)))
     contestant.state, contestant.slices_done = renderer.state(), renderer.slices_done
     contestant.pixels_active = renderer.pixels_active
+    if contestant.keep_turns:
+        contestant.turns.append((contestant.seconds, contestant.state, contestant.slices_done,
+                                 contestant.pixels_active))
 
 
 def race(renderer, camera, contestants: list[Contestant], config: DenoiseBenchConfig) -> None:
@@ -197,10 +209,11 @@ def at_equal_time(renderer, camera, reference, floor, budget_s: float, config: D
     renders' figures with their paired comparison against uniform).
 
     An adaptive render whose every pixel met the threshold before the budget ended there, having
-    taken less time: it is compared with a uniform render of its own length (raced against
-    nothing: made alone afterwards), since the budget's had more time. Each adaptive render's
-    figures carry the uniform render they were compared with (`uniform`) and whether it ended early."""
-    uniform = Contestant(None, budget_s)
+    taken less time: it is compared with the uniform render as it was at about that time (its
+    film after the turn that ended nearest; turns last at most PASS_S), since at the budget it
+    had more time. Each adaptive render's figures carry the uniform render they were compared
+    with (`uniform`) and whether it ended early."""
+    uniform = Contestant(None, budget_s, keep_turns=True)
     adaptive = [Contestant(threshold, budget_s) for threshold in config.thresholds]
     race(renderer, camera, [uniform, *adaptive], config)
     uniform_figures, uniform_image = contestant_result(renderer, uniform, reference, floor)
@@ -210,9 +223,7 @@ def at_equal_time(renderer, camera, reference, floor, budget_s: float, config: D
         compared, compared_image = uniform_figures, uniform_image
         figures["ended_early"] = contestant.pixels_active == 0 and contestant.seconds < EARLY_END * budget_s
         if figures["ended_early"]:
-            own = Contestant(None, contestant.seconds)
-            race(renderer, camera, [own], config)
-            compared, compared_image = contestant_result(renderer, own, reference, floor)
+            compared, compared_image = contestant_result(renderer, uniform.at(contestant.seconds), reference, floor)
         figures["uniform"] = uniform_summary(compared)
         figures["paired"] = error_difference(image, compared_image, reference, "rel_mse").as_dict()
         figures["paired_trimmed"] = error_difference(image, compared_image, reference, "rel_mse",
