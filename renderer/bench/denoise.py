@@ -279,8 +279,8 @@ def bench_scene(scene, denoiser, config: DenoiseBenchConfig) -> dict:
                                 "raw_spp": raw128["spp"], "passed": at8["denoised_corrected"] < raw128["raw_corrected"]}
 
     # Equal time: the budget is what uniform sampling took for equal_time_spp in the curve; the
-    # uniform render compared is made again in the same passes as the adaptive ones, right
-    # before them, so both pay the same launches and see the same machine.
+    # uniform render compared is made again, raced against the adaptive ones (at_equal_time), so
+    # all pay the same kind of passes and see the same machine.
     budget = (by_spp.get(config.equal_time_spp) or points[-1])["seconds"]
     log(f"[{scene.name}] uniform and adaptive at equal time, {budget:.1f} s each ...")
     uniform, result["adaptive"] = at_equal_time(renderer, camera, reference, floor, budget, config)

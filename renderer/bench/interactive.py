@@ -136,15 +136,16 @@ def measure_switch(app, scene_path: Path, integrator: str) -> dict:
             "frames": frames, "notice_frames": notice_frames, "longest_frame_s": longest}
 
 
-def _settle_still(app) -> None:
+def settle_still(app) -> bool:
     """Step to the first frame that accumulates at full size (the frames before it are the
-    switch's preview and reset)."""
+    switch's preview and reset); whether one came within SWITCH_FRAMES_LIMIT frames."""
     from viewer.window import FrameInput
 
     for _ in range(SWITCH_FRAMES_LIMIT):
         if app.last_plan is not None and not app.last_plan.interactive and not app.last_plan.reset:
-            return
+            return True
         app.step(FrameInput())
+    return False
 
 
 def _still_step(app, inp) -> tuple[float, float]:
@@ -205,7 +206,7 @@ def measure_still_both(app, seconds: float, rng: random.Random) -> tuple[dict, d
     the two alternate in RATE_ROUNDS blocks each (a drift of the machine's speed hits both), then
     each answers keys for `seconds` / 2."""
     resolution = app.session.resolution
-    _settle_still(app)
+    settle_still(app)
     blocks = {1: [], ROUND_SLICES: []}
     try:
         for _ in range(RATE_ROUNDS):

@@ -9,6 +9,7 @@ import re
 import numpy as np
 import pytest
 
+from renderer.bench.interactive import settle_still
 from renderer.image_io import read_exr
 from renderer.integrators import INTEGRATORS
 from renderer.scene.catalog import resolve_scene, scene_files
@@ -44,17 +45,6 @@ def settle(app, frames=3):
         app.step()
     while app.notice:
         app.step()
-
-
-def settle_still(app, limit=50):
-    """Step until a frame accumulates at full size: a fresh viewer's first frames are the
-    preview's (reduced, each a reset), and the first still frame resets once more."""
-    settle(app, 1)
-    for _ in range(limit):
-        if not app.last_plan.interactive and not app.last_plan.reset:
-            return
-        app.step()
-    raise AssertionError(f"no accumulating still frame within {limit} frames")
 
 
 def expected_display(app):
@@ -105,7 +95,9 @@ def test_hud_is_drawn_over_the_image(app):
 def test_idle_frames_accumulate_without_reset(app):
     app.session.hud_visible = True  # untouched sliders must not count as changes
     app.session.set_focus_distance(3.1234567)  # not representable in float32, like the slider's
-    settle_still(app)  # (alone in a session, the app's first frames are the preview's)
+    settle(app, 1)  # frames with the new focus distance
+    # (alone in a session, the app's first frames are the preview's, then a still frame that resets)
+    assert settle_still(app)
     resets, slices = app.session.resets, app.renderer.slices_done
     for _ in range(3):
         app.step(FrameInput(cursor=(0.5, 0.5)))  # a cursor without a button is no motion
