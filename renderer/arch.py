@@ -20,6 +20,7 @@ OPTIMIZE_FOR = ("compile", "run")
 # loading (one test file: 306 s on a clean cache, 119 s cached). Taichi holds the cap in a 32-bit
 # int: 2 GiB is the most it takes.
 OFFLINE_CACHE_MAX_BYTES = 2**31 - 1
+LANTERN_CACHE_FOLDER = "lantern-dynamic-loops"  # see default_cache_dir
 
 
 def taichi_options(optimize: str = "compile") -> dict:
@@ -29,12 +30,40 @@ def taichi_options(optimize: str = "compile") -> dict:
     return {"advanced_optimization": optimize == "run"}
 
 
+def cpu_scheduling_options() -> dict:
+    """ti.init keyword arguments of how the CPU back-end shares a parallel loop among its threads
+    (also used by the tests' runtime).
+
+    Taichi 1.7.4 by default rewrites every parallel loop into one contiguous share of its indices
+    per thread (and runs a loop of fewer than ~1,024 indices on one thread): a thread whose share
+    holds the dearer pixels (the model rather than the sky) finishes last while the others wait.
+    Without that rewrite (`make_cpu_multithreading_loop=False`) a loop is cut into blocks of up to
+    512 indices that the threads take in turn as they finish, so every thread works to the
+    loop's end: whole rounds of uneven scenes 1.5-1.9x faster than under the static shares, a
+    viewer still frame's passes ~1.1x (scripts/cpu_scheduling_cost.py; figures in
+    docs/architecture.md). GPUs schedule blocks dynamically anyway. Taichi reads the setting when
+    a kernel compiles, and its offline cache key leaves it out: see default_cache_dir.
+    """
+    return {"make_cpu_multithreading_loop": False}
+
+
+def default_cache_dir() -> str:
+    """Where compiled kernels are kept unless a caller names a folder: a folder of Lantern's own
+    within Taichi's cache (TI_OFFLINE_CACHE_FILE_PATH, else ~/.cache/taichi/ticache).
+
+    Taichi 1.7.4's cache key leaves out the loop scheduling of cpu_scheduling_options (a kernel
+    compiled with the per-thread shares was loaded as it was under the dynamic setting, and the
+    other way round: a probe timed both ways), so the kernels compiled under Lantern's setting
+    are kept apart from any compiled under Taichi's default."""
+    taichi_cache = os.environ.get("TI_OFFLINE_CACHE_FILE_PATH") or os.path.join(
+        os.path.expanduser("~"), ".cache", "taichi", "ticache")
+    return os.path.join(taichi_cache, LANTERN_CACHE_FOLDER)
+
+
 def offline_cache_options(enabled: bool = True, cache_dir: str | None = None) -> dict:
     """ti.init keyword arguments of the offline cache (also used by the tests' runtime)."""
-    kwargs = {"offline_cache": enabled, "offline_cache_max_size_of_files": OFFLINE_CACHE_MAX_BYTES}
-    if cache_dir:
-        kwargs["offline_cache_file_path"] = cache_dir
-    return kwargs
+    return {"offline_cache": enabled, "offline_cache_max_size_of_files": OFFLINE_CACHE_MAX_BYTES,
+            "offline_cache_file_path": cache_dir or default_cache_dir()}
 
 
 def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str | None = None,
@@ -48,7 +77,8 @@ def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str |
     """
     if arch not in ARCHES:
         raise ValueError(f"unknown arch '{arch}' (choose from {', '.join(ARCHES)})")
-    kwargs = {"log_level": ti.WARN, **offline_cache_options(offline_cache, cache_dir), **taichi_options(optimize)}
+    kwargs = {"log_level": ti.WARN, **offline_cache_options(offline_cache, cache_dir), **taichi_options(optimize),
+              **cpu_scheduling_options()}
     if cpu_threads is not None:
         kwargs["cpu_max_num_threads"] = cpu_threads
     if os.environ.get("LANTERN_TAICHI_DEBUG"):

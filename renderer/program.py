@@ -12,7 +12,6 @@ from renderer.geometry.interface import INF
 from renderer.materials.bsdf import Bsdf
 from renderer.pixel_slices import pass_length, slice_pixel
 from renderer.sampling.sampler import SampleState
-from renderer.spread_loop import loop_index, loop_length, spread_run, spreads_on_current_arch
 
 
 @ti.data_oriented
@@ -32,7 +31,6 @@ class RenderProgram:
         # Denoising AOVs are written where the renderer keeps them and the integrator has them.
         self.aovs = aovs if getattr(integrator, "writes_aovs", False) else None
         self.writes_aovs = self.aovs is not None  # (a Python bool: `is` is not Taichi syntax)
-        self.spread = spreads_on_current_arch()  # renderer/spread_loop.py
 
     # A pass over slices samples its pixels in slice order (renderer/pixel_slices.py); the rounds a
     # film has seen are in its counts, so the whole-image passes of SPPM do not apply.
@@ -44,12 +42,11 @@ class RenderProgram:
                right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
         """`spp` samples for each pixel of slices [slice_first, slice_first + slice_count) of a round
         cut in `order` (pixel_slices: INTERLEAVED or BANDS)."""
-        n = pass_length(slice_count, width, height, order)
-        run = spread_run(n)  # on the CPU, the pass's runs in an order that shares its cost among threads
-        for k in range(loop_length(n, run, self.spread)):
-            i = loop_index(k, run, self.spread)
+        # Threads take the loop's blocks as they finish (renderer/arch.cpu_scheduling_options), so
+        # a pass's dear and cheap pixels are shared among them whatever their order.
+        for i in range(pass_length(slice_count, width, height, order)):
             x, y = slice_pixel(i, slice_first, slice_count, width, height, order)
-            if i < n and x < width and y < height:
+            if x < width and y < height:
                 # A pixel adaptive sampling has stopped (renderer/adaptive.py) takes no more samples;
                 # a nested test: Taichi's `and` evaluates both sides, and (x, y) may lie outside the film.
                 if self.film.adaptive[x, y] != STOPPED:

@@ -148,10 +148,10 @@ def run_in(directory: Path, which: str, optimize: str = "run") -> dict:
     cwd = os.getcwd()
     os.chdir(directory)
     try:
-        from renderer.arch import taichi_options
+        from renderer.arch import cpu_scheduling_options, taichi_options
 
         ti.init(arch=ti.cpu, offline_cache=False, print_kernel_llvm_ir_optimized=True, print_kernel_asm=True,
-                log_level=ti.WARN, **taichi_options(optimize))
+                log_level=ti.WARN, **taichi_options(optimize), **cpu_scheduling_options())
         {"node": compile_node_kernel, "node8": lambda: compile_node_kernel(8), "leaf": compile_leaf_kernel,
          "traversal": compile_traversal_kernel}[which]()
         ti.reset()

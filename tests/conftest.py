@@ -2,7 +2,7 @@ import pytest
 import taichi as ti
 
 from renderer import taichi_frontend
-from renderer.arch import offline_cache_options, taichi_options
+from renderer.arch import cpu_scheduling_options, offline_cache_options, taichi_options
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -15,7 +15,8 @@ def taichi_runtime():
     optimised for compile time: a clean checkout compiles every kernel of the suite afresh.
     """
     taichi_frontend.install()  # as init_taichi does: cheaper compiles
-    ti.init(arch=ti.cpu, random_seed=0, **offline_cache_options(), **taichi_options("compile"))
+    ti.init(arch=ti.cpu, random_seed=0, **offline_cache_options(), **taichi_options("compile"),
+            **cpu_scheduling_options())
     yield
     ti.reset()
 
