@@ -3,6 +3,7 @@ import ctypes.util
 import os
 
 import taichi as ti
+from taichi._lib import core as taichi_core  # CompileConfig: its default offline-cache folder here
 
 from renderer import taichi_frontend
 
@@ -35,12 +36,12 @@ def cpu_scheduling_options() -> dict:
     (also used by the tests' runtime).
 
     Taichi 1.7.4 by default rewrites every parallel loop into one contiguous share of its indices
-    per thread (and runs a loop of fewer than ~1,024 indices on one thread): a thread whose share
+    per thread (and runs a loop of a few hundred indices on one thread): a thread whose share
     holds the dearer pixels (the model rather than the sky) finishes last while the others wait.
-    Without that rewrite (`make_cpu_multithreading_loop=False`) a loop is cut into blocks of up to
-    512 indices that the threads take in turn as they finish, so every thread works to the
-    loop's end: whole rounds of uneven scenes 1.5-1.9x faster than under the static shares, a
-    viewer still frame's passes ~1.1x (scripts/cpu_scheduling_cost.py; figures in
+    Without that rewrite (`make_cpu_multithreading_loop=False`) a loop is cut into blocks that
+    the threads take in turn as they finish, so every thread works to the loop's end: whole
+    rounds of uneven scenes 1.5-1.9x faster than under the static shares, a viewer still
+    frame's passes ~1.1x (scripts/cpu_scheduling_cost.py; figures in
     docs/architecture.md). GPUs schedule blocks dynamically anyway. Taichi reads the setting when
     a kernel compiles, and its offline cache key leaves it out: see default_cache_dir.
     """
@@ -49,14 +50,14 @@ def cpu_scheduling_options() -> dict:
 
 def default_cache_dir() -> str:
     """Where compiled kernels are kept unless a caller names a folder: a folder of Lantern's own
-    within Taichi's cache (TI_OFFLINE_CACHE_FILE_PATH, else ~/.cache/taichi/ticache).
+    within Taichi's cache (TI_OFFLINE_CACHE_FILE_PATH, else Taichi's default, ~/.cache/taichi/ticache
+    on Linux).
 
     Taichi 1.7.4's cache key leaves out the loop scheduling of cpu_scheduling_options (a kernel
-    compiled with the per-thread shares was loaded as it was under the dynamic setting, and the
-    other way round: a probe timed both ways), so the kernels compiled under Lantern's setting
+    compiled with the per-thread shares was loaded as it was under the dynamic setting:
+    scripts/cpu_scheduling_cost.py shows it), so the kernels compiled under Lantern's setting
     are kept apart from any compiled under Taichi's default."""
-    taichi_cache = os.environ.get("TI_OFFLINE_CACHE_FILE_PATH") or os.path.join(
-        os.path.expanduser("~"), ".cache", "taichi", "ticache")
+    taichi_cache = os.environ.get("TI_OFFLINE_CACHE_FILE_PATH") or taichi_core.CompileConfig().offline_cache_file_path
     return os.path.join(taichi_cache, LANTERN_CACHE_FOLDER)
 
 

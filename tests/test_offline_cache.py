@@ -29,4 +29,3 @@ def test_kernels_compiled_under_lantern_loop_scheduling_have_a_folder_of_their_o
     config = ti.lang.impl.current_cfg()
     assert config.offline_cache_file_path == str(tmp_path / LANTERN_CACHE_FOLDER)
     assert not config.make_cpu_multithreading_loop  # threads take a loop's blocks as they finish
-
