@@ -1,0 +1,190 @@
+"""Where a viewer still frame's passes lose time against a whole round: the CPU threads' own
+accounts (Linux's per-thread schedstat: time run, time waiting runnable for a CPU), per launch.
+
+    python scripts/launch_idle_cost.py [rounds] [scene/integrator ...]
+
+1. A uniform busy kernel (no renderer): the same work as one launch, as 20 launches back to back,
+   and as 20 launches with 2 ms of Python between them (a still frame leaves ~0.7 ms between two
+   render launches: 0.27 ms of the viewer's Python, 0.43 ms of Taichi's launch on the calling
+   thread; more on frames that present); Taichi's pool threads free (the OS places them) and
+   pinned one per CPU.
+2. Per case: a round (a sample per pixel) at 960x540 as one whole-round launch and in passes of
+   one still frame's slices (bands, as the viewer renders them after the first round), workers
+   free and pinned, alternated. Per round: wall time, the workers' run time, their time waiting
+   runnable, and their idle time (threads x wall - run: asleep, or not yet woken, while the
+   launch ran), then the passes' extra wall time per launch.
+
+Taichi 1.7.4's CPU back-end runs a parallel loop on its own pool threads (the calling thread only
+waits); a thread asleep between launches has to be woken for the next one. Figures: medians
+over `rounds`.
+"""
+import os
+import statistics
+import sys
+import threading
+import time
+import warnings
+
+from slice_order_cost import FRAME_SECONDS, ROOT, SIZE, compiled, round_seconds
+
+DEFAULT_CASES = ("cornell_box/mis", "textured/mis")
+LAUNCHES = 20
+GAP_SECONDS = 0.002
+
+
+def thread_times() -> dict[int, tuple[int, int]]:
+    """{thread id: (ns run, ns waiting runnable)} of this process's threads (Linux schedstat)."""
+    times = {}
+    for name in os.listdir("/proc/self/task"):
+        try:
+            with open(f"/proc/self/task/{name}/schedstat") as f:
+                run, wait = f.read().split()[:2]
+        except OSError:
+            continue
+        times[int(name)] = (int(run), int(wait))
+    return times
+
+
+def pool_threads(launch, count: int) -> list[int]:
+    """The `count` threads other than this one that ran most during `launch()`: Taichi's pool."""
+    before = thread_times()
+    launch()
+    after = thread_times()
+    me = threading.get_native_id()
+    grew = sorted(((after[t][0] - before.get(t, (0, 0))[0], t) for t in after if t != me), reverse=True)
+    return [t for ran, t in grew[:count] if ran > 0]
+
+
+def pin(threads: list[int], pinned: bool) -> None:
+    """Pin thread k to the k-th CPU this process may use, or let it run on any of them."""
+    cpus = sorted(os.sched_getaffinity(0))
+    for k, thread in enumerate(threads):
+        os.sched_setaffinity(thread, {cpus[k % len(cpus)]} if pinned else set(cpus))
+
+
+def accounted(threads: list[int], work) -> dict:
+    """Wall seconds of work() and the pool threads' run, runnable-wait and idle seconds meanwhile."""
+    before = thread_times()
+    start = time.perf_counter()
+    work()
+    wall = time.perf_counter() - start
+    after = thread_times()
+    run = sum(after[t][0] - before[t][0] for t in threads) / 1e9
+    wait = sum(after[t][1] - before[t][1] for t in threads) / 1e9
+    return {"wall": wall, "run": run, "wait": wait, "idle": len(threads) * wall - run}
+
+
+def busy_kernel():
+    """A loop of n iterations of `steps` sin() each: the same work in every iteration."""
+    import taichi as ti
+
+    out = ti.field(ti.f32, shape=1 << 18)
+
+    @ti.kernel
+    def busy(n: ti.i32, steps: ti.i32):
+        for k in range(n):
+            acc = 0.0
+            for j in range(steps):
+                acc = ti.sin(acc + j * 1e-3)
+            out[k] = acc
+
+    return busy
+
+
+def busy_lines(rounds: int, threads: int) -> list[str]:
+    import taichi as ti
+
+    busy = busy_kernel()
+    total, steps = 1 << 18, 100
+    busy(threads, 1)
+    ti.sync()
+    workers = pool_threads(lambda: (busy(total, steps // 10), ti.sync()), threads)
+
+    def launches(count: int, gap: float):
+        for _ in range(count):
+            busy(total // count, steps)
+            ti.sync()
+            end = time.perf_counter() + gap
+            while time.perf_counter() < end:  # Python between launches, as a frame's
+                pass
+
+    shapes = {"one launch": (1, 0.0), f"{LAUNCHES} launches": (LAUNCHES, 0.0),
+              f"{LAUNCHES} launches, {GAP_SECONDS * 1e3:.0f} ms apart": (LAUNCHES, GAP_SECONDS)}
+    runs = {(shape, pinned): [] for shape in shapes for pinned in (False, True)}
+    for r in range(rounds):
+        for pinned in ((False, True) if r % 2 == 0 else (True, False)):
+            pin(workers, pinned)
+            for shape, (count, gap) in shapes.items():
+                runs[(shape, pinned)].append(accounted(workers, lambda: launches(count, gap)))
+    pin(workers, False)
+    lines = []
+    for shape, (count, gap) in shapes.items():
+        parts = []
+        for pinned in (False, True):
+            got = runs[(shape, pinned)]
+            busy_s = statistics.median(g["wall"] - count * gap for g in got)
+            parts.append(f"{'pinned' if pinned else 'free'} {busy_s * 1e3:.0f} ms (workers waiting runnable "
+                         f"{statistics.median(g['wait'] for g in got) * 1e3:.1f} ms)")
+        lines.append(f"busy kernel, {shape}: " + ", ".join(parts))
+    return lines
+
+
+def case_lines(case: str, rounds: int, threads: int) -> list[str]:
+    from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
+
+    program, args = compiled(case)
+    workers = pool_threads(lambda: round_seconds(program, args, INTERLEAVED, ROUND_SLICES), threads)
+    whole = round_seconds(program, args, INTERLEAVED, ROUND_SLICES)
+    frame = max(1, min(ROUND_SLICES - 1, round(FRAME_SECONDS / (whole / ROUND_SLICES))))
+    launches = -(-ROUND_SLICES // frame)
+    kinds = {"whole round": (INTERLEAVED, ROUND_SLICES), f"passes of {frame} slices": (BANDS, frame)}
+    runs = {(kind, pinned): [] for kind in kinds for pinned in (False, True)}
+    for r in range(rounds):
+        for pinned in ((False, True) if r % 2 == 0 else (True, False)):
+            pin(workers, pinned)
+            for kind, (order, slices) in kinds.items():
+                runs[(kind, pinned)].append(accounted(workers, lambda: round_seconds(program, args, order, slices)))
+    pin(workers, False)
+    lines = []
+    for pinned in (False, True):
+        label = "pinned" if pinned else "free"
+        summary = {kind: {key: statistics.median(g[key] for g in runs[(kind, pinned)]) * 1e3
+                          for key in ("wall", "run", "wait", "idle")} for kind in kinds}
+        for kind, s in summary.items():
+            lines.append(f"{case}, {label}, {kind}: wall {s['wall']:.0f} ms, workers ran {s['run']:.0f}, waited "
+                         f"runnable {s['wait']:.1f}, idle {s['idle']:.1f} ms")
+        whole_s, passes_s = (summary[kind] for kind in kinds)
+        lines.append(f"{case}, {label}: the passes' extra per launch ({launches} launches): wall "
+                     f"{(passes_s['wall'] - whole_s['wall']) / launches:.2f} ms, workers' run "
+                     f"{(passes_s['run'] - whole_s['run']) / launches:.2f}, idle "
+                     f"{(passes_s['idle'] - whole_s['idle']) / launches:.2f} ms; whole / passes wall "
+                     f"{statistics.median(w['wall'] / p['wall'] for w, p in zip(*(runs[(k, pinned)] for k in kinds))):.3f}"
+                     " (paired)")
+    return lines
+
+
+def main(argv: list[str]) -> int:
+    if not os.path.exists("/proc/self/task") or not hasattr(os, "sched_setaffinity"):
+        print("needs Linux's per-thread schedstat (/proc/self/task/*/schedstat) and sched_setaffinity")
+        return 1
+    sys.path.insert(0, str(ROOT))
+    import taichi as ti
+
+    from renderer.arch import init_taichi
+
+    rounds = int(argv[0]) if argv and argv[0].isdigit() else 5
+    cases = [a for a in argv if not a.isdigit()] or list(DEFAULT_CASES)
+    init_taichi("cpu")
+    warnings.simplefilter("ignore")
+    threads = ti.lang.impl.current_cfg().cpu_max_num_threads
+    print(f"{threads} pool threads, {len(os.sched_getaffinity(0))} CPUs; {SIZE[0]}x{SIZE[1]}", flush=True)
+    for line in busy_lines(rounds, threads):
+        print(line, flush=True)
+    for case in cases:
+        for line in case_lines(case, rounds, threads):
+            print(line, flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
