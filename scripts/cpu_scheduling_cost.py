@@ -23,7 +23,7 @@ import tempfile
 import time
 import warnings
 
-from slice_order_cost import FRAME_SECONDS, ROOT, compiled, round_seconds
+from slice_order_cost import ROOT, compiled, frame_slices, round_seconds
 
 DEFAULT_CASES = ("cornell_box/mis", "bunnies/mis", "textured/mis", "showcase/mis")
 
@@ -45,8 +45,9 @@ BUSY_WORK = 20_000_000  # sin() steps shared among a loop's iterations
 
 
 def busy_kernel(dynamic: bool):
-    """A kernel whose loop of n iterations shares BUSY_WORK steps (the first `busy` iterations
-    only), compiled under the given setting; returns a callable (n, busy) -> seconds."""
+    """A kernel whose loop of n iterations shares `work` sin() steps (BUSY_WORK unless given; the
+    first `busy` iterations only), compiled under the given setting; returns a callable
+    (n, busy, work=BUSY_WORK) -> seconds of one launch (n at most 4,096)."""
     import taichi as ti
 
     out = ti.field(ti.f32, shape=4096)
@@ -68,9 +69,9 @@ def busy_kernel(dynamic: bool):
     finally:
         config.make_cpu_multithreading_loop = before
 
-    def seconds(n: int, busy: int) -> float:
+    def seconds(n: int, busy: int, work: int = BUSY_WORK) -> float:
         start = time.perf_counter()
-        busy_loop(n, busy, BUSY_WORK // busy)
+        busy_loop(n, busy, work // busy)
         ti.sync()
         return time.perf_counter() - start
 
@@ -114,7 +115,7 @@ def measure(case: str, rounds: int) -> list[str]:
 
     programs = {"static": compiled_under(case, False), "dynamic": compiled_under(case, True)}
     whole = round_seconds(*programs["static"], INTERLEAVED, ROUND_SLICES)
-    frame = max(1, min(ROUND_SLICES - 1, round(FRAME_SECONDS / (whole / ROUND_SLICES))))
+    frame = frame_slices(whole)
     passes = {"whole round": (INTERLEAVED, ROUND_SLICES), "passes of 4 slices": (BANDS, 4),
               f"passes of a frame ({frame} slices)": (BANDS, frame)}
     times = {(kind, name): [] for kind in passes for name in programs}

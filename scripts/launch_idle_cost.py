@@ -3,16 +3,12 @@ accounts (Linux's per-thread schedstat: time run, time waiting runnable for a CP
 
     python scripts/launch_idle_cost.py [rounds] [scene/integrator ...]
 
-1. A uniform busy kernel (no renderer): the same work as one launch, as 20 launches back to back,
-   and as 20 launches with 2 ms of Python between them (a still frame leaves ~0.7 ms between two
-   render launches: 0.27 ms of the viewer's Python, 0.43 ms of Taichi's launch on the calling
-   thread; more on frames that present); Taichi's pool threads free (the OS places them) and
-   pinned one per CPU.
-2. Per case: a round (a sample per pixel) at 960x540 as one whole-round launch and in passes of
-   one still frame's slices (bands, as the viewer renders them after the first round), workers
-   free and pinned, alternated. Per round: wall time, the workers' run time, their time waiting
-   runnable, and their idle time (threads x wall - run: asleep, or not yet woken, while the
-   launch ran), then the passes' extra wall time per launch.
+Per case: a round (a sample per pixel) at 960x540 as one whole-round launch and in passes of
+one still frame's slices (bands, as the viewer renders them after the first round), Taichi's
+pool threads free (the OS places them) and pinned one per CPU, alternated. Per round: wall time,
+the pool threads' run time, their time waiting runnable, and their idle time (threads x wall -
+run: asleep, or not yet woken, while the launch ran), then the passes' extra wall time per
+launch; and what a launch of no pixels costs (the calling thread's share of every launch).
 
 Taichi 1.7.4's CPU back-end runs a parallel loop on its own pool threads (the calling thread only
 waits); a thread asleep between launches has to be woken for the next one. Figures: medians
@@ -25,11 +21,10 @@ import threading
 import time
 import warnings
 
-from slice_order_cost import FRAME_SECONDS, ROOT, SIZE, compiled, round_seconds
+from slice_order_cost import ROOT, SIZE, compiled, frame_slices, round_seconds
 
 DEFAULT_CASES = ("cornell_box/mis", "textured/mis")
-LAUNCHES = 20
-GAP_SECONDS = 0.002
+EMPTY_LAUNCHES = 200
 
 
 def thread_times() -> dict[int, tuple[int, int]]:
@@ -74,68 +69,13 @@ def accounted(threads: list[int], work) -> dict:
     return {"wall": wall, "run": run, "wait": wait, "idle": len(threads) * wall - run}
 
 
-def busy_kernel():
-    """A loop of n iterations of `steps` sin() each: the same work in every iteration."""
-    import taichi as ti
-
-    out = ti.field(ti.f32, shape=1 << 18)
-
-    @ti.kernel
-    def busy(n: ti.i32, steps: ti.i32):
-        for k in range(n):
-            acc = 0.0
-            for j in range(steps):
-                acc = ti.sin(acc + j * 1e-3)
-            out[k] = acc
-
-    return busy
-
-
-def busy_lines(rounds: int, threads: int) -> list[str]:
-    import taichi as ti
-
-    busy = busy_kernel()
-    total, steps = 1 << 18, 100
-    busy(threads, 1)
-    ti.sync()
-    workers = pool_threads(lambda: (busy(total, steps // 10), ti.sync()), threads)
-
-    def launches(count: int, gap: float):
-        for _ in range(count):
-            busy(total // count, steps)
-            ti.sync()
-            end = time.perf_counter() + gap
-            while time.perf_counter() < end:  # Python between launches, as a frame's
-                pass
-
-    shapes = {"one launch": (1, 0.0), f"{LAUNCHES} launches": (LAUNCHES, 0.0),
-              f"{LAUNCHES} launches, {GAP_SECONDS * 1e3:.0f} ms apart": (LAUNCHES, GAP_SECONDS)}
-    runs = {(shape, pinned): [] for shape in shapes for pinned in (False, True)}
-    for r in range(rounds):
-        for pinned in ((False, True) if r % 2 == 0 else (True, False)):
-            pin(workers, pinned)
-            for shape, (count, gap) in shapes.items():
-                runs[(shape, pinned)].append(accounted(workers, lambda: launches(count, gap)))
-    pin(workers, False)
-    lines = []
-    for shape, (count, gap) in shapes.items():
-        parts = []
-        for pinned in (False, True):
-            got = runs[(shape, pinned)]
-            busy_s = statistics.median(g["wall"] - count * gap for g in got)
-            parts.append(f"{'pinned' if pinned else 'free'} {busy_s * 1e3:.0f} ms (workers waiting runnable "
-                         f"{statistics.median(g['wait'] for g in got) * 1e3:.1f} ms)")
-        lines.append(f"busy kernel, {shape}: " + ", ".join(parts))
-    return lines
-
-
 def case_lines(case: str, rounds: int, threads: int) -> list[str]:
     from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
 
     program, args = compiled(case)
     workers = pool_threads(lambda: round_seconds(program, args, INTERLEAVED, ROUND_SLICES), threads)
     whole = round_seconds(program, args, INTERLEAVED, ROUND_SLICES)
-    frame = max(1, min(ROUND_SLICES - 1, round(FRAME_SECONDS / (whole / ROUND_SLICES))))
+    frame = frame_slices(whole)
     launches = -(-ROUND_SLICES // frame)
     kinds = {"whole round": (INTERLEAVED, ROUND_SLICES), f"passes of {frame} slices": (BANDS, frame)}
     runs = {(kind, pinned): [] for kind in kinds for pinned in (False, True)}
@@ -145,7 +85,9 @@ def case_lines(case: str, rounds: int, threads: int) -> list[str]:
             for kind, (order, slices) in kinds.items():
                 runs[(kind, pinned)].append(accounted(workers, lambda: round_seconds(program, args, order, slices)))
     pin(workers, False)
-    lines = []
+    empty = accounted(workers, lambda: [program.render(*SIZE, 1, 0, 0, BANDS, *args) for _ in range(EMPTY_LAUNCHES)])
+    lines = [f"{case}: an empty launch (no pixels): {empty['wall'] / EMPTY_LAUNCHES * 1e3:.2f} ms, the pool's threads "
+             f"running {empty['run'] / EMPTY_LAUNCHES * 1e3:.3f} ms of it"]
     for pinned in (False, True):
         label = "pinned" if pinned else "free"
         summary = {kind: {key: statistics.median(g[key] for g in runs[(kind, pinned)]) * 1e3
@@ -178,8 +120,6 @@ def main(argv: list[str]) -> int:
     warnings.simplefilter("ignore")
     threads = ti.lang.impl.current_cfg().cpu_max_num_threads
     print(f"{threads} pool threads, {len(os.sched_getaffinity(0))} CPUs; {SIZE[0]}x{SIZE[1]}", flush=True)
-    for line in busy_lines(rounds, threads):
-        print(line, flush=True)
     for case in cases:
         for line in case_lines(case, rounds, threads):
             print(line, flush=True)

@@ -33,6 +33,13 @@ def round_seconds(program, args, order: int, slices_per_pass: int) -> float:
     return time.perf_counter() - start
 
 
+def frame_slices(whole_round_seconds: float) -> int:
+    """Slices one FRAME_SECONDS still frame renders at a scene's whole-round cost (1 to a round less one)."""
+    from renderer.pixel_slices import ROUND_SLICES
+
+    return max(1, min(ROUND_SLICES - 1, round(FRAME_SECONDS / (whole_round_seconds / ROUND_SLICES))))
+
+
 def compiled(case: str):
     """(program, its render arguments after the pass's own) of "scene/integrator" at SIZE, compiled,
     with the viewer's Renderer (AOVs kept)."""
@@ -57,7 +64,7 @@ def measure(case: str, rounds: int) -> str:
 
     program, args = compiled(case)
     whole = round_seconds(program, args, INTERLEAVED, ROUND_SLICES)
-    per_pass = max(1, min(ROUND_SLICES - 1, round(FRAME_SECONDS / (whole / ROUND_SLICES))))
+    per_pass = frame_slices(whole)
     times = {"whole": [], "interleaved": [], "bands": []}
     for _ in range(rounds):
         times["whole"].append(round_seconds(program, args, INTERLEAVED, ROUND_SLICES))
