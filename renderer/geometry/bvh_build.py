@@ -368,9 +368,9 @@ def _bin_by_cells(w: _Work, x, node_of, node_bins, n, b):
     n_act = x.shape[1]
     nc = (n + 1) * b ** 3
     cell = np.multiply(node_of, b ** 3, out=w.i[1][:n_act])
-    cell += node_bins[0] * (b * b)
-    cell += node_bins[1] * b
-    cell += node_bins[2]
+    # (in int64: the bins are int16, and bin * b * b passes 32767 from 46 bins up)
+    for a, stride in ((0, b * b), (1, b), (2, 1)):
+        cell += node_bins[a].astype(np.int64) * stride
     cbox = np.full((6, nc), np.inf, np.float32)
 
     def rows(rr):

@@ -322,6 +322,20 @@ def test_bin_counts(bins):
     check_bvh(build_bvh(lo, hi, c, bins=bins), lo, hi, HARD)
 
 
+def test_cell_binning_matches_per_axis_binning(monkeypatch):
+    # 64 bins on a root of more than 64**3 primitives takes the b x b x b cell path (its cell index
+    # once overflowed int16 there and crashed); it must give the per-axis scatter's tree exactly.
+    import renderer.geometry.bvh_build as builder
+
+    lo, hi, c = (x.astype(np.float32) for x in random_triangles(64 ** 3 + 5_000, seed=15))
+    cells = build_bvh(lo, hi, c, bins=64)
+    check_bvh(cells, lo, hi, HARD)
+    monkeypatch.setattr(builder, "_CELLS_MAX_RATIO", 0.0)
+    per_axis = build_bvh(lo, hi, c, bins=64)
+    for name in ("node_lo", "node_hi", "node_a", "node_count", "prim_order"):
+        assert np.array_equal(getattr(cells, name), getattr(per_axis, name)), name
+
+
 def test_bad_input():
     lo, hi, c = random_triangles(10)
     with pytest.raises(ValueError, match="zero primitives"):
