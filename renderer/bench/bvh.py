@@ -27,7 +27,7 @@ terrain), in one process so that ratios are meaningful:
 3. Embree (the optional `embreex` package: `pip install embreex`, or the project's `bench` extra)
    on the same meshes and the same rays: its build time (scene commit), Mrays/s, and the ratio
    Lantern / Embree on incoherent rays. Issue target: at least 0.3x Embree's rays/s on incoherent
-   closest-hit rays, judged on the Renderer's configuration (sah, wide4, watertight). Cross-check:
+   closest-hit rays, judged on the Renderer's configuration (sah, wide8 with packet leaves, watertight). Cross-check:
    the fraction of rays on which every Lantern configuration agrees with Embree (both miss, or
    both hit with distances within 1e-4 relative). Without embreex the Embree columns are skipped.
 4. Leaf size: SAH builds with max_leaf_size 1, 2, 4, 8, 16 on the 100k mesh: build time, bytes per

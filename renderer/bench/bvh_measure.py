@@ -33,7 +33,7 @@ PACKETS = "+packets"
 TRAVERSALS = ("stack", "stackless", "wide4", "wide8", "stack" + PACKETS, "wide4" + PACKETS, "wide8" + PACKETS)
 WIDE = "wide4"  # the 4-wide BVH's traversal, compared with the binary "stack" one on the same rays
 TRIANGLE_TESTS = ("watertight", "moller")
-DEFAULT = ("sah", "wide4+packets", "watertight")  # the Renderer's MeshOptions (traversal and leaves)
+DEFAULT = ("sah", "wide8+packets", "watertight")  # the Renderer's MeshOptions (traversal and leaves)
 DEFAULT_LEAF = MAX_LEAF_SIZE["scalar"]  # the Renderer's max leaf size with scalar leaves (4)
 PACKET_LEAF = MAX_LEAF_SIZE["packets"]  # and with packet leaves (8): the "+packets" configurations' trees
 # Leaf sizes whose rays/s lie within this fraction of the best are reported as ties: run-to-run
@@ -370,7 +370,7 @@ def measure_mesh(name: str, tris: np.ndarray, config: BvhBenchConfig, embree=Non
     # "stack" against wide, or wide against a binary traversal), each with the default leaves
     if config.shadow_rays:
         base, leaves = traversal_and_leaves(default_key[1])
-        other = ("stack" if base == WIDE else WIDE) + (PACKETS if leaves == "packets" else "")
+        other = ("stack" if base.startswith("wide") else WIDE) + (PACKETS if leaves == "packets" else "")
         other_key = (default_key[0], other, default_key[2])
         other = (other_key, batches[other_key]) if other_key in batches else None
         result["shadow"] = _shadow_rays(batches[default_key], default_key, shadow, emb, config, other)

@@ -104,7 +104,8 @@ def edge_and_vertex_rays(mesh, rng, per_edge=40):
 @pytest.mark.parametrize("transform, traversal, leaves", [("identity", "stack", "scalar"),
                                                          ("rotated_scaled_moved", "stack", "scalar"),
                                                          ("identity", "wide4", "packets"),
-                                                         ("rotated_scaled_moved", "wide4", "packets")])
+                                                         ("rotated_scaled_moved", "wide4", "packets"),
+                                                         ("rotated_scaled_moved", "wide8", "packets")])
 def test_watertight_no_ray_passes_through_shared_edges_or_vertices(transform, traversal, leaves):
     rng = np.random.default_rng(2)
     mesh = trimesh.creation.icosphere(subdivisions=3)
@@ -127,7 +128,8 @@ def test_watertight_no_ray_passes_through_shared_edges_or_vertices(transform, tr
 
 @pytest.mark.parametrize("scale", [1e-3, 1e-1, 1.0, 1e2, 1e4])
 @pytest.mark.parametrize("offset", [0.0, 1e2, 1e4])
-@pytest.mark.parametrize("traversal, leaves", [("stack", "scalar"), ("wide4", "packets"), ("wide4", "scalar"), ("stack", "packets")])
+@pytest.mark.parametrize("traversal, leaves", [("stack", "scalar"), ("wide4", "packets"), ("wide4", "scalar"), ("stack", "packets"),
+                                               ("wide8", "packets")])
 def test_spawned_rays_never_hit_their_own_surface(scale, offset, traversal, leaves):
     # float32 spacing at |offset| is offset * 2^-23; an object a few ulps across cannot be
     # represented at all (1 mm at 10 km is 1 ulp), so such pairs are not meaningful cases.

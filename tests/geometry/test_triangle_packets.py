@@ -104,7 +104,7 @@ def mixed():
 
 
 @pytest.mark.parametrize("traversal, triangle_test", [("wide4", "watertight"), ("wide4", "moller"),
-                                                      ("wide8", "watertight"), ("stack", "watertight"),
+                                                      ("wide8", "watertight"), ("wide8", "moller"), ("stack", "watertight"),
                                                       ("stackless", "moller")])
 def test_closest_hit_equals_brute_force_and_the_scalar_leaves(mixed, traversal, triangle_test):
     """Triangles, spheres, quads and discs in one tree (other kinds share packets with

@@ -8,8 +8,8 @@ import numpy as np
 
 
 def hits(out: str) -> None:
-    """Closest hits and shadow tests of the stack and wide4 traversals on Vulkan, wide4 with the
-    scalar and the packet leaves."""
+    """Closest hits and shadow tests of the stack, wide4 and wide8 traversals on Vulkan, the wide
+    ones with the scalar and the packet leaves."""
     from renderer.arch import init_taichi
 
     init_taichi("vulkan")
@@ -20,7 +20,7 @@ def hits(out: str) -> None:
     rng = np.random.default_rng(1)
     data, (o, d) = mixed_scene(rng), random_rays(rng, 4000)
     arrays = {}
-    for traversal in ("stack", "wide4", "wide4+packets"):
+    for traversal in ("stack", "wide4", "wide4+packets", "wide8", "wide8+packets"):
         base, leaves = traversal_and_leaves(traversal)
         shooter = RayShooter(geometry_from(data, traversal=base, leaves=leaves))
         arrays[traversal + "_t"], arrays[traversal + "_prim"] = shooter.closest(o, d)
