@@ -147,3 +147,29 @@ def caption(result: dict) -> str:
             f"each after one warm-up run (caches filled); RMSE against a Mitsuba reference of "
             f"{result['reference_spp']} spp. Target: Lantern at most {result['target_ratio']:g}x Mitsuba's time: "
             f"{'PASS' if result['passed'] else 'FAIL'} ({result['ratio']:.2f}x).")
+
+
+def main(argv=None) -> int:
+    """`python -m renderer.bench.whole_process [--runs N]`: this comparison alone, as `bench
+    integrators` runs it among its others (the same Mitsuba reference and processes); prints its
+    table. Needs the optional `mitsuba` package."""
+    import argparse
+    from dataclasses import replace
+
+    from renderer.bench.common import print_table
+    from renderer.bench.integrators import IntegratorBenchConfig, whole_process_comparison
+
+    parser = argparse.ArgumentParser(description=main.__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=WholeProcessConfig.runs, help="timed runs of each renderer")
+    args = parser.parse_args(argv)
+    result = whole_process_comparison(replace(IntegratorBenchConfig(), whole_process_runs=args.runs),
+                                      WholeProcessConfig.max_depth)
+    if not result.get("available"):
+        print(f"whole-process comparison not measured: {result.get('note')}", file=sys.stderr)
+        return 1
+    print_table(HEADERS, summary_rows(result), title=caption(result))
+    return 0 if result["passed"] else 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
