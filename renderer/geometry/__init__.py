@@ -6,8 +6,8 @@ mesh_data.py          a mesh scene's primitives as flat numpy arrays (triangles,
                       discs, Bezier patches)
 bvh_build.py          the BVH build (numpy); box_rounding.py keeps its f32 boxes conservative
 instance_bvh.py       the two-level BVH of instanced meshes; instances.py their device data
-mesh_geometry.py      the device side: traversal (stack, stackless or wide4), hits, surfaces, emitter points
-wide_bvh.py           the binary tree collapsed into 4-wide nodes (numpy); wide_traversal.py its device side
+mesh_geometry.py      the device side: traversal (stack, stackless, wide4 or wide8), hits, surfaces, emitter points
+wide_bvh.py           the binary tree collapsed into 4- or 8-wide nodes (numpy); wide_traversal.py its device side
 intersect.py          ray / primitive tests; coverage.py glTF alpha coverage during traversal
 bezier.py             Bezier surfaces of revolution (numpy); bezier_newton.py, bezier_device.py
                       their ray test and device data

@@ -1,14 +1,14 @@
 """The mesh side of the geometry interface: triangles, analytic spheres, quads and discs, and
 Bezier surfaces of revolution (patches, bezier_device.py) in one BVH, traversed on the device.
 
-Three traversals (a compile-time choice, benchmarked against each other):
+Four traversals (a compile-time choice, benchmarked against each other):
   "stack":     ordered traversal; both children's boxes are tested, the nearer visited first, the
                farther pushed with its entry distance and skipped on pop once a closer hit is known.
   "stackless": the depth-first next-pointer ("miss link") walk: no stack, no ordering.
   "wide4":     the binary tree collapsed into 4-wide nodes (renderer/geometry/wide_bvh.py), whose
-               four child boxes are tested together, ordered as "stack" (wide_traversal.py); the
-               Renderer's default (MeshOptions).
-  "wide8":     the same with 8-wide nodes.
+               four child boxes are tested together; the nearest entered child is visited next,
+               the others pushed with their entry distances (wide_traversal.py).
+  "wide8":     the same with 8-wide nodes; the Renderer's default (MeshOptions).
 Two triangle tests: "watertight" (Woop et al. 2013, the default) and "moller" (Moller-Trumbore).
 Two leaf layouts: "scalar" (a leaf's primitives tested one by one from the slot array) and
 "packets" (four slots at a time, triangles structure-of-arrays: triangle_packets.py).
