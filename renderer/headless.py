@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Protocol
 
 import numpy as np
+import taichi as ti
 
 from renderer.adaptive import DEFAULT_MIN_SPP
 from renderer.camera import CameraFrame
@@ -205,6 +206,10 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
                         None if target is not None else job.seconds - rendered())
         t0 = time.perf_counter()
         renderer.render_slices(camera, n, integrator, job.max_depth, job.seed)
+        # GPU back-ends launch asynchronously: without waiting, a pass would seem to take only
+        # its launch, and the next pass (sized by that rate), the progress line, the time budget
+        # and the checkpoints' timing would all be wrong (a no-op on the CPU).
+        ti.sync()
         elapsed = time.perf_counter() - t0
         n = renderer.slices_done - done  # (an integrator with whole-image passes rounds up to a sample)
         if budget_start is None:
