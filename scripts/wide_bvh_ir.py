@@ -9,8 +9,8 @@ Kernels, each on Taichi's CPU back-end with the offline cache off (so the files 
   node8:     the same with 8-wide nodes (`<8 x float>` counts)
   leaf:      a stand-alone loop over rays that tests one packet of four triangles each
              (TrianglePackets.watertight and nearest_lane, as the packet leaves call them)
-  traversal: renderer.bench.ray_batch's closest-hit kernel over a small "wide4" mesh with
-             packet leaves
+  traversal: renderer.bench.ray_batch's closest-hit kernel over a small mesh with the Renderer's
+             traversal (MeshOptions: 8-wide) and packet leaves
 For each: `<4 x float>` values in the optimised IR (loads, fsub/fmul, minnum/maxnum, fcmp) and
 packed (`ps`) against scalar (`ss`) subtract/multiply/min/max instructions in the assembly. The
 node test has vectorised when its subtractions, multiplications, minima and maxima are packed.
@@ -127,12 +127,14 @@ def compile_traversal_kernel():
     from renderer.geometry.mesh_data import MeshData
     from renderer.geometry.mesh_geometry import MeshGeometry
     from renderer.geometry.bvh_build import build_bvh
+    from renderer.renderer import MeshOptions
 
     rng = np.random.default_rng(0)
     tris = (rng.uniform(-1, 1, (200, 1, 3)) + rng.normal(0, 0.1, (200, 3, 3))).astype(np.float32)
     data = MeshData(tri_vertices=tris, tri_material=np.zeros(200, np.int32))
     lo, hi = data.bounds()
-    geometry = MeshGeometry(data, build_bvh(lo, hi, 0.5 * (lo + hi)), "wide4", leaves="packets")
+    geometry = MeshGeometry(data, build_bvh(lo, hi, 0.5 * (lo + hi)), MeshOptions().traversal,
+                            leaves="packets")
     n = 16
     RayBatch(geometry).closest(rng.normal(size=(n, 3)).astype(np.float32) * 3,
                                rng.normal(size=(n, 3)).astype(np.float32), np.full(n, 1e30, np.float32),
