@@ -23,6 +23,10 @@ Kinds
     ``"tree"`` when there are more than ``AUTO_TREE_MIN`` (64) emitters, else ``"power"``: with
     few emitters the tree's per-sample cost (two importance evaluations per level) buys little,
     with many the 1/d^2 falloff makes power alone a poor guide.
+``"single"`` (``SingleEmitterSelector``)
+    what every kind means for a scene with one emitter: that one, with probability 1, without
+    reading u. The kernels then never draw the selection's random number (LLVM drops the unused
+    draw), which on the Cornell box with the sobol sampler is ~4.6% of a sample's time.
 
 All selectors take the emitters as a ``renderer.lights.light_tree_build.EmitterBounds``.
 """
@@ -35,12 +39,33 @@ from renderer.lights.light_tree import LightTree
 from renderer.lights.light_tree_build import EmitterBounds, triangle_emitters
 from renderer.upload import upload_fields
 
-__all__ = ["SELECTOR_KINDS", "AUTO_TREE_MIN", "UniformSelector", "PowerSelector", "LightTree",
+__all__ = ["SELECTOR_KINDS", "AUTO_TREE_MIN", "SingleEmitterSelector", "UniformSelector", "PowerSelector", "LightTree",
            "EmitterBounds", "triangle_emitters", "alias_table", "resolve_kind",
            "make_light_selector"]
 
 SELECTOR_KINDS = ("auto", "uniform", "power", "tree")
 AUTO_TREE_MIN = 64  # "auto" builds a tree for more emitters than this
+
+
+@ti.data_oriented
+class SingleEmitterSelector:
+    """The one emitter of a scene that has one: chosen with probability 1, u unread."""
+
+    kind = "single"
+
+    def __init__(self, emitters: EmitterBounds | int):
+        n = emitters if isinstance(emitters, int) else len(emitters)
+        if n != 1:
+            raise ValueError(f"a single-emitter selector needs exactly one emitter, not {n}")
+        self.num_emitters = 1
+
+    @ti.func
+    def select(self, p, n, u):
+        return 0, 1.0
+
+    @ti.func
+    def pmf(self, p, n, emitter):
+        return 1.0
 
 
 @ti.data_oriented
@@ -135,10 +160,12 @@ class PowerSelector:
 
 
 def resolve_kind(kind: str, num_emitters: int) -> str:
-    """The concrete kind ("uniform", "power" or "tree") that ``kind`` means for that many
-    emitters."""
+    """The concrete kind ("single", "uniform", "power" or "tree") that ``kind`` means for that
+    many emitters (every kind is "single" for one)."""
     if kind not in SELECTOR_KINDS:
         raise ValueError(f"unknown light selector '{kind}' (known: {', '.join(SELECTOR_KINDS)})")
+    if num_emitters == 1:
+        return "single"
     if kind == "auto":
         return "tree" if num_emitters > AUTO_TREE_MIN else "power"
     return kind
@@ -148,6 +175,8 @@ def make_light_selector(kind: str, emitters: EmitterBounds, **tree_options):
     """A selector of the given kind ("auto", "uniform", "power" or "tree") over the emitters.
     ``tree_options`` (max_leaf_size, bins, small_node) go to ``LightTree``."""
     concrete = resolve_kind(kind, len(emitters))
+    if concrete == "single":
+        return SingleEmitterSelector(emitters)
     if concrete == "uniform":
         return UniformSelector(emitters)
     if concrete == "power":

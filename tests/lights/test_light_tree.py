@@ -14,7 +14,7 @@ import taichi as ti
 from scipy import stats
 
 from renderer.lights.light_select import (AUTO_TREE_MIN, SELECTOR_KINDS, PowerSelector,
-                                          UniformSelector, alias_table, make_light_selector,
+                                          SingleEmitterSelector, UniformSelector, alias_table, make_light_selector,
                                           resolve_kind)
 from renderer.lights.light_tree import LightTree
 from renderer.lights.light_tree_build import (EmitterBounds, build_light_tree, cone_union, orientation_measure,
@@ -547,6 +547,7 @@ def test_auto_rule_and_factory():
     assert resolve_kind("auto", AUTO_TREE_MIN) == "power"
     assert resolve_kind("auto", AUTO_TREE_MIN + 1) == "tree"
     assert resolve_kind("uniform", 10 ** 6) == "uniform"
+    assert all(resolve_kind(kind, 1) == "single" for kind in SELECTOR_KINDS)
     with pytest.raises(ValueError, match="unknown light selector 'best'"):
         resolve_kind("best", 10)
     small = mixed_emitters(51, AUTO_TREE_MIN)
@@ -559,6 +560,25 @@ def test_auto_rule_and_factory():
     sel = make_light_selector("uniform", small)
     table = pmf_table(sel, *random_points(53, 2))
     np.testing.assert_allclose(table, 1.0 / AUTO_TREE_MIN, rtol=1e-6)
+
+
+@pytest.mark.parametrize("kind", SELECTOR_KINDS)
+def test_one_emitter_is_chosen_with_probability_one(kind):
+    """Every kind, given one emitter, is the single-emitter selector: emitter 0 with pmf 1 for any
+    u, point and normal, as the other selectors give it (the alias table's and the tree's)."""
+    one = mixed_emitters(71, 1)
+    sel = make_light_selector(kind, one)
+    assert isinstance(sel, SingleEmitterSelector) and sel.num_emitters == 1
+    points, normals = random_points(72, 16)
+    np.testing.assert_array_equal(pmf_table(sel, points, normals), 1.0)
+    for p, n in zip(points[:4], normals[:4]):
+        em, pm, again = draw(sel, p, n, 256, seed=73)
+        assert np.all(em == 0) and np.all(pm == 1.0) and np.all(again == 1.0)
+    for other in (PowerSelector(one), UniformSelector(one), LightTree(one)):  # what they would give
+        em, pm, _ = draw(other, points[0], normals[0], 256, seed=74)
+        assert np.all(em == 0) and np.allclose(pm, 1.0)
+    with pytest.raises(ValueError, match="exactly one emitter"):
+        SingleEmitterSelector(2)
 
 
 def test_alias_table_gives_the_pmf():
