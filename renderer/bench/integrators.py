@@ -40,7 +40,15 @@ note), in one process so that ratios are meaningful:
    error; the spp each integrator needs to reach it follows from MSE ~ 1/spp (independent
    samples, unbiased), its time from its seconds per spp. The Sobol rows, whose error does not
    fall as 1/spp, read the spp off their step-3 curves against the same Mitsuba reference (log-log
-   interpolation; past the curve extrapolated, and marked so) at their curves' own speed.
+   interpolation; past the curve extrapolated, and marked so) at their curves' own speed. The best
+   samplers (Lantern's mis/sobol and nee/sobol, Mitsuba's multijitter: SEEDED_ROWS) are measured
+   again over seeds, since one curve is one image at each spp and its RMSE moves by ~10% from seed
+   to seed (the light's edge again): at the powers of two around where their curves reach the
+   targets (`seeded_levels`), each renders `seeded_renders` seeds in turn, and the spp to each
+   target is read off the root of the mean squared error (the mean relMSE) per level, log-log
+   between levels; their time per spp is the median of those renders at the top level (taken in
+   turn with Mitsuba's, like the independent rows', where a curve and Mitsuba's long render ran
+   seconds apart and the machine's speed drifts by 10% over such spans).
    Target: Lantern's `mis` reaches Mitsuba's RMSE no later than Mitsuba does (PASS/FAIL).
    Without Mitsuba (not installed, or no usable variant) the column is skipped with a note.
 5. Whole process against Mitsuba (renderer/bench/whole_process.py): Lantern's `render` command and
@@ -95,6 +103,8 @@ REFERENCE_SAMPLER = "independent"
 SCENES = ("cornell_box", "bunnies", "studio", "many_lights")
 MITSUBA_SCENE = "cornell_box"
 MITSUBA_LD_SAMPLER = "multijitter"  # Mitsuba's best at equal time here (vs stratified, ldsampler, orthogonal)
+# Rows whose spp to the targets is measured over seeds (the best samplers; see step 4)
+SEEDED_ROWS = ("mis/sobol", "nee/sobol", f"mitsuba/{MITSUBA_LD_SAMPLER}")
 FIREFLY_TRIM = 1e-3  # fraction of pixels with the largest error left out of relMSE*
 METRICS = ("rmse", "rel_mse", "rel_mse_trimmed")
 
@@ -119,6 +129,8 @@ class IntegratorBenchConfig:
     mitsuba_target_spp: int = 64  # the target RMSE is Mitsuba's at this spp
     mitsuba_curve_max_spp: int = 512  # Mitsuba's error curve: 1, 2, 4, ... spp, each a separate render
     mitsuba_target_renders: int = 8  # round-robin runs (seeds) of the equal-spp comparison
+    seeded_renders: int = 16  # seeds per spp level of the best samplers' error (SEEDED_ROWS)
+    seeded_max_spp: int = 128  # highest spp level of that measurement
     # Whole-process time (renderer/bench/whole_process.py): both commands, start to exit
     whole_process: bool = True
     whole_process_size: int = 256
@@ -133,6 +145,7 @@ FULL = IntegratorBenchConfig()
 QUICK = IntegratorBenchConfig(square_size=(64, 64), wide_size=(96, 54), budget_s=2.0, reference_s=8.0,
                               reference_launch_s=2.0, mitsuba_reference_spp=1024, mitsuba_pass_spp=256,
                               mitsuba_target_spp=32, mitsuba_curve_max_spp=256, mitsuba_target_renders=8,
+                              seeded_renders=6, seeded_max_spp=64,
                               whole_process_size=64, whole_process_spp=64, whole_process_runs=2,
                               whole_process_reference_spp=512, mesh_heavy="quick")
 
@@ -228,6 +241,46 @@ def spp_to_reach(points: list[dict], key: str, target: float, power: float = 0.5
         previous = p
     last = points[-1]
     return float(last["spp"] * (last[key] / target) ** (1.0 / power)), True
+
+
+def seeded_levels(crossings, cap: int) -> list[int]:
+    """The spp levels that bracket where rows reach their targets: powers of two from the largest
+    at or below the smallest crossing to the smallest at or above the largest, at most `cap`."""
+    finite = [c for c in crossings if math.isfinite(c) and c > 0]
+    if not finite:
+        return []
+    low = max(0, math.floor(math.log2(min(finite))))
+    high = min(max(low + 1, math.ceil(math.log2(max(finite)))), int(math.log2(cap)))
+    return [1 << k for k in range(low, high + 1)]
+
+
+def seeded_points(renders: dict, levels, seeds, reference: np.ndarray) -> dict:
+    """{name: [{"spp", "rmse", "rel_mse", "renders", "seconds"} per level]}: each `render(spp,
+    seed)` returns (image, or a function that reads it back untimed; samples per pixel it took);
+    the names render in turn at every level and seed, so a drift of the machine's speed hits all alike. RMSE is the root of the mean squared
+    error over the seeds (the expected error at that spp), relMSE the mean relMSE, seconds the
+    median wall time of a render (the call, image read-back excluded)."""
+    ref = np.asarray(reference, np.float64)
+    out = {}
+    for name in renders:
+        out[name] = []
+    for spp in levels:
+        errors = {name: {"spp": spp, "mse": [], "rel_mse": [], "seconds": []} for name in renders}
+        for seed in seeds:
+            for name, render in renders.items():
+                t0 = time.perf_counter()
+                image, taken = render(spp, seed)
+                errors[name]["seconds"].append(time.perf_counter() - t0)
+                image = image() if callable(image) else image
+                diff = np.asarray(image, np.float64) - ref
+                errors[name]["spp"] = taken
+                errors[name]["mse"].append(float((diff * diff).mean()))
+                errors[name]["rel_mse"].append(rel_mse(image, ref))
+        for name, e in errors.items():
+            out[name].append({"spp": e["spp"], "rmse": math.sqrt(float(np.mean(e["mse"]))),
+                              "rel_mse": float(np.mean(e["rel_mse"])), "renders": len(e["mse"]),
+                              "seconds": float(np.median(e["seconds"]))})
+    return out
 
 
 def convergence(renderer, camera, integrator: str, sampler: str, references: dict, config: IntegratorBenchConfig,
@@ -482,6 +535,43 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
                                                          c["seconds"] / c["spp"])
     last = ld_curve[-1]
     rows[f"mitsuba/{MITSUBA_LD_SAMPLER}"] = curve_row(ld_curve, "rmse", "rel_mse", last["seconds"] / last["spp"])
+
+    # The best samplers again, over seeds: one curve is one image per spp (see step 4)
+    # (image or its read-back, spp): Lantern's image is read back after the clock stops
+    def lantern_sobol(integrator):
+        def render(spp, seed):
+            bench.renderer.reset()
+            bench.renderer.render(bench.camera, spp, integrator, seed=seed, sampler="sobol")
+            _sync()
+            return bench.renderer.image, spp
+        return render
+
+    def mitsuba_ld(spp, seed):
+        image = ms.render_scene(ld_scene, spp, seed=seed)
+        return image, ms.samples_taken(ld_scene)
+
+    renders = {name: (mitsuba_ld if name.startswith("mitsuba/") else lantern_sobol(name.split("/")[0]))
+               for name in SEEDED_ROWS if name in rows}
+    levels = seeded_levels([rows[name][key] for name in renders for key in ("spp_to_target", "spp_to_target_rel_mse")],
+                           config.seeded_max_spp)
+    seeds = range(config.seed + 15485863, config.seed + 15485863 + config.seeded_renders)
+    seeded = seeded_points(renders, levels, seeds, ref) if levels else {}
+    for name, points in seeded.items():
+        row = rows[name]
+        # time per spp: the top level's renders, taken in turn with the other rows' (as the
+        # independent rows'), not the curve's, which ran at another moment than Mitsuba's
+        top = points[-1]
+        per_spp = top["seconds"] / top["spp"]
+        row.update({"spp_per_s": 1.0 / per_spp, "samples_per_s": pixels / per_spp,
+                    "timing": {"spp": top["spp"], "median_s": top["seconds"], "renders": top["renders"]}})
+        spp_needed, extrapolated = spp_to_reach(points, "rmse", target)
+        spp_rel, extrapolated_rel = spp_to_reach(points, "rel_mse", target_rel, power=1.0)
+        row.update({"measured": "seeds", "seeded_points": points, "spp_to_target": spp_needed,
+                    "extrapolated": extrapolated, "seconds_to_target": spp_needed * per_spp,
+                    "spp_to_target_rel_mse": spp_rel, "extrapolated_rel_mse": extrapolated_rel,
+                    "seconds_to_target_rel_mse": spp_rel * per_spp,
+                    "rmse_at_target_spp": value_at(points, "rmse", "spp", target_spp),
+                    "rel_mse_at_target_spp": value_at(points, "rel_mse", "spp", target_spp)})
     judged = rows.get(combo("mis", "independent"))
     passed = judged is not None and judged["seconds_to_target"] <= rows["mitsuba"]["seconds_to_target"]
     return {"available": True, "size": list(size), "max_depth": cornell["max_depth"], "threads": config.mitsuba_threads,
@@ -490,6 +580,7 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
             "errors_per_seed": errors,
             "target_rel_mse": target_rel, "light_edge_pixels": int(edge.sum()), "light_edge_mse_share": edge_share,
             "curve": curve, "low_discrepancy_curve": {"sampler": MITSUBA_LD_SAMPLER, "points": ld_curve}, "rows": rows,
+            "seeded": {"levels": levels, "renders": config.seeded_renders, "rows": list(seeded)},
             "lantern_curves": {combo(i, s): [{"spp": p["spp"], "seconds": p["seconds"], "rmse": p["rmse_mitsuba"]}
                                              for p in c["curve"]] for (i, s), c in curves.items()},
             "passed": passed}
@@ -573,7 +664,9 @@ def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBe
                       f"Mitsuba's RMSE {mitsuba['target_rmse']:.4g} (relMSE {mitsuba['target_rel_mse']:.4g}) at {n} spp. "
                       f"Independent-sampler rows: {mitsuba['target_renders']} renders of {n} spp each, round-robin "
                       f"(median time; mean squared error; spp to target from MSE ~ 1/spp). Sobol and Mitsuba "
-                      f"{MITSUBA_LD_SAMPLER} rows: read off their error curves, at their own speed. speed = Mitsuba's seconds / the row's (>1: faster "
+                      f"{MITSUBA_LD_SAMPLER} rows: at their curves' speed, spp to target "
+                      f"{_seeded_text(mitsuba.get('seeded'))}. "
+                      f"speed = Mitsuba's seconds / the row's (>1: faster "
                       f"than Mitsuba); (ext) = extrapolated past the curve")
     print(f"   The RMSE is dominated by the {mitsuba['light_edge_pixels']} pixels on the light's edge "
           f"({mitsuba['light_edge_pixels'] / (mitsuba['size'][0] * mitsuba['size'][1]):.1%} of the image): they hold "
@@ -608,6 +701,15 @@ def print_report(results: list[dict], mitsuba: dict | None, config: IntegratorBe
             print_table(mesh_heavy.HEADERS, mesh_heavy.summary_rows(mesh), title=mesh_heavy.caption(mesh))
         else:
             print(f"Mesh-heavy comparison not measured: {mesh.get('note')}\n")
+
+
+def _seeded_text(seeded: dict | None) -> str:
+    """How the best samplers' spp to target were measured (step 4), for captions."""
+    if not seeded or not seeded.get("rows"):
+        return "read off their error curves"
+    return (f"read off their error curves, or for {', '.join(seeded['rows'])} off the mean errors of "
+            f"{seeded['renders']} seeds at {', '.join(map(str, seeded['levels']))} spp, rendered in turn "
+            f"(speed: the median of the {seeded['levels'][-1]}-spp renders)")
 
 
 _STYLE = {"path": "C0", "nee": "C1", "mis": "C2"}

@@ -5,7 +5,9 @@ import math
 
 import pytest
 
-from renderer.bench.integrators import IntegratorBenchConfig, spp_to_reach, value_at
+import numpy as np
+
+from renderer.bench.integrators import IntegratorBenchConfig, seeded_levels, seeded_points, spp_to_reach, value_at
 from tests.scene_builder import tiny_bench_toml
 
 TINY_SCENE = tiny_bench_toml("tiny_integrators")
@@ -40,6 +42,37 @@ def test_spp_to_reach_interpolates_then_extrapolates():
     assert spp == pytest.approx(64.0) and extrapolated
     spp, extrapolated = spp_to_reach([{"spp": 4, "m": 0.5}], "m", 0.25, power=1.0)  # an MSE-like metric
     assert spp == pytest.approx(8.0) and extrapolated
+
+
+def test_seeded_levels_bracket_every_crossing():
+    # crossings 11-13 spp (RMSE) and 34-35 (relMSE): 8 up to 64
+    assert seeded_levels([12.7, 11.1, 34.8, 34.4], cap=128) == [8, 16, 32, 64]
+    assert seeded_levels([16.0, 16.0], cap=128) == [16, 32]  # a crossing on a level still gets one above
+    assert seeded_levels([3.0, 300.0], cap=64) == [2, 4, 8, 16, 32, 64]  # capped
+    assert seeded_levels([math.inf, float("nan"), 0.0], cap=64) == []
+
+
+def test_seeded_points_average_squared_errors_over_seeds():
+    """Renders with known errors: the RMSE of a level is the root of the mean of the seeds' mean
+    squared errors (not the mean of their RMSEs), relMSE the mean, spp what each render took."""
+    reference = np.full((4, 4, 3), 0.5)
+    calls = []
+
+    def exact(spp, seed):
+        calls.append(("exact", spp, seed))
+        return reference.copy(), spp
+
+    def offset(spp, seed):  # error 0.1 * seed everywhere; rounds its spp up like multijitter;
+        calls.append(("offset", spp, seed))  # its image read back by a function (untimed)
+        return (lambda: reference + 0.1 * seed), spp + 3
+
+    points = seeded_points({"exact": exact, "offset": offset}, [8, 16], [1, 2], reference)
+    assert [p["spp"] for p in points["exact"]] == [8, 16] and [p["spp"] for p in points["offset"]] == [11, 19]
+    assert all(p["rmse"] == 0.0 and p["rel_mse"] == 0.0 and p["renders"] == 2 and p["seconds"] >= 0.0
+               for p in points["exact"])
+    assert points["offset"][0]["rmse"] == pytest.approx(math.sqrt((0.01 + 0.04) / 2))
+    # the names take turns at every level and seed
+    assert calls[:4] == [("exact", 8, 1), ("offset", 8, 1), ("exact", 8, 2), ("offset", 8, 2)]
 
 
 def test_run_on_a_tiny_scene(tiny_scene, tmp_path, capsys):
