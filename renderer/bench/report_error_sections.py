@@ -145,11 +145,18 @@ def _mitsuba_block(mitsuba: dict) -> list[str]:
                      r["seconds_to_target"], times(base["seconds_to_target"] / r["seconds_to_target"])])
     ref = mitsuba["reference"]
     n = mitsuba["target_spp"]
+    seeded = mitsuba.get("seeded") or {}
+    how = (f" The independent rows: {mitsuba.get('target_renders')} renders of {n} spp each, in turn; "
+           f"the other rows' spp to target read off their error curves")
+    if seeded.get("rows"):
+        how += (f", except {listing(seeded['rows'])}: mean errors of {seeded['renders']} seeds at "
+                f"{listing([str(v) for v in seeded['levels']])} spp, rendered in turn, and timed by the "
+                f"{seeded['levels'][-1]}-spp renders")
     caption = (f"Lantern against Mitsuba {mitsuba.get('version', '')} ({mitsuba.get('variant', '')}, "
                f"{mitsuba['threads']} threads) on the Cornell box at {mitsuba['size'][0]}x{mitsuba['size'][1]}, max "
                f"depth {mitsuba['max_depth']}, against a Mitsuba reference of {num(ref['spp'])} spp. Target: "
                f"Mitsuba's RMSE at {n} spp ({num(mitsuba['target_rmse'])}); speed = Mitsuba's seconds to it / the "
-               f"row's. Lantern mis at least as fast as Mitsuba: {verdict(mitsuba.get('passed'))}.")
+               f"row's. Lantern mis at least as fast as Mitsuba: {verdict(mitsuba.get('passed'))}.{how}.")
     return [caption, table(["renderer", "Msamples/s", f"RMSE at {n} spp", "spp to target", "seconds to target",
                             "speed"], rows)]
 
@@ -212,6 +219,15 @@ def integrators_section(report: dict) -> Section:
             f"On the Cornell box, Lantern's mis reaches Mitsuba's {mitsuba['target_spp']}-spp RMSE in "
             f"{num(ours['seconds_to_target'])} s against Mitsuba's {num(theirs['seconds_to_target'])} s "
             f"({verdict(mitsuba.get('passed'))}).")
+        best = mitsuba["rows"].get("mis/sobol")
+        theirs_best = next(((name, r) for name, r in mitsuba["rows"].items() if name.startswith("mitsuba/")), None)
+        if best is not None and theirs_best is not None:
+            name, r = theirs_best
+            section.findings.append(
+                f"Best sampler against best: Lantern mis/sobol reaches it in {num(best['seconds_to_target'])} s "
+                f"({num(best['spp_to_target'])} spp) against Mitsuba {name.split('/', 1)[1]}'s "
+                f"{num(r['seconds_to_target'])} s ({num(r['spp_to_target'])} spp): "
+                f"{times(r['seconds_to_target'] / best['seconds_to_target'])} Mitsuba's speed.")
     whole = report.get("whole_process") or {}
     if whole.get("available"):
         section.findings.append(

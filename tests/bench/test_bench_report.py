@@ -275,3 +275,27 @@ def test_build_page_needs_no_plots_on_disk_to_name_them(tmp_path):
     assert "(Plot `a.png` is listed in the report but missing beside it.)" in text
     assert "b.svg" not in text  # only PNGs are plots on the page
     assert "Measured 2026-01-02 03:04 UTC by `?`" in sections(text)["x"]
+
+
+def test_the_mitsuba_comparison_says_how_its_best_samplers_were_measured(tmp_path):
+    """With Mitsuba measured: the caption names the rows measured over seeds (levels, seeds) and the
+    findings give best sampler against best, as the JSON has them."""
+    from renderer.bench.report_error_sections import integrators_section
+
+    report = integrators_report(tmp_path)
+    row = {"samples_per_s": 1.5e6, "rmse_at_target_spp": 0.0383, "extrapolated": False}
+    report["mitsuba"] = {
+        "available": True, "version": "3.9.1", "variant": "llvm_ad_rgb", "threads": 2, "size": [128, 128],
+        "max_depth": 8, "reference": {"spp": 2048}, "target_spp": 64, "target_rmse": 0.0383, "target_renders": 8,
+        "passed": False, "seeded": {"levels": [8, 16, 32, 64], "renders": 16,
+                                    "rows": ["mis/sobol", "nee/sobol", "mitsuba/multijitter"]},
+        "rows": {"mitsuba": {**row, "spp_to_target": 64.0, "seconds_to_target": 0.5},
+                 "mis/independent": {**row, "spp_to_target": 77.0, "seconds_to_target": 0.72},
+                 "mis/sobol": {**row, "spp_to_target": 11.66, "seconds_to_target": 0.118},
+                 "mitsuba/multijitter": {**row, "spp_to_target": 11.47, "seconds_to_target": 0.096}}}
+    section = integrators_section(report)
+    text = "\n".join(section.blocks)
+    assert ("except mis/sobol, nee/sobol and mitsuba/multijitter: mean errors of 16 seeds at 8, 16, 32 and 64 spp, "
+            "rendered in turn, and timed by the 64-spp renders") in text
+    best = next(f for f in section.findings if f.startswith("Best sampler against best"))
+    assert "0.118 s (11.7 spp) against Mitsuba multijitter's 0.096 s (11.5 spp): 0.81x Mitsuba's speed" in best
