@@ -54,14 +54,27 @@ class MeshOptions:
 # Measured (docs/architecture.md, "Leaves tested four at a time"): with packet leaves, bench bvh's
 # leaf sweep on the 100k terrain gave 3.99/3.88/4.36/4.92/4.85 Mrays/s incoherent at max leaf
 # 1/2/4/8/16, and whole `mis` renders ran 1.02-1.05x (stress) and 1.01x (bunnies) at 8 against 4;
-# scalar leaves keep 4.
+# scalar leaves of triangles keep 4 (textured with scalar leaves: 1 and 2 ran 0.95x of 4).
 MAX_LEAF_SIZE = {"scalar": 4, "packets": 8}
+# Scenes of mostly analytic primitives (quads, spheres, discs, Bezier patches; scalar leaves): no
+# forced leaf size, SAH decides where to stop (its leaves hold at most 16). Under 8-wide nodes, whose
+# eight boxes are tested together, a leaf of four quads cost the Cornell box four scalar tests where
+# the node would have culled most: whole `mis` renders at max leaf 1 against 4, in one process
+# (docs/architecture.md, "Analytic scenes"): Cornell box 1.25x, goblet 1.09x, weekend 0.99x.
+ANALYTIC_MAX_LEAF_SIZE = 1
 
 
-def max_leaf_size(options: MeshOptions, layout: str) -> int:
-    """The BVH's max leaf size for a leaf layout ("scalar" or "packets"): the options' own, or
-    the layout's (MAX_LEAF_SIZE)."""
-    return options.max_leaf_size if options.max_leaf_size is not None else MAX_LEAF_SIZE[layout]
+def max_leaf_size(options: MeshOptions, layout: str, counts: dict | None = None) -> int:
+    """The BVH's max leaf size for a leaf layout ("scalar" or "packets") and the world's primitive
+    counts: the options' own; else ANALYTIC_MAX_LEAF_SIZE for scalar leaves over mostly analytic
+    primitives; else the layout's (MAX_LEAF_SIZE)."""
+    if options.max_leaf_size is not None:
+        return options.max_leaf_size
+    if layout == "scalar" and counts is not None:
+        total = sum(counts.values())
+        if total and 2 * counts.get("triangle", 0) < total:
+            return ANALYTIC_MAX_LEAF_SIZE
+    return MAX_LEAF_SIZE[layout]
 
 
 def leaf_layout(leaves: str, data) -> str:
@@ -88,7 +101,7 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
         mesh = assemble(scene, instancing=mesh_options.instancing)
         layout = leaf_layout(mesh_options.leaves, mesh.data)
         bvh = build_scene_bvh(mesh.data, strategy=mesh_options.strategy,
-                              max_leaf_size=max_leaf_size(mesh_options, layout))
+                              max_leaf_size=max_leaf_size(mesh_options, layout, mesh.data.counts))
         materials = MaterialTable(mesh.rows, TextureTable(mesh.atlas, mesh.texture_slots), mesh.volume_media)
         # The geometry tests alpha coverage during traversal: it reads the material table.
         geometry = MeshGeometry(mesh.data, bvh, mesh_options.traversal, mesh_options.triangle_test, materials,

@@ -225,3 +225,18 @@ def test_the_renderer_picks_packets_where_triangles_are_at_least_half_the_primit
     assert leaf_layout("auto", tris) == "packets"
     assert leaf_layout("auto", quads) == "scalar"
     assert leaf_layout("scalar", tris) == "scalar" and leaf_layout("packets", quads) == "packets"
+
+
+def test_analytic_scenes_leave_their_leaf_sizes_to_sah():
+    """Scalar leaves over mostly analytic primitives get no forced leaf size (SAH decides); scalar
+    leaves of triangles keep theirs, packets theirs, and an explicit option wins everywhere."""
+    from renderer.renderer import ANALYTIC_MAX_LEAF_SIZE, MAX_LEAF_SIZE, MeshOptions, max_leaf_size
+
+    analytic = {"triangle": 2, "quad": 3}
+    triangles = {"triangle": 5, "sphere": 1}
+    default = MeshOptions()
+    assert max_leaf_size(default, "scalar", analytic) == ANALYTIC_MAX_LEAF_SIZE == 1
+    assert max_leaf_size(default, "scalar", triangles) == MAX_LEAF_SIZE["scalar"]
+    assert max_leaf_size(default, "packets", analytic) == MAX_LEAF_SIZE["packets"]
+    assert max_leaf_size(default, "scalar") == MAX_LEAF_SIZE["scalar"]  # counts unknown
+    assert max_leaf_size(MeshOptions(max_leaf_size=6), "scalar", analytic) == 6
