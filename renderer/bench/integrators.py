@@ -257,13 +257,12 @@ def seeded_levels(crossings, cap: int) -> list[int]:
 def seeded_points(renders: dict, levels, seeds, reference: np.ndarray) -> dict:
     """{name: [{"spp", "rmse", "rel_mse", "renders", "seconds"} per level]}: each `render(spp,
     seed)` returns (image, or a function that reads it back untimed; samples per pixel it took);
-    the names render in turn at every level and seed, so a drift of the machine's speed hits all alike. RMSE is the root of the mean squared
-    error over the seeds (the expected error at that spp), relMSE the mean relMSE, seconds the
-    median wall time of a render (the call, image read-back excluded)."""
+    the names render in turn at every level and seed, so a drift of the machine's speed hits all
+    alike. RMSE is the root of the mean squared error over the seeds (the expected error at that
+    spp), relMSE the mean relMSE, seconds the median wall time of a render (the call, image
+    read-back excluded)."""
     ref = np.asarray(reference, np.float64)
-    out = {}
-    for name in renders:
-        out[name] = []
+    out = {name: [] for name in renders}
     for spp in levels:
         errors = {name: {"spp": spp, "mse": [], "rel_mse": [], "seconds": []} for name in renders}
         for seed in seeds:
@@ -536,8 +535,8 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
     last = ld_curve[-1]
     rows[f"mitsuba/{MITSUBA_LD_SAMPLER}"] = curve_row(ld_curve, "rmse", "rel_mse", last["seconds"] / last["spp"])
 
-    # The best samplers again, over seeds: one curve is one image per spp (see step 4)
-    # (image or its read-back, spp): Lantern's image is read back after the clock stops
+    # The best samplers again, over seeds: one curve is one image per spp (see step 4). Lantern's
+    # renders return the image's read-back, which seeded_points calls after the clock stops.
     def lantern_sobol(integrator):
         def render(spp, seed):
             bench.renderer.reset()
