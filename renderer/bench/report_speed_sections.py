@@ -324,7 +324,9 @@ def interactive_section(report: dict) -> Section:
     measured = [r for r in results if "skipped" not in r]
     target = report.get("latency_target_ms")
     rows = [[r["scene"], r["integrator"], r["latency_p50_ms"], r["latency_p95_ms"], r["whole_samples_p95_ms"],
-             r["still"]["samples_per_s"] / 1e6, times(r["still"]["rate_ratio"], 3), r["still"]["frame_ms_median"],
+             r["still"]["samples_per_s"] / 1e6, times(r["still"]["rate_ratio"], 3),
+             times(r["still"]["first_round"]["rate_ratio"], 3) if "first_round" in r["still"] else "-",
+             r["still"]["frame_ms_median"],
              r["moving"]["frame_ms_median"], r["switch"]["first_image_s"]] for r in measured]
     w, h = report.get("config", {}).get("size", ("?", "?"))
     section.blocks += [
@@ -332,7 +334,8 @@ def interactive_section(report: dict) -> Section:
         f"({verdict(report.get('latency_ok'))}); still samples/s of sliced frames against whole-sample frames ≥ "
         f"{pct(report.get('still_rate_target'), 0)} ({verdict(report.get('rate_ok'))}).",
         table(["scene", "integrator", "p50 ms", "p95 ms", "p95 ms, whole-sample frames", "still Msamples/s",
-               "vs whole-sample frames", "still frame ms", "moving frame ms", "switch s"], rows)]
+               "vs whole-sample frames", "first round vs whole-sample frames", "still frame ms", "moving frame ms",
+               "switch s"], rows)]
     skipped = [f"{r['scene']} / {r['integrator']}: {r['skipped']}" for r in results if "skipped" in r]
     if skipped:
         section.blocks.append("Not measured: " + "; ".join(skipped) + ".")
@@ -345,5 +348,9 @@ def interactive_section(report: dict) -> Section:
         if ratios:
             sentence += (f", and cutting still frames into pixel slices keeps {spread(ratios, pct)} of the samples "
                          f"per second of whole-sample frames")
+            firsts = [r["still"]["first_round"]["rate_ratio"] for r in measured
+                      if r["integrator"] != "sppm" and "first_round" in r["still"]]
+            if firsts:
+                sentence += f" after a view's first round ({spread(firsts, pct)} during it, its slices interleaved)"
         section.findings.append(sentence + ".")
     return section

@@ -1,10 +1,12 @@
 """The interactive benchmark's statistics (the benchmark itself drives a window: run it with
 `python app.py bench interactive --quick`)."""
 import random
+from types import SimpleNamespace
 
 import pytest
 
-from renderer.bench.interactive import event_latencies, percentile, print_report
+from renderer.bench.interactive import event_latencies, first_round, percentile, print_report
+from renderer.pixel_slices import ROUND_SLICES
 
 
 def test_percentile_interpolates_between_order_statistics():
@@ -58,3 +60,30 @@ def test_report_shows_each_switch_load_compile_and_first_image(capsys):
     assert rows[("cornell_box", "path")][-3:] == ["0.50", "1.25", "1.90"]
     assert rows[("cornell_box", "mis")][-3:] == ["0.00", "-", "0.10"]
     assert "boom" in rows[("pool", "path")]
+
+
+class _SlicedViewer:
+    """Stands in for the viewer: each still frame renders `per_frame` pixel slices of a 16x16 film."""
+
+    def __init__(self, per_frame: int, start: int = 0):
+        self.per_frame = per_frame
+        self.renderer = SimpleNamespace(slices_done=start, film=SimpleNamespace(width=16, height=16))
+        self.session = SimpleNamespace(resolution=SimpleNamespace(min_still_slices=ROUND_SLICES))
+        self.last_plan = None
+        self.frames = 0
+
+    def step(self, inp=None):
+        assert self.session.resolution.min_still_slices == 1  # the viewer's own sliced frames
+        self.renderer.slices_done += self.per_frame
+        self.last_plan = SimpleNamespace(reset=False)
+        self.frames += 1
+
+
+def test_the_first_round_is_the_sliced_frames_until_its_last_slice():
+    viewer = _SlicedViewer(per_frame=100)
+    first = first_round(viewer)
+    assert viewer.frames == 3  # 100, 200, 300: the third frame ends the round
+    assert first["pixel_samples"] == 300 / ROUND_SLICES * 16 * 16
+    assert first["samples_per_s"] == pytest.approx(first["pixel_samples"] / first["seconds"])
+    done = _SlicedViewer(per_frame=100, start=ROUND_SLICES)  # already past it: nothing to measure
+    assert first_round(done) == {"seconds": 0.0, "pixel_samples": 0.0, "samples_per_s": 0.0} and done.frames == 0

@@ -117,6 +117,10 @@ def test_tables_are_rendered_from_the_json(reports, tmp_path):
     assert row(text["photons"], "sppm")["caustic −floor"] == num(sppm["at_budget_floor_corrected"]["rel_mse_caustic"])
     mis = next(r for r in data["interactive"]["results"] if r["integrator"] == "mis")
     assert row(text["interactive"], "box", "mis")["p95 ms"] == num(mis["latency_p95_ms"])
+    first = row(text["interactive"], "box", "mis")["first round vs whole-sample frames"]
+    assert first == times(mis["still"]["first_round"]["rate_ratio"], 3)
+    assert row(text["interactive"], "box", "path")["first round vs whole-sample frames"] == "-"
+    assert "after a view's first round (87.8 % during it, its slices interleaved)" in text["interactive"]
     beta = next(s for s in data["features"]["scenes"] if s["scene"] == "beta")
     ratio = beta["builds"]["everything"]["vs_own"]
     expected = f"{ratio['median']:.3f} [{ratio['lo']:.3f}, {ratio['hi']:.3f}]"
