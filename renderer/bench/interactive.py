@@ -166,17 +166,23 @@ def _still_step(app, inp) -> tuple[float, float]:
     return seconds, (app.renderer.slices_done - slices_before) * film.width * film.height / ROUND_SLICES
 
 
-def untouched_frames(app, seconds: float) -> dict:
-    """Still frames without input for `seconds`: their times, pixel samples and presents."""
+def still_frames_while(app, go_on) -> dict:
+    """Still frames without input while `go_on(times)` holds (times: those of the frames so far):
+    their times, pixel samples and presents."""
     from viewer.window import FrameInput
 
     times, samples, presents = [], 0.0, app.presents
-    end = time.perf_counter() + seconds
-    while time.perf_counter() < end or len(times) < 3:
+    while go_on(times):
         taken, added = _still_step(app, FrameInput())
         times.append(taken)
         samples += added
     return {"times": times, "pixel_samples": samples, "presents": app.presents - presents}
+
+
+def untouched_frames(app, seconds: float) -> dict:
+    """Still frames without input for `seconds` (at least three)."""
+    end = time.perf_counter() + seconds
+    return still_frames_while(app, lambda times: time.perf_counter() < end or len(times) < 3)
 
 
 def answering_frames(app, seconds: float) -> tuple[list[float], bool]:
@@ -207,18 +213,17 @@ def still_summary(blocks: list[dict], answers: list[float], answered: bool, rng:
             "samples_per_s": sum(b["pixel_samples"] for b in blocks) / total, "input_seen_in_frame": answered}
 
 
-def first_round(app, limit_s: float = FIRST_ROUND_LIMIT_S) -> dict:
+def first_round(app, limit_s: float = FIRST_ROUND_LIMIT_S) -> Optional[dict]:
     """Sliced still frames from a settled switch to the end of the view's first round (at most
-    `limit_s`): their seconds, pixel samples and samples per second."""
-    from viewer.window import FrameInput
-
+    `limit_s`): their seconds, pixel samples and samples per second; None where the frame that
+    settled the switch had already ended the round (a cheap view: nothing left to measure)."""
     app.session.resolution.min_still_slices = 1
-    seconds, samples = 0.0, 0.0
-    while app.renderer.slices_done < ROUND_SLICES and seconds < limit_s:
-        taken, added = _still_step(app, FrameInput())
-        seconds += taken
-        samples += added
-    return {"seconds": seconds, "pixel_samples": samples, "samples_per_s": samples / seconds if seconds else 0.0}
+    frames = still_frames_while(app, lambda times: app.renderer.slices_done < ROUND_SLICES and sum(times) < limit_s)
+    seconds = sum(frames["times"])
+    if seconds <= 0.0:
+        return None
+    return {"seconds": seconds, "pixel_samples": frames["pixel_samples"],
+            "samples_per_s": frames["pixel_samples"] / seconds}
 
 
 def measure_still_both(app, seconds: float, rng: random.Random) -> tuple[dict, dict]:
@@ -244,7 +249,8 @@ def measure_still_both(app, seconds: float, rng: random.Random) -> tuple[dict, d
         resolution.min_still_slices = 1
     sliced, whole = summaries[1], summaries[ROUND_SLICES]
     sliced["rate_ratio"] = sliced["samples_per_s"] / whole["samples_per_s"]
-    sliced["first_round"] = {**first, "rate_ratio": first["samples_per_s"] / whole["samples_per_s"]}
+    sliced["first_round"] = None if first is None else {**first,
+                                                        "rate_ratio": first["samples_per_s"] / whole["samples_per_s"]}
     return sliced, whole
 
 
@@ -301,7 +307,8 @@ def print_report(results: list[dict]) -> None:
 
 
 def first_round_text(still: dict) -> str:
-    """The first round's samples/s against whole-sample frames ('-' in reports from before it was measured)."""
+    """The first round's samples/s against whole-sample frames ('-' where it was not measured: a
+    view that ended it in the switch's frame, or a report from before it was measured)."""
     first = still.get("first_round")
     return "-" if first is None else f"{first['rate_ratio']:.3f}"
 

@@ -325,7 +325,7 @@ def interactive_section(report: dict) -> Section:
     target = report.get("latency_target_ms")
     rows = [[r["scene"], r["integrator"], r["latency_p50_ms"], r["latency_p95_ms"], r["whole_samples_p95_ms"],
              r["still"]["samples_per_s"] / 1e6, times(r["still"]["rate_ratio"], 3),
-             times(r["still"]["first_round"]["rate_ratio"], 3) if "first_round" in r["still"] else "-",
+             times(r["still"]["first_round"]["rate_ratio"], 3) if r["still"].get("first_round") else "-",
              r["still"]["frame_ms_median"],
              r["moving"]["frame_ms_median"], r["switch"]["first_image_s"]] for r in measured]
     w, h = report.get("config", {}).get("size", ("?", "?"))
@@ -349,7 +349,7 @@ def interactive_section(report: dict) -> Section:
             sentence += (f", and cutting still frames into pixel slices keeps {spread(ratios, pct)} of the samples "
                          f"per second of whole-sample frames")
             firsts = [r["still"]["first_round"]["rate_ratio"] for r in measured
-                      if r["integrator"] != "sppm" and "first_round" in r["still"]]
+                      if r["integrator"] != "sppm" and r["still"].get("first_round")]
             if firsts:
                 sentence += f" after a view's first round ({spread(firsts, pct)} during it, its slices interleaved)"
         section.findings.append(sentence + ".")
