@@ -59,12 +59,23 @@ INITIAL_MOVING_SCALE = 0.25  # before anything was measured
 # every other pixel, which the display fills out) and plans the rest from their measured time:
 # a frame that got dearer ends near its budget with fewer pixels, and the next is planned anew.
 MOVING_PROBE_SLICES = ROUND_SLICES // 4
+# A still frame that only renders and reads input may end up to this much past its budget when
+# one more pixel slice gets it nearer the budget than stopping short: on a slow scene a slice
+# costs 8-12 ms at 960x540 on 2 cores, and frames planned strictly within 45 ms rendered three
+# or four slices in 34-37 ms, so the frame's fixed costs (a launch, waking Taichi's threads,
+# ~2.5 ms) weighed a fifth more per sample (foggy / nee: still rate 0.93 against whole-sample
+# frames). An input waits for the rest of such a frame and a presenting one, which keeps the
+# strict budget.
+STILL_OVERRUN_SECONDS = 0.005
 
 # An untouched still view redraws seldom enough that presenting (with the HUD's statistics, which
 # refresh on such frames) takes at most this share of the time, within these bounds in seconds:
-# at 960x540 on a 2-core CPU a present costs ~22 ms (tone mapping 12 ms, canvas, HUD and GGUI's
-# frame 10 ms) and the statistics 10-30 ms, so the still view redraws once a second.
-STILL_PRESENT_SHARE = 0.025
+# at 960x540 on a 2-core CPU a still view's present costs 12-15 ms (the display's redraw of the
+# slices since the last one 2 ms, canvas and HUD 1 ms, GGUI's frame read back or shown 9 ms) and
+# the statistics 1-2 ms, so the still view redraws about once a second. (At 2.5% it redrew 1.8
+# times a second, and its sliced frames lost 1-2% of their samples per second more than frames
+# of whole samples, which take a second or more on a slow scene and present once each.)
+STILL_PRESENT_SHARE = 0.015
 MIN_PRESENT_INTERVAL = 0.1
 MAX_PRESENT_INTERVAL = 1.0
 
@@ -195,12 +206,18 @@ class ResolutionController:
     def still_slices(self, reserved_seconds: float = 0.0, presenting: bool = True) -> int:
         """Pixel slices for a full-resolution frame that takes about the render budget, less
         `reserved_seconds` the frame spends on something else (before anything is measured: one
-        slice, the cheapest frame there is)."""
+        slice, the cheapest frame there is). A frame that presents fits its budget; one that only
+        renders takes the slice count nearest its budget, up to STILL_OVERRUN_SECONDS past it."""
         cost = self.cost
         if cost is None:
             return self.min_still_slices
         slice_cost = cost * self.full_size[0] * self.full_size[1] / ROUND_SLICES
-        slices = min(self.still_budget(reserved_seconds, presenting) // slice_cost, self.max_spp * ROUND_SLICES)
+        budget = self.still_budget(reserved_seconds, presenting)
+        slices = budget // slice_cost
+        if not presenting and (slices + 1) * slice_cost - budget < min(budget - slices * slice_cost,
+                                                                       STILL_OVERRUN_SECONDS):
+            slices += 1
+        slices = min(slices, self.max_spp * ROUND_SLICES)
         return int(max(slices, self.min_still_slices))
 
 

@@ -9,11 +9,14 @@ integrator, at 960x540 by default:
              that compiles, after the frame that shows the "compiling..." notice) and
              first-image time of that switch, and the longest frame meanwhile. Taichi's offline
              cache is warm after the first run, so the compile is mostly the kernels' warm start.
-  still      STILL_SECONDS without input: frame times, presents, and the samples per second of
-             those time-sliced frames (an untouched still view presents a few times a second and
-             otherwise only renders: viewer/session.py), alternating in RATE_ROUNDS blocks with
-             as many seconds of still frames made of whole samples per pixel (the viewer before
-             pixel slices), in the same frame loop: the sliced rate must stay within 5% of it.
+  still      Still frames without input: frame times, presents, and the samples per second of
+             those time-sliced frames (an untouched still view presents about once a second and
+             otherwise only renders: viewer/session.py), in RATE_ROUNDS pairs of blocks with
+             still frames made of whole samples per pixel (the viewer before pixel slices), in
+             the same frame loop: a block of whole-sample frames (STILL_SECONDS / RATE_ROUNDS,
+             at least three frames: seconds each on a slow scene), then sliced frames for as long
+             as it took (paired_rate_blocks). The sliced rate must stay within 5% of it: the
+             median over the pairs of sliced / whole samples per second.
              The blocks start after the view's first full-resolution round, which is rendered
              first, in sliced frames, and reported on its own ("first round"): its slices are
              interleaved (a coarse-to-fine image: renderer/pixel_slices.py), which costs more
@@ -21,7 +24,7 @@ integrator, at 960x540 by default:
              machine, first round / steady state against whole-sample frames: cornell_box/mis
              0.80 / 1.00, foggy/nee 0.92 / 0.95, showcase/mis 0.91 / 0.97), and a still view
              spends its first 0.2-3 s there, so blocks that began with it measured mostly it.
-             Then STILL_SECONDS / 2 of still frames every third of which gets a key press (Tab
+             Then ANSWER_SECONDS of still frames every third of which gets a key press (Tab
              toggles the help overlay, a display-only change, and the benchmark checks that the
              same frame presented it), for each of the two: the times of frames that answer an
              input (the whole-sample frames' latency is the "before" figure).
@@ -60,7 +63,8 @@ from renderer.pixel_slices import ROUND_SLICES
 DEFAULT_SIZE = (960, 540)
 TARGET_LATENCY_MS = 100.0
 TARGET_STILL_RATE = 0.95  # sliced still frames keep this share of whole-image passes' samples/s
-STILL_SECONDS = 3.0
+STILL_SECONDS = 6.0  # untouched: RATE_ROUNDS pairs of blocks, each of at least a third of it
+ANSWER_SECONDS = 1.5  # still frames answering keys, for each of the two kinds
 MOVING_SECONDS = 2.0
 SWITCH_FRAMES_LIMIT = 50  # a switch that has not shown an image after this many frames failed
 EVENTS = 2000  # simulated input events per measured phase (their arrival moments; see event_latencies)
@@ -69,7 +73,7 @@ RATE_ROUNDS = 3  # alternating blocks of sliced and whole-sample still frames
 FIRST_ROUND_LIMIT_S = 20.0  # longest wait for a view's first round (sppm: its first iteration)
 FULL_INTEGRATORS = ("path", "nee", "mis", "sppm", "normals")
 QUICK = {"scenes": ("cornell_box", "showcase"), "integrators": ("path", "mis"), "size": (320, 180),
-         "still_seconds": 1.0, "moving_seconds": 0.7}
+         "still_seconds": 1.0, "answer_seconds": 0.5, "moving_seconds": 0.7}
 
 
 def viewer_runtime() -> str:
@@ -180,9 +184,26 @@ def still_frames_while(app, go_on) -> dict:
 
 
 def untouched_frames(app, seconds: float) -> dict:
-    """Still frames without input for `seconds` (at least three)."""
-    end = time.perf_counter() + seconds
-    return still_frames_while(app, lambda times: time.perf_counter() < end or len(times) < 3)
+    """Still frames without input for `seconds` of frame time (at least three frames)."""
+    return still_frames_while(app, lambda times: sum(times) < seconds or len(times) < 3)
+
+
+def paired_rate_blocks(app, seconds: float, rounds: int = RATE_ROUNDS) -> dict[int, list[dict]]:
+    """`rounds` pairs of untouched still blocks, {fewest slices a frame: blocks}: whole-sample
+    frames (min_still_slices a round) for `seconds` (at least three frames: a slow scene's take
+    seconds each), then the viewer's sliced frames for as long as that block took. Equal times
+    make a drift of the machine's speed hit both alike, and neither kind's block is mostly its
+    start (the first frame after the other kind presents: the still view's redraw was due)."""
+    resolution = app.session.resolution
+    blocks = {1: [], ROUND_SLICES: []}
+    for _ in range(rounds):
+        resolution.min_still_slices = ROUND_SLICES
+        whole = untouched_frames(app, seconds)
+        resolution.min_still_slices = 1
+        sliced = untouched_frames(app, sum(whole["times"]))
+        blocks[ROUND_SLICES].append(whole)
+        blocks[1].append(sliced)
+    return blocks
 
 
 def answering_frames(app, seconds: float) -> tuple[list[float], bool]:
@@ -226,29 +247,38 @@ def first_round(app, limit_s: float = FIRST_ROUND_LIMIT_S) -> Optional[dict]:
             "samples_per_s": frames["pixel_samples"] / seconds}
 
 
-def measure_still_both(app, seconds: float, rng: random.Random) -> tuple[dict, dict]:
+def block_rate(block: dict) -> float:
+    """Pixel samples per second of a block of still frames."""
+    return block["pixel_samples"] / sum(block["times"])
+
+
+def paired_rate_ratios(blocks: dict[int, list[dict]]) -> list[float]:
+    """Sliced / whole-sample samples per second of each pair of blocks (paired_rate_blocks): the
+    still rate is their median, which a pair disturbed by other work on the machine moves less
+    than a ratio of the totals."""
+    return [block_rate(sliced) / block_rate(whole) for sliced, whole in zip(blocks[1], blocks[ROUND_SLICES])]
+
+
+def measure_still_both(app, seconds: float, answer_seconds: float, rng: random.Random) -> tuple[dict, dict]:
     """(sliced, whole): still frames as the viewer renders them, and with every still frame made
     of whole samples per pixel (min_still_slices = a round: the viewer before pixel slices), in
     the same loop, so the two differ only in how much a frame renders. The untouched frames of
-    the two alternate in RATE_ROUNDS blocks each (a drift of the machine's speed hits both), then
-    each answers keys for `seconds` / 2."""
+    the two alternate in RATE_ROUNDS pairs of blocks of equal time over `seconds` at least
+    (paired_rate_blocks), then each answers keys for `answer_seconds`."""
     resolution = app.session.resolution
     settle_still(app)
     first = first_round(app)
-    blocks = {1: [], ROUND_SLICES: []}
     try:
-        for _ in range(RATE_ROUNDS):
-            for fewest in blocks:
-                resolution.min_still_slices = fewest
-                blocks[fewest].append(untouched_frames(app, seconds / RATE_ROUNDS))
+        blocks = paired_rate_blocks(app, seconds / RATE_ROUNDS)
         summaries = {}
         for fewest in blocks:
             resolution.min_still_slices = fewest
-            summaries[fewest] = still_summary(blocks[fewest], *answering_frames(app, seconds / 2), rng)
+            summaries[fewest] = still_summary(blocks[fewest], *answering_frames(app, answer_seconds), rng)
     finally:
         resolution.min_still_slices = 1
     sliced, whole = summaries[1], summaries[ROUND_SLICES]
-    sliced["rate_ratio"] = sliced["samples_per_s"] / whole["samples_per_s"]
+    sliced["pair_ratios"] = paired_rate_ratios(blocks)
+    sliced["rate_ratio"] = statistics.median(sliced["pair_ratios"])
     sliced["first_round"] = None if first is None else {**first,
                                                         "rate_ratio": first["samples_per_s"] / whole["samples_per_s"]}
     return sliced, whole
@@ -273,7 +303,7 @@ def measure_moving(app, seconds: float, rng: random.Random) -> dict:
 def bench_combination(app, scene_path: Path, integrator: str, config: dict, seed: int) -> dict:
     rng = random.Random(seed)
     switch = measure_switch(app, scene_path, integrator)
-    still, whole = measure_still_both(app, config["still_seconds"], rng)
+    still, whole = measure_still_both(app, config["still_seconds"], config["answer_seconds"], rng)
     moving = measure_moving(app, config["moving_seconds"], rng)
     for _ in range(3):  # let it settle, so the next combination starts from a still view
         app.step()
@@ -340,7 +370,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, integ
 
     config = dict(QUICK) if quick else {"scenes": tuple(p.stem for p in scene_files()), "integrators": FULL_INTEGRATORS,
                                         "size": DEFAULT_SIZE, "still_seconds": STILL_SECONDS,
-                                        "moving_seconds": MOVING_SECONDS}
+                                        "answer_seconds": ANSWER_SECONDS, "moving_seconds": MOVING_SECONDS}
     if scenes is not None:
         config["scenes"] = tuple(scenes)
     if integrators is not None:

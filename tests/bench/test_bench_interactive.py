@@ -1,11 +1,13 @@
 """The interactive benchmark's statistics (the benchmark itself drives a window: run it with
 `python app.py bench interactive --quick`)."""
 import random
+import time
 from types import SimpleNamespace
 
 import pytest
 
-from renderer.bench.interactive import event_latencies, first_round, first_round_text, percentile, print_report
+from renderer.bench.interactive import (event_latencies, first_round, first_round_text, paired_rate_blocks,
+                                        paired_rate_ratios, percentile, print_report)
 from renderer.pixel_slices import ROUND_SLICES
 
 
@@ -91,3 +93,44 @@ def test_the_first_round_is_the_sliced_frames_until_its_last_slice():
     done = _SlicedViewer(per_frame=100, start=ROUND_SLICES)
     assert first_round(done) is None and done.frames == 0
     assert first_round_text({"first_round": None}) == "-"
+
+
+class _TimedStillViewer(_SlicedViewer):
+    """A still view whose whole-sample frames take `whole_s` each and sliced frames `sliced_s`."""
+
+    def __init__(self, whole_s: float, sliced_s: float):
+        super().__init__(per_frame=1)
+        self.seconds = {ROUND_SLICES: whole_s, 1: sliced_s}
+        self.kinds = []
+
+    def step(self, inp=None):
+        fewest = self.session.resolution.min_still_slices
+        self.kinds.append(fewest)
+        time.sleep(self.seconds[fewest])
+        self.renderer.slices_done += ROUND_SLICES if fewest == ROUND_SLICES else 1
+        self.last_plan = SimpleNamespace(reset=False)
+        self.frames += 1
+
+
+def test_rate_blocks_pair_each_whole_block_with_sliced_frames_of_as_much_time():
+    # A slow scene: three whole-sample frames (the least a block takes) outlast the block's
+    # seconds, and the sliced block after it lasts as long, not the nominal seconds.
+    viewer = _TimedStillViewer(whole_s=0.02, sliced_s=0.002)
+    blocks = paired_rate_blocks(viewer, seconds=0.01, rounds=2)
+    assert [len(b["times"]) for b in blocks[ROUND_SLICES]] == [3, 3]
+    for whole, sliced in zip(blocks[ROUND_SLICES], blocks[1]):
+        assert sum(sliced["times"]) >= sum(whole["times"])
+        assert sum(sliced["times"]) - sum(whole["times"]) <= max(sliced["times"])  # stops at the first frame past it
+    # whole block, then its sliced block, in turn
+    runs = [k for i, k in enumerate(viewer.kinds) if i == 0 or viewer.kinds[i - 1] != k]
+    assert runs == [ROUND_SLICES, 1, ROUND_SLICES, 1]
+    assert blocks[1][0]["pixel_samples"] == len(blocks[1][0]["times"]) * 16 * 16 / ROUND_SLICES
+
+
+def test_the_still_rate_is_the_median_of_the_pairs_ratios():
+    def block(samples, *times):
+        return {"pixel_samples": samples, "times": list(times), "presents": 0}
+    blocks = {ROUND_SLICES: [block(100.0, 1.0), block(100.0, 0.5, 0.5), block(300.0, 2.0, 1.0)],
+              1: [block(96.0, 0.5, 0.5), block(50.0, 1.0), block(291.0, 3.0)]}
+    ratios = paired_rate_ratios(blocks)
+    assert ratios == pytest.approx([0.96, 0.5, 0.97])  # the second pair disturbed: its median is 0.96
