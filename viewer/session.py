@@ -16,7 +16,8 @@ internal resolution and sample count the next frame renders:
   frame stopped; so a frame never waits for a whole sample of a slow scene, and input is read
   every frame.
 - Presenting (tone mapping, canvas upload, HUD, the window's own frame) costs ~22 ms at 960x540
-  on a 2-core CPU with software Vulkan, half a frame, and the HUD's statistics 10-30 ms more. A moving view or an input presents
+  on a 2-core CPU with software Vulkan where the whole image is redrawn, 12-15 ms in a still view
+  (the display redraws the slices since its last present). A moving view or an input presents
   at once; an untouched still view redraws every `present_interval()` (about once a second:
   presenting then costs at most STILL_PRESENT_SHARE of the time), and its frames in between only
   render and read input, so sampling keeps its speed without making an input wait.

@@ -331,7 +331,8 @@ def interactive_section(report: dict) -> Section:
     w, h = report.get("config", {}).get("size", ("?", "?"))
     section.blocks += [
         f"Input latency (event to presented frame), viewer off-screen at {w}x{h}: target p95 ≤ {num(target)} ms "
-        f"({verdict(report.get('latency_ok'))}); still samples/s of sliced frames against whole-sample frames ≥ "
+        f"({verdict(report.get('latency_ok'))}); still samples/s of sliced frames against whole-sample frames (the "
+        f"median over pairs of blocks of equal time, after the view's first round) ≥ "
         f"{pct(report.get('still_rate_target'), 0)} ({verdict(report.get('rate_ok'))}).",
         table(["scene", "integrator", "p50 ms", "p95 ms", "p95 ms, whole-sample frames", "still Msamples/s",
                "vs whole-sample frames", "first round vs whole-sample frames", "still frame ms", "moving frame ms",
