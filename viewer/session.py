@@ -455,7 +455,8 @@ class ViewerSession:
     def plan_frame(self, now: float, reserved_seconds: float = 0.0, presenting: bool = True) -> FramePlan:
         """Decide size, samples and reset for the frame about to render; a still frame leaves
         `reserved_seconds` of its budget to other work (the viewer's rate-limited statistics),
-        and the present's share of it only if it will present (a moving frame always does).
+        and the present's share of it only if it will present (a moving frame always does, and
+        so does one that resets).
 
         Interactive changes (camera motion, slider drags) render at the reduced resolution. A
         frame counts as still only after `settle_seconds` without such a change: a drag whose
@@ -472,8 +473,10 @@ class ViewerSession:
             size, slices = self.resolution.moving_size(starting=not self._was_interactive), ROUND_SLICES
         else:
             self._last_motion = None
-            size, slices = self.window_size, self.resolution.still_slices(reserved_seconds, presenting)
+            size = self.window_size
         reset = self._pending_reset or size != self.active_size
+        if not interactive:  # a frame that resets presents what it restarted (viewer/window.py)
+            slices = self.resolution.still_slices(reserved_seconds, presenting or reset)
         if reset:
             self.resets += 1
         self._pending_reset = False

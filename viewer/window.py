@@ -404,7 +404,8 @@ class ViewerApp:
         else:
             slices = plan.slices
             if not plan.interactive:  # sppm's steps are planned from their own measured costs
-                steps = renderer.steps_within(integrator, features, s.resolution.still_budget(reserved, asked))
+                budget = s.resolution.still_budget(reserved, asked or plan.reset)  # a reset presents
+                steps = renderer.steps_within(integrator, features, budget)
                 slices = slices if steps is None else steps
             renderer.render_slices(frame, slices, integrator, s.max_depth, features=features, whole_iterations=False)
         ti.sync()

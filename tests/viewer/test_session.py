@@ -179,10 +179,26 @@ def test_a_frame_that_presents_leaves_the_present_out_of_its_render_budget():
     s = make_session(settle=0.0)
     s.resolution.record(1.2, PIXELS)
     s.resolution.present_seconds = 0.013
-    assert s.plan_frame(0.0, presenting=False).slices == 11
-    assert s.plan_frame(0.1, presenting=True).slices == 7
+    assert s.plan_frame(0.0, presenting=False).reset  # (the first full-size frame presents anyway)
+    assert s.plan_frame(0.1, presenting=False).slices == 11
+    assert s.plan_frame(0.2, presenting=True).slices == 7
     ctl.record_present(math.nan)  # a bad measurement is ignored
     assert ctl.present_seconds == pytest.approx(0.013)
+
+
+def test_a_still_frame_that_resets_leaves_its_present_out_of_its_budget():
+    """The first still frame after a change restarts the accumulation and presents it, asked or
+    not: it plans as a presenting frame (no overrun, the present out of its budget), and the
+    frames after it, which only render, as those do."""
+    s = make_session(settle=0.0)
+    s.resolution.record(1.2, PIXELS)
+    s.resolution.present_seconds = 0.013
+    s.request_reset(interactive=False)  # a render setting changed while still
+    first = s.plan_frame(0.0, presenting=False)
+    assert first.reset and not first.interactive
+    assert first.slices == s.resolution.still_slices(presenting=True) == 7
+    after = s.plan_frame(0.1, presenting=False)
+    assert not after.reset and after.slices == s.resolution.still_slices(presenting=False) == 11
 
 
 @pytest.mark.parametrize("slice_ms, slices", [(11.4, 4),  # 3 end 10.1 short, 4 end 1.3 past: the nearer
