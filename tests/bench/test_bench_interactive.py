@@ -113,11 +113,12 @@ class _TimedStillViewer(_SlicedViewer):
 
 
 def test_rate_blocks_pair_each_whole_block_with_sliced_frames_of_as_much_time():
-    # A slow scene: three whole-sample frames (the least a block takes) outlast the block's
+    # A slow scene: one whole-sample frame (the least a block takes) outlasts the block's
     # seconds, and the sliced block after it lasts as long, not the nominal seconds.
     viewer = _TimedStillViewer(whole_s=0.02, sliced_s=0.002)
     blocks = paired_rate_blocks(viewer, seconds=0.01, rounds=2)
-    assert [len(b["times"]) for b in blocks[ROUND_SLICES]] == [3, 3]
+    assert [len(b["times"]) for b in blocks[ROUND_SLICES]] == [1, 1]
+    assert all(len(b["times"]) >= 10 for b in blocks[1])
     for whole, sliced in zip(blocks[ROUND_SLICES], blocks[1]):
         assert sum(sliced["times"]) >= sum(whole["times"])
         assert sum(sliced["times"]) - sum(whole["times"]) <= max(sliced["times"])  # stops at the first frame past it
