@@ -245,6 +245,7 @@ class FramePlan:
     slices: int  # pixel slices this frame (ROUND_SLICES make one sample per pixel)
     reset: bool  # start the accumulation over before rendering
     interactive: bool  # rendering at the moving (reduced) resolution
+    presents: bool  # the frame shows what it renders (asked to, moving, or restarted): planned without the present
 
     @property
     def spp(self) -> float:
@@ -475,15 +476,16 @@ class ViewerSession:
             self._last_motion = None
             size = self.window_size
         reset = self._pending_reset or size != self.active_size
-        if not interactive:  # a frame that resets presents what it restarted (viewer/window.py)
-            slices = self.resolution.still_slices(reserved_seconds, presenting or reset)
+        presents = presenting or reset or interactive  # a frame that restarts shows what it restarted
+        if not interactive:
+            slices = self.resolution.still_slices(reserved_seconds, presents)
         if reset:
             self.resets += 1
         self._pending_reset = False
         self._pending_interactive = False
         self.active_size = size
         self._was_interactive = interactive
-        return FramePlan(size=size, slices=slices, reset=reset, interactive=interactive)
+        return FramePlan(size=size, slices=slices, reset=reset, interactive=interactive, presents=presents)
 
 
 # --- rate limiting (noise estimate) -----------------------------------------------------------

@@ -404,8 +404,7 @@ class ViewerApp:
         else:
             slices = plan.slices
             if not plan.interactive:  # sppm's steps are planned from their own measured costs
-                budget = s.resolution.still_budget(reserved, asked or plan.reset)  # a reset presents
-                steps = renderer.steps_within(integrator, features, budget)
+                steps = renderer.steps_within(integrator, features, s.resolution.still_budget(reserved, plan.presents))
                 slices = slices if steps is None else steps
             renderer.render_slices(frame, slices, integrator, s.max_depth, features=features, whole_iterations=False)
         ti.sync()
@@ -431,7 +430,7 @@ class ViewerApp:
             self._stats_next = (job + 1) % len(self._stats_jobs)
         present_seconds = 0.0
         self.last_display_update = None
-        if asked or plan.interactive or plan.reset or fresh or self._display_key(now) != self._presented_key:
+        if plan.presents or fresh or self._display_key(now) != self._presented_key:
             t0 = time.perf_counter()
             self.last_display_update = self.display.update(renderer.film, self._accumulation(),
                                                            renderer.slices_done, self._display_settings(),

@@ -195,10 +195,11 @@ def test_a_still_frame_that_resets_leaves_its_present_out_of_its_budget():
     s.resolution.present_seconds = 0.013
     s.request_reset(interactive=False)  # a render setting changed while still
     first = s.plan_frame(0.0, presenting=False)
-    assert first.reset and not first.interactive
+    assert first.reset and not first.interactive and first.presents
     assert first.slices == s.resolution.still_slices(presenting=True) == 7
     after = s.plan_frame(0.1, presenting=False)
     assert not after.reset and after.slices == s.resolution.still_slices(presenting=False) == 11
+    assert not after.presents
 
 
 @pytest.mark.parametrize("slice_ms, slices", [(11.4, 4),  # 3 end 10.1 short, 4 end 1.3 past: the nearer
