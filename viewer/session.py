@@ -63,10 +63,11 @@ MOVING_PROBE_SLICES = ROUND_SLICES // 4
 # A still frame that only renders and reads input may end up to this much past its budget when
 # one more pixel slice gets it nearer the budget than stopping short: on a slow scene a slice
 # costs 8-12 ms at 960x540 on 2 cores, and frames planned strictly within 45 ms rendered three
-# or four slices in 34-37 ms, so the frame's fixed costs (a launch, waking Taichi's threads,
-# ~2.5 ms) weighed a fifth more per sample (foggy / nee: still rate 0.93 against whole-sample
-# frames). An input waits for the rest of such a frame and a presenting one, which keeps the
-# strict budget.
+# or four slices in 34-37 ms, each paying a launch's fixed cost (Taichi's threads woken: a
+# round in passes of five slices ran at 0.95-0.96 of whole-round launches). In a restricted
+# `bench interactive` run, foggy / mis and nee went from 0.927 and 0.941 of whole-sample frames'
+# samples/s to 0.945 and 0.945 with this overrun. An input waits for the rest of such a frame
+# and a presenting one, which keeps the strict budget.
 STILL_OVERRUN_SECONDS = 0.005
 
 # An untouched still view redraws seldom enough that presenting (with the HUD's statistics, which
@@ -74,8 +75,8 @@ STILL_OVERRUN_SECONDS = 0.005
 # at 960x540 on a 2-core CPU a still view's present costs 12-15 ms (the display's redraw of the
 # slices since the last one 2 ms, canvas and HUD 1 ms, GGUI's frame read back or shown 9 ms) and
 # the statistics 1-2 ms, so the still view redraws about once a second. (At 2.5% it redrew 1.8
-# times a second, and its sliced frames lost 1-2% of their samples per second more than frames
-# of whole samples, which take a second or more on a slow scene and present once each.)
+# times a second: presents took 2.5% of a sliced still view's time on showcase / mis, where
+# frames of whole samples take 1.5-3 s and present once each, under 1% of theirs.)
 STILL_PRESENT_SHARE = 0.015
 MIN_PRESENT_INTERVAL = 0.1
 MAX_PRESENT_INTERVAL = 1.0

@@ -318,6 +318,12 @@ def features_section(report: dict) -> Section:
 
 # --- interactive ---------------------------------------------------------------------------------
 
+def _first_round_ratio(result: dict):
+    """The first round's samples/s against whole-sample frames; None where it was not measured."""
+    first = result["still"].get("first_round")
+    return None if first is None else first["rate_ratio"]
+
+
 def interactive_section(report: dict) -> Section:
     section = Section()
     results = report.get("results", [])
@@ -325,7 +331,7 @@ def interactive_section(report: dict) -> Section:
     target = report.get("latency_target_ms")
     rows = [[r["scene"], r["integrator"], r["latency_p50_ms"], r["latency_p95_ms"], r["whole_samples_p95_ms"],
              r["still"]["samples_per_s"] / 1e6, times(r["still"]["rate_ratio"], 3),
-             times(r["still"]["first_round"]["rate_ratio"], 3) if r["still"].get("first_round") else "-",
+             "-" if _first_round_ratio(r) is None else times(_first_round_ratio(r), 3),
              r["still"]["frame_ms_median"],
              r["moving"]["frame_ms_median"], r["switch"]["first_image_s"]] for r in measured]
     w, h = report.get("config", {}).get("size", ("?", "?"))
@@ -349,8 +355,8 @@ def interactive_section(report: dict) -> Section:
         if ratios:
             sentence += (f", and cutting still frames into pixel slices keeps {spread(ratios, pct)} of the samples "
                          f"per second of whole-sample frames")
-            firsts = [r["still"]["first_round"]["rate_ratio"] for r in measured
-                      if r["integrator"] != "sppm" and r["still"].get("first_round")]
+            firsts = [_first_round_ratio(r) for r in measured
+                      if r["integrator"] != "sppm" and _first_round_ratio(r) is not None]
             if firsts:
                 sentence += f" after a view's first round ({spread(firsts, pct)} during it, its slices interleaved)"
         section.findings.append(sentence + ".")
