@@ -126,6 +126,26 @@ def sphere(o, d, center, radius, t_max):
     return hit, t
 
 
+# Unit roundoff of float32, 2^-24.
+F32_UNIT_ROUNDOFF = 5.9604645e-08
+# A sphere's spawn clearance in units of roundoff of |centre| + radius (sphere_spawn_clearance).
+SPHERE_CLEARANCE_ROUNDOFFS = 8.0
+
+
+@ti.func
+def sphere_spawn_clearance(center, radius):
+    """How far a ray leaving a sphere must start off it so that `sphere` cannot find the sphere
+    again at its origin. A sphere's point is rebuilt as centre + radius * normal, which rounds at
+    the scale of |centre| + radius, not of the point itself: the weekend scene's ground (radius
+    1000 about (0, -1000, 0)) has points near y = 0, whose ulps are tiny, with errors of ~1e-4.
+    And `sphere` tells outside from inside by c = |o - centre|^2 - radius^2, which rounds at the
+    scale of radius^2. Both are a few roundoffs of |centre| + radius (pbrt bounds the point by
+    gamma(5) |p| in object space, plus its transform's share); 8 of them: 0.95 mm for that ground,
+    1e-6 of a unit sphere at the origin."""
+    scale = ti.max(ti.abs(center.x), ti.max(ti.abs(center.y), ti.abs(center.z))) + radius
+    return SPHERE_CLEARANCE_ROUNDOFFS * F32_UNIT_ROUNDOFF * scale
+
+
 @ti.func
 def quad(o, d, corner, edge_u, edge_v, t_max):
     """Parallelogram corner + a edge_u + b edge_v, a, b in [0, 1]. Returns (hit, t, a, b).

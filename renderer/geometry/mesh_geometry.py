@@ -440,6 +440,7 @@ class MeshGeometry:
         p = ray.o + hit.t * ray.d
         n = vec3(0.0, 1.0, 0.0)
         ns = n
+        eps = 0.0  # how far a spawned ray must start off the surface, beyond offset_ray_origin's ulps
         uv = ti.math.vec2(0.0)
         uv1 = ti.math.vec2(0.0)
         tangent = ti.math.vec4(0.0)
@@ -491,6 +492,7 @@ class MeshGeometry:
                 n = ti.math.normalize(p - sp.xyz)
                 p = sp.xyz + sp.w * n  # back onto the sphere
                 ns = n
+                eps = isect.sphere_spawn_clearance(sp.xyz, sp.w)
                 uv = ti.math.vec2(0.5 + ti.atan2(n.x, -n.z) / (2.0 * PI), ti.acos(ti.math.clamp(n.y, -1.0, 1.0)) / PI)
         if ti.static("quad" in self.kinds):
             if g >= self.range_end[1] and g < self.range_end[2]:
@@ -515,7 +517,7 @@ class MeshGeometry:
         front = 1 if ray.d.dot(n) < 0.0 else 0
         ns = consistent_shading_normal(ns, n, -ray.d)
         return Surface(p=p, n_geo=n, n_shading=ns, uv=uv, uv1=uv1, tangent=tangent, material=self.prim_material[g],
-                       prim=g, front_face=front, eps=0.0, cone_width=ray.cone_width + ray.cone_spread * hit.t,
+                       prim=g, front_face=front, eps=eps, cone_width=ray.cone_width + ray.cone_spread * hit.t,
                        cone_spread=ray.cone_spread, color=color)
 
     @ti.func
@@ -548,8 +550,19 @@ class MeshGeometry:
     @ti.func
     def spawn(self, surface, direction):
         side = surface.n_geo if direction.dot(surface.n_geo) > 0.0 else -surface.n_geo
-        return Ray(o=isect.offset_ray_origin(surface.p, side), d=direction,
+        return Ray(o=self._leave(surface, side), d=direction,
                    cone_width=surface.cone_width, cone_spread=surface.cone_spread)
+
+    @ti.func
+    def _leave(self, surface, side):
+        """A ray origin off `surface` on `side`: a few ulps of the point's own magnitude
+        (offset_ray_origin), and at least the surface's own clearance `eps` (spheres: the rounding
+        of their centre and radius, which the point's magnitude does not show)."""
+        o = isect.offset_ray_origin(surface.p, side)
+        if ti.static("sphere" in self.kinds):
+            if surface.eps > 0.0:
+                o = isect.offset_ray_origin(surface.p + surface.eps * side, side)
+        return o
 
     # --- direct lighting ---------------------------------------------------------------------------
     def primitive_count(self) -> int:
@@ -645,7 +658,7 @@ class MeshGeometry:
             side = surface.n_geo if to.dot(surface.n_geo) > 0.0 else -surface.n_geo
             o = surface.p
             if surface.eps >= 0.0:
-                o = isect.offset_ray_origin(surface.p, side)
+                o = self._leave(surface, side)
             far_side = target_n if (o - target).dot(target_n) > 0.0 else -target_n
             seg = isect.offset_ray_origin(target, far_side) - o
             length = seg.norm()
