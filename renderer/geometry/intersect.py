@@ -128,22 +128,31 @@ def sphere(o, d, center, radius, t_max):
 
 # Unit roundoff of float32, 2^-24.
 F32_UNIT_ROUNDOFF = 5.9604645e-08
-# A sphere's spawn clearance in units of roundoff of |centre| + radius (sphere_spawn_clearance).
-SPHERE_CLEARANCE_ROUNDOFFS = 8.0
+# A primitive's spawn clearance in roundoffs of the magnitude its points are computed at
+# (spawn_clearance).
+CLEARANCE_ROUNDOFFS = 8.0
 
 
 @ti.func
-def sphere_spawn_clearance(center, radius):
-    """How far a ray leaving a sphere must start off it so that `sphere` cannot find the sphere
-    again at its origin. A sphere's point is rebuilt as centre + radius * normal, which rounds at
-    the scale of |centre| + radius, not of the point itself: the weekend scene's ground (radius
-    1000 about (0, -1000, 0)) has points near y = 0, whose ulps are tiny, with errors of ~1e-4.
-    And `sphere` tells outside from inside by c = |o - centre|^2 - radius^2, which rounds at the
-    scale of radius^2. Both are a few roundoffs of |centre| + radius (pbrt bounds the point by
-    gamma(5) |p| in object space, plus its transform's share); 8 of them: 0.95 mm for that ground,
-    1e-6 of a unit sphere at the origin."""
-    scale = ti.max(ti.abs(center.x), ti.max(ti.abs(center.y), ti.abs(center.z))) + radius
-    return SPHERE_CLEARANCE_ROUNDOFFS * F32_UNIT_ROUNDOFF * scale
+def max_abs(v):
+    return ti.max(ti.abs(v.x), ti.max(ti.abs(v.y), ti.abs(v.z)))
+
+
+@ti.func
+def spawn_clearance(scale):
+    """How far a ray leaving a primitive must start off it so that the primitive's own test cannot
+    find it again at the origin, for a surface point computed from coordinates of magnitude
+    `scale` (a sphere's |centre| + radius, a triangle's largest corner, a quad's corner and
+    edges). offset_ray_origin moves a point by ulps of its own magnitude, which is enough where
+    the point is as large as the coordinates it came from; a point near the origin on a large
+    primitive is not: the weekend scene's ground (a sphere of radius 1000 about (0, -1000, 0))
+    has points near y = 0 whose errors are ~1e-4 against an offset of 1.5e-5, and so does a
+    tilted ground quad or triangle a kilometre across near its middle. The point rounds at a few
+    roundoffs of `scale` (pbrt: gamma(5) |p| for a sphere in object space, gamma(7) sum |b_i v_i|
+    for a triangle), and so does each test's inside/outside decision (the sphere's
+    |o - centre|^2 - radius^2, the triangle's t); 8 of them: 0.95 mm for that ground, 1e-6 of a
+    unit object at the origin."""
+    return CLEARANCE_ROUNDOFFS * F32_UNIT_ROUNDOFF * scale
 
 
 @ti.func

@@ -440,7 +440,7 @@ class MeshGeometry:
         p = ray.o + hit.t * ray.d
         n = vec3(0.0, 1.0, 0.0)
         ns = n
-        eps = 0.0  # how far a spawned ray must start off the surface, beyond offset_ray_origin's ulps
+        eps = 0.0  # how far a spawned ray must start off the surface (isect.spawn_clearance)
         uv = ti.math.vec2(0.0)
         uv1 = ti.math.vec2(0.0)
         tangent = ti.math.vec4(0.0)
@@ -457,6 +457,7 @@ class MeshGeometry:
                         v2 = self.instances.point_to_world(hit.instance, v2)
                 # From barycentrics, not o + t d: stays on the triangle's plane to f32 precision.
                 p = b0 * v0 + bary.x * v1 + bary.y * v2
+                eps = isect.spawn_clearance(ti.max(isect.max_abs(v0), ti.max(isect.max_abs(v1), isect.max_abs(v2))))
                 n = ti.math.normalize((v1 - v0).cross(v2 - v0))
                 if ti.static(self.has_instances):
                     if hit.instance >= 0:
@@ -492,12 +493,14 @@ class MeshGeometry:
                 n = ti.math.normalize(p - sp.xyz)
                 p = sp.xyz + sp.w * n  # back onto the sphere
                 ns = n
-                eps = isect.sphere_spawn_clearance(sp.xyz, sp.w)
+                eps = isect.spawn_clearance(isect.max_abs(sp.xyz) + sp.w)
                 uv = ti.math.vec2(0.5 + ti.atan2(n.x, -n.z) / (2.0 * PI), ti.acos(ti.math.clamp(n.y, -1.0, 1.0)) / PI)
         if ti.static("quad" in self.kinds):
             if g >= self.range_end[1] and g < self.range_end[2]:
                 i = g - self.range_end[1]
                 p = self.quads[i, 0] + hit.bary.x * self.quads[i, 1] + hit.bary.y * self.quads[i, 2]
+                eps = isect.spawn_clearance(isect.max_abs(self.quads[i, 0]) + isect.max_abs(self.quads[i, 1])
+                                            + isect.max_abs(self.quads[i, 2]))
                 n = ti.math.normalize(self.quads[i, 1].cross(self.quads[i, 2]))
                 ns = n
                 uv = hit.bary
@@ -507,6 +510,7 @@ class MeshGeometry:
                 n = self.discs_n[i]
                 c = self.discs_a[i].xyz
                 p = p - (p - c).dot(n) * n  # back onto the plane
+                eps = isect.spawn_clearance(isect.max_abs(c) + self.discs_a[i].w)
                 ns = n
                 r = (p - c).norm() / self.discs_a[i].w
                 uv = ti.math.vec2(r, 0.0)
@@ -555,14 +559,10 @@ class MeshGeometry:
 
     @ti.func
     def _leave(self, surface, side):
-        """A ray origin off `surface` on `side`: a few ulps of the point's own magnitude
-        (offset_ray_origin), and at least the surface's own clearance `eps` (spheres: the rounding
-        of their centre and radius, which the point's magnitude does not show)."""
-        o = isect.offset_ray_origin(surface.p, side)
-        if ti.static("sphere" in self.kinds):
-            if surface.eps > 0.0:
-                o = isect.offset_ray_origin(surface.p + surface.eps * side, side)
-        return o
+        """A ray origin off `surface` on `side`: the surface's clearance `eps` (the rounding of the
+        coordinates its point came from, which the point's own magnitude need not show), then a
+        few ulps of the point's magnitude (offset_ray_origin)."""
+        return isect.offset_ray_origin(surface.p + surface.eps * side, side)
 
     # --- direct lighting ---------------------------------------------------------------------------
     def primitive_count(self) -> int:
