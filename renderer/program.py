@@ -10,7 +10,7 @@ from renderer.adaptive import STOPPED
 from renderer.camera import generate_ray
 from renderer.geometry.interface import INF
 from renderer.materials.bsdf import Bsdf
-from renderer.pixel_slices import pass_length, slice_pixel
+from renderer.pixel_slices import pass_length, slice_pixel, whole_groups
 from renderer.sampling.sampler import SampleState
 
 
@@ -44,9 +44,10 @@ class RenderProgram:
         cut in `order` (pixel_slices: INTERLEAVED or BANDS)."""
         # Threads take the loop's blocks as they finish (renderer/arch.cpu_scheduling_options), so
         # a pass's dear and cheap pixels are shared among them whatever their order.
-        for i in range(pass_length(slice_count, width, height, order)):
+        n = pass_length(slice_count, width, height, order)
+        for i in range(whole_groups(n)):
             x, y = slice_pixel(i, slice_first, slice_count, width, height, order)
-            if x < width and y < height:
+            if i < n and x < width and y < height:
                 # A pixel adaptive sampling has stopped (renderer/adaptive.py) takes no more samples;
                 # a nested test: Taichi's `and` evaluates both sides, and (x, y) may lie outside the film.
                 if self.film.adaptive[x, y] != STOPPED:

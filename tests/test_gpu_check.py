@@ -10,7 +10,7 @@ import pytest
 from renderer.camera import CameraFrame
 from renderer.renderer import Renderer
 from renderer.scene.catalog import load_any, resolve_scene
-from scripts.gpu_check import SEEDS, compare, probe_arch, render_side
+from scripts.gpu_check import SEEDS, _scene_result, compare, probe_arch, render_side
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZE = (32, 32)
@@ -39,6 +39,7 @@ def two_cpu_renders():
         renderer.reset()
         result = render_side(renderer, camera, SEEDS[side], min_spp=SPP, seconds=0.0)
         assert result.spp == SPP  # no time budget: exactly min_spp
+        assert result.pixel_samples == (SPP, SPP)  # every pixel took every sample
         sides.append((result.mean, result.variance))
     assert not np.array_equal(sides[0][0], sides[1][0])  # independent noise
     return sides
@@ -67,3 +68,15 @@ def test_a_wrong_tile_is_found(two_cpu_renders):
     agreement = compare(reference, (altered, variance))
     assert not agreement.passed, agreement.text()
     assert agreement.pixel_fraction < 1.0
+
+
+def test_a_back_end_that_drops_samples_fails_whatever_its_images_say(tmp_path):
+    """On lavapipe the last, partial group of 128 pixels stopped after 3 samples of a launch that
+    asked for 4 or more; its image statistics could not tell (the pixels' means stay right). The
+    check reads each pixel's sample count and fails such a back-end before comparing images."""
+    jobs = {("s", side): {"start_s": 1.0} for side in ("reference", "checked")}
+    rendered = {("s", "reference"): {"spp": 9, "render_s": 1.0, "pixel_samples": [9, 9]},
+                ("s", "checked"): {"spp": 9, "render_s": 1.0, "pixel_samples": [4, 9]}}
+    images = {job: tmp_path / "never_read.npz" for job in jobs}  # the verdict comes first
+    result = _scene_result("s", jobs, rendered, images, 0.01)
+    assert result["verdict"] == "FAIL (samples lost: checked: pixels took 4-9 of 9 samples)"
