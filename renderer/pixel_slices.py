@@ -119,22 +119,6 @@ def slice_rank(i, slice_first, slice_count):
     return slice_first + i % slice_count
 
 
-# GPU threads run in groups of this many loop indices (Taichi's default block size on CUDA and
-# Vulkan); see whole_groups.
-THREAD_GROUP = 128
-
-
-@ti.func
-def whole_groups(n):
-    """n rounded up to whole THREAD_GROUPs: a pass's loop runs over this many indices and skips
-    those from n on. On lavapipe (Vulkan) the last, partial group of a render pass stopped after 3
-    of the samples a launch asked of its pixels, for 4 or more (the Cornell box, hard_cases and
-    weekend, normals and mis; at 80x45 the last 16 pixels took 3 of 4, at 81x45 the last 61), and
-    its pixels' means stayed plausible; with whole groups every pixel takes them all. On the CPU
-    the extra indices are at most 127 empty iterations."""
-    return (n + THREAD_GROUP - 1) // THREAD_GROUP * THREAD_GROUP
-
-
 @ti.func
 def pass_length(slice_count, width, height, order=INTERLEAVED):
     """Loop indices of a pass over `slice_count` slices (see slice_pixel)."""

@@ -10,7 +10,7 @@ from renderer.adaptive import STOPPED
 from renderer.camera import generate_ray
 from renderer.geometry.interface import INF
 from renderer.materials.bsdf import Bsdf
-from renderer.pixel_slices import pass_length, slice_pixel, whole_groups
+from renderer.pixel_slices import pass_length, slice_pixel
 from renderer.sampling.sampler import SampleState
 
 
@@ -44,10 +44,9 @@ class RenderProgram:
         cut in `order` (pixel_slices: INTERLEAVED or BANDS)."""
         # Threads take the loop's blocks as they finish (renderer/arch.cpu_scheduling_options), so
         # a pass's dear and cheap pixels are shared among them whatever their order.
-        n = pass_length(slice_count, width, height, order)
-        for i in range(whole_groups(n)):
+        for i in range(pass_length(slice_count, width, height, order)):
             x, y = slice_pixel(i, slice_first, slice_count, width, height, order)
-            if i < n and x < width and y < height:
+            if x < width and y < height:
                 # A pixel adaptive sampling has stopped (renderer/adaptive.py) takes no more samples;
                 # a nested test: Taichi's `and` evaluates both sides, and (x, y) may lie outside the film.
                 if self.film.adaptive[x, y] != STOPPED:

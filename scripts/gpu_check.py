@@ -26,8 +26,8 @@ check (7.2e-4 for 14 scenes), so a correct back-end fails some scene with probab
 speed-up is CUDA's samples per second over the CPU's. Prints a table, writes
 reports/gpu_check.json; exit status 0 when every scene agrees, 1 if not. Without a CUDA device it
 prints "skipped: no CUDA device" and exits 0. `--arch vulkan` checks the Vulkan back-end instead
-(a software driver too: lavapipe, slowly; its per-pixel test needs --min-spp 64 or more there, since
-8 samples of a pixel estimate its variance too poorly). `--arch cpu` runs the same check with the
+(a software driver too: lavapipe, slowly; its per-pixel test needs --min-spp 256 there, since
+fewer samples of a pixel estimate a heavy-tailed pixel's variance too poorly). `--arch cpu` runs the same check with the
 CPU on both sides (two seeds): whether the test passes a correct back-end, seen without a GPU.
 """
 from __future__ import annotations
@@ -52,7 +52,8 @@ MARKER = "LANTERN-GPU-CHECK "
 SIDES = ("reference", "checked")  # the CPU, the back-end under test
 SEEDS = {"reference": 1, "checked": 2}
 # Not a multiple of 128 pixels: the last group of GPU threads is a partial one (56,922 = 444 x 128
-# + 90), where lavapipe dropped samples; 320x180 fills every group and could not show it.
+# + 90), where lavapipe dropped samples (renderer.VULKAN_SAMPLES_PER_LAUNCH); 320x180 fills every
+# group.
 DEFAULT_SIZE = "318x179"
 DEFAULT_SECONDS = 2.0
 DEFAULT_MIN_SPP = 8

@@ -93,9 +93,10 @@ print('TAKEN', int(taken.min()), int(taken.max()))
 
 @pytest.mark.vulkan
 def test_vulkan_every_pixel_takes_every_sample_of_a_launch():
-    """80x45 pixels are 28 groups of 128 GPU threads and a partial one of 16. On lavapipe that last
-    group's pixels took 3 of the 4 samples of one launch until a pass ran over whole groups
-    (pixel_slices.whole_groups); their means looked right, so only the counts tell."""
+    """On lavapipe a launch of 4 samples a pixel gave the last, partial group of 128 pixels (80x45:
+    16 of them) 3 each, and hard_cases / mis lost most of 256 (4-89 taken), biasing its image dark
+    where paths are long. Vulkan renders now take one sample a launch
+    (renderer.VULKAN_SAMPLES_PER_LAUNCH); only the counts tell, so the test reads them."""
     if not vulkan_available():
         pytest.skip("no Vulkan driver (install libvulkan1 mesa-vulkan-drivers)")
     proc = subprocess.run([sys.executable, "-c", SAMPLE_COUNTS], capture_output=True, text=True, timeout=600,
