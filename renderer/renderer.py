@@ -299,8 +299,9 @@ class Renderer:
         program, seed, max_depth = self._launch(camera, integrator, max_depth, seed, None, sampler)
         if not program.sliced:
             raise ValueError("an integrator with whole-image passes (sppm) cannot render a group of pixels")
-        program.render(self.film.width, self.film.height, spp, slice_first, slice_count, INTERLEAVED, seed,
-                       max_depth, *camera.kernel_args())
+        for taken in range(0, spp, self.samples_per_launch):  # each pixel goes on from its own count
+            program.render(self.film.width, self.film.height, min(self.samples_per_launch, spp - taken), slice_first,
+                           slice_count, INTERLEAVED, seed, max_depth, *camera.kernel_args())
 
     def round_order(self, slices_done: int | None = None) -> int:
         """How the round holding slice `slices_done` since the last reset (default: the next one)
