@@ -118,7 +118,9 @@ def test_rate_blocks_pair_each_whole_block_with_sliced_frames_of_as_much_time():
     viewer = _TimedStillViewer(whole_s=0.02, sliced_s=0.002)
     blocks = paired_rate_blocks(viewer, seconds=0.01, rounds=2)
     assert [len(b["times"]) for b in blocks[ROUND_SLICES]] == [1, 1]
-    assert all(len(b["times"]) >= 10 for b in blocks[1])
+    # Several short frames fill the long one's time (how many depends on how long a 2 ms sleep
+    # takes on a loaded machine: 10 when it is exact; the sums below are what the pairing promises).
+    assert all(len(b["times"]) > 1 for b in blocks[1])
     for whole, sliced in zip(blocks[ROUND_SLICES], blocks[1]):
         assert sum(sliced["times"]) >= sum(whole["times"])
         assert sum(sliced["times"]) - sum(whole["times"]) <= max(sliced["times"])  # stops at the first frame past it
