@@ -123,8 +123,8 @@ class AdaptiveSettings:
 # pixels stopped short of the samples a launch asked of them: hard_cases / mis at 80x45, one
 # launch of 256: 4-89 each; the Cornell box / normals, 4 or more a launch: the last, partial
 # group of 128 pixels took 3. One or two a launch were exact in every case tried; the cause (the
-# driver or Taichi's SPIR-V) is not found. CUDA and the CPU take every sample
-# (scripts/gpu_check.py checks each pixel's count).
+# driver or Taichi's SPIR-V) is not found. The CPU takes every sample; scripts/gpu_check.py
+# checks each pixel's count on CUDA (its one run so far agreed in images but did not read them).
 VULKAN_SAMPLES_PER_LAUNCH = 1
 
 

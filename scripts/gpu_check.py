@@ -16,9 +16,9 @@ CUDA (independent noise, so the z-test of the difference is meaningful). Two pha
             --min-spp at the least, about --seconds' worth; at 318x179, 14 scenes x 2 back-ends
             x 2 s plus the starts keep the whole catalog within about five minutes)
 
-First, every pixel must have taken every sample on both sides (a back-end that drops samples in
-some group of threads can keep the pixels' means right; lavapipe did, in the last partial group).
-Then the verdict per scene is the suite's (tests/stats/image_tests.py): each pixel channel's z-test of
+First, every pixel must have taken every sample on both sides (a back-end that drops samples can
+keep the pixels' means plausible; lavapipe did, in launches of several samples a pixel). Then the
+verdict per scene is the suite's (tests/stats/image_tests.py): each pixel channel's z-test of
 the difference of the two means against their combined standard error at the Sidak level that
 tests the whole image, with at least 99.75 % of pixel channels passing, and the image means
 (green) by a two-sided z-test; the scene's level is the Sidak share of alpha = 0.01 for the whole
@@ -27,8 +27,9 @@ speed-up is CUDA's samples per second over the CPU's. Prints a table, writes
 reports/gpu_check.json; exit status 0 when every scene agrees, 1 if not. Without a CUDA device it
 prints "skipped: no CUDA device" and exits 0. `--arch vulkan` checks the Vulkan back-end instead
 (a software driver too: lavapipe, slowly; its per-pixel test needs --min-spp 256 there, since
-fewer samples of a pixel estimate a heavy-tailed pixel's variance too poorly). `--arch cpu` runs the same check with the
-CPU on both sides (two seeds): whether the test passes a correct back-end, seen without a GPU.
+fewer samples estimate a heavy-tailed pixel's variance too poorly). `--arch cpu` runs the same
+check with the CPU on both sides (two seeds): whether the test passes a correct back-end, seen
+without a GPU.
 """
 from __future__ import annotations
 
