@@ -282,9 +282,7 @@ def _scene_result(scene: str, compiled: dict, rendered: dict, images: dict, alph
     if errors:
         result["verdict"] = "ERROR " + "; ".join(errors)
         return result
-    lost = [f"{side}: pixels took {low}-{high} of {result[side]['spp']} samples" for side in SIDES
-            for low, high in [result[side].get("pixel_samples", (result[side]["spp"],) * 2)]
-            if (low, high) != (result[side]["spp"],) * 2]
+    lost = _lost_samples(result)
     if lost:  # a back-end that drops samples fails whatever its image's statistics say
         result["verdict"] = "FAIL (samples lost: " + "; ".join(lost) + ")"
         return result
@@ -297,6 +295,16 @@ def _scene_result(scene: str, compiled: dict, rendered: dict, images: dict, alph
                   speed_up=result["reference"]["render_s"] / result["reference"]["spp"]
                   / (result["checked"]["render_s"] / result["checked"]["spp"]))
     return result
+
+
+def _lost_samples(result: dict) -> list[str]:
+    """What each side's pixels took where some took fewer or more than the side's spp."""
+    lost = []
+    for side in SIDES:
+        low, high = result[side]["pixel_samples"]
+        if not low == high == result[side]["spp"]:
+            lost.append(f"{side}: pixels took {low}-{high} of {result[side]['spp']} samples")
+    return lost
 
 
 def _side_cells(result: dict, side: str) -> list:

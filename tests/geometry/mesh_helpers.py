@@ -1,6 +1,7 @@
 """Test helpers: mesh geometries built from numpy data, and kernels that fire rays at them."""
 import numpy as np
 import taichi as ti
+import trimesh
 
 from renderer.bench.ray_batch import RayBatch, ray_at
 from renderer.geometry.instance_bvh import build_scene_bvh
@@ -15,6 +16,23 @@ def geometry_from(data: MeshData, strategy="sah", traversal="stack", triangle_te
     bvh = build_scene_bvh(data, strategy=strategy, max_leaf_size=leaf)
     return MeshGeometry(data, bvh, traversal=traversal, triangle_test=triangle_test, materials=materials,
                         leaves=leaves)
+
+
+# Euler angles, degrees, about x, then y, then z (the scene files' `rotate`): a plane tilted so
+# that no coordinate of its points is exact.
+TILT_DEGREES = (7.0, 0.0, 5.0)
+
+
+def tilt(tilt_degrees=TILT_DEGREES) -> np.ndarray:
+    """The 3x3 rotation of `tilt_degrees`."""
+    return trimesh.transformations.euler_matrix(*np.radians(tilt_degrees), axes="sxyz")[:3, :3]
+
+
+def tilted_square_corners(size: float) -> np.ndarray:
+    """The four corners (4, 3) of a square `size` across about the origin in the xz plane, tilted
+    by TILT_DEGREES."""
+    h = 0.5 * size
+    return np.array([[-h, 0.0, -h], [h, 0.0, -h], [h, 0.0, h], [-h, 0.0, h]]) @ tilt().T
 
 
 def trimesh_data(mesh, material=0) -> MeshData:

@@ -16,10 +16,9 @@ a flat primitive, nothing.
 """
 import numpy as np
 import pytest
-import trimesh
 
 from renderer.geometry.mesh_data import MeshData
-from tests.geometry.mesh_helpers import RayShooter, geometry_from
+from tests.geometry.mesh_helpers import RayShooter, geometry_from, tilt, tilted_square_corners
 
 # (centre, radius): small and unit spheres, grounds as large as the weekend's and ten times larger,
 # a sphere about the origin and one far from it.
@@ -32,7 +31,6 @@ SPHERES = {
     "unit_10km_away": ((1e4, 0.0, 0.0), 1.0),
 }
 FLAT_SIZES = (1.0, 2e3, 2e4)  # metres across, centred on the origin
-TILT = trimesh.transformations.euler_matrix(np.radians(7.0), 0.0, np.radians(5.0))[:3, :3]
 RAYS = 50_000
 MIN_COSINE = 0.1  # incidence of the first rays, and how far from tangent the spawned rays leave
 NO_MATERIAL = np.zeros(0, np.int32)
@@ -44,10 +42,8 @@ def sphere_data(centre, radius):
 
 
 def flat_data(kind, size):
-    """A square `size` across in the plane through the origin tilted by TILT: one quad, or two
-    triangles."""
-    h = 0.5 * size
-    corners = np.array([[-h, 0.0, -h], [h, 0.0, -h], [h, 0.0, h], [-h, 0.0, h]]) @ TILT.T
+    """A square `size` across in the plane through the origin, tilted: one quad, or two triangles."""
+    corners = tilted_square_corners(size)
     if kind == "quad":
         quad = np.stack([corners[0], corners[1] - corners[0], corners[3] - corners[0]])[None]
         return MeshData(tri_vertices=np.zeros((0, 3, 3), np.float32), tri_material=NO_MATERIAL,
@@ -112,8 +108,10 @@ def test_rays_leaving_a_large_flat_primitive_never_hit_it_again(kind, traversal,
     shooter = RayShooter(geometry_from(flat_data(kind, size), traversal=traversal, leaves=leaves))
     # Points within 10 m of the middle (within the square for the 1 m one), from both sides.
     reach = min(10.0, 0.45 * size)
-    points = np.stack([rng.uniform(-reach, reach, RAYS), np.zeros(RAYS), rng.uniform(-reach, reach, RAYS)], 1) @ TILT.T
-    up = TILT @ np.array([0.0, 1.0, 0.0])
+    rotation = tilt()
+    xz = rng.uniform(-reach, reach, (RAYS, 2))
+    points = np.stack([xz[:, 0], np.zeros(RAYS), xz[:, 1]], axis=1) @ rotation.T
+    up = rotation @ np.array([0.0, 1.0, 0.0])
     normal = np.where(rng.uniform(size=(RAYS, 1)) < 0.5, up, -up)
     origins, dirs = aimed_rays(rng, points, normal, 1.0)
     out, leaving = leaving_directions(rng, normal)

@@ -16,11 +16,11 @@ variance is zero and the test asks for a to the rounding of the film's float32 s
 """
 import numpy as np
 import pytest
-import trimesh
 from scipy import stats
 
 from renderer.camera import CameraFrame
 from renderer.renderer import Renderer
+from tests.geometry.mesh_helpers import TILT_DEGREES, tilted_square_corners
 from tests.scene_builder import scene_from_toml
 from tests.stats.chi2 import sidak_alpha
 from tests.stats.image_tests import mean_z
@@ -29,13 +29,19 @@ ALPHA = 0.01
 ALBEDO = 0.5
 SPP = 64
 SIZE = (48, 27)
-TILT_DEGREES = (7.0, 0.0, 5.0)  # Euler angles about x, y, z: no coordinate of the ground is exact
+
+
+def ground_object(kind: str, fields: str) -> str:
+    return f'[[objects]]\ntype = "{kind}"\nmaterial = "ground"\n{fields}\n'
+
+
+TILTED = f"rotate = {list(TILT_DEGREES)}"
 GROUNDS = {
-    "sphere_r1000": '[[objects]]\ntype = "sphere"\nmaterial = "ground"\nradius = 1000\ntranslate = [0.0, -1000.0, 0.0]\n',
-    "sphere_r10000": '[[objects]]\ntype = "sphere"\nmaterial = "ground"\nradius = 10000\ntranslate = [0.0, -10000.0, 0.0]\n',
-    "quad_2km_tilted": f'[[objects]]\ntype = "quad"\nmaterial = "ground"\nsize = [2000, 2000]\nrotate = {list(TILT_DEGREES)}\n',
-    "disc_2km_tilted": f'[[objects]]\ntype = "disc"\nmaterial = "ground"\nradius = 1000\nrotate = {list(TILT_DEGREES)}\n',
-    "triangles_2km_tilted": '[[objects]]\ntype = "mesh"\nfile = "ground.obj"\nmaterial = "ground"\n',
+    "sphere_r1000": ground_object("sphere", "radius = 1000\ntranslate = [0.0, -1000.0, 0.0]"),
+    "sphere_r10000": ground_object("sphere", "radius = 10000\ntranslate = [0.0, -10000.0, 0.0]"),
+    "quad_2km_tilted": ground_object("quad", f"size = [2000, 2000]\n{TILTED}"),
+    "disc_2km_tilted": ground_object("disc", f"radius = 1000\n{TILTED}"),
+    "triangles_2km_tilted": ground_object("mesh", 'file = "ground.obj"'),
 }
 INTEGRATORS = ("path", "nee", "mis")
 LEVEL = sidak_alpha(ALPHA, len(GROUNDS) * len(INTEGRATORS))
@@ -61,10 +67,8 @@ base_color = [{ALBEDO}, {ALBEDO}, {ALBEDO}]
 
 
 def write_tilted_square(path, size):
-    """Two triangles `size` across about the origin, tilted as the quad (x, then y, then z)."""
-    h = 0.5 * size
-    rotation = trimesh.transformations.euler_matrix(*np.radians(TILT_DEGREES), axes="sxyz")[:3, :3]
-    corners = np.array([[-h, 0.0, -h], [h, 0.0, -h], [h, 0.0, h], [-h, 0.0, h]]) @ rotation.T
+    """Two triangles `size` across about the origin, tilted as the quad."""
+    corners = tilted_square_corners(size)
     path.write_text("".join(f"v {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in corners) + "f 1 3 2\nf 1 4 3\n")
 
 
