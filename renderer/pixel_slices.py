@@ -23,9 +23,11 @@ so after the first round (which keeps the interleaved order: an image refining e
 coarse one): a partial pass over interleaved slices costs more per sample than the same pixels
 as rows (their neighbours in the loop are 2-16 pixels apart, in memory and in the scene).
 `python scripts/slice_order_cost.py 3 cornell_box/path bunnies/mis textured/mis` (passes of one
-40 ms frame's slices, alternated in one process), interleaved / bands: 1.06, 1.38, 1.29. A band
-pass has the loop indices of the tallest band for each (3 rows at 540, 2.1 on average): the
-indices past a band's rows only compute their pixel and skip. Which pixels a pass takes never
+40 ms frame's slices, alternated in one process), interleaved / bands: 1.06, 1.38, 1.29. Here a
+band pass has the loop indices of the tallest band for each (3 rows at 540, 2.1 on average): the
+indices past a band's rows only compute their pixel and skip. The render kernel does not use
+that form: it takes a band pass's rows from a table (renderer/band_table.py), the same pixels
+without the skipped indices and the divisions. Which pixels a pass takes never
 changes their values (each continues at
 its own sample index), so either order gives the same film; an order is a property of a render,
 and everything that maps its slices to pixels (the display's partial redraws) is told which.
@@ -146,6 +148,16 @@ def band_rows_array(bands: np.ndarray, height: int) -> tuple[np.ndarray, np.ndar
     """numpy twin of band_start: the rows [start, end) from the top of each band under BANDS."""
     bands = np.asarray(bands)
     return bands * height // ROUND_SLICES, (bands + 1) * height // ROUND_SLICES
+
+
+def band_order_rows(height: int) -> tuple[np.ndarray, np.ndarray]:
+    """BANDS' rows in slice order: (rows, starts), rows[starts[r]:starts[r + 1]] being slice r's
+    band, its rows counted from the top, top to bottom (renderer/band_table.py keeps it on the
+    device for the render kernel's passes)."""
+    top, bottom = band_rows_array(bit_reverse_array(np.arange(ROUND_SLICES)), height)
+    rows = np.concatenate([np.arange(t, b) for t, b in zip(top, bottom)]).astype(np.int32)
+    starts = np.concatenate([[0], np.cumsum(bottom - top)]).astype(np.int32)
+    return rows, starts
 
 
 def bayer_matrix() -> np.ndarray:

@@ -10,14 +10,14 @@ from renderer.adaptive import STOPPED
 from renderer.camera import generate_ray
 from renderer.geometry.interface import INF
 from renderer.materials.bsdf import Bsdf
-from renderer.pixel_slices import pass_length, slice_pixel
+from renderer.pixel_slices import BANDS, ROUND_SLICES, pass_length, slice_pixel
 from renderer.sampling.sampler import SampleState
 
 
 @ti.data_oriented
 class RenderProgram:
     def __init__(self, geometry, materials, environment, integrator, film, work, features, sampler, lights=None,
-                 media=None, aovs=None):
+                 media=None, aovs=None, bands=None):
         self.geometry = geometry
         self.media = media  # MediaTable (read only by kernels compiled with media or fog)
         self.lights = lights  # None for integrators that do not sample lights
@@ -26,6 +26,7 @@ class RenderProgram:
         self.environment = environment
         self.integrator = integrator
         self.film = film
+        self.bands = bands  # the film's BandTable (renderer/band_table.py); None: no band passes (sppm)
         self.work = work  # per-pixel [geometry work, primitive tests, rays traced] summed over samples
         self.features = features
         # Denoising AOVs are written where the renderer keeps them and the integrator has them.
@@ -42,10 +43,21 @@ class RenderProgram:
                right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
         """`spp` samples for each pixel of slices [slice_first, slice_first + slice_count) of a round
         cut in `order` (pixel_slices: INTERLEAVED or BANDS)."""
+        # A partial pass over bands visits its rows from the band table: the same pixels as
+        # slice_pixel's, without its divisions and skipped indices (renderer/band_table.py).
+        banded = order == BANDS and slice_count < ROUND_SLICES
+        n = pass_length(slice_count, width, height, order)
+        if banded:
+            n = self.bands.pass_length(slice_first, slice_count, width)
         # Threads take the loop's blocks as they finish (renderer/arch.cpu_scheduling_options), so
         # a pass's dear and cheap pixels are shared among them whatever their order.
-        for i in range(pass_length(slice_count, width, height, order)):
-            x, y = slice_pixel(i, slice_first, slice_count, width, height, order)
+        for i in range(n):
+            x = 0
+            y = 0
+            if banded:
+                x, y = self.bands.pixel(i, slice_first, width)
+            else:
+                x, y = slice_pixel(i, slice_first, slice_count, width, height, order)
             if x < width and y < height:
                 # A pixel adaptive sampling has stopped (renderer/adaptive.py) takes no more samples;
                 # a nested test: Taichi's `and` evaluates both sides, and (x, y) may lie outside the film.

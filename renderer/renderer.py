@@ -12,6 +12,7 @@ import taichi as ti
 from renderer.adaptive import DEFAULT_MIN_SPP, AdaptiveSampling, is_check_point, next_check
 from renderer.aovs import AovFilm
 from renderer.allocation import allocation_size
+from renderer.band_table import BandTable
 from renderer.camera import CameraFrame
 from renderer.film import Film, FilmState
 from renderer.image_io import read_environment
@@ -154,6 +155,7 @@ class Renderer:
         self._adaptive_rule = None
         self.pixels_active = width * height  # pixels adaptive sampling has not stopped
         self.work = pixel_vector(3, ti.f32, allocated)
+        self.bands = BandTable(allocated[1])
         self._probe_out = ti.field(ti.f32, shape=())
         self._programs: dict[tuple[str, Features], RenderProgram] = {}
         # Per-integrator knobs that are data, not compile-time (e.g. "sppm": SppmOptions), and
@@ -186,7 +188,7 @@ class Renderer:
             else:
                 self._programs[key] = RenderProgram(self.geometry, self.materials, self.environment, chosen,
                                                     self.film, self.work, features, make_sampler(sampler), lights,
-                                                    self.media, self.aovs)
+                                                    self.media, self.aovs, self.bands)
         return self._programs[key]
 
     def lights(self):
@@ -213,6 +215,7 @@ class Renderer:
     # --- rendering -----------------------------------------------------------------------------
     def reset(self, width: int | None = None, height: int | None = None) -> None:
         self.film.reset(width or self.film.width, height or self.film.height)
+        self.bands.set_height(self.film.height)
         if self.aovs is not None:
             self.aovs.reset(self.film.width, self.film.height)
         self.work.fill(0.0)
@@ -239,6 +242,7 @@ class Renderer:
     def restore(self, state: FilmState, slices_done: int) -> None:
         """Continue from `state` (Renderer.state()) with `slices_done` slices rendered."""
         self.film.restore(state)
+        self.bands.set_height(self.film.height)
         if self.aovs is not None:
             if state.albedo is not None and state.normal is not None:
                 self.aovs.restore(state.albedo, state.normal)

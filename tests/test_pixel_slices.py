@@ -5,9 +5,10 @@ import numpy as np
 import pytest
 import taichi as ti
 
+from renderer.band_table import BandTable
 from renderer.film import Film, FilmState
-from renderer.pixel_slices import (BANDS, CELL, INTERLEAVED, ROUND_SLICES, bayer_matrix, filled_mean_array,
-                                   pass_length, slice_mask, slice_pixel, spp_text)
+from renderer.pixel_slices import (BANDS, CELL, INTERLEAVED, ROUND_SLICES, band_order_rows, bayer_matrix,
+                                   filled_mean_array, pass_length, slice_mask, slice_pixel, spp_text)
 from renderer.tonemap import display_array, tonemap_into
 
 
@@ -42,6 +43,41 @@ def test_passes_over_slices_visit_their_pixels_and_a_round_visits_each_once(widt
     whole = np.zeros((height, width), np.int32)
     _visit(whole, 0, ROUND_SLICES, width, height, order)  # a whole round, in raster order
     np.testing.assert_array_equal(whole, 1)
+
+
+@ti.kernel
+def _visit_banded(visits: ti.types.ndarray(), table: ti.template(), first: ti.i32, count: ti.i32, width: ti.i32):
+    for i in range(table.pass_length(first, count, width)):
+        x, y = table.pixel(i, first, width)
+        ti.atomic_add(visits[visits.shape[0] - 1 - y, x], 1)
+
+
+@pytest.mark.parametrize("height", [1, 3, 255, 256, 257, 300, 540])
+def test_band_order_lists_every_row_once_in_slice_order(height):
+    rows, starts = band_order_rows(height)
+    assert sorted(rows.tolist()) == list(range(height))
+    for rank in (0, 1, 77, 255):
+        mask = slice_mask(rank, 1, 1, height, BANDS)[::-1, 0]  # row 0 at the top
+        np.testing.assert_array_equal(rows[starts[rank]:starts[rank + 1]], np.nonzero(mask)[0])
+
+
+def test_the_band_table_pass_visits_exactly_its_slices_pixels_once_at_every_height():
+    """The render kernel's passes over bands (renderer/band_table.py) take exactly the pixels of
+    slice_pixel's passes, each once, and a round all of them; the table follows the film's height
+    as it changes (a smaller internal resolution, then back)."""
+    table = BandTable(300)
+    width = 9
+    for height in (300, 45, 1, 256, 300):
+        table.set_height(height)
+        total = np.zeros((height, width), np.int32)
+        for first, count in ((0, 1), (1, 6), (7, 100), (107, 148), (255, 1)):
+            visits = np.zeros((height, width), np.int32)
+            _visit_banded(visits, table, first, count, width)
+            np.testing.assert_array_equal(visits, slice_mask(first, count, width, height, BANDS)[::-1].astype(np.int32))
+            total += visits
+        np.testing.assert_array_equal(total, 1)
+    with pytest.raises(ValueError, match="height 301"):
+        table.set_height(301)
 
 
 def test_bands_are_whole_rows_spread_over_the_image():
