@@ -24,6 +24,9 @@ class BandTable:
         self.rows = ti.field(ti.i32, shape=max_height)
         self.starts = ti.field(ti.i32, shape=ROUND_SLICES + 1)
         self.height = -1
+        # Filled now, with its tallest image: the first fill compiles the uploads (~90 ms on two
+        # cores), which belongs with the scene's loading, not with the first still frame's pass.
+        self.set_height(max_height)
 
     def set_height(self, height: int) -> None:
         """Fill the table for an image `height` rows tall (nothing to do when it already is)."""

@@ -37,18 +37,26 @@ class RenderProgram:
     # film has seen are in its counts, so the whole-image passes of SPPM do not apply.
     sliced = True
 
-    @ti.kernel
-    def render(self, width: ti.i32, height: ti.i32, spp: ti.i32, slice_first: ti.i32, slice_count: ti.i32,
-               order: ti.i32, seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3,
-               right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
+    def render(self, width: int, height: int, spp: int, slice_first: int, slice_count: int, order: int,
+               *rest) -> None:
         """`spp` samples for each pixel of slices [slice_first, slice_first + slice_count) of a round
-        cut in `order` (pixel_slices: INTERLEAVED or BANDS)."""
+        cut in `order` (pixel_slices: INTERLEAVED or BANDS); `rest`: seed, max depth and the
+        camera's kernel arguments. A partial band pass first fills the band table for `height`
+        (nothing to do when it already is: a still view's passes; moving frames, which change the
+        height, are interleaved)."""
+        if order == BANDS and slice_count < ROUND_SLICES:
+            self.bands.set_height(height)
+        self._render(width, height, spp, slice_first, slice_count, order, *rest)
+
+    @ti.kernel
+    def _render(self, width: ti.i32, height: ti.i32, spp: ti.i32, slice_first: ti.i32, slice_count: ti.i32,
+                order: ti.i32, seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3,
+                right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
         # A partial pass over bands visits its rows from the band table: the same pixels as
         # slice_pixel's, without its divisions and skipped indices (renderer/band_table.py).
         banded = order == BANDS and slice_count < ROUND_SLICES
-        n = pass_length(slice_count, width, height, order)
-        if banded:
-            n = self.bands.pass_length(slice_first, slice_count, width)
+        n = self.bands.pass_length(slice_first, slice_count, width) if banded else pass_length(
+            slice_count, width, height, order)
         # Threads take the loop's blocks as they finish (renderer/arch.cpu_scheduling_options), so
         # a pass's dear and cheap pixels are shared among them whatever their order.
         for i in range(n):

@@ -215,7 +215,6 @@ class Renderer:
     # --- rendering -----------------------------------------------------------------------------
     def reset(self, width: int | None = None, height: int | None = None) -> None:
         self.film.reset(width or self.film.width, height or self.film.height)
-        self.bands.set_height(self.film.height)
         if self.aovs is not None:
             self.aovs.reset(self.film.width, self.film.height)
         self.work.fill(0.0)
@@ -242,7 +241,6 @@ class Renderer:
     def restore(self, state: FilmState, slices_done: int) -> None:
         """Continue from `state` (Renderer.state()) with `slices_done` slices rendered."""
         self.film.restore(state)
-        self.bands.set_height(self.film.height)
         if self.aovs is not None:
             if state.albedo is not None and state.normal is not None:
                 self.aovs.restore(state.albedo, state.normal)
