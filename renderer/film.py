@@ -50,9 +50,18 @@ class FilmState:
     adaptive: np.ndarray | None = None  # int32 (height, width)
     albedo: np.ndarray | None = None  # float32 (height, width, 3)
     normal: np.ndarray | None = None  # float32 (height, width, 3)
+    aov_count: np.ndarray | None = None  # int32 (height, width): the AOVs' samples, feature samples included
 
     ARRAYS = (("mean", np.float32, 3), ("m2", np.float32, 3), ("count", np.int32, 0), ("rejected", np.int32, 0))
-    OPTIONAL_ARRAYS = (("adaptive", np.int32, 0), ("albedo", np.float32, 3), ("normal", np.float32, 3))
+    OPTIONAL_ARRAYS = (("adaptive", np.int32, 0), ("albedo", np.float32, 3), ("normal", np.float32, 3),
+                       ("aov_count", np.int32, 0))
+
+    def aov_samples(self) -> np.ndarray:
+        """The AOVs' sample counts: those kept, or for a state saved before feature samples
+        existed (one AOV sample per colour sample, rejected ones included), count + rejected."""
+        if self.aov_count is not None:
+            return self.aov_count
+        return self.count + self.rejected
 
     @property
     def size(self) -> tuple[int, int]:

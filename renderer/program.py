@@ -7,6 +7,7 @@ combination already seen compiles nothing.
 import taichi as ti
 
 from renderer.adaptive import STOPPED
+from renderer.aovs import FEATURE_BOOSTED_SAMPLES, FEATURE_SEED_SALT
 from renderer.camera import generate_ray
 from renderer.geometry.interface import INF
 from renderer.materials.bsdf import Bsdf
@@ -32,25 +33,28 @@ class RenderProgram:
         # Denoising AOVs are written where the renderer keeps them and the integrator has them.
         self.aovs = aovs if getattr(integrator, "writes_aovs", False) else None
         self.writes_aovs = self.aovs is not None  # (a Python bool: `is` is not Taichi syntax)
+        # Integrators with AOVs can trace feature samples: their li takes a features_only flag.
+        self.feature_tracing = getattr(integrator, "writes_aovs", False)
 
     # A pass over slices samples its pixels in slice order (renderer/pixel_slices.py); the rounds a
     # film has seen are in its counts, so the whole-image passes of SPPM do not apply.
     sliced = True
 
     def render(self, width: int, height: int, spp: int, slice_first: int, slice_count: int, order: int,
-               *rest) -> None:
+               *rest, feature_boost: int = 0) -> None:
         """`spp` samples for each pixel of slices [slice_first, slice_first + slice_count) of a round
         cut in `order` (pixel_slices: INTERLEAVED or BANDS); `rest`: seed, max depth and the
-        camera's kernel arguments. A partial band pass first fills the band table for `height`
-        (nothing to do when it already is: a still view's passes; moving frames, which change the
-        height, are interleaved)."""
+        camera's kernel arguments. `feature_boost`: the AOV-only samples each of a pixel's first
+        colour samples brings where AOVs are kept (renderer/aovs.py). A partial band pass first
+        fills the band table for `height` (nothing to do when it already is: a still view's
+        passes; moving frames, which change the height, are interleaved)."""
         if order == BANDS and slice_count < ROUND_SLICES:
             self.bands.set_height(height)
-        self._render(width, height, spp, slice_first, slice_count, order, *rest)
+        self._render(width, height, spp, slice_first, slice_count, order, feature_boost, *rest)
 
     @ti.kernel
     def _render(self, width: ti.i32, height: ti.i32, spp: ti.i32, slice_first: ti.i32, slice_count: ti.i32,
-                order: ti.i32, seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3,
+                order: ti.i32, feature_boost: ti.i32, seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3,
                 right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
         # A partial pass over bands visits its rows from the band table: the same pixels as
         # slice_pixel's, without its divisions and skipped indices (renderer/band_table.py).
@@ -75,16 +79,40 @@ class RenderProgram:
                     first_sample = self.film.count[x, y] + self.film.rejected[x, y]
                     work = ti.math.vec3(0.0)
                     for s in range(spp):
-                        state = self.sampler.start(pixel, first_sample + s, seed)
-                        ray = generate_ray(x, y, width, height, self.sampler, state, origin, forward, right, up,
-                                           tan_half_fov, aperture, focus, self.features.depth_of_field)
-                        value, stats, albedo, normal = self.integrator.li(self, ray, state, max_depth)
-                        self.film.add_sample(x, y, value)
+                        # Camera sample 0 is the colour sample; any more are feature samples, which
+                        # only find the AOVs (renderer/aovs.py), through the same call of the
+                        # integrator (a second call site would compile its tracing in again).
+                        features = 0
                         if ti.static(self.writes_aovs):
-                            self.aovs.add(x, y, first_sample + s, albedo, normal)
-                        work += stats
+                            if first_sample + s < FEATURE_BOOSTED_SAMPLES:
+                                features = feature_boost
+                        for k in range(1 + features):
+                            state = self.sampler.start(pixel, first_sample + s, seed)
+                            if ti.static(self.writes_aovs):
+                                if k > 0:
+                                    state = self.sampler.start(pixel, self.aovs.count[x, y], seed ^ FEATURE_SEED_SALT)
+                            ray = generate_ray(x, y, width, height, self.sampler, state, origin, forward, right,
+                                               up, tan_half_fov, aperture, focus, self.features.depth_of_field)
+                            if ti.static(self.writes_aovs):
+                                value, stats, albedo, normal = self.integrator.li(self, ray, state, max_depth, k > 0)
+                                if k == 0:
+                                    self.film.add_sample(x, y, value)
+                                self.aovs.add(x, y, albedo, normal)
+                                work += stats
+                            else:
+                                value, stats, _, _ = self._trace(ray, state, max_depth)
+                                self.film.add_sample(x, y, value)
+                                work += stats
                     # One plain store per pixel: += on a global field would be an atomic add per sample.
                     self.work[x, y] = self.work[x, y] + work
+
+    @ti.func
+    def _trace(self, ray, state, max_depth):
+        """A colour sample of an integrator (with AOVs or without), in a kernel that keeps none."""
+        if ti.static(self.feature_tracing):
+            return self.integrator.li(self, ray, state, max_depth, False)
+        else:
+            return self.integrator.li(self, ray, state, max_depth)
 
     @ti.kernel
     def probe(self, u: ti.f32, v: ti.f32, width: ti.i32, height: ti.i32, origin: ti.math.vec3,

@@ -10,7 +10,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.adaptive import DEFAULT_MIN_SPP, AdaptiveSampling, is_check_point, next_check
-from renderer.aovs import AovFilm
+from renderer.aovs import DEFAULT_FEATURE_BOOST, AovFilm
 from renderer.allocation import allocation_size
 from renderer.band_table import BandTable
 from renderer.camera import CameraFrame
@@ -138,7 +138,7 @@ class Renderer:
     def __init__(self, scene: Scene, max_size: tuple[int, int] | None = None,
                  mesh_options: MeshOptions = MeshOptions(), aovs: bool = False):
         """`aovs`: also accumulate the denoising AOVs (renderer/aovs.py) of integrators that write
-        them; 24 bytes a pixel more."""
+        them; 28 bytes a pixel more."""
         self.scene = scene
         width, height = max_size or (scene.render.width, scene.render.height)
         image = (read_environment(scene.environment.file, scene.model_files.options.budget)
@@ -151,6 +151,9 @@ class Renderer:
         allocated = allocation_size(width, height)  # shared compiled programs across nearby sizes
         self.film = Film(*allocated)
         self.aovs = AovFilm(*allocated) if aovs else None
+        # Feature samples (renderer/aovs.py) each of a pixel's first colour samples brings where
+        # AOVs are kept; the viewer sets 0 while nothing will be denoised.
+        self.feature_boost = DEFAULT_FEATURE_BOOST if aovs else 0
         self.adaptive: AdaptiveSettings | None = None  # set_adaptive()
         self._adaptive_rule = None
         self.pixels_active = width * height  # pixels adaptive sampling has not stopped
@@ -235,7 +238,7 @@ class Renderer:
         """The film's exact state with the AOVs' (what a checkpoint keeps)."""
         state = self.film.state()
         if self.aovs is not None:
-            state.albedo, state.normal = self.aovs.images()
+            state.albedo, state.normal, state.aov_count = self.aovs.state()
         return state
 
     def restore(self, state: FilmState, slices_done: int) -> None:
@@ -243,7 +246,7 @@ class Renderer:
         self.film.restore(state)
         if self.aovs is not None:
             if state.albedo is not None and state.normal is not None:
-                self.aovs.restore(state.albedo, state.normal)
+                self.aovs.restore(state.albedo, state.normal, state.aov_samples())
             else:
                 self.aovs.reset(self.film.width, self.film.height)
         self.slices_done = slices_done
@@ -284,7 +287,7 @@ class Renderer:
             else:
                 spp, first, count = 1, cursor, min(left, ROUND_SLICES - cursor)
             program.render(width, height, spp, first, count, self.round_order(), seed, max_depth,
-                           *camera.kernel_args())
+                           *camera.kernel_args(), feature_boost=self.feature_boost)
             self.slices_done += spp * count
             left -= spp * count
             if (self.adaptive is not None and self.slices_done % ROUND_SLICES == 0
@@ -303,7 +306,8 @@ class Renderer:
             raise ValueError("an integrator with whole-image passes (sppm) cannot render a group of pixels")
         for taken in range(0, spp, self.samples_per_launch):  # each pixel goes on from its own count
             program.render(self.film.width, self.film.height, min(self.samples_per_launch, spp - taken), slice_first,
-                           slice_count, INTERLEAVED, seed, max_depth, *camera.kernel_args())
+                           slice_count, INTERLEAVED, seed, max_depth, *camera.kernel_args(),
+                           feature_boost=self.feature_boost)
 
     def round_order(self, slices_done: int | None = None) -> int:
         """How the round holding slice `slices_done` since the last reset (default: the next one)

@@ -209,3 +209,22 @@ def test_automatic_checkpoint_starts_with_a_long_render_and_goes_when_it_complet
 
     explicit = command.CheckpointPolicy(path, 30.0, header_for(scene_path), active=True, stream=said)
     assert "checkpoint at 50 spp" in explicit.finish(result) and read_header(path).spp_done == 50  # kept
+
+
+def test_continuing_a_stopped_render_keeps_its_aovs_bit_identical(scene_path):
+    """A render that keeps the denoising AOVs, stopped within the samples that bring feature samples
+    (renderer/aovs.py) and continued: the AOVs and their sample counts are those of the render that
+    never stopped, so the count saved with them is what the feature samples' numbers go on from."""
+    scene = load_scene(scene_path)
+    job = RenderJob(spp=12, size=(24, 16), integrator="path", seed=11, aovs=True)
+    whole = render(scene, job)
+    part = render(scene, job, stop=StopAfter(6))
+    assert part.interrupted and 0 < part.mean_spp < 8
+    state = part.state
+    assert state.aov_count is not None and state.aov_count.max() > state.count.max()
+    continued = render(scene, job, resume=Resume(state, part.spp, part.seconds_rendered, part.slices_in_round))
+    end, expected = continued.state, whole.state
+    assert_same_state(end, expected)
+    for name in ("albedo", "normal", "aov_count"):
+        np.testing.assert_array_equal(getattr(end, name), getattr(expected, name), err_msg=name)
+    assert (expected.aov_count == 12 + 4 * 8).all()

@@ -15,7 +15,7 @@ from renderer.pixel_slices import CELL, ROUND_SLICES, bayer_matrix
 
 # A slice whose pixels all stopped (adaptive sampling) or that holds no pixel: nothing left to render.
 DONE = np.iinfo(np.int64).max
-PER_PIXEL = ("mean", "m2", "count", "rejected", "adaptive", "albedo", "normal")
+PER_PIXEL = ("mean", "m2", "count", "rejected", "adaptive", "albedo", "normal", "aov_count")
 
 
 class PixelSlices:
@@ -75,7 +75,8 @@ def empty_state(width: int, height: int, adaptive: bool, aovs: bool) -> FilmStat
     zeros3 = lambda: np.zeros((height, width, 3), np.float32)  # noqa: E731
     return FilmState(zeros3(), zeros3(), np.zeros((height, width), np.int32), np.zeros((height, width), np.int32),
                      adaptive=np.zeros((height, width), np.int32) if adaptive else None,
-                     albedo=zeros3() if aovs else None, normal=zeros3() if aovs else None)
+                     albedo=zeros3() if aovs else None, normal=zeros3() if aovs else None,
+                     aov_count=np.zeros((height, width), np.int32) if aovs else None)
 
 
 def group_count(pixels: int, workers: int, min_group_pixels: int = 1024) -> int:

@@ -165,6 +165,9 @@ def _starting_state(resume, width, height, adaptive, aovs, empty_state) -> FilmS
     if aovs and (state.albedo is None or state.normal is None):  # as Renderer.restore: AOVs start over
         state.albedo = np.zeros_like(state.mean)
         state.normal = np.zeros_like(state.mean)
+        state.aov_count = np.zeros_like(state.count)
+    elif aovs:
+        state.aov_count = state.aov_samples()
     return state
 
 

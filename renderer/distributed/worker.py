@@ -90,7 +90,7 @@ class RenderWorker:
         film_arrays.setdefault("adaptive", np.zeros(len(xs), np.int32))
         renderer.film.write_pixels(xs, ys, film_arrays)
         if renderer.aovs is not None:
-            renderer.aovs.write_pixels(xs, ys, arrays["albedo"], arrays["normal"])
+            renderer.aovs.write_pixels(xs, ys, arrays["albedo"], arrays["normal"], arrays["aov_count"])
         start = time.perf_counter()
         renderer.render_pass(self.camera, chunk.spp, chunk.first, chunk.count, settings.integrator,
                              settings.max_depth, settings.seed)
@@ -98,5 +98,5 @@ class RenderWorker:
         seconds = time.perf_counter() - start
         out = {name: value for name, value in renderer.film.read_pixels(xs, ys).items() if name in arrays}
         if renderer.aovs is not None and "albedo" in arrays:
-            out["albedo"], out["normal"] = renderer.aovs.read_pixels(xs, ys)
+            out["albedo"], out["normal"], out["aov_count"] = renderer.aovs.read_pixels(xs, ys)
         return out, seconds

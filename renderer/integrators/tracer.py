@@ -95,7 +95,12 @@ class PathTracerBase:
     denoisable = True
 
     @ti.func
-    def li(self, ctx, ray_in, state, max_depth):
+    def li(self, ctx, ray_in, state, max_depth, features_only):
+        """(radiance, stats, AOV albedo, AOV normal) of a camera ray. `features_only` (a run-time
+        flag of kernels that keep AOVs; False elsewhere): the path ends once its AOVs are known,
+        at the first non-delta vertex, with the same decisions up to there as a whole path takes
+        (its light samples come later), so these AOVs share the colour samples' distribution at
+        a fraction of their cost (renderer/aovs.py: feature samples)."""
         radiance = vec3(0.0)
         throughput = vec3(1.0)
         ray = ray_in
@@ -200,6 +205,8 @@ class PathTracerBase:
                             aov_albedo = aov_weight * rec.sigma_s / ti.max(rec.sigma_a + rec.sigma_s, 1e-30)
                             aov_normal = vec3(0.0)
                             aov_open = False
+                        if features_only:
+                            break
                     if ti.static(self.light_sampling):
                         ls = ctx.lights.sample(ctx, p, vec3(0.0), ctx.sampler.get1d(state, dim + dims.LIGHT_SELECT),
                                                ctx.sampler.get2d(state, dim + dims.LIGHT_POINT))
@@ -249,6 +256,8 @@ class PathTracerBase:
                         aov_albedo = aov_weight * ctx.bsdf.albedo(mat)
                         aov_normal = n
                         aov_open = not ctx.bsdf.has_smooth_part(mat)
+                    if features_only and not aov_open:
+                        break
                 if ti.static(ctx.features.has_emission):
                     if s.front_face == 1 and mat.emission.max() > 0.0:
                         weight = 1.0

@@ -117,12 +117,13 @@ class MemoryLedger:
 # count, rejected and the adaptive-sampling state, i32 each), the renderer's work buffer (3 x f32),
 # and the mean and variance images downloaded at the end (3 x f32 each). tests/scene/
 # test_input_limits.py checks the film's share against a real Film. A render that keeps the
-# denoising AOVs (renderer/aovs.py) adds their two fields and their two downloaded images. The
+# denoising AOVs (renderer/aovs.py) adds their three fields (albedo, normal, sample count) and their
+# two downloaded images. The
 # fields are allocated in whole steps (renderer/allocation.py): the estimate counts the pixels
 # allocated, a little more than the images' (at most a step's width of rows and columns).
 FILM_FIELD_BYTES = 3 * 4 + 3 * 4 + 4 + 4 + 4
 RENDER_BYTES_PER_PIXEL = FILM_FIELD_BYTES + 3 * 4 + 2 * 3 * 4
-AOV_BYTES_PER_PIXEL = 2 * 3 * 4 + 2 * 3 * 4
+AOV_BYTES_PER_PIXEL = 2 * 3 * 4 + 4 + 2 * 3 * 4
 
 
 def check_film(path: PathLike, width: int, height: int, budget: MemoryBudget, source: str,

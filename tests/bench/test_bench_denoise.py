@@ -11,7 +11,7 @@ pytestmark = pytest.mark.skipif(unavailable_reason() is not None, reason="pyoidn
 
 TINY = denoise.DenoiseBenchConfig(size=(48, 27), reference_s=3.0, reference_launch_s=0.5, max_spp=16,
                                   equal_time_spp=8, thresholds=(0.05, 0.5), min_spp=2, frame_size=(64, 36),
-                                  scenes=("cornell_box",))
+                                  scenes=("cornell_box",), viewer_size=(40, 24), viewer_reference_s=2.0)
 
 
 def test_tiny_run_writes_curves_targets_and_a_plot(tmp_path, capsys):
@@ -59,6 +59,12 @@ def test_tiny_run_writes_curves_targets_and_a_plot(tmp_path, capsys):
     assert all(p["denoised_quick_corrected"] >= 0.0 for p in curve)
     assert (tmp_path / "bench_denoise_cornell_box.png").stat().st_size > 0
     assert report["denoiser_frame_s"] > 0.0 and report["denoiser_frame_quick_s"] > 0.0
+    # The target again at the "viewer's" size: its own reference, both forms of the AOVs, raw at 128 spp.
+    viewer = scene["viewer_size"]
+    assert viewer["size"] == [40, 24] and viewer["reference"]["spp"] >= 1
+    assert viewer["seconds_128"] > viewer["seconds_8"] > 0.0 and viewer["seconds_8_without_features"] > 0.0
+    assert all(viewer[k] >= 0.0 for k in ("raw_8", "denoised_8", "denoised_8_without_features", "raw_128"))
+    assert viewer["passed"] == (viewer["denoised_8"] < viewer["raw_128"])
     out = capsys.readouterr().out
     assert "Adaptive against uniform sampling at equal time" in out and "Denoiser time per 64x36 frame" in out
 

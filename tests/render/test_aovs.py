@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from renderer.aovs import DEFAULT_FEATURE_BOOST, FEATURE_BOOSTED_SAMPLES
 from renderer.camera import CameraFrame
 from renderer.renderer import Renderer
 from renderer.scene import load_scene
@@ -56,7 +57,11 @@ def test_aovs_equal_the_albedo_and_normals_views_without_delta_surfaces(cornell_
     # same camera rays, so the running means agree up to float rounding.
     scene, with_aovs, without = cornell_box
     size, spp = (40, 40), 3
-    _, albedo, normal = render_aovs(scene, "mis", spp, size=size, renderer=with_aovs)
+    with_aovs.feature_boost = 0  # the colour samples' AOVs alone (feature samples: tests below)
+    try:
+        _, albedo, normal = render_aovs(scene, "mis", spp, size=size, renderer=with_aovs)
+    finally:
+        with_aovs.feature_boost = DEFAULT_FEATURE_BOOST
     albedo_view = render_view(scene, "albedo", spp, size=size, renderer=without)
     normals_view = render_view(scene, "normals", spp, size=size, renderer=without)
     np.testing.assert_allclose(albedo, np.clip(albedo_view, 0, 1), atol=2e-6)
@@ -132,7 +137,10 @@ def test_glass_pane_passes_the_textured_wall_albedo_through(tmp_path):
     spp = 48
     # `path`: the tracer writes the AOVs alike under each of its settings, and this one compiles the
     # least (no light sampling; `mis` with AOVs is rendered by the other tests here).
-    _, albedo, _ = render_aovs(with_pane, "path", spp, seed=3)
+    renderer, albedo, _ = render_aovs(with_pane, "path", spp, seed=3)
+    aov_samples = renderer.aovs.state()[2]  # colour and feature samples (renderer/aovs.py)
+    assert (aov_samples == spp + DEFAULT_FEATURE_BOOST * FEATURE_BOOSTED_SAMPLES).all()
+    n = int(aov_samples[0, 0])
     wall = render_view(without, "albedo", spp, seed=3)
     assert wall.max() > 0.0
     # Every camera ray meets the pane within 6 degrees of its normal: T varies by < 1e-4 over the image.
@@ -145,10 +153,11 @@ def test_glass_pane_passes_the_textured_wall_albedo_through(tmp_path):
     assert all(mask.sum() > 50 for mask in classes.values())
     for name, mask in classes.items():
         # Each sample is a Bernoulli(T) multiple of the wall albedo at that ray: the pooled ratio of
-        # sums has variance ~ T (1 - T) sum(a^2) / (spp sum(a)^2) over the pixels' albedos a.
+        # sums has variance ~ T (1 - T) sum(a^2) / (n sum(a)^2) over the pixels' albedos a, n the
+        # AOVs' samples (the wall view's own noise, at 48 spp of a flat texel, is left out).
         a = lum_wall[mask]
         ratio = lum_aov[mask].sum() / a.sum()
-        sd = np.sqrt(transmittance * (1 - transmittance) * (a**2).sum() / spp) / a.sum()
+        sd = np.sqrt(transmittance * (1 - transmittance) * (a**2).sum() / n) / a.sum()
         z = (ratio - transmittance) / sd
         assert abs(z) < stats.norm.isf(ALPHA / 2), f"{name} texels: AOV / wall = {ratio:.4f}, T = {transmittance:.4f}"
     contrast = lum_wall[classes["light"]].mean() / lum_wall[classes["dark"]].mean()
@@ -199,3 +208,58 @@ def test_mirror_passes_the_reflected_surface_albedo_through(tmp_path):
     expected = np.array([0.9, 0.6, 0.3]) * np.array([0.8, 0.1, 0.1])
     np.testing.assert_allclose(centre.mean(axis=0), expected, rtol=0.01, atol=2e-3)
     assert np.allclose(normal[8:16, 8:16].reshape(-1, 3).mean(axis=0), [0.0, -1.0, 0.0], atol=1e-3)
+
+
+@pytest.mark.parametrize("spp", [3, 11])  # within the boosted first samples, and past them in two launches
+def test_feature_samples_fill_the_aovs_and_leave_the_colour_unchanged(cornell_box, spp):
+    """Each of a pixel's first FEATURE_BOOSTED_SAMPLES colour samples brings `feature_boost` AOV-only
+    samples: the AOVs count them, the colour and its sample counts are bit for bit those of a render
+    without them."""
+    scene, with_aovs, _ = cornell_box
+    camera = CameraFrame.from_spec(scene.camera)
+    images, per_launch = {}, with_aovs.samples_per_launch
+    for boost in (0, DEFAULT_FEATURE_BOOST):
+        with_aovs.feature_boost = boost
+        try:
+            fresh(with_aovs, (24, 24))
+            with_aovs.samples_per_launch = 6  # 11 spp: two launches, the second past the boosted samples
+            with_aovs.render(camera, spp, "path", seed=5)
+        finally:
+            with_aovs.feature_boost = DEFAULT_FEATURE_BOOST
+            with_aovs.samples_per_launch = per_launch
+        albedo, normal, count = with_aovs.aovs.state()
+        assert (count == spp + boost * min(spp, FEATURE_BOOSTED_SAMPLES)).all()
+        assert (with_aovs.film.sample_counts() == spp).all()
+        images[boost] = with_aovs.image(), albedo
+    assert np.array_equal(images[0][0], images[DEFAULT_FEATURE_BOOST][0])
+    assert not np.array_equal(images[0][1], images[DEFAULT_FEATURE_BOOST][1])  # the feature samples did add
+
+
+@pytest.mark.parametrize("name, scene_text", [("pane", None), ("mirror", MIRROR_SCENE)])
+def test_feature_samples_see_what_colour_samples_see(tmp_path, name, scene_text):
+    """Feature samples end their paths at the first non-delta vertex, so their AOVs must have the
+    colour samples' distribution, through a glass pane (Fresnel reflection or transmission drawn
+    per sample) and a mirror. AOVs of 64 colour samples against AOVs of 8 colour + 56 feature
+    samples, per pixel on independent seeds: the mean of the differences over the image against
+    its standard error (a z-test at ALPHA, two-sided), for each channel of albedo and normal."""
+    from pathlib import Path
+
+    if scene_text is None:
+        quad = Path(__file__).resolve().parents[1] / "data" / "textured_quad.glb"
+        scene_text = PANE_SCENE.format(quad=quad.as_posix(), pane=PANE)
+    scene = scene_from_toml(tmp_path, scene_text, name)
+    renderer = Renderer(scene, (24, 24), aovs=True)
+    renderer.feature_boost = 0
+    _, colour_albedo, colour_normal = render_aovs(scene, "path", 64, seed=11, size=(24, 24), renderer=renderer)
+    renderer.feature_boost = 7
+    _, feature_albedo, feature_normal = render_aovs(scene, "path", 8, seed=12, size=(24, 24), renderer=renderer)
+    assert (renderer.aovs.state()[2] == 64).all()
+    for label, a, b in (("albedo", colour_albedo, feature_albedo), ("normal", colour_normal, feature_normal)):
+        for c in range(3):
+            d = (a[..., c] - b[..., c]).ravel()
+            if d.std() == 0.0:
+                assert d.mean() == 0.0
+                continue
+            z = d.mean() / (d.std(ddof=1) / np.sqrt(d.size))
+            assert abs(z) < stats.norm.isf(ALPHA / 2), f"{label}[{c}]: z = {z:.2f}"
+    assert colour_albedo.max() > 0.05
