@@ -10,14 +10,17 @@ how many samples it holds, updated in the pixel's own sample order, so they are 
 as the image.
 
 Feature samples. The AOVs of 8 samples are a noisy guide where a pixel covers sub-pixel detail
-(a texture's thin lines, a normal map's bevels), and the denoiser then smears or keeps noise.
-So each of a pixel's first FEATURE_BOOSTED_SAMPLES colour samples may bring `boost` more
-camera samples that only find the AOVs (the tracer's `features_only` paths end at the first
-non-delta vertex: on mesh scenes 14-18% of a `mis` sample, 40% on the SDF showcase). At the
-default boost of 4, a pixel's AOVs hold 40 samples when its colour holds 8. The colour is not
-touched: an image renders bit for bit the same with any boost. Measured on textured at 960x540,
-8 spp, AOVs prefiltered (relMSE less the reference's noise, ad hoc probe): AOVs of 8 samples
-0.00171, of 40 0.00130, of 288 0.00114, against raw 128 spp 0.00145.
+of a texture (thin lines, a normal map's bevels), and the denoiser then smears or keeps noise.
+So in scenes with texture or normal maps, each of a pixel's first FEATURE_BOOSTED_SAMPLES colour
+samples brings DEFAULT_FEATURE_BOOST more camera samples that only find the AOVs (the tracer's
+`features_only` paths end at the first non-delta vertex): at 8 spp the AOVs hold 40 samples.
+The colour is not touched: an image renders bit for bit the same with any boost. Elsewhere an
+albedo is constant over a surface, the AOVs' only sub-pixel detail is at edges, and the samples
+buy too little for their time. `bench denoise` at 960x540 (relMSE of denoised 8 spp, without ->
+with 4 feature samples; render seconds of the 8 spp): textured 0.00172 -> 0.00131 (raw at 128
+spp: 0.00146), 1.61 -> 3.09 s; cornell_box 4.63e-4 -> 4.50e-4, 0.92 -> 1.51 s; studio 0.00175 ->
+0.00166, 1.06 -> 2.01 s; bunnies 0.00596 -> 0.00526, 1.43 -> 2.91 s; showcase 0.00440 ->
+0.00428, 10.4 -> 29.4 s (an SDF camera ray is most of its sample's cost).
 
 Allocated only when asked for (the viewer, `render --denoise` / `--aovs`): 28 bytes a pixel.
 """
@@ -35,6 +38,12 @@ DEFAULT_FEATURE_BOOST = 4
 # Feature samples draw their numbers under the colour seed xor this salt, at the pixel's AOV
 # sample count as index: streams of their own, never a colour sample's.
 FEATURE_SEED_SALT = 0x5EA7F00D
+
+
+def scene_feature_boost(features) -> int:
+    """The feature samples each early colour sample brings in a scene with these Features: only
+    where texture or normal maps put sub-pixel detail into the AOVs (see above)."""
+    return DEFAULT_FEATURE_BOOST if features.has_textures or features.has_normal_maps else 0
 
 
 @ti.func

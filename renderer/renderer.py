@@ -10,7 +10,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.adaptive import DEFAULT_MIN_SPP, AdaptiveSampling, is_check_point, next_check
-from renderer.aovs import DEFAULT_FEATURE_BOOST, AovFilm
+from renderer.aovs import AovFilm, scene_feature_boost
 from renderer.allocation import allocation_size
 from renderer.band_table import BandTable
 from renderer.camera import CameraFrame
@@ -152,8 +152,9 @@ class Renderer:
         self.film = Film(*allocated)
         self.aovs = AovFilm(*allocated) if aovs else None
         # Feature samples (renderer/aovs.py) each of a pixel's first colour samples brings where
-        # AOVs are kept; the viewer sets 0 while nothing will be denoised.
-        self.feature_boost = DEFAULT_FEATURE_BOOST if aovs else 0
+        # AOVs are kept, as the scene calls for; the viewer sets 0 while nothing will be denoised.
+        self.scene_feature_boost = scene_feature_boost(self._features) if aovs else 0
+        self.feature_boost = self.scene_feature_boost
         self.adaptive: AdaptiveSettings | None = None  # set_adaptive()
         self._adaptive_rule = None
         self.pixels_active = width * height  # pixels adaptive sampling has not stopped

@@ -215,7 +215,13 @@ def test_continuing_a_stopped_render_keeps_its_aovs_bit_identical(scene_path):
     """A render that keeps the denoising AOVs, stopped within the samples that bring feature samples
     (renderer/aovs.py) and continued: the AOVs and their sample counts are those of the render that
     never stopped, so the count saved with them is what the feature samples' numbers go on from."""
-    scene = load_scene(scene_path)
+    from pathlib import Path
+
+    from tests.render.test_aovs import PANE_SCENE
+    from tests.scene_builder import scene_from_toml
+
+    quad = Path(__file__).resolve().parent / "data" / "textured_quad.glb"  # textured: feature samples
+    scene = scene_from_toml(scene_path.parent, PANE_SCENE.format(quad=quad.as_posix(), pane=""), "wall")
     job = RenderJob(spp=12, size=(24, 16), integrator="path", seed=11, aovs=True)
     whole = render(scene, job)
     part = render(scene, job, stop=StopAfter(6))

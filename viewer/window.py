@@ -38,7 +38,6 @@ import numpy as np
 import taichi as ti
 
 from renderer.camera import CameraFrame
-from renderer.aovs import DEFAULT_FEATURE_BOOST
 from renderer.denoise import DenoiseInput, Denoiser, unavailable_reason
 from renderer.image_io import write_exr, write_png
 from renderer.integrators import INTEGRATORS, integrator_names
@@ -398,7 +397,7 @@ class ViewerApp:
         if renderer.adaptive != wanted:
             renderer.set_adaptive(wanted)
         # Feature samples (renderer/aovs.py) only for a still image the denoised view will show.
-        renderer.feature_boost = DEFAULT_FEATURE_BOOST if s.denoise_view and not plan.interactive else 0
+        renderer.feature_boost = renderer.scene_feature_boost if s.denoise_view and not plan.interactive else 0
         t0 = time.perf_counter()
         slices_before = renderer.slices_done
         # sppm's frames take steps of its whole-image iterations (a share of one while still)

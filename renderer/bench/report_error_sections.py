@@ -323,14 +323,17 @@ def denoise_section(report: dict) -> Section:
         from renderer.bench.denoise import viewer_row
 
         vw, vh = viewer[0]["viewer_size"]["size"]
+        boost = viewer[0]["viewer_size"].get("with_features_boost", "?")
         section.blocks += [
             f"The same target at the viewer's size, {vw}x{vh}, where a texture's lines and a normal map's "
-            "bevels span more pixels: raw and denoised at 8 spp (the AOVs prefiltered; with the AOVs' "
-            "feature samples, as `render --denoise` and the viewer's denoised view take them, and without) "
-            "and raw at 128 spp, against a reference of its own; render seconds, the denoiser's excluded.",
-            table(["scene", "reference spp", "raw at 8 spp", "denoised at 8 spp", "denoised at 8, no feature samples",
-                   "raw at 128 spp", "render s at 8", "at 8, no feature samples", "at 128", "target"],
-                  [viewer_row(s) for s in viewer])]
+            "bevels span more pixels: raw and denoised at 8 spp (the AOVs prefiltered), without feature "
+            f"samples for the AOVs and with {boost} for each of the first 8 samples, and raw at 128 spp, "
+            "against a reference of its own; render seconds, the denoiser's excluded. The target takes the "
+            "scene's own choice (`feature samples`: only scenes with texture or normal maps take them), what "
+            "`render --denoise` and the viewer's denoised view do.",
+            table(["scene", "reference spp", "raw at 8 spp", "feature samples", "denoised at 8, none",
+                   "denoised at 8, with", "raw at 128 spp", "render s at 8, none", "at 8, with", "at 128",
+                   "target"], [viewer_row(s) for s in viewer])]
     rows = [_adaptive_row(s, a) for s in scenes for a in s["adaptive"]]
     section.blocks += [
         "Adaptive against uniform sampling at equal time (the budget: uniform sampling's time to "

@@ -128,10 +128,11 @@ def test_tables_are_rendered_from_the_json(reports, tmp_path):
 
     room = data["denoise"]["scenes"][1]
     assert row(text["denoise"], "room")["denoised at 8 spp"] == num(room["target_denoise"]["denoised_8"])
-    viewer = next(t for t in tables(text["denoise"]) if "denoised at 8, no feature samples" in t[0])
+    viewer = next(t for t in tables(text["denoise"]) if "denoised at 8, with" in t[0])
     cells = dict(zip(viewer[0], next(c for c in viewer[1:] if c[0] == "room")))
-    assert cells["denoised at 8, no feature samples"] == num(room["viewer_size"]["denoised_8_without_features"])
-    assert cells["target"] == ("PASS" if room["viewer_size"]["passed"] else "FAIL")
+    assert cells["denoised at 8, none"] == num(room["viewer_size"]["denoised_8_without_features"])
+    assert cells["denoised at 8, with"] == num(room["viewer_size"]["denoised_8_with_features"])
+    assert cells["feature samples"] == "4 each" and cells["target"] == ("PASS" if room["viewer_size"]["passed"] else "FAIL")
     assert "at the viewer's 960x540" in text["denoise"]
 
     # a figure changed in the JSON changes the page

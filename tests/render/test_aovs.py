@@ -57,11 +57,8 @@ def test_aovs_equal_the_albedo_and_normals_views_without_delta_surfaces(cornell_
     # same camera rays, so the running means agree up to float rounding.
     scene, with_aovs, without = cornell_box
     size, spp = (40, 40), 3
-    with_aovs.feature_boost = 0  # the colour samples' AOVs alone (feature samples: tests below)
-    try:
-        _, albedo, normal = render_aovs(scene, "mis", spp, size=size, renderer=with_aovs)
-    finally:
-        with_aovs.feature_boost = DEFAULT_FEATURE_BOOST
+    assert with_aovs.feature_boost == 0  # no texture: no feature samples (renderer/aovs.py; tests below)
+    _, albedo, normal = render_aovs(scene, "mis", spp, size=size, renderer=with_aovs)
     albedo_view = render_view(scene, "albedo", spp, size=size, renderer=without)
     normals_view = render_view(scene, "normals", spp, size=size, renderer=without)
     np.testing.assert_allclose(albedo, np.clip(albedo_view, 0, 1), atol=2e-6)
@@ -225,7 +222,7 @@ def test_feature_samples_fill_the_aovs_and_leave_the_colour_unchanged(cornell_bo
             with_aovs.samples_per_launch = 6  # 11 spp: two launches, the second past the boosted samples
             with_aovs.render(camera, spp, "path", seed=5)
         finally:
-            with_aovs.feature_boost = DEFAULT_FEATURE_BOOST
+            with_aovs.feature_boost = with_aovs.scene_feature_boost
             with_aovs.samples_per_launch = per_launch
         albedo, normal, count = with_aovs.aovs.state()
         assert (count == spp + boost * min(spp, FEATURE_BOOSTED_SAMPLES)).all()
@@ -263,3 +260,16 @@ def test_feature_samples_see_what_colour_samples_see(tmp_path, name, scene_text)
             z = d.mean() / (d.std(ddof=1) / np.sqrt(d.size))
             assert abs(z) < stats.norm.isf(ALPHA / 2), f"{label}[{c}]: z = {z:.2f}"
     assert colour_albedo.max() > 0.05
+
+
+def test_only_scenes_with_texture_or_normal_maps_take_feature_samples(tmp_path):
+    """Feature samples help where textures put sub-pixel detail into the AOVs; elsewhere they cost
+    time for little (renderer/aovs.py). A Renderer without AOVs takes none."""
+    from pathlib import Path
+
+    quad = Path(__file__).resolve().parents[1] / "data" / "textured_quad.glb"
+    textured = scene_from_toml(tmp_path, PANE_SCENE.format(quad=quad.as_posix(), pane=""), "wall")
+    plain = load_scene(resolve_scene("cornell_box"))
+    assert Renderer(textured, (8, 8), aovs=True).feature_boost == DEFAULT_FEATURE_BOOST
+    assert Renderer(textured, (8, 8)).feature_boost == 0
+    assert Renderer(plain, (8, 8), aovs=True).feature_boost == 0

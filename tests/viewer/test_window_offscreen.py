@@ -486,3 +486,30 @@ def test_quit_key_ends_the_loop(app):
     assert not app.running
     app.running = True
     assert app.run(max_frames=app.frames + 2) == 0  # headless: bounded by frames
+
+
+def test_feature_samples_only_for_a_still_image_under_the_denoised_view(app):
+    """The AOVs' feature samples (renderer/aovs.py) cost render time: a scene with textures takes
+    them while the denoised view is on and the camera still, never in moving frames, and not
+    with the view off; the AOVs then count them."""
+    from renderer.aovs import FEATURE_BOOSTED_SAMPLES
+
+    app.select_scene(resolve_scene("textured"))
+    app.session.set_integrator("path")
+    app.session.hud_visible = False
+    settle(app, 1)
+    renderer = app.renderer
+    assert renderer.scene_feature_boost > 0 and renderer.feature_boost == 0  # the view is off
+    app.session.denoise_view = True
+    try:
+        app.step(FrameInput(held=frozenset({"w"})))
+        assert app.last_plan.interactive and renderer.feature_boost == 0
+        app.step(FrameInput())  # still again (settle time 0 here): a fresh accumulation
+        assert not app.last_plan.interactive and renderer.feature_boost == renderer.scene_feature_boost
+        sample_every_pixel(app)
+        counts = renderer.film.sample_counts()
+        aov_counts = renderer.aovs.state()[2]
+        boosted = np.minimum(counts, FEATURE_BOOSTED_SAMPLES)
+        np.testing.assert_array_equal(aov_counts, counts + renderer.feature_boost * boosted)
+    finally:
+        app.session.denoise_view = False
