@@ -27,30 +27,35 @@ For each scene (cornell_box, bunnies, studio, showcase, textured), in one proces
    standard error over the pixels, z; |z| > common.Z_SIGNIFICANT is a difference at the 5% level, two-
    sided), untrimmed and without the 0.1% of pixels with the largest errors: at these sample counts
    a handful of fireflies decide the untrimmed relMSE of bunnies, studio and showcase (0.05-0.45).
-4. The denoiser's time for one 960x540 frame in each form (median of 3, after one warm-up call).
+4. The denoising target again at the viewer's size, 960x540 (viewer_size_target()): a reference
+   of its own (`viewer_reference_s`), raw and denoised at 8 spp without the AOVs' feature samples
+   and with them (renderer/aovs.py), and raw at 128 spp.
+5. The denoiser's time for one 960x540 frame in each form (median of 3, after one warm-up call).
 
-The images are 320x180: the denoiser's error depends on how many pixels a feature spans, and at
+The curves are 320x180: the denoiser's error depends on how many pixels a feature spans, and at
 160x90 (the size before) a floor tile or a texture's checker is a few pixels wide, unlike the
 viewer's 960x540 (measured on textured, AOVs prefiltered, 8 spp against raw at 128: 0.0084 vs
-0.0021 at 160x90, 0.0056 vs 0.0018 at 320x180, 0.0028 vs 0.0016 at 640x360). 960x540 itself
-would take a whole afternoon for five long references.
+0.0021 at 160x90, 0.0056 vs 0.0018 at 320x180, 0.0028 vs 0.0016 at 640x360). Curves and races at
+960x540 would take a whole afternoon; the target alone there takes about 20 minutes.
 
-Targets (the issue's): denoised at 8 spp below raw at 128 spp in relMSE on each scene; adaptive
-(at the default threshold, DEFAULT_THRESHOLD, chosen before measuring) below uniform at equal time
-on at least four of the five scenes.
+Targets (the issue's): denoised at 8 spp below raw at 128 spp in relMSE on each scene, judged at
+the viewer's 960x540 (the 320x180 verdicts are printed too); adaptive (at the default threshold,
+DEFAULT_THRESHOLD, chosen before measuring) below uniform at equal time on at least four of the
+five scenes. Every render here keeps the AOVs, so the curves' seconds for textured include its
+feature samples over its first 8 spp (the colour is the same with or without them).
 
-textured misses the denoising target, and no change to how the denoiser is fed closed it. Its
-denoised error lies on the floor's thin grid lines (73% of it) and the sphere's tile bevels
-(26%): sub-pixel detail whose coverage 8 samples estimate noisily, in the AOVs as in the colour.
+textured is the hard case. Its denoised error lies on the floor's thin grid lines (73% of it) and
+the sphere's tile bevels (26%): sub-pixel detail whose coverage 8 samples estimate noisily, in
+the AOVs as in the colour.
 Measured on it (ad hoc probes, 320x180, 8 spp, relMSE less the reference's noise): the AOVs
 passed noisy 0.0078; prefiltered (the default) 0.0056; AOVs of 256 spp passed as clean 0.0028,
 the denoiser's own limit here, against raw 0.0018 at 128 spp; albedo demodulation (the colour
 over the albedo denoised, then times an albedo) 0.0037 with the 256-spp albedo, 0.0069 with the
 prefiltered one; the Sobol sampler brings denoised 8 spp to 0.0029 but raw 128 spp to 0.0006.
 At the viewer's 960x540 (a reference of 600 s, 2,888 spp): denoised 0.00171 against raw 0.00145;
-with AOVs of 40 spp 0.00130, of 288 spp 0.00114. So it would take features sampled more densely
-than the colour, a feature pass costing 14-18% of a `mis` sample on the mesh scenes (40% on
-showcase), and a benchmark at 960x540: neither is built.
+with AOVs of 40 spp 0.00130, of 288 spp 0.00114. Hence the feature samples (40 AOV samples at 8
+spp, in scenes with textures) and the target at 960x540, where textured passes; at 320x180 it
+still misses, even with AOVs of 256 spp.
 
 Writes <out_dir>/bench_denoise.json and one log-log plot per scene.
 """
