@@ -36,7 +36,7 @@ The curves are 320x180: the denoiser's error depends on how many pixels a featur
 160x90 (the size before) a floor tile or a texture's checker is a few pixels wide, unlike the
 viewer's 960x540 (measured on textured, AOVs prefiltered, 8 spp against raw at 128: 0.0084 vs
 0.0021 at 160x90, 0.0056 vs 0.0018 at 320x180, 0.0028 vs 0.0016 at 640x360). Curves and races at
-960x540 would take a whole afternoon; the target alone there takes about 20 minutes.
+960x540 would take a whole afternoon; the target alone there took 926 s of a 1,830 s run.
 
 Targets (the issue's): denoised at 8 spp below raw at 128 spp in relMSE on each scene, judged at
 the viewer's 960x540 (the 320x180 verdicts are printed too); adaptive (at the default threshold,
