@@ -79,38 +79,46 @@ class RenderProgram:
                     first_sample = self.film.count[x, y] + self.film.rejected[x, y]
                     work = ti.math.vec3(0.0)
                     for s in range(spp):
-                        # Camera sample 0 is the colour sample; any more are feature samples, which
-                        # only find the AOVs (renderer/aovs.py), through the same call of the
-                        # integrator (a second call site would compile its tracing in again).
-                        features = 0
+                        index = first_sample + s
                         if ti.static(self.writes_aovs):
-                            if first_sample + s < FEATURE_BOOSTED_SAMPLES:
-                                features = feature_boost
-                        for k in range(1 + features):
-                            state = self.sampler.start(pixel, first_sample + s, seed)
-                            if ti.static(self.writes_aovs):
+                            # Camera sample 0 is the colour sample; any more are feature samples,
+                            # which only find the AOVs (renderer/aovs.py), on streams of their own.
+                            features = ti.select(index < FEATURE_BOOSTED_SAMPLES, feature_boost, 0)
+                            for k in range(1 + features):
+                                stream_index, stream_seed = index, seed
                                 if k > 0:
-                                    state = self.sampler.start(pixel, self.aovs.count[x, y], seed ^ FEATURE_SEED_SALT)
-                            ray = generate_ray(x, y, width, height, self.sampler, state, origin, forward, right,
-                                               up, tan_half_fov, aperture, focus, self.features.depth_of_field)
-                            if ti.static(self.writes_aovs):
-                                value, stats, albedo, normal = self.integrator.li(self, ray, state, max_depth, k > 0)
-                                if k == 0:
-                                    self.film.add_sample(x, y, value)
-                                self.aovs.add(x, y, albedo, normal)
-                                work += stats
-                            else:
-                                value, stats, _, _ = self._trace(ray, state, max_depth)
-                                self.film.add_sample(x, y, value)
-                                work += stats
+                                    stream_index, stream_seed = self.aovs.count[x, y], seed ^ FEATURE_SEED_SALT
+                                work += self._camera_sample(x, y, width, height, pixel, stream_index, stream_seed,
+                                                            k > 0, max_depth, origin, forward, right, up, tan_half_fov,
+                                                            aperture, focus)
+                        else:
+                            work += self._camera_sample(x, y, width, height, pixel, index, seed, False, max_depth,
+                                                        origin, forward, right, up, tan_half_fov, aperture, focus)
                     # One plain store per pixel: += on a global field would be an atomic add per sample.
                     self.work[x, y] = self.work[x, y] + work
 
     @ti.func
-    def _trace(self, ray, state, max_depth):
-        """A colour sample of an integrator (with AOVs or without), in a kernel that keeps none."""
+    def _camera_sample(self, x, y, width, height, pixel, index, stream_seed, features_only, max_depth, origin, forward,
+                       right, up, tan_half_fov, aperture, focus):
+        """One camera sample of pixel (x, y) at sampler `index` under `stream_seed`: added to the
+        film unless `features_only`, and to the AOVs where they are kept; returns its work stats.
+        The kernel's only call of the integrator: another call site would compile its tracing in
+        again."""
+        state = self.sampler.start(pixel, index, stream_seed)
+        ray = generate_ray(x, y, width, height, self.sampler, state, origin, forward, right, up, tan_half_fov,
+                           aperture, focus, self.features.depth_of_field)
+        value, stats, albedo, normal = self._trace(ray, state, max_depth, features_only)
+        if not features_only:
+            self.film.add_sample(x, y, value)
+        if ti.static(self.writes_aovs):
+            self.aovs.add(x, y, albedo, normal)
+        return stats
+
+    @ti.func
+    def _trace(self, ray, state, max_depth, features_only):
+        """The integrator's li, with its features_only flag where it has one (integrators with AOVs)."""
         if ti.static(self.feature_tracing):
-            return self.integrator.li(self, ray, state, max_depth, False)
+            return self.integrator.li(self, ray, state, max_depth, features_only)
         else:
             return self.integrator.li(self, ray, state, max_depth)
 
