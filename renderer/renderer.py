@@ -161,12 +161,12 @@ class Renderer:
         self.work = pixel_vector(3, ti.f32, allocated)
         self.bands = BandTable(allocated[1])
         self._probe_out = ti.field(ti.f32, shape=())
-        self._programs: dict[tuple[str, Features], RenderProgram] = {}
+        self._programs: dict[tuple, RenderProgram] = {}  # by _program_key
         # Per-integrator knobs that are data, not compile-time (e.g. "sppm": SppmOptions), and
         # device state that integrators with their own programs share between them (shared()).
         self.integrator_options: dict[str, object] = {}
         self._shared: dict[str, object] = {}
-        self._launched: set[tuple[str, Features]] = set()
+        self._launched: set[tuple] = set()  # program keys launched in this process
         self.slices_done = 0  # pixel slices rendered since the last reset (renderer/pixel_slices.py)
         # Rounds after the first cut into bands of rows (pixel_slices.BANDS) rather than interleaved:
         # the viewer's still frames, whose passes are a few slices each. Renders that save or share
@@ -183,7 +183,7 @@ class Renderer:
         return replace(self._features, depth_of_field=camera.aperture > 0.0)
 
     def program(self, integrator: str, features: Features, sampler: str = "independent") -> RenderProgram:
-        key = (integrator, features, sampler)
+        key = self._program_key(integrator, features, sampler)
         if key not in self._programs:
             chosen = make_integrator(integrator)
             lights = self.lights() if getattr(chosen, "uses_lights", False) else None
@@ -192,8 +192,15 @@ class Renderer:
             else:
                 self._programs[key] = RenderProgram(self.geometry, self.materials, self.environment, chosen,
                                                     self.film, self.work, features, make_sampler(sampler), lights,
-                                                    self.media, self.aovs, self.bands)
+                                                    self.media, self.aovs, self.bands, key[3])
         return self._programs[key]
+
+    def _program_key(self, integrator: str, features: Features, sampler: str) -> tuple:
+        """A program's cache key: the combination, and whether its kernel has the AOVs' feature
+        samples compiled in: where the scene calls for them (its textures), so the viewer's toggle
+        of the denoised view compiles nothing, or where feature_boost asks for them elsewhere."""
+        return integrator, features, sampler, self.aovs is not None and (self.feature_boost > 0
+                                                                          or self.scene_feature_boost > 0)
 
     def lights(self):
         """The scene's emitters for direct lighting, built on first use (light selection structures
@@ -214,7 +221,7 @@ class Renderer:
 
     def is_compiled(self, integrator: str, features: Features, sampler: str = "independent") -> bool:
         """False until the combination has run once in this process (its first call compiles)."""
-        return (integrator, features, sampler) in self._launched
+        return self._program_key(integrator, features, sampler) in self._launched
 
     # --- rendering -----------------------------------------------------------------------------
     def reset(self, width: int | None = None, height: int | None = None) -> None:
@@ -323,7 +330,7 @@ class Renderer:
         sampler = sampler or settings.sampler
         features = features or self.features(camera)
         program = self.program(integrator, features, sampler)
-        self._launched.add((integrator, features, sampler))
+        self._launched.add(self._program_key(integrator, features, sampler))
         seed = (settings.seed if seed is None else seed) & 0xFFFFFFFF
         return program, seed, settings.max_depth if max_depth is None else max_depth
 

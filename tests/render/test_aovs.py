@@ -6,6 +6,7 @@ from scipy import stats
 
 from renderer.aovs import DEFAULT_FEATURE_BOOST, FEATURE_BOOSTED_SAMPLES
 from renderer.camera import CameraFrame
+from renderer.pixel_slices import INTERLEAVED, ROUND_SLICES
 from renderer.renderer import Renderer
 from renderer.scene import load_scene
 from renderer.scene.catalog import resolve_scene
@@ -273,3 +274,28 @@ def test_only_scenes_with_texture_or_normal_maps_take_feature_samples(tmp_path):
     assert Renderer(textured, (8, 8), aovs=True).feature_boost == DEFAULT_FEATURE_BOOST
     assert Renderer(textured, (8, 8)).feature_boost == 0
     assert Renderer(plain, (8, 8), aovs=True).feature_boost == 0
+
+
+def test_the_feature_loop_is_compiled_only_where_feature_samples_are_taken(tmp_path):
+    """Unused, the feature-sample loop costs a kernel time (renderer/program.py), so a program has
+    it only where the scene takes feature samples, or feature_boost asks for them; a textured
+    scene's program keeps it with the boost at 0 (the viewer's denoised-view toggle compiles
+    nothing); and a program without it refuses feature samples rather than skip them."""
+    from pathlib import Path
+
+    quad = Path(__file__).resolve().parents[1] / "data" / "textured_quad.glb"
+    textured = Renderer(scene_from_toml(tmp_path, PANE_SCENE.format(quad=quad.as_posix(), pane=""), "wall"),
+                        (8, 8), aovs=True)
+    plain = Renderer(load_scene(resolve_scene("cornell_box")), (8, 8), aovs=True)
+    features = plain.features()
+    assert not plain.program("path", features).feature_samples
+    plain.feature_boost = DEFAULT_FEATURE_BOOST
+    assert plain.program("path", features).feature_samples
+    textured.feature_boost = 0
+    assert textured.program("path", textured.features()).feature_samples
+    assert not Renderer(load_scene(resolve_scene("cornell_box")), (8, 8)).program("path", features).feature_samples
+    plain.feature_boost = 0
+    loopless = plain.program("path", features)
+    camera = CameraFrame.from_spec(plain.scene.camera)
+    with pytest.raises(ValueError, match="feature samples"):
+        loopless.render(8, 8, 1, 0, ROUND_SLICES, INTERLEAVED, 1, 4, *camera.kernel_args(), feature_boost=2)
