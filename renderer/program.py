@@ -11,7 +11,7 @@ from renderer.aovs import FEATURE_BOOSTED_SAMPLES, FEATURE_SEED_SALT
 from renderer.camera import generate_ray
 from renderer.geometry.interface import INF
 from renderer.materials.bsdf import Bsdf
-from renderer.pixel_slices import BANDS, ROUND_SLICES, pass_length, slice_pixel
+from renderer.pixel_slices import BANDS, ROUND_SLICES, interleaved_layout, pass_length, slice_pixel
 from renderer.sampling.sampler import SampleState
 
 
@@ -64,6 +64,7 @@ class RenderProgram:
         # A partial pass over bands visits its rows from the band table: the same pixels as
         # slice_pixel's, without its divisions and skipped indices (renderer/band_table.py).
         banded = order == BANDS and slice_count < ROUND_SLICES
+        layout = interleaved_layout(slice_count, width)
         n = self.bands.pass_length(slice_first, slice_count, width) if banded else pass_length(
             slice_count, width, height, order)
         # Threads take the loop's blocks as they finish (renderer/arch.cpu_scheduling_options), so
@@ -74,7 +75,7 @@ class RenderProgram:
             if banded:
                 x, y = self.bands.pixel(i, slice_first, width)
             else:
-                x, y = slice_pixel(i, slice_first, slice_count, width, height, order)
+                x, y = slice_pixel(i, slice_first, slice_count, width, height, order, layout)
             if x < width and y < height:
                 # A pixel adaptive sampling has stopped (renderer/adaptive.py) takes no more samples;
                 # a nested test: Taichi's `and` evaluates both sides, and (x, y) may lie outside the film.

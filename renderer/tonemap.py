@@ -9,8 +9,8 @@ import numpy as np
 import taichi as ti
 
 from renderer.film import is_finite_f32
-from renderer.pixel_slices import (CELL, CELL_BITS, INTERLEAVED, ROUND_SLICES, filled_mean, pass_length,
-                                   slice_pixel, slice_rank)
+from renderer.pixel_slices import (CELL, CELL_BITS, INTERLEAVED, ROUND_SLICES, filled_mean, interleaved_layout,
+                                   pass_length, slice_pixel, slice_rank)
 from renderer.luminance import LUMINANCE_WEIGHTS, luminance
 
 TONEMAPPERS = ("aces", "reinhard", "none")
@@ -189,11 +189,12 @@ def _tonemap_packed_kernel(
     # partial one only the pixels of those slices (1:1 with the film, the ones a render of the
     # same slices changed), with `blocks` (a first round) each one's fill block.
     out_width, out_height = out.shape[0], out.shape[1]
+    layout = interleaved_layout(slice_count, out_width)
     for i in range(pass_length(slice_count, out_width, out_height, order)):
-        x, y = slice_pixel(i, slice_first, slice_count, out_width, out_height, order)
+        x, y = slice_pixel(i, slice_first, slice_count, out_width, out_height, order, layout)
         side = 1
         if blocks:
-            side = fill_block_side(slice_rank(i, slice_first, slice_count))  # the loop index's slice
+            side = fill_block_side(slice_rank(i, slice_first, layout))  # the loop index's slice
         for dy, dx in ti.ndrange(side, side):
             qx, qy = x + dx, y + dy
             if qx < out_width and qy < out_height:

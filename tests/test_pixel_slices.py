@@ -8,7 +8,8 @@ import taichi as ti
 from renderer.band_table import BandTable
 from renderer.film import Film, FilmState
 from renderer.pixel_slices import (BANDS, CELL, INTERLEAVED, ROUND_SLICES, band_order_rows, bayer_matrix,
-                                   filled_mean_array, pass_length, slice_mask, slice_pixel, spp_text)
+                                   filled_mean_array, interleaved_layout, pass_length, slice_mask, slice_pixel,
+                                   spp_text)
 from renderer.tonemap import display_array, tonemap_into
 
 
@@ -24,17 +25,20 @@ def test_the_bayer_order_is_a_permutation_whose_prefixes_are_regular_grids():
 
 @ti.kernel
 def _visit(visits: ti.types.ndarray(), first: ti.i32, count: ti.i32, width: ti.i32, height: ti.i32, order: ti.i32):
+    layout = interleaved_layout(count, width)
     for i in range(pass_length(count, width, height, order)):
-        x, y = slice_pixel(i, first, count, width, height, order)
+        x, y = slice_pixel(i, first, count, width, height, order, layout)
         if x < width and y < height:
             ti.atomic_add(visits[height - 1 - y, x], 1)  # row 0 at the top, as the film's arrays
 
 
 @pytest.mark.parametrize("order", [INTERLEAVED, BANDS], ids=["interleaved", "bands"])
-@pytest.mark.parametrize("width, height", [(67, 45), (16, 16), (5, 3), (1, 1), (9, 300)])
-def test_passes_over_slices_visit_their_pixels_and_a_round_visits_each_once(width, height, order):
+@pytest.mark.parametrize("width, height", [(67, 45), (16, 16), (5, 3), (1, 1), (9, 300), (1000, 20)])
+@pytest.mark.parametrize("cuts", [((0, 1), (1, 6), (7, 100), (107, 149)),  # a round cut into unequal passes
+                                  ((0, 128), (128, 1), (129, 127))])  # powers of two and either side
+def test_passes_over_slices_visit_their_pixels_and_a_round_visits_each_once(width, height, order, cuts):
     total = np.zeros((height, width), np.int32)
-    for first, count in ((0, 1), (1, 6), (7, 100), (107, 149)):  # a round cut into unequal passes
+    for first, count in cuts:
         visits = np.zeros((height, width), np.int32)
         _visit(visits, first, count, width, height, order)
         np.testing.assert_array_equal(visits, slice_mask(first, count, width, height, order)[::-1].astype(np.int32))
