@@ -92,11 +92,11 @@ def slice_pixel(i, slice_first, slice_count, width, height, order, layout):
     so a loop index splits into slice, cell column and cell row by shifts and masks: the integer
     divisions by run-time values this took cost a cheap integrator more than its sample (ad hoc,
     scripts/slice_order_cost.py, Cornell box at 960x540, a round in passes of one frame's slices
-    against whole-round launches: normals 1.65 -> 1.05, path 1.15 -> 1.09). (x, y) falls outside
-    the image for the padding's indices and where the last row and column of cells are cut by the
-    image's edge: callers skip those. With `order` BANDS a
-    partial pass visits its slices' bands in turn, each row by row, left to right; each band has
-    the loop indices of the tallest (band_rows), those beyond its own rows falling outside.
+    against whole-round launches, three runs: normals 1.65 -> 1.05-1.11, path 1.15 -> 1.05-1.09).
+    (x, y) falls outside the image for the padding's indices and where the last row and column of
+    cells are cut by the image's edge: callers skip those. With `order` BANDS a partial pass
+    visits its slices' bands in turn, each row by row, left to right; each band has the loop
+    indices of the tallest (band_rows), those beyond its own rows falling outside.
     """
     x = 0
     y = 0
@@ -113,7 +113,7 @@ def slice_pixel(i, slice_first, slice_count, width, height, order, layout):
             y = height - 1 - row
     else:
         cells_x = (width + CELL - 1) >> CELL_BITS
-        rank_bits, cx_bits = layout[0], layout[1]
+        rank_bits, cx_bits = layout & 0xFF, layout >> 8
         k = i & ((1 << rank_bits) - 1)
         cell = i >> rank_bits
         cx = cell & ((1 << cx_bits) - 1)
@@ -127,8 +127,10 @@ def slice_pixel(i, slice_first, slice_count, width, height, order, layout):
 
 @ti.func
 def interleaved_layout(slice_count, width):
-    """(rank bits, cell-column bits) of a partial interleaved pass's loop indices (slice_pixel)."""
-    return ti.math.ivec2(ceil_log2(slice_count), ceil_log2((width + CELL - 1) >> CELL_BITS))
+    """A partial interleaved pass's loop index layout (slice_pixel): its rank bits in the low
+    byte, its cell-column bits above (one integer: a vector computed before a kernel's parallel
+    loop lost pixels on Vulkan)."""
+    return ceil_log2(slice_count) | (ceil_log2((width + CELL - 1) >> CELL_BITS) << 8)
 
 
 @ti.func
@@ -144,7 +146,7 @@ def ceil_log2(value):
 @ti.func
 def slice_rank(i, slice_first, layout):
     """The slice of loop index i of a partial interleaved pass (see slice_pixel)."""
-    return slice_first + (i & ((1 << layout[0]) - 1))
+    return slice_first + (i & ((1 << (layout & 0xFF)) - 1))
 
 
 @ti.func

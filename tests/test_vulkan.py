@@ -85,9 +85,14 @@ from renderer.renderer import Renderer
 from renderer.scene.catalog import load_any, resolve_scene
 scene = load_any(resolve_scene('cornell_box'))
 r = Renderer(scene, (80, 45))
-r.render(CameraFrame.from_spec(scene.camera), 4, integrator='normals', seed=1)
+camera = CameraFrame.from_spec(scene.camera)
+r.render(camera, 4, integrator='normals', seed=1)
 taken = r.film.sample_counts() + r.film.rejected_counts()
 print('TAKEN', int(taken.min()), int(taken.max()))
+for slices in (100, 29, 127):  # a round in partial interleaved passes (the viewer's first round)
+    r.render_slices(camera, slices, integrator='normals', seed=1)
+taken = r.film.sample_counts() + r.film.rejected_counts()
+print('PASSES', int(taken.min()), int(taken.max()))
 """
 
 
@@ -104,3 +109,5 @@ def test_vulkan_every_pixel_takes_every_sample_of_a_launch():
     assert proc.returncode == 0, proc.stderr
     taken = re.search(r"TAKEN (\d+) (\d+)", proc.stdout)
     assert taken and taken.groups() == ("4", "4"), proc.stdout
+    passes = re.search(r"PASSES (\d+) (\d+)", proc.stdout)
+    assert passes and passes.groups() == ("5", "5"), proc.stdout
