@@ -569,6 +569,11 @@ class ViewerApp:
         pixels = r.film.width * r.film.height
         return f"{100.0 * (pixels - r.pixels_active) / max(pixels, 1):.0f}% stopped"
 
+    def present_due(self) -> None:
+        """The next frame presents, as a still view's first frame does (its present interval
+        counts from there)."""
+        self._last_present = None
+
     def _present(self, now: float) -> None:
         s = self.session
         self.presents += 1

@@ -74,6 +74,10 @@ class _SlicedViewer:
         self.last_plan = None
         self.frames = 0
         self.presents = 0  # an untouched still view presents seldom; this one never
+        self.dues = []  # the kind of still frame set when a present was made due
+
+    def present_due(self):
+        self.dues.append(self.session.resolution.min_still_slices)
 
     def step(self, inp=None):
         assert self.session.resolution.min_still_slices == 1  # the viewer's own sliced frames
@@ -127,6 +131,8 @@ def test_rate_blocks_pair_each_whole_block_with_sliced_frames_of_as_much_time():
     # whole block, then its sliced block, in turn
     runs = [k for i, k in enumerate(viewer.kinds) if i == 0 or viewer.kinds[i - 1] != k]
     assert runs == [ROUND_SLICES, 1, ROUND_SLICES, 1]
+    # each block starts with a present due, so each kind presents at its own rate
+    assert viewer.dues == runs
     assert blocks[1][0]["pixel_samples"] == len(blocks[1][0]["times"]) * 16 * 16 / ROUND_SLICES
 
 
