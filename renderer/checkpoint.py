@@ -30,8 +30,10 @@ from renderer.scene.errors import SceneError
 from renderer.scene.description import Scene
 
 # The layout of the archive; a reader refuses others. 2: the position in a round of pixel slices;
-# 3: adaptive sampling's state and the denoising AOVs (optional arrays), their options.
-FORMAT = 3
+# 3: adaptive sampling's state and the denoising AOVs (optional arrays), their options; 4: a
+# round's slices past its first 64 are rows of each cell (pixel_slices.rank_matrix), so a
+# position within a round names other pixels than in format 3.
+FORMAT = 4
 CHECKPOINT_EXTENSION = ".ckpt"
 HEADER = "header"
 INTEGER_FIELDS = ("width", "height", "seed", "max_depth", "spp_done", "slices_in_round", "min_spp")

@@ -1,10 +1,16 @@
 """Pixel slices: a sample per pixel split into ROUND_SLICES interleaved parts that cover the image evenly.
 
 The image is cut into CELL x CELL cells; slice r of a round is the pixel at the same offset in
-every cell, offsets taken in the order of a CELL x CELL Bayer (ordered-dither) matrix. The first
-4^j slices of a round are then the regular grid of spacing CELL / 2^j, so a frame that renders
-only a few slices still samples the whole image evenly, and an image whose round is unfinished
-can show every pixel from the nearest finer-or-equal grid point already reached (`anchor`).
+every cell (rank_matrix). The first PREVIEW_SLICES offsets are taken in the order of a CELL x CELL
+Bayer (ordered-dither) matrix: the first 4^j slices of a round are then the regular grid of
+spacing CELL / 2^j (down to 2), so a frame that renders only a few slices still samples the whole
+image evenly, and an image whose round is unfinished can show every pixel from the nearest
+finer-or-equal grid point already reached (`anchor`). The remaining three quarters fill each
+cell by pairs of rows, the pairs in bit-reversed order: a pass over Bayer slices touches every
+row of every cell for a few pixels of each (the film's memory in many scattered pieces), one
+over row slices a few whole rows of each cell: a first round in one 40 ms frame's passes costs
+1.03-1.09x a whole round's launch at 960x540 (`python scripts/slice_order_cost.py`; with Bayer
+order throughout 1.07-1.18x; docs/architecture.md).
 
 A pixel's sample index is its own count of samples so far (the film's accepted plus rejected
 counts), not a global counter: pixels may be one sample apart within a round, and a pixel's
@@ -38,7 +44,13 @@ import taichi as ti
 CELL_BITS = 4
 CELL = 1 << CELL_BITS  # cells of 16 x 16 pixels
 ROUND_SLICES = CELL * CELL  # 256 slices make one sample per pixel
-INTERLEAVED = 0  # slice r: the pixel of Bayer rank r in every CELL x CELL cell
+# The first PREVIEW_SLICES ranks are the Bayer order's (its prefix: the grid of spacing 2); the
+# rest fill a cell's remaining pixels by pairs of rows (PAIR_PIXELS each), the pairs in
+# bit-reversed order, so a pass over a few of them touches a few rows of each cell.
+PREVIEW_SLICES = ROUND_SLICES // 4
+PAIR_BITS = CELL_BITS - 1
+PAIR_PIXELS = CELL // 2 + CELL  # the odd columns of the even row, and the odd row
+INTERLEAVED = 0  # slice r: the pixel of rank r in every CELL x CELL cell (rank_matrix)
 BANDS = 1  # slice r: the band of whole rows bit_reverse(r) (band_start)
 
 
@@ -53,17 +65,38 @@ def bit_reverse(rank):
 
 @ti.func
 def slice_offset(rank):
-    """(x, y) in the cell of slice `rank` in [0, ROUND_SLICES): the inverse of the Bayer matrix
-    B(x, y) = bit_reverse(interleave(x ^ y, y)) (x ^ y on the odd bits, y on the even bits)."""
-    reversed_rank = bit_reverse(rank)
+    """(x, y) in the cell of slice `rank` in [0, ROUND_SLICES) (rank_matrix's inverse). Below
+    PREVIEW_SLICES: the inverse of the Bayer matrix B(x, y) = bit_reverse(interleave(x ^ y, y))
+    (x ^ y on the odd bits, y on the even bits); from there, row pair by row pair."""
     x = 0
     y = 0
-    for i in ti.static(range(CELL_BITS)):
-        y_bit = (reversed_rank >> (2 * i)) & 1
-        x_bit = ((reversed_rank >> (2 * i + 1)) & 1) ^ y_bit
-        x |= x_bit << i
-        y |= y_bit << i
+    if rank < PREVIEW_SLICES:
+        reversed_rank = bit_reverse(rank)
+        for i in ti.static(range(CELL_BITS)):
+            y_bit = (reversed_rank >> (2 * i)) & 1
+            x_bit = ((reversed_rank >> (2 * i + 1)) & 1) ^ y_bit
+            x |= x_bit << i
+            y |= y_bit << i
+    else:
+        j = rank - PREVIEW_SLICES
+        pair = j // PAIR_PIXELS
+        at = j - pair * PAIR_PIXELS
+        y = 2 * bit_reverse_bits(pair, PAIR_BITS)
+        if at < CELL // 2:
+            x = 2 * at + 1
+        else:
+            x = at - CELL // 2
+            y += 1
     return x, y
+
+
+@ti.func
+def bit_reverse_bits(value, bits: ti.template()):
+    """The low `bits` bits of value reversed."""
+    out = 0
+    for b in ti.static(range(bits)):
+        out |= ((value >> b) & 1) << (bits - 1 - b)
+    return out
 
 
 @ti.func
@@ -189,13 +222,29 @@ def band_order_rows(height: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def bayer_matrix() -> np.ndarray:
-    """B[y, x]: the rank of offset (x, y) in a round, CELL x CELL."""
+    """B[y, x]: the rank of offset (x, y) in the CELL x CELL Bayer (ordered-dither) order."""
     y, x = np.mgrid[0:CELL, 0:CELL]
     mixed = np.zeros_like(x)
     for i in range(CELL_BITS):
         mixed |= (((x ^ y) >> i) & 1) << (2 * i + 1)
         mixed |= ((y >> i) & 1) << (2 * i)
     return bit_reverse_array(mixed)
+
+
+def rank_matrix() -> np.ndarray:
+    """R[y, x]: the rank (slice) of offset (x, y) in a round, CELL x CELL: the Bayer rank where it
+    is below PREVIEW_SLICES, then the remaining offsets row pair by row pair (slice_offset)."""
+    ranks = bayer_matrix()
+    rank = PREVIEW_SLICES
+    for pair in range(CELL // 2):
+        y = 2 * int(bit_reverse_array(np.array([pair << (2 * CELL_BITS - PAIR_BITS)]))[0])
+        for x in range(1, CELL, 2):
+            ranks[y, x] = rank
+            rank += 1
+        for x in range(CELL):
+            ranks[y + 1, x] = rank
+            rank += 1
+    return ranks
 
 
 def slice_mask(slice_first: int, slice_count: int, width: int, height: int, order: int = INTERLEAVED) -> np.ndarray:
@@ -209,7 +258,7 @@ def slice_mask(slice_first: int, slice_count: int, width: int, height: int, orde
                                                 height)):
             from_top[top:bottom] = True
         return mask
-    ranks = np.tile(bayer_matrix(), ((height + CELL - 1) // CELL, (width + CELL - 1) // CELL))[:height, :width]
+    ranks = np.tile(rank_matrix(), ((height + CELL - 1) // CELL, (width + CELL - 1) // CELL))[:height, :width]
     return (ranks >= slice_first) & (ranks < slice_first + slice_count)
 
 

@@ -7,20 +7,35 @@ import taichi as ti
 
 from renderer.band_table import BandTable
 from renderer.film import Film, FilmState
-from renderer.pixel_slices import (BANDS, CELL, INTERLEAVED, ROUND_SLICES, band_order_rows, bayer_matrix,
+from renderer.pixel_slices import (BANDS, CELL, INTERLEAVED, PAIR_PIXELS, PREVIEW_SLICES, ROUND_SLICES,
+                                   band_order_rows, bayer_matrix, rank_matrix,
                                    filled_mean_array, interleaved_layout, pass_length, slice_mask, slice_pixel,
                                    spp_text)
 from renderer.tonemap import display_array, tonemap_into
 
 
-def test_the_bayer_order_is_a_permutation_whose_prefixes_are_regular_grids():
-    ranks = bayer_matrix()
-    assert sorted(ranks.ravel().tolist()) == list(range(ROUND_SLICES))
-    for j in range(5):  # 1, 4, 16, 64, 256 slices
-        spacing = CELL >> j
-        grid = np.zeros((CELL, CELL), bool)
-        grid[::spacing, ::spacing] = True
-        np.testing.assert_array_equal(ranks < 4 ** j, grid)
+def test_the_slice_order_is_a_permutation_whose_prefixes_are_regular_grids():
+    for ranks in (bayer_matrix(), rank_matrix()):
+        assert sorted(ranks.ravel().tolist()) == list(range(ROUND_SLICES))
+        for j in range(5):  # 1, 4, 16, 64, 256 slices
+            spacing = CELL >> j
+            grid = np.zeros((CELL, CELL), bool)
+            grid[::spacing, ::spacing] = True
+            np.testing.assert_array_equal(ranks < 4 ** j, grid)
+
+
+def test_after_the_preview_a_pass_takes_whole_rows_of_each_cell():
+    """Past the spacing-2 grid a round fills each cell row pair by row pair (a pass over a few
+    slices touches a few rows of a cell, not all sixteen: renderer/pixel_slices.py), the pairs in
+    bit-reversed order so the image refines evenly."""
+    ranks = rank_matrix()
+    np.testing.assert_array_equal(ranks < PREVIEW_SLICES, bayer_matrix() < PREVIEW_SLICES)
+    pair_order = []
+    for start in range(PREVIEW_SLICES, ROUND_SLICES, PAIR_PIXELS):
+        rows = np.unique(np.nonzero((ranks >= start) & (ranks < start + PAIR_PIXELS))[0])
+        assert len(rows) == 2 and rows[1] == rows[0] + 1 and rows[0] % 2 == 0
+        pair_order.append(rows[0] // 2)
+    assert pair_order == [0, 4, 2, 6, 1, 5, 3, 7]
 
 
 @ti.kernel
