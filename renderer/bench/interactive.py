@@ -21,9 +21,11 @@ integrator, at 960x540 by default:
              first, in sliced frames, and reported on its own ("first round"): its slices are
              interleaved (a coarse-to-fine image: renderer/pixel_slices.py), which costs more
              per sample than the rows of the rounds after it (ad hoc, 960x540 on a quiet 2-core
-             machine, first round / steady state against whole-sample frames: cornell_box/mis
-             0.80 / 1.00, foggy/nee 0.92 / 0.95, showcase/mis 0.91 / 0.97), and a still view
-             spends its first 0.2-3 s there, so blocks that began with it measured mostly it.
+             machine, first round / steady state against whole-sample frames, when a whole
+             round was in Bayer order: cornell_box/mis 0.80 / 1.00, foggy/nee 0.92 / 0.95,
+             showcase/mis 0.91 / 0.97; its last three quarters now go by rows of each cell), and
+             a still view spends its first 0.1-2 s there, so blocks that began with it measured
+             mostly it.
              Then ANSWER_SECONDS of still frames every third of which gets a key press (Tab
              toggles the help overlay, a display-only change, and the benchmark checks that the
              same frame presented it), for each of the two: the times of frames that answer an
