@@ -57,10 +57,7 @@ BANDS = 1  # slice r: the band of whole rows bit_reverse(r) (band_start)
 @ti.func
 def bit_reverse(rank):
     """rank's 2 * CELL_BITS bits reversed (the band of slice `rank` under BANDS)."""
-    reversed_rank = 0
-    for b in ti.static(range(2 * CELL_BITS)):
-        reversed_rank |= ((rank >> b) & 1) << (2 * CELL_BITS - 1 - b)
-    return reversed_rank
+    return bit_reverse_bits(rank, 2 * CELL_BITS)
 
 
 @ti.func
