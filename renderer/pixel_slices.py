@@ -193,12 +193,12 @@ def pass_length(slice_count, width, height, order=INTERLEAVED):
 # --- numpy (tests, and the host's view of which pixels a slice holds) -----------------------------
 
 
-def bit_reverse_array(ranks: np.ndarray) -> np.ndarray:
-    """numpy twin of bit_reverse."""
+def bit_reverse_array(ranks: np.ndarray, bits: int = 2 * CELL_BITS) -> np.ndarray:
+    """numpy twin of bit_reverse_bits (by default bit_reverse's 8 bits)."""
     ranks = np.asarray(ranks)
     out = np.zeros_like(ranks)
-    for b in range(2 * CELL_BITS):
-        out |= ((ranks >> b) & 1) << (2 * CELL_BITS - 1 - b)
+    for b in range(bits):
+        out |= ((ranks >> b) & 1) << (bits - 1 - b)
     return out
 
 
@@ -234,7 +234,7 @@ def rank_matrix() -> np.ndarray:
     ranks = bayer_matrix()
     rank = PREVIEW_SLICES
     for pair in range(CELL // 2):
-        y = 2 * int(bit_reverse_array(np.array([pair << (2 * CELL_BITS - PAIR_BITS)]))[0])
+        y = 2 * int(bit_reverse_array(np.array(pair), PAIR_BITS))
         for x in range(1, CELL, 2):
             ranks[y, x] = rank
             rank += 1

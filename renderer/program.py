@@ -36,7 +36,7 @@ class RenderProgram:
         # Integrators with AOVs can trace feature samples: their li takes a features_only flag.
         self.feature_tracing = getattr(integrator, "writes_aovs", False)
         # The feature-sample loop is compiled in only where asked for (Renderer.program: scenes
-        # with texture or normal maps): unused, it cost the sample loop 2.5% and its compile 9%.
+        # with texture or normal maps): unused, it cost the sample loop 2.5% and its compile 5-9%.
         self.feature_samples = self.writes_aovs and feature_samples
 
     # A pass over slices samples its pixels in slice order (renderer/pixel_slices.py); the rounds a
