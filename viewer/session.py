@@ -515,6 +515,14 @@ class Every:
     def force(self) -> None:
         self._last = None
 
+    def age(self, now: float) -> Optional[float]:
+        """Seconds since the last turn (None: none yet)."""
+        return None if self._last is None else now - self._last
+
+    def set_age(self, now: float, age: Optional[float]) -> None:
+        """As if the last turn was `age` seconds before `now` (None: none yet, so it is time)."""
+        self._last = None if age is None else now - age
+
 
 @dataclass
 class RateMeter:

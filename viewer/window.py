@@ -32,7 +32,7 @@ import time
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
-from typing import Callable, Optional
+from typing import Callable, NamedTuple, Optional
 
 import numpy as np
 import taichi as ti
@@ -95,6 +95,13 @@ def camera_frame(state: CameraState) -> CameraFrame:
 def window_buffer_to_image(buffer: np.ndarray) -> np.ndarray:
     """GGUI's get_image_buffer_as_numpy() ([x, y, rgba] y-up floats) as uint8 (H, W, 3)."""
     return quantize(np.ascontiguousarray(np.transpose(buffer[:, :, :3], (1, 0, 2))[::-1]))
+
+
+class StillClocks(NamedTuple):
+    """Seconds since a view last presented and last refreshed the HUD's statistics (None: never)."""
+
+    since_present: Optional[float]
+    since_stats: Optional[float]
 
 
 class ViewerApp:
@@ -569,10 +576,21 @@ class ViewerApp:
         pixels = r.film.width * r.film.height
         return f"{100.0 * (pixels - r.pixels_active) / max(pixels, 1):.0f}% stopped"
 
-    def present_due(self) -> None:
-        """The next frame presents, as a still view's first frame does (its present interval
-        counts from there)."""
-        self._last_present = None
+    def still_clocks(self) -> StillClocks:
+        """How long ago this view last presented and refreshed the HUD's statistics."""
+        now = self.clock()
+        return StillClocks(None if self._last_present is None else now - self._last_present,
+                           self._stats_due.age(now))
+
+    def resume_still_clocks(self, clocks: Optional[StillClocks] = None) -> None:
+        """Set the present and statistics clocks as `clocks` (still_clocks()) left them, as if no
+        time had passed since; None: both due, so the next frame presents, as a still view's
+        first frame does. bench interactive alternates blocks of two kinds of still frames and
+        resumes each kind's clocks, so each redraws as a continuous still view of its kind."""
+        now = self.clock()
+        since_present, since_stats = (None, None) if clocks is None else clocks
+        self._last_present = None if since_present is None else now - since_present
+        self._stats_due.set_age(now, since_stats)
 
     def _present(self, now: float) -> None:
         s = self.session

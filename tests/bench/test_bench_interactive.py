@@ -74,10 +74,15 @@ class _SlicedViewer:
         self.last_plan = None
         self.frames = 0
         self.presents = 0  # an untouched still view presents seldom; this one never
-        self.dues = []  # the kind of still frame set when a present was made due
+        self.resumed = []  # (kind of still frame set, clocks resumed) at each resume_still_clocks
+        self._clock_reads = 0
 
-    def present_due(self):
-        self.dues.append(self.session.resolution.min_still_slices)
+    def still_clocks(self):
+        self._clock_reads += 1
+        return ("clocks", self._clock_reads)  # what the next resume of this kind must get back
+
+    def resume_still_clocks(self, clocks=None):
+        self.resumed.append((self.session.resolution.min_still_slices, clocks))
 
     def step(self, inp=None):
         assert self.session.resolution.min_still_slices == 1  # the viewer's own sliced frames
@@ -131,8 +136,10 @@ def test_rate_blocks_pair_each_whole_block_with_sliced_frames_of_as_much_time():
     # whole block, then its sliced block, in turn
     runs = [k for i, k in enumerate(viewer.kinds) if i == 0 or viewer.kinds[i - 1] != k]
     assert runs == [ROUND_SLICES, 1, ROUND_SLICES, 1]
-    # each block starts with a present due, so each kind presents at its own rate
-    assert viewer.dues == runs
+    # each block resumes its own kind's clocks: the first of each kind with both due, the next
+    # where the last block of that kind left them (read at its end), so each presents as a
+    # continuous still view of its kind
+    assert viewer.resumed == [(ROUND_SLICES, None), (1, None), (ROUND_SLICES, ("clocks", 1)), (1, ("clocks", 2))]
     assert blocks[1][0]["pixel_samples"] == len(blocks[1][0]["times"]) * 16 * 16 / ROUND_SLICES
 
 

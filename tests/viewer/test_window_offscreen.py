@@ -5,6 +5,7 @@ scene and integrator compiles once here. Frames go through `ViewerApp.step()`, e
 real loop runs, with `FrameInput`s made up instead of GGUI events.
 """
 import re
+import time
 
 import numpy as np
 import pytest
@@ -18,7 +19,7 @@ from renderer.tonemap import tonemap_array, unpack_rgba8
 from viewer import hud
 from viewer.display import UPDATE_SLICES
 from viewer.session import MOVING_PROBE_SLICES
-from viewer.window import FrameInput, ViewerApp, window_buffer_to_image
+from viewer.window import FrameInput, StillClocks, ViewerApp, window_buffer_to_image
 
 SIZE = (128, 72)
 # A frame counts as "not blank" above this standard deviation of its 8-bit pixel values. A
@@ -421,13 +422,27 @@ def test_an_untouched_still_view_renders_without_presenting_until_an_input(app):
         assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1
         app.step()
         assert app.presents == presents + 2
-        app.present_due()  # (bench interactive starts each block of still frames so)
+        app.resume_still_clocks(None)  # due (bench interactive starts each kind's first block so)
         app.step()
         app.step()
         assert app.presents == presents + 3  # the first frame only
-        app.still_present_interval = 0.0  # the interval has passed: the next frame presents
+        # Clocks resumed as read: the time in between does not count (bench interactive's blocks
+        # of the other kind), so an hour's interval less a minute has not passed yet; resumed at
+        # an hour's age it has.
+        clocks = app.still_clocks()
+        assert 0.0 <= clocks.since_present < 60.0
+        time.sleep(0.2)
+        app.resume_still_clocks(clocks)
+        assert app.still_clocks().since_present - clocks.since_present < 0.1
+        app.resume_still_clocks(StillClocks(3600.0 - 60.0, None))
+        app.step()
+        assert app.presents == presents + 3
+        app.resume_still_clocks(StillClocks(3600.0, None))
         app.step()
         assert app.presents == presents + 4
+        app.still_present_interval = 0.0  # the interval has passed: the next frame presents
+        app.step()
+        assert app.presents == presents + 5
     finally:
         app.still_present_interval = 0.0
 
