@@ -15,8 +15,10 @@ integrator, at 960x540 by default:
              still frames made of whole samples per pixel (the viewer before pixel slices), in
              the same frame loop: a block of whole-sample frames (STILL_SECONDS / RATE_ROUNDS,
              at least one frame: seconds each on a slow scene), then sliced frames for as long
-             as it took (paired_rate_blocks). The sliced rate must stay within 5% of it: the
-             median over the pairs of sliced / whole samples per second.
+             as it took (paired_rate_blocks; each kind's blocks go on with its own present
+             clocks, so each redraws as a continuous still view of its kind). The sliced rate
+             must stay within 5% of it: the median over the pairs of sliced / whole samples
+             per second.
              The blocks start after the view's first full-resolution round, which is rendered
              first, in sliced frames, and reported on its own ("first round"): its slices are
              interleaved (a coarse-to-fine image: renderer/pixel_slices.py), which costs more
