@@ -191,6 +191,12 @@ def build_parser() -> argparse.ArgumentParser:
                            help="a camera orbiting the scene's bounds once in SECONDS (instead of the scene's path)")
     _add_input_options(render)
 
+    warm = sub.add_parser("warm-cache", help="compile the viewer's kernels for scenes ahead of time")
+    warm.add_argument("scenes", nargs="*", help="scene names or files (default: every catalog scene)")
+    warm.add_argument("--size", type=_size, default=(960, 540), help="the viewer's window size WxH (default 960x540)")
+    warm.add_argument("--integrators", metavar="A,B", help="comma-separated integrators (default: all)")
+    warm.add_argument("--arch", choices=ARCHES, default="auto", help="the back-end the viewer will use")
+
     sub.add_parser("list", help="list scenes and integrators")
     info = sub.add_parser("info", help="describe a scene")
     info.add_argument("scene")
@@ -281,6 +287,23 @@ def cmd_view(args) -> int:
     return run_viewer(path, size=args.size, integrator=args.integrator, max_frames=args.frames, load_options=options)
 
 
+def cmd_warm_cache(args) -> int:
+    from renderer.integrators import integrator_names, make_integrator
+    from renderer.scene.catalog import resolve_scene, scene_files
+    from viewer.cache_warmer import warm_scenes
+
+    scenes = [resolve_scene(name) for name in args.scenes] if args.scenes else scene_files()
+    integrators = None
+    if args.integrators:
+        integrators = [name.strip() for name in args.integrators.split(",") if name.strip()]
+        for name in integrators:
+            make_integrator(name)  # an unknown name: one line, before any process starts
+    print(f"warming the viewer's kernels at {args.size[0]}x{args.size[1]}: {len(scenes)} scenes, "
+          f"{', '.join(integrators or integrator_names())}", flush=True)
+    results = warm_scenes(scenes, args.size, integrators, args.arch, report=lambda line: print(line, flush=True))
+    return 1 if any(result["error"] for result in results) else 0
+
+
 def cmd_bench(args) -> int:
     from renderer.bench import run_benchmark
 
@@ -309,7 +332,8 @@ def main(argv: list[str] | None = None) -> int:
         else:
             print("no display: rendering the default scene headless instead of opening the viewer", file=sys.stderr)
             args = parser.parse_args(["render", "showcase", "--spp", "32"])
-    handlers = {"view": cmd_view, "render": cmd_render, "list": cmd_list, "info": cmd_info, "bench": cmd_bench}
+    handlers = {"view": cmd_view, "render": cmd_render, "list": cmd_list, "info": cmd_info, "bench": cmd_bench,
+                "warm-cache": cmd_warm_cache}
     try:
         return handlers[args.command](args)
     except (SceneError, ValueError, RuntimeError) as error:

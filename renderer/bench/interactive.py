@@ -134,7 +134,7 @@ def measure_switch(app, scene_path: Path, integrator: str) -> dict:
     'compiling' notice are counted: they are what the user sees meanwhile. compile_s is the
     render call of the frame that compiled (None: nothing to compile, the kernels were built
     earlier in this process)."""
-    from viewer.window import FrameInput
+    from viewer.cache_warmer import step_to_first_image
 
     t0 = time.perf_counter()
     app.select_scene(scene_path)
@@ -142,18 +142,10 @@ def measure_switch(app, scene_path: Path, integrator: str) -> dict:
     app.session.reset_camera()  # the scene's own view: the last combination's flight moved it
     load_s = time.perf_counter() - t0
     app.compile_seconds = None
-    notice_frames, frames, longest = 0, 0, 0.0
-    while frames < SWITCH_FRAMES_LIMIT:
-        seconds = _step_timed(app, FrameInput())
-        frames += 1
-        longest = max(longest, seconds)
-        if app.notice:
-            notice_frames += 1
-            continue
-        if app.last_plan is not None and app.renderer.slices_done > 0:
-            break
+    shown = step_to_first_image(app, SWITCH_FRAMES_LIMIT)
     return {"load_s": load_s, "compile_s": app.compile_seconds, "first_image_s": time.perf_counter() - t0,
-            "frames": frames, "notice_frames": notice_frames, "longest_frame_s": longest}
+            "frames": shown["frames"], "notice_frames": shown["notice_frames"],
+            "longest_frame_s": shown["longest_frame_s"]}
 
 
 def settle_still(app) -> bool:

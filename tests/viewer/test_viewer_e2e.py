@@ -152,3 +152,31 @@ def test_viewer_under_xvfb(xserver, tmp_path):
     assert png.std() > MIN_PIXEL_STD
     assert np.isfinite(read_exr(exrs[0])).all()
     assert time.monotonic() - start < TIMEOUT
+
+
+def test_a_warmed_viewer_start_compiles_nothing(xserver, tmp_path):
+    """`warm-cache SCENE` (off-screen, one process per scene) leaves in Taichi's offline cache every
+    kernel that `view SCENE` at that size then needs, in a window, with its first integrator or
+    another one chosen at start: the cache gains no kernel from those viewers."""
+    from renderer.arch import LANTERN_CACHE_FOLDER
+    from viewer.cache_warmer import cached_kernels
+
+    env = dict(xserver, TI_OFFLINE_CACHE_FILE_PATH=str(tmp_path / "ticache"))
+    cache = tmp_path / "ticache" / LANTERN_CACHE_FOLDER
+
+    def app(*args):
+        return subprocess.run([sys.executable, str(ROOT / "app.py"), *args, "--size", "64x36", "--arch", "cpu"],
+                              cwd=ROOT, env=env, capture_output=True, text=True, timeout=TIMEOUT)
+
+    warmed = app("warm-cache", "cornell_box", "--integrators", "mis,normals")
+    assert warmed.returncode == 0, warmed.stdout + warmed.stderr
+    assert "cornell_box / mis: kernels ready in" in warmed.stdout and "cornell_box / normals" in warmed.stdout
+    kernels = cached_kernels(cache)
+    assert f"cornell_box: {kernels} kernels added to the cache" in warmed.stdout
+    for chosen in ([], ["--integrator", "normals"]):  # the scene's own integrator (mis), or another
+        viewed = app("view", "cornell_box", "--frames", "12", *chosen)
+        assert viewed.returncode == 0, viewed.stderr
+        assert cached_kernels(cache) == kernels, f"view {' '.join(chosen)} compiled kernels the warm-up had not"
+    # A scene the warm-up did not open compiles its own (so the count above does see compiles).
+    assert app("view", "weekend", "--frames", "12").returncode == 0
+    assert cached_kernels(cache) > kernels
