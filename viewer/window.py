@@ -522,8 +522,8 @@ class ViewerApp:
         return DenoiseInput(renderer.shown_image())
 
     def _refresh_noise(self, renderer: Renderer, integrator: str) -> None:
-        """The HUD's noise estimate and dropped samples: a reduction over the film (~5-10 ms at
-        960x540 on a 2-core CPU), hence rate-limited."""
+        """The HUD's noise estimate and dropped samples: a reduction over the film (~1 ms at
+        960x540 on a 2-core CPU), rate-limited with the other statistics (STATS_INTERVAL)."""
         stats = renderer.film.stats()
         # An integrator whose film holds an estimate, not a mean of samples (sppm), has no
         # variance to estimate the noise from: say so rather than show the film's inf or 0.
