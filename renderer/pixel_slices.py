@@ -244,6 +244,11 @@ def rank_matrix() -> np.ndarray:
     return ranks
 
 
+def rank_image(width: int, height: int) -> np.ndarray:
+    """(height, width) [row 0 = y 0]: each pixel's rank (slice) in a round, rank_matrix tiled."""
+    return np.tile(rank_matrix(), (-(-height // CELL), -(-width // CELL)))[:height, :width]
+
+
 def slice_mask(slice_first: int, slice_count: int, width: int, height: int, order: int = INTERLEAVED) -> np.ndarray:
     """Boolean (height, width) [row 0 = y 0], True where a pass over those slices samples."""
     if slice_count >= ROUND_SLICES:
@@ -255,7 +260,7 @@ def slice_mask(slice_first: int, slice_count: int, width: int, height: int, orde
                                                 height)):
             from_top[top:bottom] = True
         return mask
-    ranks = np.tile(rank_matrix(), ((height + CELL - 1) // CELL, (width + CELL - 1) // CELL))[:height, :width]
+    ranks = rank_image(width, height)
     return (ranks >= slice_first) & (ranks < slice_first + slice_count)
 
 

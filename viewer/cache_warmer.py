@@ -19,12 +19,14 @@ a process of its own, which opens the viewer off-screen on it exactly as `view` 
 scene's own integrator first (the one a viewer starts with; light-sampling integrators build the
 scene's light structures then), then each other integrator, SPPM last (it builds fields of its
 own), and writes its kernels to the cache as it exits. A later `view SCENE` at that size starts
-warm, and every integrator key there loads its kernels from the cache. Scenes reached with n / b
-from another scene have other field ids and compile as before.
+warm, and every integrator key there loads its kernels from the cache. Started with
+`--integrator X` instead, the viewer creates fields in another order where X builds some of its
+own: integrators that build none (path, normals, ...) still load theirs, SPPM compiles four
+kernels again (cornell_box at 320x180: 30 kernels warmed, `view --integrator sppm` added 4).
+Scenes reached with n / b from another scene have other field ids and compile as before.
 """
 from __future__ import annotations
 
-import argparse
 import json
 import subprocess
 import sys
@@ -36,7 +38,7 @@ from typing import Optional
 from renderer.integrators import integrator_names
 
 ROOT = Path(__file__).resolve().parents[1]
-RESULT_MARK = "LANTERN-WARM "  # a child's result lines start with this
+RESULT_MARK = "LANTERN-WARM "  # the line of a child's results starts with this
 FIRST_IMAGE_FRAME_LIMIT = 50  # a switch that has not shown an image after this many frames failed
 
 
@@ -91,8 +93,8 @@ def _child(argv: list[str]) -> int:
 
     init_taichi(arch, optimize="compile")  # as `app.py view` does
     width, height = (int(v) for v in size.split("x"))
-    for result in warm_scene(Path(scene), (width, height), integrators.split(",")):
-        print(RESULT_MARK + json.dumps(result), flush=True)
+    combinations = warm_scene(Path(scene), (width, height), integrators.split(","))
+    print(RESULT_MARK + json.dumps({"combinations": combinations}), flush=True)
     return 0
 
 
@@ -108,6 +110,7 @@ def warm_scenes(scene_paths: list[Path], size: tuple[int, int], integrators: Opt
     to the cache (0: every one was there already). A scene whose child fails is reported with
     its error and the others go on."""
     from renderer.arch import default_cache_dir
+    from renderer.bench.common import child_report
 
     cache_dir = Path(default_cache_dir())
     integrators = integrators or integrator_names()
@@ -118,9 +121,8 @@ def warm_scenes(scene_paths: list[Path], size: tuple[int, int], integrators: Opt
         before, started = cached_kernels(cache_dir), time.perf_counter()
         try:
             done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=timeout_s)
-            lines = [json.loads(line[len(RESULT_MARK):]) for line in done.stdout.splitlines()
-                     if line.startswith(RESULT_MARK)]
-            error = None if done.returncode == 0 else _last_line(done.stderr) or f"exit code {done.returncode}"
+            result, why = child_report(done.stdout, done.stderr, done.returncode, RESULT_MARK)
+            lines, error = ([], why) if result is None else (result["combinations"], None)
         except subprocess.TimeoutExpired:
             lines, error = [], f"not done after {timeout_s:.0f} s"
         added, seconds = cached_kernels(cache_dir) - before, time.perf_counter() - started
@@ -140,11 +142,6 @@ def _result_text(result: dict) -> str:
     kernels = "compiled earlier in this process" if compiled is None else f"kernels ready in {compiled:.1f} s"
     shown = "" if result["shown"] else " (no image shown)"
     return f"  {result['scene']} / {result['integrator']}: {kernels}, first image {result['first_image_s']:.1f} s{shown}"
-
-
-def _last_line(text: str) -> str:
-    lines = [line.strip() for line in text.strip().splitlines() if line.strip()]
-    return lines[-1] if lines else ""
 
 
 if __name__ == "__main__":

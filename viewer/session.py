@@ -506,9 +506,10 @@ class Every:
             return True
         return False
 
-    def ready(self, now: float) -> bool:
-        """Whether it is time, without taking the turn (mark() takes it)."""
-        return self._last is None or now - self._last >= self.interval
+    def ready(self, now: float, interval: Optional[float] = None) -> bool:
+        """Whether it is time, without taking the turn (mark() takes it); `interval` for this
+        call instead of the usual one (the still view's present interval follows its cost)."""
+        return self._last is None or now - self._last >= (self.interval if interval is None else interval)
 
     def mark(self, now: float) -> None:
         self._last = now

@@ -50,8 +50,9 @@ from viewer.camera_state import CameraState
 from viewer.denoise_worker import BackgroundDenoiser
 from viewer.display import DenoisedDisplay, DisplayImages, DisplaySettings, show_on_canvas
 from viewer.hotkeys import KeyMap
-from viewer.session import (DEFAULT_TARGET_SECONDS, MOVING_PROBE_SLICES, SETTLE_SECONDS, STATS_INTERVAL, Every,
-                            RateMeter, ViewerSession, scene_scale, screenshot_dir, screenshot_paths)
+from viewer.session import (DEFAULT_TARGET_SECONDS, MAX_PRESENT_INTERVAL, MOVING_PROBE_SLICES, SETTLE_SECONDS,
+                            STATS_INTERVAL, Every, RateMeter, ViewerSession, scene_scale, screenshot_dir,
+                            screenshot_paths)
 
 TITLE = "Lantern"
 DEFAULT_SIZE = (960, 540)
@@ -151,7 +152,7 @@ class ViewerApp:
         self._awaiting_render = False
         self.frames = 0
         self.presents = 0  # frames that presented (the rest only rendered and read input)
-        self._last_present: Optional[float] = None
+        self._present_due = Every(MAX_PRESENT_INTERVAL)  # when the last frame presented
         self._presented_key = None  # what the HUD and notices said on the last present
         self._cursor_before = None
         self.last_plan = None
@@ -481,7 +482,7 @@ class ViewerApp:
         interval = self.still_present_interval
         if interval is None:
             interval = self.session.resolution.present_interval()
-        return self._last_present is None or now - self._last_present >= interval
+        return self._present_due.ready(now, interval)
 
     def _display_key(self, now: float) -> tuple:
         """What the window says besides the image: a change presents at once."""
@@ -579,8 +580,7 @@ class ViewerApp:
     def still_clocks(self) -> StillClocks:
         """How long ago this view last presented and refreshed the HUD's statistics."""
         now = self.clock()
-        return StillClocks(None if self._last_present is None else now - self._last_present,
-                           self._stats_due.age(now))
+        return StillClocks(self._present_due.age(now), self._stats_due.age(now))
 
     def resume_still_clocks(self, clocks: Optional[StillClocks] = None) -> None:
         """Set the present and statistics clocks as `clocks` (still_clocks()) left them, as if no
@@ -589,13 +589,13 @@ class ViewerApp:
         resumes each kind's clocks, so each redraws as a continuous still view of its kind."""
         now = self.clock()
         since_present, since_stats = (None, None) if clocks is None else clocks
-        self._last_present = None if since_present is None else now - since_present
+        self._present_due.set_age(now, since_present)
         self._stats_due.set_age(now, since_stats)
 
     def _present(self, now: float) -> None:
         s = self.session
         self.presents += 1
-        self._last_present = now
+        self._present_due.mark(now)
         show_on_canvas(self.canvas, self.display.shown if self._shown is None else self._shown)
         if s.hud_visible:
             forced = INTEGRATORS[s.integrator].display_tonemapper

@@ -203,20 +203,21 @@ def paired_rate_blocks(app, seconds: float, rounds: int = RATE_ROUNDS) -> dict[i
     2-3% of the sliced blocks' time); a present forced at each block's start made the sliced
     blocks of 1.2 s redraw 1.5 times a second where the view does once (mirror_field / mis:
     25 ms a redraw at 960x540, 1.2% of their time)."""
-    resolution = app.session.resolution
     blocks = {1: [], ROUND_SLICES: []}
-    clocks = {ROUND_SLICES: None, 1: None}
+    clocks = {1: None, ROUND_SLICES: None}
+
+    def block(fewest: int, block_seconds: float, min_frames: int) -> dict:
+        app.session.resolution.min_still_slices = fewest
+        app.resume_still_clocks(clocks[fewest])
+        frames = untouched_frames(app, block_seconds, min_frames)
+        clocks[fewest] = app.still_clocks()
+        blocks[fewest].append(frames)
+        return frames
+
     for _ in range(rounds):
-        for fewest in (ROUND_SLICES, 1):
-            resolution.min_still_slices = fewest
-            app.resume_still_clocks(clocks[fewest])
-            if fewest == ROUND_SLICES:
-                block = untouched_frames(app, seconds, min_frames=1)
-            else:
-                block = untouched_frames(app, sum(blocks[ROUND_SLICES][-1]["times"]))
-            clocks[fewest] = app.still_clocks()
-            blocks[fewest].append(block)
-    resolution.min_still_slices = 1
+        whole = block(ROUND_SLICES, seconds, min_frames=1)
+        block(1, sum(whole["times"]), min_frames=3)
+    app.session.resolution.min_still_slices = 1
     return blocks
 
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from renderer.adaptive import STOPPED
 from renderer.film import FilmState
-from renderer.pixel_slices import CELL, ROUND_SLICES, rank_matrix
+from renderer.pixel_slices import ROUND_SLICES, rank_image
 
 # A slice whose pixels all stopped (adaptive sampling) or that holds no pixel: nothing left to render.
 DONE = np.iinfo(np.int64).max
@@ -23,7 +23,7 @@ class PixelSlices:
 
     def __init__(self, width: int, height: int):
         self.width, self.height = width, height
-        ranks = np.tile(rank_matrix(), (-(-height // CELL), -(-width // CELL)))[:height, :width]  # [y, x], y up
+        ranks = rank_image(width, height)  # [y, x], y up
         flat = ranks.ravel()
         self._order = np.argsort(flat, kind="stable").astype(np.int64)
         self._starts = np.searchsorted(flat[self._order], np.arange(ROUND_SLICES + 1))
