@@ -111,11 +111,11 @@ def _add_input_options(command: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from renderer.arch import ARCHES, OPTIMIZE_FOR
+    from renderer.runtime.arch import ARCHES, OPTIMIZE_FOR
     from renderer.bench import BENCHMARKS
-    from renderer.tonemap import TONEMAPPERS
+    from renderer.output.tonemap import TONEMAPPERS
 
-    from renderer.render_command import DEFAULT_CHECKPOINT_EVERY
+    from renderer.commands.render import DEFAULT_CHECKPOINT_EVERY
 
     parser = OneLineErrorParser(prog="app.py", description="Lantern path tracer")
     sub = parser.add_subparsers(dest="command")
@@ -151,7 +151,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--optimize", choices=OPTIMIZE_FOR,
                         help="kernel optimisation: compile (fast compiling) or run (every optimisation: a few %% faster, "
                              "compiles several times longer); default: run for renders long enough to repay that "
-                             "(renderer/optimize_choice.py), else compile; on --resume, the checkpoint's")
+                             "(renderer/runtime/optimize_choice.py), else compile; on --resume, the checkpoint's")
     render.add_argument("--checkpoint", type=Path,
                         help="save the film here every --checkpoint-every seconds and when stopped (default: "
                              "OUT.ckpt for renders expected to take over a minute, removed when they complete)")
@@ -214,8 +214,8 @@ def has_display() -> bool:
 
 
 def cmd_render(args) -> int:
-    from renderer.interrupts import StopRequests
-    from renderer.render_command import run_render
+    from renderer.commands.interrupts import StopRequests
+    from renderer.commands.render import run_render
 
     with StopRequests() as stop:
         return run_render(args, stop)
@@ -273,7 +273,7 @@ def cmd_info(args) -> int:
 
 
 def cmd_view(args) -> int:
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
     from renderer.scene.catalog import DEFAULT_SCENE, resolve_scene
     from viewer.window import run_viewer
 
@@ -319,7 +319,7 @@ def main(argv: list[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning
     from renderer.scene.errors import SceneError
 
-    from renderer.interrupts import Interrupted, exit_code
+    from renderer.commands.interrupts import Interrupted, exit_code
 
     parser = build_parser()
     try:

@@ -6,12 +6,12 @@ combination already seen compiles nothing.
 """
 import taichi as ti
 
-from renderer.adaptive import STOPPED
-from renderer.aovs import FEATURE_BOOSTED_SAMPLES, FEATURE_SEED_SALT
+from renderer.film.adaptive import STOPPED
+from renderer.film.aovs import FEATURE_BOOSTED_SAMPLES, FEATURE_SEED_SALT
 from renderer.camera import generate_ray
 from renderer.geometry.interface import INF
 from renderer.materials.bsdf import Bsdf
-from renderer.pixel_slices import BANDS, ROUND_SLICES, interleaved_layout, pass_length, slice_pixel
+from renderer.film.pixel_slices import BANDS, ROUND_SLICES, interleaved_layout, pass_length, slice_pixel
 from renderer.sampling.sampler import SampleState
 
 
@@ -27,7 +27,7 @@ class RenderProgram:
         self.environment = environment
         self.integrator = integrator
         self.film = film
-        self.bands = bands  # the film's BandTable (renderer/band_table.py); None: no band passes (sppm)
+        self.bands = bands  # the film's BandTable (renderer/film/band_table.py); None: no band passes (sppm)
         self.work = work  # per-pixel [geometry work, primitive tests, rays traced] summed over samples
         self.features = features
         # Denoising AOVs are written where the renderer keeps them and the integrator has them.
@@ -39,7 +39,7 @@ class RenderProgram:
         # with texture or normal maps): unused, it cost the sample loop 2.5% and its compile 5-9%.
         self.feature_samples = self.writes_aovs and feature_samples
 
-    # A pass over slices samples its pixels in slice order (renderer/pixel_slices.py); the rounds a
+    # A pass over slices samples its pixels in slice order (renderer/film/pixel_slices.py); the rounds a
     # film has seen are in its counts, so the whole-image passes of SPPM do not apply.
     sliced = True
 
@@ -48,7 +48,7 @@ class RenderProgram:
         """`spp` samples for each pixel of slices [slice_first, slice_first + slice_count) of a round
         cut in `order` (pixel_slices: INTERLEAVED or BANDS); `rest`: seed, max depth and the
         camera's kernel arguments. `feature_boost`: the AOV-only samples each of a pixel's first
-        colour samples brings where AOVs are kept (renderer/aovs.py). A partial band pass first
+        colour samples brings where AOVs are kept (renderer/film/aovs.py). A partial band pass first
         fills the band table for `height` (nothing to do when it already is: a still view's
         passes; moving frames, which change the height, are interleaved)."""
         if feature_boost > 0 and not self.feature_samples:
@@ -62,7 +62,7 @@ class RenderProgram:
                 order: ti.i32, feature_boost: ti.i32, seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3,
                 right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
         # A partial pass over bands visits its rows from the band table: the same pixels as
-        # slice_pixel's, without its divisions and skipped indices (renderer/band_table.py).
+        # slice_pixel's, without its divisions and skipped indices (renderer/film/band_table.py).
         banded = order == BANDS and slice_count < ROUND_SLICES
         layout = interleaved_layout(slice_count, width)
         n = self.bands.pass_length(slice_first, slice_count, width) if banded else pass_length(
@@ -77,7 +77,7 @@ class RenderProgram:
             else:
                 x, y = slice_pixel(i, slice_first, slice_count, width, height, order, layout)
             if x < width and y < height:
-                # A pixel adaptive sampling has stopped (renderer/adaptive.py) takes no more samples;
+                # A pixel adaptive sampling has stopped (renderer/film/adaptive.py) takes no more samples;
                 # a nested test: Taichi's `and` evaluates both sides, and (x, y) may lie outside the film.
                 if self.film.adaptive[x, y] != STOPPED:
                     pixel = y * width + x
@@ -88,7 +88,7 @@ class RenderProgram:
                         index = first_sample + s
                         if ti.static(self.feature_samples):
                             # Camera sample 0 is the colour sample; any more are feature samples,
-                            # which only find the AOVs (renderer/aovs.py), on streams of their own.
+                            # which only find the AOVs (renderer/film/aovs.py), on streams of their own.
                             features = ti.select(index < FEATURE_BOOSTED_SAMPLES, feature_boost, 0)
                             for k in range(1 + features):
                                 stream_index, stream_seed = index, seed

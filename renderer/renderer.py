@@ -9,20 +9,20 @@ from dataclasses import dataclass, replace
 import numpy as np
 import taichi as ti
 
-from renderer.adaptive import DEFAULT_MIN_SPP, AdaptiveSampling, is_check_point, next_check
-from renderer.aovs import AovFilm, scene_feature_boost
-from renderer.allocation import allocation_size
-from renderer.band_table import BandTable
+from renderer.film.adaptive import DEFAULT_MIN_SPP, AdaptiveSampling, is_check_point, next_check
+from renderer.film.aovs import AovFilm, scene_feature_boost
+from renderer.runtime.allocation import allocation_size
+from renderer.film.band_table import BandTable
 from renderer.camera import CameraFrame
-from renderer.film import Film, FilmState
-from renderer.image_io import read_environment
+from renderer.film.accumulation import Film, FilmState
+from renderer.output.image_io import read_environment
 from renderer.integrators import make_integrator
 from renderer.lights.environment import Environment
 from renderer.materials.table import MaterialTable
 from renderer.materials.texture_sampler import TextureTable
 from renderer.media.table import MediaTable
-from renderer.pixel_fields import pixel_vector, row_sums
-from renderer.pixel_slices import (BANDS, INTERLEAVED, ROUND_SLICES, band_rows_array, bit_reverse_array,
+from renderer.film.pixel_fields import pixel_vector, row_sums
+from renderer.film.pixel_slices import (BANDS, INTERLEAVED, ROUND_SLICES, band_rows_array, bit_reverse_array,
                                    filled_mean_array)
 from renderer.program import RenderProgram
 from renderer.sampling.sampler import make_sampler
@@ -90,7 +90,7 @@ def leaf_layout(leaves: str, data) -> str:
 def build_world(scene: Scene, mesh_options: MeshOptions):
     """(geometry, material table, Features with the scene camera's lens) for any scene kind."""
     if scene.geometry == "sdf":
-        from renderer.sdf.geometry import SdfGeometry
+        from shaders_sdf.geometry import SdfGeometry
 
         return (SdfGeometry(scene, scene.material_index), MaterialTable.from_specs(scene.materials, scene.medium_names()),
                 scene_features(scene))
@@ -113,7 +113,7 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
 
 @dataclass(frozen=True)
 class AdaptiveSettings:
-    """Adaptive sampling (renderer/adaptive.py): stop pixels whose relative standard error is
+    """Adaptive sampling (renderer/film/adaptive.py): stop pixels whose relative standard error is
     below `threshold`, once they have `min_spp` samples."""
 
     threshold: float
@@ -137,7 +137,7 @@ def samples_per_launch_limit() -> int:
 class Renderer:
     def __init__(self, scene: Scene, max_size: tuple[int, int] | None = None,
                  mesh_options: MeshOptions = MeshOptions(), aovs: bool = False):
-        """`aovs`: also accumulate the denoising AOVs (renderer/aovs.py) of integrators that write
+        """`aovs`: also accumulate the denoising AOVs (renderer/film/aovs.py) of integrators that write
         them; 28 bytes a pixel more."""
         self.scene = scene
         width, height = max_size or (scene.render.width, scene.render.height)
@@ -151,7 +151,7 @@ class Renderer:
         allocated = allocation_size(width, height)  # shared compiled programs across nearby sizes
         self.film = Film(*allocated)
         self.aovs = AovFilm(*allocated) if aovs else None
-        # Feature samples (renderer/aovs.py) each of a pixel's first colour samples brings where
+        # Feature samples (renderer/film/aovs.py) each of a pixel's first colour samples brings where
         # AOVs are kept, as the scene calls for; the viewer sets 0 while nothing will be denoised.
         self.scene_feature_boost = scene_feature_boost(self._features) if aovs else 0
         self.feature_boost = self.scene_feature_boost
@@ -167,7 +167,7 @@ class Renderer:
         self.integrator_options: dict[str, object] = {}
         self._shared: dict[str, object] = {}
         self._launched: set[tuple] = set()  # program keys launched in this process
-        self.slices_done = 0  # pixel slices rendered since the last reset (renderer/pixel_slices.py)
+        self.slices_done = 0  # pixel slices rendered since the last reset (renderer/film/pixel_slices.py)
         # Rounds after the first cut into bands of rows (pixel_slices.BANDS) rather than interleaved:
         # the viewer's still frames, whose passes are a few slices each. Renders that save or share
         # partial rounds (checkpoints, distributed groups) keep the interleaved order throughout.
@@ -272,7 +272,7 @@ class Renderer:
                       max_depth: int | None = None, seed: int | None = None, features: Features | None = None,
                       sampler: str | None = None, whole_iterations: bool = True) -> None:
         """Render the next `slices` pixel slices (ROUND_SLICES of them make one sample per pixel;
-        renderer/pixel_slices.py), continuing the round in progress: at most three launches (the
+        renderer/film/pixel_slices.py), continuing the round in progress: at most three launches (the
         rest of that round, whole rounds, the start of the next). An integrator whose passes are
         global (sppm) renders whole iterations: at least one, `slices` rounded down to rounds; or,
         with whole_iterations False (the viewer's still frames), `slices` steps of its iterations
@@ -390,6 +390,6 @@ class Renderer:
 
     def shown_image(self) -> np.ndarray:
         """The linear image the viewer shows: the mean, with pixels a partial first round has not
-        reached taken from their nearest sampled grid point (renderer/pixel_slices.py)."""
+        reached taken from their nearest sampled grid point (renderer/film/pixel_slices.py)."""
         film = self.film
         return filled_mean_array(film.mean_image(), film.sample_counts() + film.rejected_counts())

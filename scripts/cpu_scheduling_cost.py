@@ -111,7 +111,7 @@ def cache_key_lines() -> list[str]:
 
 
 def measure(case: str, rounds: int) -> list[str]:
-    from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
+    from renderer.film.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
 
     programs = {"static": compiled_under(case, False), "dynamic": compiled_under(case, True)}
     whole = round_seconds(*programs["static"], INTERLEAVED, ROUND_SLICES)
@@ -139,11 +139,11 @@ def main(argv: list[str]) -> int:
     for line in cache_key_lines():
         print(line, flush=True)
     sys.path.insert(0, str(ROOT))
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     rounds = int(argv[0]) if argv and argv[0].isdigit() else 5
     cases = [a for a in argv if not a.isdigit()] or list(DEFAULT_CASES)
-    init_taichi("cpu", offline_cache=False)  # Taichi's cache key leaves the setting out (renderer/arch.py)
+    init_taichi("cpu", offline_cache=False)  # Taichi's cache key leaves the setting out (renderer/runtime/arch.py)
     warnings.simplefilter("ignore")
     for line in loop_size_lines():
         print(line, flush=True)

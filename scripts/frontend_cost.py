@@ -1,5 +1,5 @@
 """CPU seconds of a cold first render (compile + one sample at 64x36) with and without the
-cheaper Taichi front end (renderer/taichi_frontend.py), runs interleaved in fresh processes.
+cheaper Taichi front end (renderer/runtime/taichi_frontend.py), runs interleaved in fresh processes.
 
     python scripts/frontend_cost.py [scene] [integrator] [runs]
 """
@@ -18,7 +18,7 @@ def cold_first_render(scene_name: str, integrator: str, cheaper: bool) -> float:
     sys.path.insert(0, str(ROOT))
     import taichi as ti
 
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
     from renderer.renderer import Renderer
     from renderer.scene.catalog import load_any, resolve_scene
     from viewer.session import camera_from_spec

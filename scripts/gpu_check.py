@@ -176,7 +176,7 @@ def _child_job(argv: list[str]) -> int:
     args = parser.parse_args(argv)
     import taichi as ti
 
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
     from renderer.camera import CameraFrame
     from renderer.renderer import Renderer
     from renderer.scene.catalog import load_any, resolve_scene

@@ -41,7 +41,7 @@ CASES = [
 
 
 def render_all(only: str | None = None) -> dict[str, np.ndarray]:
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     init_taichi("cpu", cpu_threads=1)
     from renderer.camera import CameraFrame

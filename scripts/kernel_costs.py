@@ -50,7 +50,7 @@ def main() -> int:
 
     kernel_impl.Kernel.materialize, kernel_impl.Kernel.__call__ = timed_materialize, timed_call
 
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
     from renderer.camera import CameraFrame
     from renderer.renderer import Renderer
     from renderer.scene import load_scene

@@ -70,7 +70,7 @@ def accounted(threads: list[int], work) -> dict:
 
 
 def case_lines(case: str, rounds: int, threads: int) -> list[str]:
-    from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
+    from renderer.film.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
 
     program, args = compiled(case)
     workers = pool_threads(lambda: round_seconds(program, args, INTERLEAVED, ROUND_SLICES), threads)
@@ -112,7 +112,7 @@ def main(argv: list[str]) -> int:
     sys.path.insert(0, str(ROOT))
     import taichi as ti
 
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     rounds = int(argv[0]) if argv and argv[0].isdigit() else 5
     cases = [a for a in argv if not a.isdigit()] or list(DEFAULT_CASES)

@@ -1,5 +1,5 @@
 """What each kernel optimisation level costs and gives back, the figures behind
-renderer/optimize_choice.py. For each scene and level (renderer.arch.OPTIMIZE_FOR), each
+renderer/runtime/optimize_choice.py. For each scene and level (renderer.runtime.arch.OPTIMIZE_FOR), each
 measurement a fresh process:
 
   cold start  on an empty offline cache (a new temporary directory): Renderer built and its first
@@ -48,7 +48,7 @@ def child_main(argv: list[str]) -> int:
     args = parser.parse_args(argv)
     import taichi as ti
 
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
     from renderer.camera import CameraFrame
     from renderer.renderer import Renderer
     from renderer.scene.catalog import load_any, resolve_scene

@@ -176,7 +176,7 @@ def main(argv=None) -> int:
     parser.add_argument("--nodes-only", action="store_true", help="stub the leaf tests (nodes alone)")
     args = parser.parse_args(argv)
 
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     init_taichi("cpu", optimize=args.optimize)
     if args.nodes_only:

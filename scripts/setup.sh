@@ -59,5 +59,5 @@ fi
 # install runs them from source, and where PYTHONDONTWRITEBYTECODE is set (or the checkout is
 # read-only) every command would otherwise compile ~120 modules again (about 0.3 s of each start).
 # Python checks each .pyc against its source's time stamp, so an edited module is compiled afresh.
-.venv/bin/python -m compileall -q app.py renderer viewer scripts >/dev/null
+.venv/bin/python -m compileall -q app.py renderer viewer shaders_sdf scripts >/dev/null
 echo "setup: ready (.venv)"

@@ -1,5 +1,5 @@
 """What a viewer still frame's passes cost per slice: whole rounds against passes of one frame's
-slices in the interleaved and the banded order (renderer/pixel_slices.py), alternated in one
+slices in the interleaved and the banded order (renderer/film/pixel_slices.py), alternated in one
 process so a drift of the machine's speed hits all three.
 
     python scripts/slice_order_cost.py [rounds] [scene/integrator ...]
@@ -24,7 +24,7 @@ def round_seconds(program, args, order: int, slices_per_pass: int) -> float:
     """Seconds to render one round (a sample per pixel) in passes of `slices_per_pass` slices."""
     import taichi as ti
 
-    from renderer.pixel_slices import ROUND_SLICES
+    from renderer.film.pixel_slices import ROUND_SLICES
 
     start = time.perf_counter()
     for first in range(0, ROUND_SLICES, slices_per_pass):
@@ -35,7 +35,7 @@ def round_seconds(program, args, order: int, slices_per_pass: int) -> float:
 
 def frame_slices(whole_round_seconds: float) -> int:
     """Slices one FRAME_SECONDS still frame renders at a scene's whole-round cost (1 to a round less one)."""
-    from renderer.pixel_slices import ROUND_SLICES
+    from renderer.film.pixel_slices import ROUND_SLICES
 
     return max(1, min(ROUND_SLICES - 1, round(FRAME_SECONDS / (whole_round_seconds / ROUND_SLICES))))
 
@@ -60,7 +60,7 @@ def compiled(case: str):
 
 
 def measure(case: str, rounds: int) -> str:
-    from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
+    from renderer.film.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES
 
     program, args = compiled(case)
     whole = round_seconds(program, args, INTERLEAVED, ROUND_SLICES)
@@ -79,7 +79,7 @@ def measure(case: str, rounds: int) -> str:
 
 def main() -> None:
     sys.path.insert(0, str(ROOT))
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     rounds = int(sys.argv[1]) if len(sys.argv) > 1 else 5
     cases = sys.argv[2:] or DEFAULT_CASES

@@ -59,7 +59,7 @@ def compile_node_kernel(width: int = 4):
     from renderer.geometry.wide_bvh import collapse
     from renderer.geometry.bvh_build import build_bvh
     from renderer.geometry.wide_traversal import WideNodes, plane_rows
-    from renderer.upload import upload_fields
+    from renderer.runtime.upload import upload_fields
 
     rng = np.random.default_rng(0)
     lo = rng.uniform(-1, 1, (64, 3))
@@ -93,7 +93,7 @@ def compile_leaf_kernel():
 
     from renderer.geometry.intersect import watertight_setup
     from renderer.geometry.triangle_packets import TrianglePackets, build_packets, nearest_lane, permuted_origin
-    from renderer.upload import upload_fields
+    from renderer.runtime.upload import upload_fields
 
     rng = np.random.default_rng(0)
     tris = rng.normal(size=(64, 3, 3)).astype(np.float32)
@@ -150,7 +150,7 @@ def run_in(directory: Path, which: str, optimize: str = "run") -> dict:
     cwd = os.getcwd()
     os.chdir(directory)
     try:
-        from renderer.arch import cpu_scheduling_options, taichi_options
+        from renderer.runtime.arch import cpu_scheduling_options, taichi_options
 
         ti.init(arch=ti.cpu, offline_cache=False, print_kernel_llvm_ir_optimized=True, print_kernel_asm=True,
                 log_level=ti.WARN, **taichi_options(optimize), **cpu_scheduling_options())
@@ -166,7 +166,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--keep", type=Path, help="write the .ll and .s files here (default: a temporary folder)")
     parser.add_argument("--optimize", choices=("compile", "run"), default="run",
-                        help="Taichi's optimisation level (renderer/arch.py): run (benchmarks, long renders) or "
+                        help="Taichi's optimisation level (renderer/runtime/arch.py): run (benchmarks, long renders) or "
                              "compile (the viewer's and the tests'); LLVM optimises both")
     parser.add_argument("--only", default="node,node8,leaf,traversal", help="which kernels (comma-separated)")
     args = parser.parse_args(argv)

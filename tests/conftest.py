@@ -1,8 +1,8 @@
 import pytest
 import taichi as ti
 
-from renderer import taichi_frontend
-from renderer.arch import cpu_scheduling_options, offline_cache_options, taichi_options
+from renderer.runtime import taichi_frontend
+from renderer.runtime.arch import cpu_scheduling_options, offline_cache_options, taichi_options
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -25,7 +25,7 @@ def taichi_runtime():
 # order, and tests/viewer comes last alphabetically: its offscreen window file (every catalog scene
 # compiled) then ran alone at the end while the other core idled. Longest first shortens the run.
 LONGEST_FILES = (  # a cold run's order (clean offline cache, as in CI)
-    "tests/distributed/test_ray_render.py",
+    "tests/commands/distributed/test_ray_render.py",
     "tests/viewer/test_window_offscreen.py",
     "tests/render/test_glass_furnace.py",
     "tests/render/test_integrator_agreement.py",

@@ -11,14 +11,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from renderer.image_io import read_exr
+from renderer.output.image_io import read_exr
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 @functools.cache  # asked by every Vulkan test: one probe per test process
 def vulkan_available() -> bool:
-    probe = "from renderer.arch import init_taichi; init_taichi('vulkan')"  # raises without a Vulkan device
+    probe = "from renderer.runtime.arch import init_taichi; init_taichi('vulkan')"  # raises without a Vulkan device
     try:
         return subprocess.run([sys.executable, "-c", probe], capture_output=True, timeout=120, cwd=ROOT).returncode == 0
     except subprocess.TimeoutExpired:
@@ -78,7 +78,7 @@ def test_vulkan_render_times_its_passes_after_they_finish(tmp_path):
 
 
 SAMPLE_COUNTS = """
-from renderer.arch import init_taichi
+from renderer.runtime.arch import init_taichi
 init_taichi('vulkan')
 from renderer.camera import CameraFrame
 from renderer.renderer import Renderer

@@ -89,7 +89,7 @@ def warm_scene(scene_path: Path, size: tuple[int, int], integrators: list[str]) 
 def _child(argv: list[str]) -> int:
     """`python -m viewer.cache_warmer SCENE WxH INTEGRATORS ARCH`: warm one scene, print its results."""
     scene, size, integrators, arch = argv
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     init_taichi(arch, optimize="compile")  # as `app.py view` does
     width, height = (int(v) for v in size.split("x"))
@@ -109,7 +109,7 @@ def warm_scenes(scene_paths: list[Path], size: tuple[int, int], integrators: Opt
     `report(line)` is told each scene's combinations as its child ends, with the kernels it added
     to the cache (0: every one was there already). A scene whose child fails is reported with
     its error and the others go on."""
-    from renderer.arch import default_cache_dir
+    from renderer.runtime.arch import default_cache_dir
     from renderer.bench.common import child_report
 
     cache_dir = Path(default_cache_dir())

@@ -20,7 +20,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from renderer.denoise import DenoiseInput
+from renderer.output.denoise import DenoiseInput
 
 
 @dataclass(frozen=True)

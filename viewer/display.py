@@ -18,8 +18,8 @@ from typing import Callable, Hashable, Optional
 import numpy as np
 from taichi.ui.utils import get_field_info
 
-from renderer.pixel_slices import INTERLEAVED, ROUND_SLICES
-from renderer.tonemap import tonemap_array, tonemap_packed, unpack_rgba8
+from renderer.film.pixel_slices import INTERLEAVED, ROUND_SLICES
+from renderer.output.tonemap import tonemap_array, tonemap_packed, unpack_rgba8
 
 # What update() did, for the frame loop's accounting and for tests.
 UPDATE_NONE = "none"

@@ -13,7 +13,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from renderer.pixel_slices import spp_text
+from renderer.film.pixel_slices import spp_text
 from viewer.controller import MIN_SPEED
 from viewer.session import Controls
 

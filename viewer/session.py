@@ -12,7 +12,7 @@ internal resolution and sample count the next frame renders:
   measured cost of the previous frames. Once the camera has been still for `settle_seconds`, the
   next frame resets at full resolution and accumulates from there.
 - A still frame renders what fits the same budget: whole samples per pixel when one fits, else a
-  share of the pixel slices of a sample (renderer/pixel_slices.py), continuing where the last
+  share of the pixel slices of a sample (renderer/film/pixel_slices.py), continuing where the last
   frame stopped; so a frame never waits for a whole sample of a slow scene, and input is read
   every frame.
 - Presenting (tone mapping, canvas upload, HUD, the window's own frame) costs ~22 ms at 960x540
@@ -31,7 +31,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Callable, Hashable, Iterable, Optional
 
-from renderer.pixel_slices import ROUND_SLICES
+from renderer.film.pixel_slices import ROUND_SLICES
 from viewer.camera_state import CameraState
 from viewer.controller import MAX_SPEED, MIN_SPEED, FreeLookController
 
@@ -238,7 +238,7 @@ class Controls:
     aperture: float  # lens radius, metres
     focus_distance: float  # metres
     move_speed: Optional[float] = None  # m/s; None leaves it alone. Not a change of the image
-    noise_threshold: float = 0.0  # adaptive sampling's relative standard error (renderer/adaptive.py); 0 = off
+    noise_threshold: float = 0.0  # adaptive sampling's relative standard error (renderer/film/adaptive.py); 0 = off
 
 
 @dataclass(frozen=True)

@@ -38,13 +38,13 @@ import numpy as np
 import taichi as ti
 
 from renderer.camera import CameraFrame
-from renderer.denoise import DenoiseInput, Denoiser, unavailable_reason
-from renderer.image_io import write_exr, write_png
+from renderer.output.denoise import DenoiseInput, Denoiser, unavailable_reason
+from renderer.output.image_io import write_exr, write_png
 from renderer.integrators import INTEGRATORS, integrator_names
-from renderer.pixel_slices import ROUND_SLICES, spp_text
+from renderer.film.pixel_slices import ROUND_SLICES, spp_text
 from renderer.renderer import AdaptiveSettings, Renderer
 from renderer.scene.catalog import load_any, scene_files
-from renderer.tonemap import TONEMAPPERS, quantize
+from renderer.output.tonemap import TONEMAPPERS, quantize
 from viewer import hud
 from viewer.camera_state import CameraState
 from viewer.denoise_worker import BackgroundDenoiser
@@ -199,7 +199,7 @@ class ViewerApp:
             # With AOVs: the denoised view needs them, and toggling it must not recompile.
             renderer = Renderer(load_any(path, self.load_options), max_size=self.size, aovs=True)
             # Still frames render a few slices each: after the first round, bands of rows (cheaper
-            # per sample than interleaved pixels: renderer/pixel_slices.py)
+            # per sample than interleaved pixels: renderer/film/pixel_slices.py)
             renderer.bands_after_first_round = True
             self.renderers[path] = renderer
         return self.renderers[path]
@@ -404,7 +404,7 @@ class ViewerApp:
         wanted = AdaptiveSettings(s.noise_threshold) if s.noise_threshold > 0.0 else None
         if renderer.adaptive != wanted:
             renderer.set_adaptive(wanted)
-        # Feature samples (renderer/aovs.py) only for a still image the denoised view will show.
+        # Feature samples (renderer/film/aovs.py) only for a still image the denoised view will show.
         renderer.feature_boost = renderer.scene_feature_boost if s.denoise_view and not plan.interactive else 0
         t0 = time.perf_counter()
         slices_before = renderer.slices_done

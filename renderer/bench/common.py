@@ -23,7 +23,7 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from renderer.atomic_write import atomic_output, write_text_atomic
+from renderer.output.atomic_write import atomic_output, write_text_atomic
 
 REL_MSE_EPS = 1e-2
 
@@ -231,7 +231,7 @@ def speed_runtime() -> str:
     the caller (a test session) has initialised it already; returns the back-end's name."""
     import taichi as ti
 
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     if not ti.lang.impl.get_runtime().prog:
         init_taichi("cpu", optimize="run")

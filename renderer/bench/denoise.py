@@ -7,7 +7,7 @@ For each scene (cornell_box, bunnies, studio, showcase, textured), in one proces
    unbiased estimate of the error against the true image, the two renders being independent).
 2. Raw and denoised against spp: totals of 1, 2, 4, ... max_spp samples per pixel; after each, the
    raw image and Open Image Denoise's output are compared with the reference, in both of
-   renderer/denoise.py's forms: `denoised` (the AOVs prefiltered, what `render --denoise` writes
+   renderer/output/denoise.py's forms: `denoised` (the AOVs prefiltered, what `render --denoise` writes
    and the viewer's later denoises show) and `denoised_quick` (the noisy AOVs passed straight in:
    the viewer's first denoise of an accumulation). Render time is cumulative and excludes the
    denoiser, whose time is its own column.
@@ -16,7 +16,7 @@ For each scene (cornell_box, bunnies, studio, showcase, textured), in one proces
 3. Adaptive against uniform sampling at equal time: the time uniform sampling took for
    `equal_time_spp` spp (256: with min spp 16 and a stop confirmed at the next doubling, nothing
    stops before 32 spp, so a budget of 64 left the rule a quarter of it) is the budget; a uniform
-   render and adaptive renders (renderer/adaptive.py) with each threshold of `thresholds` run in
+   render and adaptive renders (renderer/film/adaptive.py) with each threshold of `thresholds` run in
    growing passes until that budget, and are compared at the budget. They take turns pass by pass
    (race(): each film is kept aside between its turns), so a change of the machine's speed hits
    all of them alike; run one after the other, that decided the verdicts. An adaptive render
@@ -29,7 +29,7 @@ For each scene (cornell_box, bunnies, studio, showcase, textured), in one proces
    a handful of fireflies decide the untrimmed relMSE of bunnies, studio and showcase (0.05-0.45).
 4. The denoising target again at the viewer's size, 960x540 (viewer_size_target()): a reference
    of its own (`viewer_reference_s`), raw and denoised at 8 spp without the AOVs' feature samples
-   and with them (renderer/aovs.py), and raw at 128 spp.
+   and with them (renderer/film/aovs.py), and raw at 128 spp.
 5. The denoiser's time for one 960x540 frame in each form (median of 3, after one warm-up call).
 
 The curves are 320x180: the denoiser's error depends on how many pixels a feature spans, and at
@@ -72,7 +72,7 @@ import numpy as np
 from renderer.bench.common import (describe_error, error_difference, load_average, load_named_scene, log, paired_text,
                                    paired_verdict, print_table, pyplot, rel_mse, report_header, save_figure, speed_runtime,
                                    verdict, write_json)
-from renderer.bench.integrators import FIREFLY_TRIM, noise_floor, progressive, spp_to_reach
+from renderer.bench.convergence import FIREFLY_TRIM, noise_floor, progressive, spp_to_reach, sync
 
 INTEGRATOR = "mis"
 DEFAULT_THRESHOLD = 0.05
@@ -108,15 +108,9 @@ QUICK = DenoiseBenchConfig(size=(64, 36), reference_s=8.0, reference_launch_s=1.
 TARGET_SPP = (8, 128)  # the target: denoised at 8 spp below raw at 128
 
 
-def _sync():
-    import taichi as ti
-
-    ti.sync()
-
-
 def denoise_curve(renderer, camera, denoiser, reference, floor, config: DenoiseBenchConfig) -> list[dict]:
     """Raw and denoised relMSE at 1, 2, 4, ... max_spp spp (cumulative render seconds)."""
-    from renderer.denoise import DenoiseInput
+    from renderer.output.denoise import DenoiseInput
 
     renderer.reset()
     points, seconds, done = [], 0.0, 0
@@ -124,7 +118,7 @@ def denoise_curve(renderer, camera, denoiser, reference, floor, config: DenoiseB
         n = max(1, done)
         t0 = time.perf_counter()
         renderer.render(camera, n, INTEGRATOR, seed=config.seed)
-        _sync()
+        sync()
         seconds += time.perf_counter() - t0
         done += n
         raw = renderer.image()
@@ -183,7 +177,7 @@ def take_turn(renderer, camera, contestant: Contestant, config: DenoiseBenchConf
         before = renderer.slices_done
         t0 = time.perf_counter()
         renderer.render_slices(camera, contestant.pass_slices, INTEGRATOR, seed=config.seed)
-        _sync()
+        sync()
         dt = time.perf_counter() - t0
     finally:
         renderer.set_adaptive(None)
@@ -259,7 +253,7 @@ def at_equal_time(renderer, camera, reference, floor, budget_s: float, config: D
 def denoiser_frame_time(denoiser, scene, size, prefilter_aux: bool = True) -> float:
     """Median seconds of denoising one frame of `scene` at `size` (1 spp with AOVs)."""
     from renderer.camera import CameraFrame
-    from renderer.denoise import DenoiseInput
+    from renderer.output.denoise import DenoiseInput
     from renderer.renderer import Renderer
 
     renderer = Renderer(scene, size, aovs=True)
@@ -289,7 +283,7 @@ def reference_render(renderer, camera, scene_name: str, seconds: float, config: 
 def timed_render(renderer, camera, spp: int, seed: int) -> float:
     t0 = time.perf_counter()
     renderer.render(camera, spp, INTEGRATOR, seed=seed)
-    _sync()
+    sync()
     return time.perf_counter() - t0
 
 
@@ -297,12 +291,12 @@ def viewer_size_target(scene, denoiser, config: DenoiseBenchConfig) -> dict:
     """The denoising target at the viewer's size, where a texture's lines and a normal map's bevels
     span more pixels than at the curves' size: raw and denoised (AOVs prefiltered) at 8 spp, and
     raw at 128 spp, against a reference of config.viewer_reference_s. The 8 spp are rendered
-    without the AOVs' feature samples and with DEFAULT_FEATURE_BOOST of them (renderer/aovs.py);
+    without the AOVs' feature samples and with DEFAULT_FEATURE_BOOST of them (renderer/film/aovs.py);
     `denoised_8` and `seconds_8` are those of the scene's own choice (`feature_boost`), what
     `render --denoise` does. Times are render seconds (the denoiser's excluded)."""
-    from renderer.aovs import DEFAULT_FEATURE_BOOST
+    from renderer.film.aovs import DEFAULT_FEATURE_BOOST
     from renderer.camera import CameraFrame
-    from renderer.denoise import DenoiseInput
+    from renderer.output.denoise import DenoiseInput
     from renderer.renderer import Renderer
 
     low, high = TARGET_SPP
@@ -373,7 +367,7 @@ def bench_scene(scene, denoiser, config: DenoiseBenchConfig) -> dict:
 
 
 def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, config: DenoiseBenchConfig | None = None) -> int:
-    from renderer.denoise import Denoiser, unavailable_reason
+    from renderer.output.denoise import Denoiser, unavailable_reason
 
     reason = unavailable_reason()
     if reason:

@@ -293,7 +293,7 @@ def _first_calls(world, b: Build, seed: int) -> tuple[float, float]:
 def child_scene(path: str, config: FeaturesBenchConfig) -> dict:
     import taichi as ti
 
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
     from renderer.scene import load_scene
 
     scene = load_scene(path)

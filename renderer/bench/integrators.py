@@ -72,15 +72,20 @@ from __future__ import annotations
 import math
 import time
 import traceback
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
 
+from renderer.bench.convergence import (FIREFLY_TRIM, REFERENCE_INTEGRATOR, REFERENCE_SAMPLER, SceneBench, combo,
+                                        convergence, seeded_levels, seeded_points, spp_to_reach,
+                                        sync, value_at)
+from renderer.bench.integrator_config import (FULL, MITSUBA_LD_SAMPLER, MITSUBA_SCENE, QUICK, SEEDED_ROWS,
+                                              IntegratorBenchConfig)
+from renderer.bench.mitsuba_side import mitsuba_reference
+from renderer.bench.whole_process import whole_process_comparison
 from renderer.bench.common import (
-    REL_MSE_EPS,
     describe_error,
-    image_errors,
     load_average,
     load_named_scene,
     log,
@@ -95,261 +100,6 @@ from renderer.bench.common import (
     verdict,
     write_json,
 )
-
-INTEGRATORS = ("path", "nee", "mis")
-SAMPLERS = ("independent", "sobol")
-REFERENCE_INTEGRATOR = "mis"
-REFERENCE_SAMPLER = "independent"
-SCENES = ("cornell_box", "bunnies", "studio", "many_lights")
-MITSUBA_SCENE = "cornell_box"
-MITSUBA_LD_SAMPLER = "multijitter"  # Mitsuba's best at equal time here (vs stratified, ldsampler, orthogonal)
-# Rows whose spp to the targets is measured over seeds (the best samplers; see step 4)
-SEEDED_ROWS = ("mis/sobol", "nee/sobol", f"mitsuba/{MITSUBA_LD_SAMPLER}")
-FIREFLY_TRIM = 1e-3  # fraction of pixels with the largest error left out of relMSE*
-METRICS = ("rmse", "rel_mse", "rel_mse_trimmed")
-
-
-@dataclass(frozen=True)
-class IntegratorBenchConfig:
-    square_size: tuple[int, int] = (128, 128)  # scenes with a square image (the Cornell box)
-    wide_size: tuple[int, int] = (160, 90)  # every other scene
-    budget_s: float = 10.0  # render time per (integrator, sampler) curve: the equal-time budget
-    reference_s: float = 60.0  # render time of each scene's reference
-    reference_launch_s: float = 3.0  # longest single launch while rendering the reference
-    max_spp: int = 1 << 16  # curves stop here even within the budget
-    seed: int = 1  # test images (one seed for every integrator and sampler)
-    reference_seed: int = 104729  # reference: independent of the test seed
-    scenes: tuple[str, ...] = SCENES
-    integrators: tuple[str, ...] = INTEGRATORS
-    samplers: tuple[str, ...] = SAMPLERS
-    mitsuba: bool = True
-    mitsuba_threads: int = 2
-    mitsuba_reference_spp: int = 2048  # rendered in passes of mitsuba_pass_spp (memory: one lane per sample)
-    mitsuba_pass_spp: int = 256
-    mitsuba_target_spp: int = 64  # the target RMSE is Mitsuba's at this spp
-    mitsuba_curve_max_spp: int = 512  # Mitsuba's error curve: 1, 2, 4, ... spp, each a separate render
-    mitsuba_target_renders: int = 8  # round-robin runs (seeds) of the equal-spp comparison
-    seeded_renders: int = 16  # seeds per spp level of the best samplers' error (SEEDED_ROWS)
-    seeded_max_spp: int = 128  # highest spp level of that measurement
-    # Whole-process time (renderer/bench/whole_process.py): both commands, start to exit
-    whole_process: bool = True
-    whole_process_size: int = 256
-    whole_process_spp: int = 256
-    whole_process_runs: int = 3
-    whole_process_reference_spp: int = 1024
-    # The mesh-heavy comparison with Mitsuba (renderer/bench/mesh_heavy.py): "full", "quick" or "off"
-    mesh_heavy: str = "full"
-
-
-FULL = IntegratorBenchConfig()
-QUICK = IntegratorBenchConfig(square_size=(64, 64), wide_size=(96, 54), budget_s=2.0, reference_s=8.0,
-                              reference_launch_s=2.0, mitsuba_reference_spp=1024, mitsuba_pass_spp=256,
-                              mitsuba_target_spp=32, mitsuba_curve_max_spp=256, mitsuba_target_renders=8,
-                              seeded_renders=6, seeded_max_spp=64,
-                              whole_process_size=64, whole_process_spp=64, whole_process_runs=2,
-                              whole_process_reference_spp=512, mesh_heavy="quick")
-
-def _sync() -> None:
-    import taichi as ti
-
-    ti.sync()
-
-
-def combo(integrator: str, sampler: str) -> str:
-    return f"{integrator}/{sampler}"
-
-
-# --- measurement -----------------------------------------------------------------------------------
-
-def noise_floor(mean: np.ndarray, var_of_mean: np.ndarray) -> dict:
-    """The expected MSE / relMSE that an image's own noise adds to any comparison with it."""
-    mean = np.asarray(mean, np.float64)
-    var = np.asarray(var_of_mean, np.float64)
-    var = np.where(np.isfinite(var), var, 0.0)
-    mse = float(var.mean())
-    return {"mse": mse, "rmse": math.sqrt(mse), "rel_mse": float((var / (mean * mean + REL_MSE_EPS)).mean())}
-
-
-def progressive(renderer, camera, integrator: str, sampler: str, seed: int, budget_s: float, max_spp: int,
-                observe=None, max_launch_s: float | None = None) -> dict:
-    """Render from an empty film until `budget_s` seconds of render time (or `max_spp`).
-
-    Launches of 1, 1, 2, 4, ... spp (totals 1, 2, 4, 8, ...), the last one sized from the speed of
-    the previous launch to end near the budget; with `max_launch_s`, no launch is planned longer
-    than that. After each launch, untimed, `observe(image)` may return a dict of measurements.
-    Returns {"points": [{"spp", "seconds", ...}], "spp", "seconds"}.
-    """
-    renderer.reset()
-    points = []
-    seconds = 0.0
-    done = 0
-    n = 1
-    while True:
-        t0 = time.perf_counter()
-        renderer.render(camera, n, integrator, seed=seed, sampler=sampler)
-        _sync()
-        dt = time.perf_counter() - t0
-        seconds += dt
-        done += n
-        point = {"spp": done, "seconds": seconds}
-        if observe is not None:
-            point.update(observe(renderer.image()))
-        points.append(point)
-        if seconds >= budget_s or done >= max_spp:
-            break
-        per_spp = dt / n
-        n = done  # double the total
-        if max_launch_s is not None:
-            n = min(n, max(1, int(max_launch_s / max(per_spp, 1e-9))))
-        remaining = budget_s - seconds
-        if per_spp * n > remaining:  # the last launch: end at the budget
-            n = max(1, int(math.ceil(remaining / max(per_spp, 1e-9))))
-        n = min(n, max_spp - done)
-    return {"points": points, "spp": done, "seconds": seconds}
-
-
-def value_at(points: list[dict], key: str, x_key: str, x: float) -> float:
-    """points[key] at x_key = x, interpolated linearly in log-log between the points around x
-    (the first point's value when x is before it; the last one's when x is after it)."""
-    xs = [p[x_key] for p in points]
-    if x <= xs[0]:
-        return float(points[0][key])
-    for a, b in zip(points, points[1:]):
-        if a[x_key] <= x <= b[x_key]:
-            ya, yb = a[key], b[key]
-            if ya <= 0 or yb <= 0 or b[x_key] == a[x_key]:
-                return float(yb)
-            t = math.log(x / a[x_key]) / math.log(b[x_key] / a[x_key])
-            return float(math.exp(math.log(ya) + t * (math.log(yb) - math.log(ya))))
-    return float(points[-1][key])
-
-
-def spp_to_reach(points: list[dict], key: str, target: float, power: float = 0.5) -> tuple[float, bool]:
-    """(spp at which points[key] first falls to `target`, extrapolated?): log-log interpolation
-    between the points around it; past the last point, extrapolated with error ~ spp^-power (1/2
-    for an RMSE, 1 for an MSE-like metric, of an unbiased estimator), which is then flagged."""
-    previous = None
-    for p in points:
-        if p[key] <= target:
-            if previous is None:
-                return float(p["spp"]), False
-            ya, yb = math.log(previous[key]), math.log(p[key])
-            xa, xb = math.log(previous["spp"]), math.log(p["spp"])
-            if ya == yb:
-                return float(p["spp"]), False
-            return float(math.exp(xa + (math.log(target) - ya) * (xb - xa) / (yb - ya))), False
-        previous = p
-    last = points[-1]
-    return float(last["spp"] * (last[key] / target) ** (1.0 / power)), True
-
-
-def seeded_levels(crossings, cap: int) -> list[int]:
-    """The spp levels that bracket where rows reach their targets: powers of two from the largest
-    at or below the smallest crossing to the smallest at or above the largest, at most `cap`."""
-    finite = [c for c in crossings if math.isfinite(c) and c > 0]
-    if not finite:
-        return []
-    low = max(0, math.floor(math.log2(min(finite))))
-    high = min(max(low + 1, math.ceil(math.log2(max(finite)))), int(math.log2(cap)))
-    return [1 << k for k in range(low, high + 1)]
-
-
-def seeded_points(renders: dict, levels, seeds, reference: np.ndarray) -> dict:
-    """{name: [{"spp", "rmse", "rel_mse", "renders", "seconds"} per level]}: each `render(spp,
-    seed)` returns (image, or a function that reads it back untimed; samples per pixel it took);
-    the names render in turn at every level and seed, so a drift of the machine's speed hits all
-    alike. RMSE is the root of the mean squared error over the seeds (the expected error at that
-    spp), relMSE the mean relMSE, seconds the median wall time of a render (the call, image
-    read-back excluded)."""
-    ref = np.asarray(reference, np.float64)
-    out = {name: [] for name in renders}
-    for spp in levels:
-        errors = {name: {"spp": spp, "mse": [], "rel_mse": [], "seconds": []} for name in renders}
-        for seed in seeds:
-            for name, render in renders.items():
-                t0 = time.perf_counter()
-                image, taken = render(spp, seed)
-                errors[name]["seconds"].append(time.perf_counter() - t0)
-                image = image() if callable(image) else image
-                diff = np.asarray(image, np.float64) - ref
-                errors[name]["spp"] = taken
-                errors[name]["mse"].append(float((diff * diff).mean()))
-                errors[name]["rel_mse"].append(rel_mse(image, ref))
-        for name, e in errors.items():
-            out[name].append({"spp": e["spp"], "rmse": math.sqrt(float(np.mean(e["mse"]))),
-                              "rel_mse": float(np.mean(e["rel_mse"])), "renders": len(e["mse"]),
-                              "seconds": float(np.median(e["seconds"]))})
-    return out
-
-
-def convergence(renderer, camera, integrator: str, sampler: str, references: dict, config: IntegratorBenchConfig,
-                budget_s: float | None = None) -> dict:
-    """One error-against-time curve of (integrator, sampler) against each named reference image.
-
-    references: {name: image}; the first is the main reference (its metrics are stored without a
-    prefix), the others' RMSE as "rmse_<name>". Returns the curve, its points at the budget, and
-    the final spp and seconds.
-    """
-    names = list(references)
-    main = references[names[0]]
-
-    def observe(image):
-        out = image_errors(image, main, FIREFLY_TRIM)
-        for name in names[1:]:
-            out[f"rmse_{name}"] = rmse(image, references[name])
-            out[f"rel_mse_{name}"] = rel_mse(image, references[name])
-        return out
-
-    budget = config.budget_s if budget_s is None else budget_s
-    run = progressive(renderer, camera, integrator, sampler, config.seed, budget, config.max_spp, observe)
-    points = run["points"]
-    at_budget = {key: value_at(points, key, "seconds", budget) for key in points[-1] if key not in ("spp", "seconds")}
-    at_budget["spp"] = value_at(points, "spp", "seconds", budget)
-    rejected = int(renderer.film.rejected_counts().sum())
-    return {"integrator": integrator, "sampler": sampler, "curve": points, "spp": run["spp"], "seconds": run["seconds"],
-            "samples_per_s": run["spp"] * renderer.film.width * renderer.film.height / run["seconds"],
-            "at_budget": at_budget, "rejected_samples": rejected}
-
-
-class SceneBench:
-    """One scene's Renderer at the benchmark size, its camera and compile times."""
-
-    def __init__(self, scene, size: tuple[int, int]):
-        from renderer.camera import CameraFrame
-        from renderer.renderer import Renderer
-
-        self.scene = scene
-        t0 = time.perf_counter()
-        self.renderer = Renderer(scene, size)
-        self.build_s = time.perf_counter() - t0
-        self.camera = CameraFrame.from_spec(scene.camera)
-        self.compile_s: dict[str, float] = {}
-
-    @property
-    def pixels(self) -> int:
-        return self.renderer.film.width * self.renderer.film.height
-
-    def compile(self, integrator: str, sampler: str) -> float:
-        """First launch of the program (compiles it, or loads it from the offline cache): 1 spp."""
-        key = combo(integrator, sampler)
-        if key not in self.compile_s:
-            self.renderer.reset()
-            t0 = time.perf_counter()
-            self.renderer.render(self.camera, 1, integrator, sampler=sampler, seed=0)
-            _sync()
-            self.compile_s[key] = time.perf_counter() - t0
-        return self.compile_s[key]
-
-    def reference(self, config: IntegratorBenchConfig) -> dict:
-        """The long `mis` render: image, spp, seconds and its own noise floor."""
-        run = progressive(self.renderer, self.camera, REFERENCE_INTEGRATOR, REFERENCE_SAMPLER, config.reference_seed,
-                          config.reference_s, 1 << 24, max_launch_s=config.reference_launch_s)
-        image = self.renderer.image()
-        floor = noise_floor(image, self.renderer.film.variance_of_mean_image())
-        return {"image": image, "integrator": REFERENCE_INTEGRATOR, "sampler": REFERENCE_SAMPLER,
-                "seed": config.reference_seed, "spp": run["spp"], "seconds": run["seconds"], "noise_floor": floor,
-                "rejected_samples": int(self.renderer.film.rejected_counts().sum())}
-
 
 def scene_size(scene, config: IntegratorBenchConfig) -> tuple[int, int]:
     return config.square_size if scene.render.width == scene.render.height else config.wide_size
@@ -417,25 +167,6 @@ def light_edge_mask(reference: np.ndarray, threshold: float = 2.0) -> np.ndarray
     return np.logical_or.reduce(windows) & ~np.logical_and.reduce(windows)
 
 
-def mitsuba_reference(config: IntegratorBenchConfig, size: tuple[int, int], max_depth: int) -> dict:
-    """Mitsuba's reference image (mean of independent passes) and its noise floor (from the spread
-    of the passes: var of the mean = sample variance of the pass images / passes)."""
-    from renderer.bench import mitsuba_side as ms
-
-    ms.set_threads(config.mitsuba_threads)
-    scene = ms.load_cornell_box(size[0], size[1], max_depth)
-    passes = max(2, config.mitsuba_reference_spp // config.mitsuba_pass_spp)
-    t0 = time.perf_counter()
-    images = [ms.render_scene(scene, config.mitsuba_pass_spp, seed=config.reference_seed + k).astype(np.float64)
-              for k in range(passes)]
-    seconds = time.perf_counter() - t0
-    stack = np.stack(images)
-    mean = stack.mean(axis=0)
-    var_of_mean = stack.var(axis=0, ddof=1) / passes
-    return {"scene": scene, "image": mean.astype(np.float32), "spp": passes * config.mitsuba_pass_spp,
-            "passes": passes, "seconds": seconds, "noise_floor": noise_floor(mean, var_of_mean)}
-
-
 def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref: dict) -> dict:
     """Samples/s and time to Mitsuba's target RMSE: Mitsuba against Lantern's mis and path."""
     from renderer.bench import mitsuba_side as ms
@@ -483,7 +214,7 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
         def call():
             bench.renderer.reset()
             bench.renderer.render(bench.camera, target_spp, name, seed=next(seeds[name]), sampler="independent")
-            _sync()
+            sync()
         return call
 
     calls = {"mitsuba": mitsuba_call, **{name: lantern_call(name) for name in lantern}}
@@ -541,7 +272,7 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
         def render(spp, seed):
             bench.renderer.reset()
             bench.renderer.render(bench.camera, spp, integrator, seed=seed, sampler="sobol")
-            _sync()
+            sync()
             return bench.renderer.image, spp
         return render
 
@@ -583,21 +314,6 @@ def mitsuba_comparison(cornell: dict, config: IntegratorBenchConfig, mitsuba_ref
             "lantern_curves": {combo(i, s): [{"spp": p["spp"], "seconds": p["seconds"], "rmse": p["rmse_mitsuba"]}
                                              for p in c["curve"]] for (i, s), c in curves.items()},
             "passed": passed}
-
-
-def whole_process_comparison(config: IntegratorBenchConfig, max_depth: int) -> dict:
-    """Lantern's `render` command against a Mitsuba process on the Cornell box, start to exit
-    (renderer/bench/whole_process.py), both read against a Mitsuba reference of that size."""
-    from renderer.bench import whole_process as wp
-
-    size = config.whole_process_size
-    log(f"[whole process] Mitsuba reference {size}x{size}, {config.whole_process_reference_spp} spp ...")
-    reference = mitsuba_reference(replace(config, mitsuba_reference_spp=config.whole_process_reference_spp),
-                                  (size, size), max_depth)
-    whole = wp.WholeProcessConfig(size=size, spp=config.whole_process_spp, max_depth=max_depth,
-                                  runs=config.whole_process_runs, threads=config.mitsuba_threads)
-    log(f"[whole process] {whole.runs} runs of each command, alternating, after a warm-up run each ...")
-    return wp.compare_or_note(whole, reference["image"].astype(np.float64), reference["spp"])
 
 
 # --- report ------------------------------------------------------------------------------------

@@ -21,7 +21,7 @@ integrator, at 960x540 by default:
              per second.
              The blocks start after the view's first full-resolution round, which is rendered
              first, in sliced frames, and reported on its own ("first round"): its slices are
-             interleaved (a coarse-to-fine image: renderer/pixel_slices.py), which costs more
+             interleaved (a coarse-to-fine image: renderer/film/pixel_slices.py), which costs more
              per sample than the rows of the rounds after it (ad hoc, 960x540 on a quiet 2-core
              machine, first round / steady state against whole-sample frames, when a whole
              round was in Bayer order: cornell_box/mis 0.80 / 1.00, foggy/nee 0.92 / 0.95,
@@ -62,7 +62,7 @@ from typing import Optional
 
 from renderer.bench.common import (describe_error, load_average, log, print_table, pyplot, report_header,
                                    save_figure, verdict, write_json)
-from renderer.pixel_slices import ROUND_SLICES
+from renderer.film.pixel_slices import ROUND_SLICES
 
 DEFAULT_SIZE = (960, 540)
 TARGET_LATENCY_MS = 100.0
@@ -89,7 +89,7 @@ def viewer_runtime() -> str:
     waits for on a switch), unless the caller has initialised it already; the back-end's name."""
     import taichi as ti
 
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     if not ti.lang.impl.get_runtime().prog:
         init_taichi("cpu", optimize="compile")

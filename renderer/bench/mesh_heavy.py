@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from renderer.bench.common import describe_error, load_named_scene, log, rel_mse
-from renderer.bench.integrators import SceneBench, noise_floor, progressive, spp_to_reach
+from renderer.bench.convergence import SceneBench, noise_floor, progressive, spp_to_reach
 
 SCENE = "stress"
 LANTERN_ROWS = (("mis", "independent"), ("mis", "sobol"))

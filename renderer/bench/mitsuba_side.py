@@ -221,3 +221,22 @@ def render_cornell_box(width: int = 256, height: int = 256, spp: int = 64, seed:
     image = render_scene(scene, spp, seed)  # np.array() waits for the JIT's asynchronous work
     seconds = time.perf_counter() - start
     return MitsubaRender(image, seconds, width * height * spp / seconds if seconds > 0 else float("inf"))
+
+
+def mitsuba_reference(config, size: tuple[int, int], max_depth: int) -> dict:
+    """Mitsuba's reference image (mean of independent passes) and its noise floor (from the spread
+    of the passes: var of the mean = sample variance of the pass images / passes)."""
+    from renderer.bench.convergence import noise_floor
+
+    set_threads(config.mitsuba_threads)
+    scene = load_cornell_box(size[0], size[1], max_depth)
+    passes = max(2, config.mitsuba_reference_spp // config.mitsuba_pass_spp)
+    t0 = time.perf_counter()
+    images = [render_scene(scene, config.mitsuba_pass_spp, seed=config.reference_seed + k).astype(np.float64)
+              for k in range(passes)]
+    seconds = time.perf_counter() - t0
+    stack = np.stack(images)
+    mean = stack.mean(axis=0)
+    var_of_mean = stack.var(axis=0, ddof=1) / passes
+    return {"scene": scene, "image": mean.astype(np.float32), "spp": passes * config.mitsuba_pass_spp,
+            "passes": passes, "seconds": seconds, "noise_floor": noise_floor(mean, var_of_mean)}

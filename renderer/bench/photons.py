@@ -33,7 +33,7 @@ import numpy as np
 
 from renderer.bench.common import (REL_MSE_EPS, describe_error, load_average, load_named_scene, log, print_table, pyplot,
                                    rel_mse, report_header, rmse, save_figure, speed_runtime, verdict, write_json)
-from renderer.bench.integrators import noise_floor, progressive, value_at
+from renderer.bench.convergence import noise_floor, progressive, value_at
 
 INTEGRATORS = ("mis", "sppm")
 SAMPLER = "independent"

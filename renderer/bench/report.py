@@ -21,7 +21,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Callable
 
-from renderer.atomic_write import write_bytes_atomic, write_text_atomic
+from renderer.output.atomic_write import write_bytes_atomic, write_text_atomic
 from renderer.bench import BENCHMARKS
 from renderer.bench.common import REPO_ROOT, describe_error
 from renderer.bench.report_error_sections import (

@@ -2,7 +2,7 @@
 
 On this machine, one scene (cornell_box, `mis`), the same image rendered:
 1. in one process with every core (two threads here): the baseline, its rate after compiling;
-2. on 1 and on 2 local Ray workers of one thread each (renderer/distributed/), chunks sized by the
+2. on 1 and on 2 local Ray workers of one thread each (renderer/commands/distributed/), chunks sized by the
    default rule (about 2 s of work each);
 3. on 2 workers with one-sample chunks: the overhead of a chunk when it is smallest.
 
@@ -67,7 +67,7 @@ def one_process(scene, job) -> dict:
 
 
 def distributed(scene, job, workers: int, chunk_spp: int | None) -> dict:
-    from renderer.distributed.render import DistributedOptions, DistributedRun, render_distributed
+    from renderer.commands.distributed.render import DistributedOptions, DistributedRun, render_distributed
 
     run = DistributedRun()
     start = time.perf_counter()
@@ -88,9 +88,9 @@ def distributed(scene, job, workers: int, chunk_spp: int | None) -> dict:
 
 
 def run(quick: bool = False, out_dir: Path = Path("reports"), config: ScaleBenchConfig | None = None) -> int:
-    from renderer.arch import init_taichi
-    from renderer.distributed.cluster import RayCluster
-    from renderer.headless import RenderJob
+    from renderer.runtime.arch import init_taichi
+    from renderer.commands.distributed.cluster import RayCluster
+    from renderer.commands.headless import RenderJob
 
     config = config or (QUICK if quick else FULL)
     out_dir = Path(out_dir)

@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from renderer.bench.convergence import FIREFLY_TRIM  # pixels with the largest error left out of the path-traced test
 from renderer.bench.common import (
     REL_MSE_EPS,
     error_difference,
@@ -59,7 +60,6 @@ STEP_REDUCTION_TARGET = 0.25  # the issue's target: at least 25 % fewer march st
 # a deterministic image can show a "significant" difference of a few silhouette pixels.
 EQUAL_ERROR_Z = 3.0
 EQUAL_ERROR_MARGIN = 0.02
-FIREFLY_TRIM = 1e-3  # fraction of pixels with the largest error left out of the path-traced test
 GEOMETRY_INTEGRATOR = "normals"
 
 

@@ -22,7 +22,7 @@ and the first step that shows a rendered image. Then, as a user flying forwards 
 steps MOVING_FRAMES more frames: the median wall time of the last half is the frame time while
 moving, which the viewer holds at its 50 ms budget by lowering the internal resolution.
 
-Kernel optimisation levels (renderer.arch.OPTIMIZE_FOR): the start-up figures use the default,
+Kernel optimisation levels (renderer.runtime.arch.OPTIMIZE_FOR): the start-up figures use the default,
 "compile"; the renderer is also measured cold and warm with "run" (every Taichi IR optimisation),
 and the table sets their compile times against their rendering speed (1 spp frames).
 
@@ -104,7 +104,7 @@ def child_main(argv: list[str] | None = None) -> int:
 def _child_renderer(args, size, marks, result) -> None:
     import taichi as ti
 
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
     from renderer.camera import CameraFrame
     from renderer.renderer import Renderer
     from renderer.scene import load_scene
@@ -132,7 +132,7 @@ def _child_renderer(args, size, marks, result) -> None:
 
 
 def _child_viewer(args, size, marks, result) -> None:
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
     from renderer.scene.catalog import DEFAULT_SCENE, resolve_scene
     from viewer.window import ViewerApp
 

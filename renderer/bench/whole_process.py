@@ -24,7 +24,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -80,7 +80,7 @@ def _failure(name: str, done: subprocess.CompletedProcess) -> str:
 def compare(config: WholeProcessConfig, reference: np.ndarray, reference_spp: int) -> dict:
     """Time both renderers' processes alternately and read their images' error (see the module
     docstring). `reference`: linear RGB (size, size, 3), row 0 = top."""
-    from renderer.image_io import read_exr
+    from renderer.output.image_io import read_exr
 
     sides = {
         "lantern": (lantern_command, ".exr", lambda path: read_exr(path)),
@@ -149,15 +149,29 @@ def caption(result: dict) -> str:
             f"{'PASS' if result['passed'] else 'FAIL'} ({result['ratio']:.2f}x).")
 
 
+def whole_process_comparison(config, max_depth: int) -> dict:
+    """Lantern's `render` command against a Mitsuba process on the Cornell box, start to exit
+    (renderer/bench/whole_process.py), both read against a Mitsuba reference of that size."""
+    from renderer.bench.mitsuba_side import mitsuba_reference
+
+    size = config.whole_process_size
+    log(f"[whole process] Mitsuba reference {size}x{size}, {config.whole_process_reference_spp} spp ...")
+    reference = mitsuba_reference(replace(config, mitsuba_reference_spp=config.whole_process_reference_spp),
+                                  (size, size), max_depth)
+    whole = WholeProcessConfig(size=size, spp=config.whole_process_spp, max_depth=max_depth,
+                                  runs=config.whole_process_runs, threads=config.mitsuba_threads)
+    log(f"[whole process] {whole.runs} runs of each command, alternating, after a warm-up run each ...")
+    return compare_or_note(whole, reference["image"].astype(np.float64), reference["spp"])
+
+
 def main(argv=None) -> int:
     """`python -m renderer.bench.whole_process [--runs N]`: this comparison alone, as `bench
     integrators` runs it among its others (the same Mitsuba reference and processes); prints its
     table. Needs the optional `mitsuba` package."""
     import argparse
-    from dataclasses import replace
 
     from renderer.bench.common import print_table
-    from renderer.bench.integrators import IntegratorBenchConfig, whole_process_comparison
+    from renderer.bench.integrator_config import IntegratorBenchConfig
 
     parser = argparse.ArgumentParser(description=main.__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=WholeProcessConfig.runs, help="timed runs of each renderer")

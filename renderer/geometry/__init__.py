@@ -1,7 +1,7 @@
 """Geometry: the contract every geometry kind implements, and the mesh world that implements it.
 
 interface.py          Ray / Hit / Surface and the funcs a geometry object provides (the SDF side is
-                      renderer.sdf)
+                      shaders_sdf)
 mesh_data.py          a mesh scene's primitives as flat numpy arrays (triangles, spheres, quads,
                       discs, Bezier patches)
 bvh_build.py          the BVH build (numpy); box_rounding.py keeps its f32 boxes conservative

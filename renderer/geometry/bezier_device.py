@@ -42,7 +42,7 @@ def _object_rows(data: MeshData):
 class BezierPatches:
     def __init__(self, data: MeshData, uploads: list):
         """uploads: the caller's (field, array) list, copied to the device in one launch with the
-        rest of the mesh (renderer.upload)."""
+        rest of the mesh (renderer.runtime.upload)."""
         def upload(array):
             array = np.asarray(array)
             f = ti.Vector.field(array.shape[-1], ti.f32, shape=array.shape[:-1])

@@ -34,7 +34,7 @@ from renderer.geometry.wide_bvh import collapse, empty_wide_bvh
 from renderer.geometry.wide_traversal import WideNodes, stack_size
 from renderer.materials.table import ALPHA_OPAQUE
 from renderer.sampling.warps import PI
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 vec3 = ti.math.vec3
 STACK_SIZE = 64  # deeper than any tree the builder makes (its depth is bounded well below this)
@@ -80,7 +80,7 @@ class MeshGeometry:
         nodes = bvh.nodes if self.has_instances else bvh
         self.node_total = len(nodes.node_count)
         self.data = data  # kept for emitter_info (the device has its own copy)
-        uploads = []  # (field, array): copied in one launch (renderer.upload)
+        uploads = []  # (field, array): copied in one launch (renderer.runtime.upload)
         mesh_root = bvh.mesh_root if self.has_instances else np.zeros(0, np.int32)
         if traversal in WIDE_TRAVERSALS:
             mesh_root, prim_order = self._upload_wide(nodes, mesh_root, uploads, WIDE_TRAVERSALS[traversal])

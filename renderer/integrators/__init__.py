@@ -6,7 +6,7 @@ An integrator is a data-oriented class with
   display_tonemapper                None (the user's choice) or a tone mapper name its output wants
   li(ctx, ray, state, max_depth)    a Taichi func returning (value, stats, albedo, normal), all vec3:
                                     stats = (geometry work, primitive tests, rays traced) for this
-                                    sample; albedo and normal are the denoising AOVs (renderer/aovs.py)
+                                    sample; albedo and normal are the denoising AOVs (renderer/film/aovs.py)
   writes_aovs                       whether li's albedo and normal mean anything (else zeros)
   denoisable                        whether its image is light a denoiser may clean (not debug views)
 `ctx` is the RenderProgram: ctx.geometry, ctx.bsdf, ctx.environment, ctx.sampler, ctx.features;

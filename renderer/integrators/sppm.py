@@ -67,14 +67,14 @@ import numpy as np
 import taichi as ti
 
 from renderer.camera import generate_ray
-from renderer.film import is_finite_vec3
+from renderer.film.accumulation import is_finite_vec3
 from renderer.geometry.interface import INF, Hit, Ray, Surface
 from renderer.integrators.light_sampling import emission_weight, environment_weight, sample_direct
 from renderer.integrators.photon_grid import PhotonGrid, bucket_of, cell_of, table_size_for
 from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
 from renderer.materials.kinds import LobeFlags
 from renderer.materials.table import Material
-from renderer.pixel_slices import ROUND_SLICES
+from renderer.film.pixel_slices import ROUND_SLICES
 from renderer.program import RenderProgram
 from renderer.sampling import dims
 from renderer.sampling.warps import PI

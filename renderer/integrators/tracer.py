@@ -100,7 +100,7 @@ class PathTracerBase:
         flag of kernels that keep AOVs; False elsewhere): the path ends once its AOVs are known,
         at the first non-delta vertex, with the same decisions up to there as a whole path takes
         (its light samples come later), so these AOVs share the colour samples' distribution at
-        a fraction of their cost (renderer/aovs.py: feature samples)."""
+        a fraction of their cost (renderer/film/aovs.py: feature samples)."""
         radiance = vec3(0.0)
         throughput = vec3(1.0)
         ray = ray_in
@@ -125,7 +125,7 @@ class PathTracerBase:
         lam = 0.0
         ending = False  # the path is over once its pending shadow ray is traced
         depth = 0
-        # Denoising AOVs (renderer/aovs.py): the first non-delta vertex's albedo, scaled by the
+        # Denoising AOVs (renderer/film/aovs.py): the first non-delta vertex's albedo, scaled by the
         # delta bounces before it, and its shading normal; a delta vertex is a stand-in until then.
         aov_albedo = vec3(0.0)
         aov_normal = vec3(0.0)

@@ -53,10 +53,10 @@ import numpy as np
 import taichi as ti
 
 from renderer.lights.environment import row_edges
-from renderer.luminance import LUMINANCE_WEIGHTS
+from renderer.spectral.luminance import LUMINANCE_WEIGHTS
 from renderer.sampling.cdf import cdf_interval
 from renderer.sampling.warps import PI
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 LUMINANCE = np.array(LUMINANCE_WEIGHTS)
 FLOOR = 1e-3  # see the module doc: keeps every float32 CDF interval wider than 2^-22

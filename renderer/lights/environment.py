@@ -15,7 +15,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.sampling.warps import PI
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 
 def row_edges(height: int) -> np.ndarray:

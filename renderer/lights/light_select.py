@@ -37,7 +37,7 @@ import taichi as ti
 
 from renderer.lights.light_tree import LightTree
 from renderer.lights.light_tree_build import EmitterBounds, triangle_emitters
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 __all__ = ["SELECTOR_KINDS", "AUTO_TREE_MIN", "SingleEmitterSelector", "UniformSelector", "PowerSelector", "LightTree",
            "EmitterBounds", "triangle_emitters", "alias_table", "resolve_kind",

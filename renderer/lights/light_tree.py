@@ -49,7 +49,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.lights.light_tree_build import SMALL_NODE, EmitterBounds, build_light_tree
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 __all__ = ["LightTree", "node_importance"]
 

@@ -18,9 +18,9 @@ from renderer.geometry.interface import INF, Surface
 from renderer.lights.env_sampling import EnvironmentSampler
 from renderer.lights.light_select import make_light_selector
 from renderer.lights.light_tree_build import EmitterBounds
-from renderer.luminance import LUMINANCE_WEIGHTS
+from renderer.spectral.luminance import LUMINANCE_WEIGHTS
 from renderer.sampling.warps import PI
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 vec3 = ti.math.vec3
 LightSample = ti.types.struct(wi=vec3, dist=ti.f32, radiance=vec3, pdf=ti.f32, p=vec3, n=vec3, is_env=ti.i32)

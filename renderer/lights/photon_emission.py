@@ -47,10 +47,10 @@ import taichi as ti
 
 from renderer.geometry.interface import Surface
 from renderer.lights.lights import choose_environment, emitted_radiance, environment_direction, environment_emits
-from renderer.luminance import LUMINANCE_WEIGHTS
+from renderer.spectral.luminance import LUMINANCE_WEIGHTS
 from renderer.sampling.cdf import cdf_interval
 from renderer.sampling.warps import PI, concentric_disk, cosine_hemisphere, orthonormal_basis, to_world
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 vec3 = ti.math.vec3
 

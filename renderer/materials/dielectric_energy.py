@@ -37,7 +37,7 @@ from renderer.materials import lobes
 from renderer.materials.energy import cosine_average
 from renderer.materials.lobes import BsdfSample
 from renderer.sampling.warps import INV_PI, cosine_hemisphere
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 vec3 = ti.math.vec3
 TABLE_FILE = Path(__file__).resolve().parent / "data" / "dielectric_albedo.npz"

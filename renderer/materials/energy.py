@@ -23,7 +23,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.sampling.warps import INV_PI
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 TABLE_FILE = Path(__file__).resolve().parent / "data" / "ggx_albedo.npz"
 # 1 - E_avg is about 1e-4 at the smallest roughness: the floor only keeps the division finite

@@ -28,7 +28,7 @@ agree. All vectors are local (z = the shading normal on wo's side); mat.coat_nor
 """
 import taichi as ti
 
-from renderer.luminance import luminance
+from renderer.spectral.luminance import luminance
 from renderer.materials import lobes
 from renderer.materials import microfacet as mf
 from renderer.materials.kinds import LobeFlags

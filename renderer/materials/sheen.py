@@ -19,7 +19,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.sampling.warps import INV_PI, PI
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 TABLE_FILE = Path(__file__).resolve().parent / "data" / "sheen_albedo.npz"
 # Below this roughness the distribution is a sliver at exactly grazing half vectors that f32 cannot

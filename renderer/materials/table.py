@@ -11,7 +11,7 @@ from renderer.materials.dispersion import dispersion_row
 from renderer.materials.kinds import (COLUMNS, KIND_IDS, KIND_NAMES, LAYER_COLUMNS, LAYERS, NO_MEDIUM, NO_TEXTURE,
                                       compensated_when_rough)
 from renderer.materials.texture_sampler import TextureTable
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 vec3 = ti.math.vec3
 

@@ -14,7 +14,7 @@ import taichi as ti
 
 from renderer.scene.srgb import SRGB8_TO_LINEAR
 from renderer.scene.textures import STORE_FLOAT, STORE_HALF, STORE_RGBA8, WRAP_CLAMP, WRAP_MIRROR, pack_atlas
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 # Texture table row: rect x, y, w, h in its page | wrap s, wrap t, uv set | storage, sRGB |
 # uv matrix rows 0 and 1.

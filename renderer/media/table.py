@@ -7,7 +7,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.materials.table import NO_MEDIUM
-from renderer.upload import upload_fields
+from renderer.runtime.upload import upload_fields
 
 vec3 = ti.math.vec3
 MediumRecord = ti.types.struct(sigma_a=vec3, sigma_s=vec3, g=ti.f32)

@@ -37,7 +37,7 @@ class CameraSpec:
     fov: float = 45.0  # vertical field of view, degrees
     aperture: float = 0.0  # lens radius in metres; 0 is a pinhole
     focus_distance: float = 5.0  # metres along the view direction
-    # A camera path (renderer/animation/camera_path.py): per keyframe its fields as sorted (name,
+    # A camera path (renderer/commands/animation/camera_path.py): per keyframe its fields as sorted (name,
     # value) pairs, as the loader reads tables of known fields (time, position, look_at; fov and up
     # None where the camera's apply). Empty: the camera stands still.
     keyframes: tuple[tuple[tuple[str, object], ...], ...] = ()

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Optional
 
-from renderer.allocation import allocation_size
+from renderer.runtime.allocation import allocation_size
 from renderer.scene.errors import PathLike, SceneError
 
 ENVIRONMENT_VARIABLE = "LANTERN_MEMORY_LIMIT"
@@ -113,13 +113,13 @@ class MemoryLedger:
 
 # --- the film --------------------------------------------------------------------------------
 
-# Bytes per pixel of a render: the film's fields (renderer/film.py: mean and m2, 3 x f32 each;
+# Bytes per pixel of a render: the film's fields (renderer/film/accumulation.py: mean and m2, 3 x f32 each;
 # count, rejected and the adaptive-sampling state, i32 each), the renderer's work buffer (3 x f32),
 # and the mean and variance images downloaded at the end (3 x f32 each). tests/scene/
 # test_input_limits.py checks the film's share against a real Film. A render that keeps the
-# denoising AOVs (renderer/aovs.py) adds their three fields (albedo, normal, sample count) and their
+# denoising AOVs (renderer/film/aovs.py) adds their three fields (albedo, normal, sample count) and their
 # two downloaded images. The
-# fields are allocated in whole steps (renderer/allocation.py): the estimate counts the pixels
+# fields are allocated in whole steps (renderer/runtime/allocation.py): the estimate counts the pixels
 # allocated, a little more than the images' (at most a step's width of rows and columns).
 FILM_FIELD_BYTES = 3 * 4 + 3 * 4 + 4 + 4 + 4
 RENDER_BYTES_PER_PIXEL = FILM_FIELD_BYTES + 3 * 4 + 2 * 3 * 4

@@ -234,7 +234,7 @@ def bvh_report(out_dir: Path) -> dict:
 # --- integrators ---------------------------------------------------------------------------------
 
 def _integrator_curve(integrator: str, sampler: str, error_at_1s: float, budget: float) -> dict:
-    from renderer.bench.integrators import value_at
+    from renderer.bench.convergence import value_at
 
     points, spp, seconds = [], 1, 0.0
     while seconds < budget:
@@ -255,9 +255,10 @@ def _integrator_curve(integrator: str, sampler: str, error_at_1s: float, budget:
 def integrators_report(out_dir: Path, errors: dict | None = None) -> dict:
     """errors: scene -> {integrator/sampler: relMSE after one second} (the default: mis/sobol best)."""
     from renderer.bench import integrators
+    from renderer.bench.integrator_config import IntegratorBenchConfig
 
-    config = integrators.IntegratorBenchConfig(square_size=(64, 64), wide_size=(96, 54), budget_s=2.0,
-                                               scenes=("box", "room"), mitsuba=False)
+    config = IntegratorBenchConfig(square_size=(64, 64), wide_size=(96, 54), budget_s=2.0,
+                                   scenes=("box", "room"), mitsuba=False)
     errors = errors or {scene: {"path/independent": 0.4, "path/sobol": 0.3, "nee/independent": 0.1,
                                 "nee/sobol": 0.08, "mis/independent": 0.05, "mis/sobol": 0.02}
                         for scene in config.scenes}
@@ -425,7 +426,7 @@ def interactive_report(out_dir: Path) -> dict:
 def _denoise_scene(name: str, gain: float, adaptive_gain: float, config) -> dict:
     """gain: denoised relMSE / raw relMSE; adaptive_gain: adaptive relMSE / uniform relMSE at equal time."""
     from renderer.bench.denoise import DEFAULT_THRESHOLD, paired_verdict
-    from renderer.bench.integrators import spp_to_reach
+    from renderer.bench.convergence import spp_to_reach
 
     floor = 1e-4
     points, spp = [], 1

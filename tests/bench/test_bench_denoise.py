@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from renderer.bench import denoise
-from renderer.denoise import unavailable_reason
+from renderer.output.denoise import unavailable_reason
 
 pytestmark = pytest.mark.skipif(unavailable_reason() is not None, reason="pyoidn is not installed here")
 

@@ -7,7 +7,8 @@ import pytest
 
 import numpy as np
 
-from renderer.bench.integrators import IntegratorBenchConfig, seeded_levels, seeded_points, spp_to_reach, value_at
+from renderer.bench.convergence import seeded_levels, seeded_points, spp_to_reach, value_at
+from renderer.bench.integrator_config import IntegratorBenchConfig
 from tests.scene_builder import tiny_bench_toml
 
 TINY_SCENE = tiny_bench_toml("tiny_integrators")

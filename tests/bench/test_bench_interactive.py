@@ -8,7 +8,7 @@ import pytest
 
 from renderer.bench.interactive import (event_latencies, first_round, first_round_text, paired_rate_blocks,
                                         paired_rate_ratios, percentile, print_report)
-from renderer.pixel_slices import ROUND_SLICES
+from renderer.film.pixel_slices import ROUND_SLICES
 
 
 def test_percentile_interpolates_between_order_statistics():

@@ -19,7 +19,7 @@ def _writer(value: float, suffix: str, seconds_line: str = ""):
     """A command writing a 4x4 image of `value` to its --out path, as each side's command does."""
     def command(config, seed, out):
         if suffix == ".exr":
-            code = ("import sys, numpy as np; from renderer.image_io import write_exr; "
+            code = ("import sys, numpy as np; from renderer.output.image_io import write_exr; "
                     f"write_exr(sys.argv[1], np.full((4, 4, 3), {value}, np.float32)); print('{seconds_line}')")
         else:
             code = f"import sys, numpy as np; np.save(sys.argv[1], np.full((4, 4, 3), {value}, np.float32))"

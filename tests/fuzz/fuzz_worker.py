@@ -95,7 +95,7 @@ def run_case(case, options, render_allowed: bool) -> dict:
 def main(workspace: str, first: str, deadline: str, budget: str, render_seconds: str) -> int:
     resource.setrlimit(resource.RLIMIT_AS, (ADDRESS_SPACE, ADDRESS_SPACE))
     signal.signal(signal.SIGALRM, _alarm)
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
     from renderer.scene.limits import MemoryBudget
     from renderer.scene.load_options import LoadOptions
     from tests.fuzz.fuzz_cases import write_case

@@ -203,7 +203,7 @@ def test_alpha_coverage_decides_lane_by_lane_as_the_scalar_layout():
 # whole renders
 
 
-@pytest.mark.filterwarnings("ignore::renderer.image_io.NegativePixelsWarning")
+@pytest.mark.filterwarnings("ignore::renderer.output.image_io.NegativePixelsWarning")
 # One whole scene (the ray-level tests above hold every hit of mixed, degenerate, instanced and
 # cut-out inputs to brute force and to the scalar layout): quads, a triangle mesh, textures (shading
 # reads the corners back from the packets) and an environment map.

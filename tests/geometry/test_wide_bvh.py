@@ -408,7 +408,7 @@ def test_mesh_scene_renders_bit_identical_to_the_binary_traversal(path):
     np.testing.assert_array_equal(stack, wide)
 
 
-@pytest.mark.filterwarnings("ignore::renderer.image_io.NegativePixelsWarning")
+@pytest.mark.filterwarnings("ignore::renderer.output.image_io.NegativePixelsWarning")
 @pytest.mark.parametrize("path", ["assets/scenes/textured.toml"])
 def test_mesh_scene_renders_z_equal_to_the_binary_traversal(path):
     """A scene whose hits the two traversals round differently in the last bits (the triangle test

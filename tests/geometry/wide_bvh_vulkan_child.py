@@ -10,7 +10,7 @@ import numpy as np
 def hits(out: str) -> None:
     """Closest hits and shadow tests of the stack, wide4 and wide8 traversals on Vulkan, the wide
     ones with the scalar and the packet leaves."""
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     init_taichi("vulkan")
     from renderer.bench.bvh_measure import traversal_and_leaves
@@ -30,7 +30,7 @@ def hits(out: str) -> None:
 
 def render(out: str, arch: str, traversal: str, seed: int) -> None:
     """The Cornell box at 24x24, 32 spp of mis, on `arch` with `traversal`: mean and variance."""
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     init_taichi(arch)
     from renderer.bench.bvh_measure import traversal_and_leaves

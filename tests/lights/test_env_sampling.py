@@ -13,7 +13,7 @@ import pytest
 import taichi as ti
 from scipy import stats
 
-from renderer.image_io import read_environment
+from renderer.output.image_io import read_environment
 from renderer.lights.env_sampling import FLOOR, EnvironmentSampler, texel_bounds
 from renderer.lights.environment import Environment
 from renderer.scene.description import EnvironmentSpec

@@ -42,7 +42,7 @@ def run() -> np.ndarray:
 
 
 if __name__ == "__main__":
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     init_taichi(sys.argv[1], offline_cache=False)
     np.save(sys.argv[2], run())

@@ -12,7 +12,7 @@ import numpy as np
 def render_on(threads: int, out: str) -> dict:
     import taichi as ti
 
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
     from renderer.camera import CameraFrame
     from renderer.renderer import Renderer
     from renderer.scene.catalog import load_any, resolve_scene

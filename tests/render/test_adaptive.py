@@ -1,4 +1,4 @@
-"""Adaptive sampling (renderer/adaptive.py): the minimum spp, unbiasedness where pixels stopped,
+"""Adaptive sampling (renderer/film/adaptive.py): the minimum spp, unbiasedness where pixels stopped,
 exact continuation from a checkpointed state.
 
 The renders share one Renderer (each starts from reset(): film, adaptive state and rounds
@@ -7,7 +7,7 @@ a resumed render would."""
 import numpy as np
 import pytest
 
-from renderer.adaptive import STOPPED, is_check_point, next_check
+from renderer.film.adaptive import STOPPED, is_check_point, next_check
 from renderer.camera import CameraFrame
 from renderer.renderer import AdaptiveSettings, Renderer
 from renderer.scene import load_scene

@@ -1,12 +1,12 @@
-"""Denoising AOVs (renderer/aovs.py): in range, equal to the debug views where no delta surface
+"""Denoising AOVs (renderer/film/aovs.py): in range, equal to the debug views where no delta surface
 intervenes, and passed through mirrors and glass to the surface seen in them."""
 import numpy as np
 import pytest
 from scipy import stats
 
-from renderer.aovs import DEFAULT_FEATURE_BOOST, FEATURE_BOOSTED_SAMPLES
+from renderer.film.aovs import DEFAULT_FEATURE_BOOST, FEATURE_BOOSTED_SAMPLES
 from renderer.camera import CameraFrame
-from renderer.pixel_slices import INTERLEAVED, ROUND_SLICES
+from renderer.film.pixel_slices import INTERLEAVED, ROUND_SLICES
 from renderer.renderer import Renderer
 from renderer.scene import load_scene
 from renderer.scene.catalog import resolve_scene
@@ -58,7 +58,7 @@ def test_aovs_equal_the_albedo_and_normals_views_without_delta_surfaces(cornell_
     # same camera rays, so the running means agree up to float rounding.
     scene, with_aovs, without = cornell_box
     size, spp = (40, 40), 3
-    assert with_aovs.feature_boost == 0  # no texture: no feature samples (renderer/aovs.py; tests below)
+    assert with_aovs.feature_boost == 0  # no texture: no feature samples (renderer/film/aovs.py; tests below)
     _, albedo, normal = render_aovs(scene, "mis", spp, size=size, renderer=with_aovs)
     albedo_view = render_view(scene, "albedo", spp, size=size, renderer=without)
     normals_view = render_view(scene, "normals", spp, size=size, renderer=without)
@@ -136,7 +136,7 @@ def test_glass_pane_passes_the_textured_wall_albedo_through(tmp_path):
     # `path`: the tracer writes the AOVs alike under each of its settings, and this one compiles the
     # least (no light sampling; `mis` with AOVs is rendered by the other tests here).
     renderer, albedo, _ = render_aovs(with_pane, "path", spp, seed=3)
-    aov_samples = renderer.aovs.state()[2]  # colour and feature samples (renderer/aovs.py)
+    aov_samples = renderer.aovs.state()[2]  # colour and feature samples (renderer/film/aovs.py)
     assert (aov_samples == spp + DEFAULT_FEATURE_BOOST * FEATURE_BOOSTED_SAMPLES).all()
     n = int(aov_samples[0, 0])
     wall = render_view(without, "albedo", spp, seed=3)
@@ -265,7 +265,7 @@ def test_feature_samples_see_what_colour_samples_see(tmp_path, name, scene_text)
 
 def test_only_scenes_with_texture_or_normal_maps_take_feature_samples(tmp_path):
     """Feature samples help where textures put sub-pixel detail into the AOVs; elsewhere they cost
-    time for little (renderer/aovs.py). A Renderer without AOVs takes none."""
+    time for little (renderer/film/aovs.py). A Renderer without AOVs takes none."""
     from pathlib import Path
 
     quad = Path(__file__).resolve().parents[1] / "data" / "textured_quad.glb"

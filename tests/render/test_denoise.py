@@ -1,10 +1,10 @@
-"""Denoising (renderer/denoise.py, Intel Open Image Denoise): it keeps the image's light, leaves a
+"""Denoising (renderer/output/denoise.py, Intel Open Image Denoise): it keeps the image's light, leaves a
 converged image alone, never sees a non-finite value, and the CLI writes its images and AOVs."""
 import numpy as np
 import pytest
 
 from renderer.camera import CameraFrame
-from renderer.denoise import DenoiseInput, Denoiser, unavailable_reason
+from renderer.output.denoise import DenoiseInput, Denoiser, unavailable_reason
 from renderer.renderer import Renderer
 from renderer.scene import load_scene
 from renderer.scene.catalog import resolve_scene
@@ -68,7 +68,7 @@ def test_denoising_a_converged_image_changes_it_no_more_than_its_noise(renderers
 
 @pytest.mark.parametrize("prefilter_aux", [False, True])
 def test_no_non_finite_value_reaches_the_denoiser(monkeypatch, prefilter_aux):
-    from renderer.denoise import OidnFilters
+    from renderer.output.denoise import OidnFilters
 
     seen = []
 

@@ -25,7 +25,7 @@ from tests.stats.image_tests import assert_agree
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 # Model files open under the default environment map, whose few negative texels warn.
-pytestmark = pytest.mark.filterwarnings("ignore::renderer.image_io.NegativePixelsWarning")
+pytestmark = pytest.mark.filterwarnings("ignore::renderer.output.image_io.NegativePixelsWarning")
 
 
 def quiet_load(path):

@@ -103,7 +103,7 @@ def reference():
     if not (REF_MEAN.is_file() and REF_VAR.is_file()):
         pytest.skip(f"Mitsuba reference images missing ({REF_MEAN.name}, {REF_VAR.name} in tests/data); "
                     "make them with scripts/mitsuba_reference.py")
-    from renderer.image_io import read_exr
+    from renderer.output.image_io import read_exr
 
     return read_exr(REF_MEAN), read_exr(REF_VAR)
 
@@ -195,7 +195,7 @@ GLASS_SPP = 1024
 def glass():
     """(reference mean, reference variance, render(integrator) -> (mean, variance))."""
     from renderer.camera import CameraFrame
-    from renderer.image_io import read_exr
+    from renderer.output.image_io import read_exr
     from renderer.renderer import Renderer
     from renderer.scene import load_scene
 

@@ -9,7 +9,7 @@ import pytest
 from scipy import stats
 
 from renderer.camera import CameraFrame
-from renderer.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES, slice_mask
+from renderer.film.pixel_slices import BANDS, INTERLEAVED, ROUND_SLICES, slice_mask
 from renderer.renderer import Renderer
 from tests.scene_builder import furnace_toml, scene_from_toml
 

@@ -41,9 +41,9 @@ from scipy import stats
 from scipy.ndimage import maximum_filter
 
 from renderer.camera import CameraFrame
-from renderer.luminance import LUMINANCE_WEIGHTS
+from renderer.spectral.luminance import LUMINANCE_WEIGHTS
 from renderer.integrators.sppm import PHOTON_STREAM
-from renderer.pixel_slices import ROUND_SLICES
+from renderer.film.pixel_slices import ROUND_SLICES
 from renderer.renderer import Renderer
 from renderer.sampling import dims
 from renderer.scene.catalog import load_any, resolve_scene
@@ -316,7 +316,7 @@ def test_sppm_runs_on_vulkan(tmp_path):
            "--integrator", "sppm", "--arch", "vulkan", "--out", str(out)]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, cwd=ROOT)
     assert proc.returncode == 0, proc.stderr[-2000:]
-    from renderer.image_io import read_exr
+    from renderer.output.image_io import read_exr
 
     image = read_exr(out)
     assert np.isfinite(image).all() and image.mean() > 0.05

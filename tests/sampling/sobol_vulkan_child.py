@@ -7,7 +7,7 @@ import numpy as np
 
 
 def main() -> int:
-    from renderer.arch import init_taichi
+    from renderer.runtime.arch import init_taichi
 
     try:
         init_taichi("vulkan")

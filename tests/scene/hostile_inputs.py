@@ -215,7 +215,7 @@ def png_declaring(path: Path, width: int, height: int) -> Path:
 
 def exr_declaring(path: Path, width: int, height: int) -> Path:
     """A 4x8 EXR whose header's data window claims width x height."""
-    from renderer.image_io import write_exr
+    from renderer.output.image_io import write_exr
 
     write_exr(path, np.ones((4, 8, 3), np.float32))
     data = bytearray(path.read_bytes())

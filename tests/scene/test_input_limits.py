@@ -234,7 +234,7 @@ def test_an_image_within_the_budget_still_decodes(tmp_path):
 
 
 def test_a_radiance_header_that_promises_more_than_the_file_holds(tmp_path):
-    from renderer.image_io import read_environment
+    from renderer.output.image_io import read_environment
 
     path = h.huge_hdr(tmp_path / "huge.hdr")
     message, peak, _ = refused(read_environment, path, SMALL)
@@ -244,7 +244,7 @@ def test_a_radiance_header_that_promises_more_than_the_file_holds(tmp_path):
 
 
 def test_a_radiance_map_over_the_budget_is_refused_before_decoding(tmp_path):
-    from renderer.image_io import read_environment
+    from renderer.output.image_io import read_environment
 
     width, height = 2000, 1000
     path = tmp_path / "big.hdr"
@@ -257,7 +257,7 @@ def test_a_radiance_map_over_the_budget_is_refused_before_decoding(tmp_path):
 
 
 def test_an_exr_header_over_the_budget_is_refused_before_decoding(tmp_path):
-    from renderer.image_io import read_environment
+    from renderer.output.image_io import read_environment
 
     path = h.exr_declaring(tmp_path / "huge.exr", 100000, 100000)
     message, peak, _ = refused(read_environment, path, MemoryBudget(8 * GIB, "test"))
@@ -267,7 +267,7 @@ def test_an_exr_header_over_the_budget_is_refused_before_decoding(tmp_path):
 
 @pytest.mark.parametrize("resolution", [b"+Y 4 +X 4", b"-Y 4", b"-Y -4 +X 4", b"-Y 0 +X 4"])
 def test_radiance_resolution_lines_we_cannot_read(tmp_path, resolution):
-    from renderer.image_io import read_environment
+    from renderer.output.image_io import read_environment
 
     path = tmp_path / "odd.hdr"
     path.write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n" + resolution + b"\n" + bytes(256))
@@ -293,8 +293,8 @@ def test_film_bytes_per_pixel_match_the_film_and_the_renderer(tmp_path):
     the renderer's work buffer is the 3 x f32 the budget assumes."""
     import taichi as ti
 
-    from renderer.allocation import allocation_size
-    from renderer.film import Film
+    from renderer.runtime.allocation import allocation_size
+    from renderer.film.accumulation import Film
     from renderer.renderer import Renderer
     from renderer.scene.toml_loader import load_scene
 
@@ -308,11 +308,11 @@ def test_film_bytes_per_pixel_match_the_film_and_the_renderer(tmp_path):
                  if isinstance(v, ti.Field) and tuple(v.shape) == (width, height)]
     assert len(per_pixel) == 5 and sum(per_pixel) == limits.FILM_FIELD_BYTES
     renderer = Renderer(load_scene(h.huge_film_scene(tmp_path, width, height)))
-    # the renderer allocates whole steps (renderer/allocation.py), which the budget counts
+    # the renderer allocates whole steps (renderer/runtime/allocation.py), which the budget counts
     assert tuple(renderer.work.shape) == allocation_size(width, height) and cell_bytes(renderer.work) == 3 * 4
     assert tuple(renderer.film.mean.shape) == allocation_size(width, height)
     assert limits.RENDER_BYTES_PER_PIXEL == limits.FILM_FIELD_BYTES + 3 * 4 + 2 * 3 * 4
-    from renderer.aovs import AovFilm
+    from renderer.film.aovs import AovFilm
 
     aovs = AovFilm(width, height)
     aov_fields = [cell_bytes(v) for v in vars(aovs).values() if isinstance(v, ti.Field)]

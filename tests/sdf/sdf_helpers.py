@@ -19,7 +19,7 @@ from renderer.scene.description import (
     SdfNode,
     Transform,
 )
-from renderer.sdf.geometry import SdfGeometry
+from shaders_sdf.geometry import SdfGeometry
 
 vec3 = ti.math.vec3
 MATERIAL = "m"

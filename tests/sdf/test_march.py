@@ -34,7 +34,7 @@ from sdf_helpers import (
     sdf,
     trace,
 )
-from renderer.sdf.geometry import SdfGeometry
+from shaders_sdf.geometry import SdfGeometry
 
 REPO = Path(__file__).resolve().parents[2]
 THRESHOLD = 1e-4  # MarchSettings.min_threshold; rays here have no cone, so it is the hit threshold

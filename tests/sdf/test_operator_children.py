@@ -1,5 +1,5 @@
 """Operators with many children: the children are data, evaluated in a loop; only the shape of the
-operator tree is code (renderer/sdf/scene_sdf.py).
+operator tree is code (shaders_sdf/scene_sdf.py).
 
 A node's shape is its kind, whether its transform is the identity, whether a repetition is finite
 and the set of its children's shapes. The number of generated funcs must follow the number of

@@ -4,7 +4,7 @@ import time
 
 import numpy as np
 
-from renderer.denoise import DenoiseInput
+from renderer.output.denoise import DenoiseInput
 from viewer.denoise_worker import BackgroundDenoiser, wants_denoise
 
 

@@ -2,9 +2,9 @@
 it updated, the shown image is the film's full tone map."""
 import numpy as np
 
-from renderer.film import Film
-from renderer.pixel_slices import ROUND_SLICES, slice_mask
-from renderer.tonemap import tonemap_packed, unpack_rgba8
+from renderer.film.accumulation import Film
+from renderer.film.pixel_slices import ROUND_SLICES, slice_mask
+from renderer.output.tonemap import tonemap_packed, unpack_rgba8
 from viewer.display import UPDATE_FULL, UPDATE_NONE, UPDATE_SLICES, DisplayImages, DisplaySettings
 
 SIZE = (70, 40)  # cells of 16 cut at the right and top edges

@@ -7,7 +7,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from renderer.pixel_slices import ROUND_SLICES
+from renderer.film.pixel_slices import ROUND_SLICES
 from viewer.controller import MAX_SPEED
 from viewer.session import (MAX_PRESENT_INTERVAL, MIN_PRESENT_INTERVAL, MIN_SCALE, MOVING_PROBE_SLICES,
                             STILL_OVERRUN_SECONDS, STILL_PRESENT_SHARE, Controls, Every, RateMeter,

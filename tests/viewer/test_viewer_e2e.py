@@ -145,7 +145,7 @@ def test_viewer_under_xvfb(xserver, tmp_path):
 
     import imageio.v3 as iio
 
-    from renderer.image_io import read_exr
+    from renderer.output.image_io import read_exr
 
     png = iio.imread(pngs[0])
     assert png.shape == (SIZE[1], SIZE[0], 3)
@@ -158,7 +158,7 @@ def test_a_warmed_viewer_start_compiles_nothing(xserver, tmp_path):
     """`warm-cache SCENE` (off-screen, one process per scene) leaves in Taichi's offline cache every
     kernel that `view SCENE` at that size then needs, in a window, with its first integrator or
     another one chosen at start: the cache gains no kernel from those viewers."""
-    from renderer.arch import LANTERN_CACHE_FOLDER
+    from renderer.runtime.arch import LANTERN_CACHE_FOLDER
     from viewer.cache_warmer import cached_kernels
 
     env = dict(xserver, TI_OFFLINE_CACHE_FILE_PATH=str(tmp_path / "ticache"))

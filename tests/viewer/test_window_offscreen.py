@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from renderer.bench.interactive import settle_still
-from renderer.image_io import read_exr
+from renderer.output.image_io import read_exr
 from renderer.integrators import INTEGRATORS
 from renderer.scene.catalog import resolve_scene, scene_files
-from renderer.pixel_slices import BANDS, ROUND_SLICES, filled_mean_array, slice_mask
-from renderer.tonemap import tonemap_array, unpack_rgba8
+from renderer.film.pixel_slices import BANDS, ROUND_SLICES, filled_mean_array, slice_mask
+from renderer.output.tonemap import tonemap_array, unpack_rgba8
 from viewer import hud
 from viewer.display import UPDATE_SLICES
 from viewer.session import MOVING_PROBE_SLICES
@@ -61,7 +61,7 @@ def sample_every_pixel(app, max_frames=400):
 
 def expected_display(app):
     """The film tone-mapped, pixels a partial first round has not reached filled from their
-    nearest sampled grid point (renderer/pixel_slices.py)."""
+    nearest sampled grid point (renderer/film/pixel_slices.py)."""
     s, film = app.session, app.renderer.film
     mapper = s.display_tonemapper(INTEGRATORS[s.integrator].display_tonemapper)
     shown = filled_mean_array(app.renderer.image(), film.sample_counts() + film.rejected_counts())
@@ -345,7 +345,7 @@ def test_still_frames_redraw_only_the_pixels_they_rendered(app):
             app.step()
             assert app.renderer.slices_done == slices + 1 and not app.last_plan.reset
             assert app.last_display_update == UPDATE_SLICES
-            # past the first round a still frame's slice is a band of rows (renderer/pixel_slices.py)
+            # past the first round a still frame's slice is a band of rows (renderer/film/pixel_slices.py)
             band = slice_mask(slices % ROUND_SLICES, 1, *SIZE, BANDS)[::-1]
             np.testing.assert_array_equal(app.renderer.film.sample_counts() != counts, band)
             banded_rows += band.any(axis=1).sum()
@@ -447,7 +447,7 @@ def test_an_untouched_still_view_renders_without_presenting_until_an_input(app):
         app.still_present_interval = 0.0
 
 
-@pytest.mark.skipif(__import__("renderer.denoise", fromlist=["x"]).unavailable_reason() is not None,
+@pytest.mark.skipif(__import__("renderer.output.denoise", fromlist=["x"]).unavailable_reason() is not None,
                     reason="pyoidn is not installed here")
 def test_denoised_view_shows_the_denoiser_output_and_screenshots_save_both(app, tmp_path):
     """Key x: while still, a worker denoises the film as its samples double; the canvas shows its
@@ -508,10 +508,10 @@ def test_quit_key_ends_the_loop(app):
 
 
 def test_feature_samples_only_for_a_still_image_under_the_denoised_view(app):
-    """The AOVs' feature samples (renderer/aovs.py) cost render time: a scene with textures takes
+    """The AOVs' feature samples (renderer/film/aovs.py) cost render time: a scene with textures takes
     them while the denoised view is on and the camera still, never in moving frames, and not
     with the view off; the AOVs then count them."""
-    from renderer.aovs import FEATURE_BOOSTED_SAMPLES
+    from renderer.film.aovs import FEATURE_BOOSTED_SAMPLES
 
     app.select_scene(resolve_scene("textured"))
     app.session.set_integrator("path")
