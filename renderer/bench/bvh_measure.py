@@ -12,7 +12,7 @@ from renderer.bench import embree_side
 from renderer.bench.common import time_call, time_interleaved
 from renderer.bench.ray_batch import RayBatch
 from renderer.bench.rays import Rays, camera_rays, random_rays, ray_rates
-from renderer.geometry import bvh_build
+from renderer.geometry import bvh_build, bvh_tree
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.mesh_geometry import MeshGeometry
 from renderer.renderer import MAX_LEAF_SIZE
@@ -146,7 +146,7 @@ def _builder_threads() -> int | None:
 
 def build_stats(bvh) -> dict:
     leaves = bvh.node_count > 0
-    return {"sah_cost": bvh_build.sah_cost(bvh), "nodes": bvh.num_nodes, "leaves": int(leaves.sum()),
+    return {"sah_cost": bvh_tree.sah_cost(bvh), "nodes": bvh.num_nodes, "leaves": int(leaves.sum()),
             "mean_leaf_size": float(bvh.node_count[leaves].mean()), "largest_leaf": int(bvh.node_count.max()),
             "depth": bvh.depth()}
 

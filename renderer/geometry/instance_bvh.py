@@ -21,7 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from renderer.geometry.bvh_build import FlatBVH, build_bvh
+from renderer.geometry.bvh_build import build_bvh
+from renderer.geometry.bvh_tree import FlatBVH
 from renderer.geometry.mesh_data import MeshData
 
 INSTANCE_NODE = -1  # node_count of an instance node

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from renderer.geometry.bvh_build import FlatBVH
+from renderer.geometry.bvh_tree import FlatBVH
 from renderer.geometry.instance_bvh import INSTANCE_NODE
 
 WIDTH = 4  # the default width; collapse(..., width=8) makes 8-wide nodes

@@ -18,14 +18,15 @@ steps, first_step, seed, max_depth, *camera) runs steps of its own whole-image i
 (ROUND_SLICES steps an iteration) and returns how many it ran, and
 `noise_estimate = False` when its film holds an estimate rather than a mean of samples.
 """
-from renderer.integrators.debug import AlbedoView, BvhView, DepthView, NormalsView, StepsView
+from renderer.integrators.debug import VIEWS
 from renderer.integrators.nee_mis import MultipleImportanceSampling, NextEventEstimation
 from renderer.integrators.path import PathTracer
 from renderer.integrators.sppm import StochasticProgressivePhotonMapping
 
-_ALL = (MultipleImportanceSampling, NextEventEstimation, PathTracer, NormalsView, AlbedoView, DepthView, StepsView,
-        BvhView, StochasticProgressivePhotonMapping)
-INTEGRATORS = {cls.name: cls for cls in _ALL}
+# Name -> the integrator's class, or a debug view's row (renderer/integrators/debug.py): either has
+# the attributes above, and calling it makes the integrator.
+_ALL = (MultipleImportanceSampling, NextEventEstimation, PathTracer, *VIEWS, StochasticProgressivePhotonMapping)
+INTEGRATORS = {entry.name: entry for entry in _ALL}
 
 
 def integrator_names() -> list[str]:

@@ -1,9 +1,9 @@
 """The registry of material kinds and of the principled model's layers (numpy side, no Taichi).
 
 A kind is what a scene file's `type` names. Its entry says its id in the device table (its
-position in KINDS), the scene-file parameters that belong to it, its device columns, the lobe
-flags its BSDF can have (pbrt's BxDFFlags) and the module holding its lobes, which
-renderer/materials/bsdf.py dispatches to. The layers of the principled kind (glTF clearcoat,
+position in KINDS), the scene-file parameters that belong to it, its own defaults of shared ones
+(metals and glass are smooth), its device columns, the lobe flags its BSDF can have (pbrt's
+BxDFFlags) and the module holding its lobes, which renderer/materials/bsdf.py dispatches to. The layers of the principled kind (glTF clearcoat,
 sheen, specular) are entries of their own: parameters, columns, flags and the test of a device
 row that says whether the row uses the layer. Features holds the sets of kinds and layers a
 scene uses, and only those are compiled.
@@ -56,7 +56,8 @@ class MaterialKind:
     lobes: the module of its `sample`, `evaluate` and `flags` (Taichi funcs); compensation: when
     Kulla-Conty multiple scattering is compiled for it ("always", "rough": where a row's
     roughness > 0, "never"); refracts: its transmission bends light into another index (radiance scales by
-    1 / eta^2, photons do not)."""
+    1 / eta^2, photons do not); defaults: (field, value) pairs for the scene-file fields whose default
+    differs on this kind from the field's shared one."""
 
     name: str
     label: str
@@ -66,6 +67,7 @@ class MaterialKind:
     lobes: str
     compensation: str = "never"
     refracts: bool = False
+    defaults: tuple[tuple[str, object], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -84,13 +86,18 @@ class MaterialLayer:
 _F = LobeFlags
 _IOR = Column("ior", "f32", 1.5, from_spec=True)
 _THIN = Column("thin", "i32", 0)
+# The roughness of a material that names none, unless its kind has its own: what `principled`
+# starts from in Blender and Mitsuba 3 (diffuse and null surfaces ignore it).
+SHARED_ROUGHNESS = 0.5
+# Metals and glass are smooth unless a roughness is given, as in Mitsuba 3 and pbrt-v4.
+_SMOOTH = (("roughness", 0.0),)
 
 # Shared by every kind: what the base of any surface has (colour, roughness, emission, the
 # base texture slots, the medium inside, glTF coverage).
 SHARED_COLUMNS = (
     Column("kind", "i32", 0),
     Column("base_color", "vec3", (0.8, 0.8, 0.8), from_spec=True),
-    Column("roughness", "f32", 0.5, from_spec=True),
+    Column("roughness", "f32", SHARED_ROUGHNESS, from_spec=True),
     Column("emission", "vec3", (0.0, 0.0, 0.0), from_spec=True),
     Column("normal_scale", "f32", 1.0),
     Column("textures", "ivec4", (NO_TEXTURE,) * 4),  # base colour, metallic-roughness, normal, emissive
@@ -110,12 +117,13 @@ KINDS = (
                  (Column("edge_tint", "vec3", (1.0, 1.0, 1.0), from_spec=True), Column("complex_ior", "i32", 0),
                   Column("eta", "vec3", (0.0, 0.0, 0.0)), Column("k", "vec3", (0.0, 0.0, 0.0)),
                   Column("fresnel_avg", "vec3", (0.0, 0.0, 0.0))),
-                 _F.REFLECTION | _F.GLOSSY | _F.SPECULAR, "renderer.materials.conductor", compensation="rough"),
+                 _F.REFLECTION | _F.GLOSSY | _F.SPECULAR, "renderer.materials.conductor", compensation="rough",
+                 defaults=_SMOOTH),
     MaterialKind("dielectric", "glass", ("ior", "thin", "abbe", "glass"),
                  (_IOR, _THIN, Column("dispersion", "i32", 0), Column("dispersion_b", "vec4", (0.0,) * 4),
                   Column("dispersion_c", "vec4", (0.0,) * 4)),
                  _F.REFLECTION | _F.TRANSMISSION | _F.GLOSSY | _F.SPECULAR, "renderer.materials.dielectric",
-                 compensation="rough", refracts=True),
+                 compensation="rough", refracts=True, defaults=_SMOOTH),
     MaterialKind("principled", "principled", ("metallic", "transmission", "ior", "thin"),
                  (Column("metallic", "f32", 0.0, from_spec=True), Column("transmission", "f32", 0.0, from_spec=True),
                   _IOR, _THIN, Column("transmission_texture", "i32", NO_TEXTURE)),
@@ -172,6 +180,17 @@ def kinds_with_param(param: str) -> tuple[str, ...]:
     registry order."""
     return tuple(k.name for k in KINDS if param in k.params
                  or any(layer.of == k.name and param in layer.params for layer in LAYERS))
+
+
+def own_defaults(param: str) -> dict[str, object]:
+    """The kinds that give a scene-file field a default of their own, with that default, in
+    registry order."""
+    return {k.name: dict(k.defaults)[param] for k in KINDS if param in dict(k.defaults)}
+
+
+def default_on(name: str, param: str, shared: object) -> object:
+    """A scene-file field's default on a material of kind `name`: the kind's own, else `shared`."""
+    return dict(kind(name).defaults).get(param, shared)
 
 
 def compensated_when_rough(name: str) -> bool:

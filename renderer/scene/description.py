@@ -12,7 +12,7 @@ from typing import Optional
 
 import numpy as np
 
-from renderer.materials.kinds import KIND_NAMES
+from renderer.materials.kinds import KIND_NAMES, SHARED_ROUGHNESS, default_on
 from renderer.scene.model_files import ModelFiles
 
 Vec3 = tuple[float, float, float]
@@ -85,7 +85,9 @@ class MaterialSpec:
     name: str
     kind: str = "diffuse"  # one of MATERIAL_KINDS
     base_color: Vec3 = (0.8, 0.8, 0.8)  # albedo (diffuse), F0 (conductor), transmittance tint (dielectric)
-    roughness: float = 0.5  # perceptual roughness in [0, 1]; alpha = roughness^2; 0 is a perfect mirror
+    # Perceptual roughness in [0, 1]; alpha = roughness^2; 0 is a perfect mirror. None: the kind's
+    # default (renderer/materials/kinds.py: 0 for conductors and dielectrics, else 0.5).
+    roughness: Optional[float] = None
     ior: float = 1.5  # dielectric index of refraction
     emission: Vec3 = (0.0, 0.0, 0.0)  # emitted radiance, linear RGB (colour times strength)
     edge_tint: Vec3 = (1.0, 1.0, 1.0)  # conductor only: tint at grazing angles (Hoffman's F82 model)
@@ -104,6 +106,10 @@ class MaterialSpec:
     sheen_roughness: float = 0.0
     specular: float = 1.0
     specular_color: Vec3 = (1.0, 1.0, 1.0)
+
+    def __post_init__(self):
+        if self.roughness is None:
+            object.__setattr__(self, "roughness", default_on(self.kind, "roughness", SHARED_ROUGHNESS))
 
     @property
     def is_dispersive(self) -> bool:
@@ -216,13 +222,25 @@ class MeshObject:
     translate: Vec3 = (0.0, 0.0, 0.0)
     rotate: Vec3 = (0.0, 0.0, 0.0)
     scale: Vec3 = (1.0, 1.0, 1.0)
+    # Any affine object-to-world matrix (4 rows of 4), from a format that places objects so (a
+    # Mitsuba `to_world`); when given it replaces translate, rotate and scale.
+    to_world: Optional[tuple[tuple[float, ...], ...]] = None
 
     def matrix(self) -> np.ndarray:
         """The 4x4 object-to-world matrix."""
+        if self.to_world is not None:
+            return np.array(self.to_world, np.float64)
         m = np.eye(4)
         m[:3, :3] = Transform(rotate=self.rotate).rotation_matrix() @ np.diag(self.scale)
         m[:3, 3] = self.translate
         return m
+
+    def centre_and_scale(self) -> tuple[tuple[float, float, float], float]:
+        """Where an analytic sphere or disc sits, and its (uniform) scale."""
+        if self.to_world is None:
+            return self.translate, self.scale[0]
+        m = self.matrix()
+        return tuple(float(x) for x in m[:3, 3]), float(np.linalg.norm(m[:3, 0]))
 
 
 @dataclass(frozen=True)

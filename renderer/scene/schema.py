@@ -1,21 +1,16 @@
 """The scene file format, as data: every section, field, type, default, range and meaning.
 
-This module is the single source of truth. The TOML loader validates against it and
-docs/scene-format.md is generated from it by `render_markdown()` (a test keeps the two equal).
-Regenerate the document with:
-
-    python -c "from renderer.scene.schema import write_markdown; write_markdown()"
+These tables are the format's single source of truth. The TOML loader validates against them (the
+checks of their rules are schema_checks.py) and docs/scene-format.md is generated from them
+(schema_docs.py; a test keeps the two equal). The types they are made of are schema_types.py.
 
 Defaults here must equal the dataclass defaults in description.py; a test checks that too.
 """
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, replace
-from pathlib import Path
-from typing import Callable, Optional
+from dataclasses import replace
 
-from renderer.materials.kinds import kinds_with_param
+from renderer.materials.kinds import SHARED_ROUGHNESS, kinds_with_param, own_defaults
 from renderer.materials.metals import metal_names
 from renderer.sampling.names import SAMPLERS
 
@@ -27,83 +22,31 @@ from .description import (
     MESH_GENERATORS,
     MESH_OBJECT_KINDS,
 )
-
-
-class _Required:
-    """Marker default for fields that must be written in the file."""
-
-    def __repr__(self) -> str:
-        return "REQUIRED"
-
-
-REQUIRED = _Required()
-
-# Key of the set of written field names in the values a section's Rule checks (see Rule).
-WRITTEN = "<written>"
-
-# Value kinds a field can have. The loader converts raw TOML values according to these.
-VALUE_KINDS = {
-    "bool": "true or false",
-    "string": "string",
-    "int": "integer",
-    "float": "float",
-    "vec3": "array of 3 floats",
-    "dir3": "array of 3 floats",  # a direction: non-zero, normalised by the loader
-    "int3": "array of 3 integers",
-    "vec2": "array of 2 floats",
-    "points2": "array of [float, float] pairs",
-    "scale": "float, or array of 3 equal floats",
-    "scale3": "float, or array of 3 floats",
-    "table": "table",
-    "tables": "array of tables",
-}
-
-
-def format_number(x: float) -> str:
-    """Numbers as a person would write them: 1 rather than 1.0 in ranges and messages."""
-    if isinstance(x, float) and x.is_integer() and abs(x) < 1e15:
-        return str(int(x))
-    return repr(x)
-
-
-@dataclass(frozen=True)
-class Range:
-    """A numeric interval (bounds may be open or absent) plus isolated extra values."""
-
-    lo: Optional[float] = None
-    hi: Optional[float] = None
-    lo_open: bool = False
-    hi_open: bool = False
-    also: tuple[float, ...] = ()  # e.g. -1 for render.max_depth
-
-    def __contains__(self, x: float) -> bool:
-        if x in self.also:
-            return True
-        if self.lo is not None and (x < self.lo or (self.lo_open and x == self.lo)):
-            return False
-        if self.hi is not None and (x > self.hi or (self.hi_open and x == self.hi)):
-            return False
-        return True
-
-    def __str__(self) -> str:
-        lo, hi = self.lo, self.hi
-        if lo is not None and hi is not None:
-            opening, closing = "(" if self.lo_open else "[", ")" if self.hi_open else "]"
-            text = f"{opening}{format_number(lo)}, {format_number(hi)}{closing}"
-        elif lo is not None:
-            text = f"{'>' if self.lo_open else '>='} {format_number(lo)}"
-        elif hi is not None:
-            text = f"{'<' if self.hi_open else '<='} {format_number(hi)}"
-        else:
-            text = "any"
-        extras = " or ".join(format_number(a) for a in self.also)
-        return f"{extras} or {text}" if extras else text
-
-
-POSITIVE = Range(0.0, lo_open=True)
-NON_NEGATIVE = Range(0.0)
-UNIT = Range(0.0, 1.0)
-AT_LEAST_ONE = Range(1)
+from .schema_checks import (
+    check_camera,
+    check_conductor_fresnel,
+    check_fixed_relaxation,
+    check_keyframes,
+    check_profile,
+    check_rounded_box,
+    check_torus,
+    check_water_waves,
+    water_fields_check,
+)
+from .schema_types import (
+    AT_LEAST_ONE,
+    NON_NEGATIVE,
+    POSITIVE,
+    REQUIRED,
+    UNIT,
+    Field,
+    Generator,
+    MeshKind,
+    NodeKind,
+    Range,
+    Rule,
+    Section,
+)
 
 # Limits that keep a scene file from asking for more than a machine has (the memory a scene's
 # files may take is budgeted separately: renderer/scene/limits.py).
@@ -115,187 +58,6 @@ FILM_SIDE = Range(1, MAX_IMAGE_SIDE)
 MAX_SDF_DEPTH = 16
 # Every number ends up as a 32-bit float on the device; larger magnitudes would become infinity.
 F32_MAX = 3.4028234663852886e38
-
-
-@dataclass(frozen=True)
-class Field:
-    name: str
-    kind: str  # a key of VALUE_KINDS
-    default: object
-    description: str
-    range: Optional[Range] = None  # applies to each component of a vector
-    choices: Optional[tuple[str, ...]] = None
-    only_for: Optional[tuple[str, ...]] = None  # the section `type`s this field belongs to
-    attr: Optional[str] = None  # model attribute when it differs from `name`
-    in_model: bool = True  # False: no model attribute of its own (e.g. emission_strength)
-    default_doc: Optional[str] = None  # shown instead of the default when it is computed
-    allowed_doc: Optional[str] = None  # shown instead of the range when another check applies
-    geometries: Optional[tuple[str, ...]] = None  # the scene geometry kinds it belongs to (None: all)
-    items: Optional[tuple["Field", ...]] = None  # kind "tables": the fields of each table
-
-    @property
-    def model_attr(self) -> str:
-        return self.attr or self.name
-
-    @property
-    def required(self) -> bool:
-        return self.default is REQUIRED
-
-    def applies_to(self, kind: Optional[str]) -> bool:
-        return self.only_for is None or kind in self.only_for
-
-    def in_geometry(self, geometry: str) -> bool:
-        return self.geometries is None or geometry in self.geometries
-
-
-@dataclass(frozen=True)
-class Rule:
-    """A constraint between fields. `check` gets the converted values (defaults filled in)
-    and returns a problem description, or None when the values are fine. In a section's rules the
-    values also hold, under WRITTEN, the names of the fields the file wrote (a default and the
-    same value written out are not the same thing when fields exclude each other)."""
-
-    text: str
-    check: Callable[[dict], Optional[str]]
-
-
-@dataclass(frozen=True)
-class Section:
-    name: str  # as written in the file, e.g. "render.march" or "materials.<name>"
-    description: str
-    fields: tuple[Field, ...]
-    rules: tuple[Rule, ...] = ()
-    heading: Optional[str] = None  # markdown heading, when the name alone is ambiguous
-
-    def field(self, name: str) -> Field:
-        return next(f for f in self.fields if f.name == name)
-
-    def allowed(self, kind: Optional[str] = None) -> tuple[str, ...]:
-        """Names of the fields a table of this section (of the given `type`) may contain."""
-        return tuple(f.name for f in self.fields if f.applies_to(kind))
-
-
-@dataclass(frozen=True)
-class NodeKind:
-    """An SDF primitive (no children) or operator (children)."""
-
-    name: str
-    description: str
-    params: tuple[Field, ...] = ()
-    rules: tuple[Rule, ...] = ()
-    min_children: int = 0
-    max_children: Optional[int] = 0  # None: no upper limit
-
-    @property
-    def is_operator(self) -> bool:
-        return self.max_children != 0
-
-    def children_text(self) -> str:
-        if self.max_children == self.min_children:
-            return f"exactly {self.min_children} child" + ("" if self.min_children == 1 else "ren")
-        return f"at least {self.min_children} children"
-
-
-@dataclass(frozen=True)
-class MeshKind:
-    """A `type` of object in a `mesh` scene: a model file, an analytic shape or a generated mesh."""
-
-    name: str
-    description: str
-    params: tuple[Field, ...] = ()
-    needs_material: bool = True  # False: the object may bring its own materials (model files)
-    uniform_scale_reason: Optional[str] = None  # set when only a uniform scale keeps the shape
-    rules: tuple[Rule, ...] = ()
-
-
-@dataclass(frozen=True)
-class Generator:
-    """A procedural mesh of a `generated` object; its parameters are fields of that object."""
-
-    name: str
-    description: str
-    params: tuple[Field, ...] = ()
-    rules: tuple["Rule", ...] = ()
-
-
-# --- rules -----------------------------------------------------------------------------------
-
-
-def _cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def _norm(v) -> float:
-    return math.sqrt(sum(c * c for c in v))
-
-
-def _check_fixed_relaxation(v: dict) -> Optional[str]:
-    if not v["adaptive"] and v["over_relaxation"] >= 2.0:
-        return f"over_relaxation {v['over_relaxation']:g} needs adaptive = true (a fixed factor must be below 2)"
-    return None
-
-
-def _check_camera(v: dict) -> Optional[str]:
-    view = tuple(b - a for a, b in zip(v["position"], v["look_at"]))
-    if _norm(view) == 0.0:
-        return "position and look_at are the same point"
-    # Relative test so that tiny or huge scenes behave the same.
-    if _norm(_cross(view, v["up"])) <= 1e-9 * _norm(view) * _norm(v["up"]):
-        return "up is zero or parallel to the view direction (look_at - position)"
-    return None
-
-
-def _check_keyframes(v: dict) -> Optional[str]:
-    keyframes = [dict(k) for k in v["keyframes"]]
-    if not keyframes:
-        return None
-    if len(keyframes) < 2:
-        return "keyframes: a camera path needs at least 2 keyframes, got 1"
-    for i, k in enumerate(keyframes):
-        if i and k["time"] <= keyframes[i - 1]["time"]:
-            return (f"keyframes[{i}].time {format_number(k['time'])} is not after keyframes[{i - 1}].time "
-                    f"{format_number(keyframes[i - 1]['time'])} (times must increase strictly)")
-        view = {"position": k["position"], "look_at": k["look_at"], "up": k["up"] or v["up"]}
-        problem = _check_camera(view)
-        if problem:
-            return f"keyframes[{i}]: {problem}"
-    return None
-
-
-def _check_rounded_box(v: dict) -> Optional[str]:
-    half = min(v["size"]) / 2.0
-    if v["radius"] > half:
-        return (f"radius {format_number(v['radius'])} is larger than half the smallest size "
-                f"component ({format_number(half)})")
-    return None
-
-
-def _check_profile(v: dict) -> Optional[str]:
-    from renderer.geometry.bezier import profile_problem
-
-    return profile_problem(v["profile"], v["degree"])
-
-
-def _check_conductor_fresnel(v: dict) -> Optional[str]:
-    if v["type"] != "conductor":
-        return None
-    if (v["eta"] is None) != (v["k"] is None):
-        given, missing = ("eta", "k") if v["k"] is None else ("k", "eta")
-        return f"`{given}` needs `{missing}` (the complex index eta + i k)"
-    descriptions = (("`metal`", ("metal",)), ("`eta`/`k`", ("eta", "k")),
-                    ("`base_color`/`edge_tint`", ("base_color", "edge_tint")))
-    given = [name for name, fields in descriptions if v[WRITTEN] & set(fields)]
-    if len(given) > 1:
-        return (f"{', '.join(given[:-1])} and {given[-1]} cannot be combined: each describes the "
-                "conductor's Fresnel (keep `metal`, or `eta` with `k`, or `base_color` with `edge_tint`)")
-    return None
-
-
-def _check_torus(v: dict) -> Optional[str]:
-    if v["minor_radius"] >= v["major_radius"]:
-        minor, major = format_number(v["minor_radius"]), format_number(v["major_radius"])
-        return f"minor_radius {minor} must be smaller than major_radius {major}"
-    return None
 
 
 # --- sections --------------------------------------------------------------------------------
@@ -350,9 +112,9 @@ CAMERA = Section(
               default_doc="none (a still camera)", allowed_doc="see below", items=KEYFRAME_FIELDS),
     ),
     (Rule("`position` and `look_at` must differ, and `up` must not be parallel to the view "
-          "direction.", _check_camera),
+          "direction.", check_camera),
      Rule("A camera path has at least 2 keyframes, their times increase strictly, and each keyframe's "
-          "`position`, `look_at` and `up` obey the rule above.", _check_keyframes)),
+          "`position`, `look_at` and `up` obey the rule above.", check_keyframes)),
 )
 
 RENDER = Section(
@@ -406,7 +168,7 @@ MARCH = Section(
               "fixed factor (Keinert et al. 2014), which must then be below 2."),
     ),
     rules=(Rule("With `adaptive = false`, `over_relaxation` must be below 2: a fixed factor of 2 or "
-                "more overshoots every surface it approaches.", _check_fixed_relaxation),),
+                "more overshoots every surface it approaches.", check_fixed_relaxation),),
 )
 
 _MAP, _SKY, _CONSTANT = ("map",), ("sky",), ("constant",)
@@ -437,9 +199,10 @@ ENVIRONMENT = Section(
 
 
 def _kind_fields(fields: tuple[Field, ...]) -> tuple[Field, ...]:
-    """A material's fields, each with the kinds it belongs to as the registry says (fields no
-    kind claims belong to every kind)."""
-    return tuple(replace(f, only_for=kinds_with_param(f.name) or None) for f in fields)
+    """A material's fields, each with the kinds it belongs to and the kinds' own defaults as the
+    registry says (fields no kind claims belong to every kind)."""
+    return tuple(replace(f, only_for=kinds_with_param(f.name) or None,
+                         type_defaults=tuple(own_defaults(f.name).items())) for f in fields)
 
 
 GLASSES_CHOICES = ("bk7", "fused_silica", "sf11", "water")  # renderer/spectral/ior.py SELLMEIER_PRESETS
@@ -476,7 +239,10 @@ MATERIAL = Section(
               allowed_doc="a name in renderer/materials/data/metals.csv"),
         Field("metallic", "float", 0.0, "0 is a dielectric base, 1 a metal (glTF "
               "`metallicFactor`).", UNIT),
-        Field("roughness", "float", 0.5, "Perceptual roughness; 0 is a perfect mirror.", UNIT),
+        Field("roughness", "float", SHARED_ROUGHNESS, "Perceptual roughness; 0 is a perfect mirror (and "
+              "clear glass). Conductors and dielectrics are smooth unless a roughness is given, as in "
+              "Mitsuba 3 and pbrt; `principled` starts from 0.5, as in Blender and Mitsuba 3 (a glTF "
+              "material's roughness is its own, 1 when the file gives none).", UNIT),
         Field("transmission", "float", 0.0, "Fraction of the dielectric base that is transmitted "
               "(glTF `KHR_materials_transmission`).", UNIT),
         Field("ior", "float", 1.5, "Index of refraction.", Range(1.0, 4.0, lo_open=True)),
@@ -514,7 +280,7 @@ MATERIAL = Section(
     )),
     rules=(Rule("A conductor's Fresnel comes from one description: `base_color` with `edge_tint`, or "
                 "`eta` with `k`, or `metal`; fields of two of them together are an error, and `eta` and "
-                "`k` come together.", _check_conductor_fresnel),),
+                "`k` come together.", check_conductor_fresnel),),
 )
 
 MEDIUM = Section(
@@ -591,11 +357,11 @@ PRIMITIVES = (
              (Field("size", "vec3", (1.0, 1.0, 1.0), "Full edge lengths along x, y, z.", POSITIVE),
               _length("radius", 0.1, "Edge rounding radius.")),
              (Rule("`radius` must be at most half the smallest `size` component.",
-                   _check_rounded_box),)),
+                   check_rounded_box),)),
     NodeKind("torus", "A ring in the xz plane, centred at the origin.",
              (_length("major_radius", 0.5, "Distance from the centre to the tube's centre line."),
               _length("minor_radius", 0.15, "Tube radius.")),
-             (Rule("`minor_radius` must be smaller than `major_radius`.", _check_torus),)),
+             (Rule("`minor_radius` must be smaller than `major_radius`.", check_torus),)),
     NodeKind("capsule", "A segment along y, centred at the origin, swept by a sphere.",
              (_length("height", 1.0, "Length of the core segment (the caps add `radius` at each end)."),
               _length("radius", 0.25, "Radius."))),
@@ -700,7 +466,7 @@ MESH_KINDS = (
                     Range(1, 64)),
               Field("sectors", "int", 16, "Patches around the axis.", Range(4, 256))),
              rules=(Rule("`profile` needs `degree` x k + 1 points (k >= 1 segments), radii >= 0, and "
-                         "no segment that is a single point or lies on the axis.", _check_profile),)),
+                         "no segment that is a single point or lies on the axis.", check_profile),)),
 )
 
 MESH_KINDS_BY_NAME = {k.name: k for k in MESH_KINDS}
@@ -716,31 +482,19 @@ WAVE_FIELDS = (
           "sharpen and the troughs flatten (1: circular orbits).", UNIT),
 )
 
-WATER_RANDOM_FIELDS = ("wave_count", "wavelength", "amplitude", "direction", "spread", "steepness", "seed")
-
-
-def _water_defaults() -> dict:
-    spec = next(g for g in GENERATORS if g.name == "water")
-    return {f.name: f.default for f in spec.params}
-
-
-def _check_water_fields(v: dict) -> Optional[str]:
-    if not v["waves"]:
-        return None
-    defaults = _water_defaults()
-    given = [name for name in WATER_RANDOM_FIELDS if v[name] != defaults[name]]
-    if given:
-        return (f"{', '.join(given)} describe{'s' if len(given) == 1 else ''} a random wave set and "
-                f"cannot be combined with `waves` (remove {'it' if len(given) == 1 else 'them'} or the waves)")
-    return None
-
-
-def _check_water_waves(v: dict) -> Optional[str]:
-    from renderer.scene import waves  # numpy only; imported here to keep the schema light
-
-    wave_set, names = waves.from_params(v)
-    return waves.problems(wave_set, v["size"] / v["resolution"], names)
-
+# The fields of a water surface's random wave set (excluded by `waves`).
+WATER_RANDOM_SET = (
+    Field("wave_count", "int", 4, "Random set: how many waves.", Range(1, 64)),
+    Field("wavelength", "float", 1.0, "Random set: the longest wavelength, metres; the others are "
+          "log-uniform down to a quarter of it.", POSITIVE),
+    Field("amplitude", "float", 0.02, "Random set: the amplitude of a wave `wavelength` long, metres; "
+          "shorter waves are proportionally lower (equally steep).", NON_NEGATIVE),
+    Field("direction", "float", 0.0, "Random set: mean direction of travel, degrees from +x towards +z."),
+    Field("spread", "float", 30.0, "Random set: directions are uniform within `direction` +- `spread`, "
+          "degrees.", Range(0.0, 180.0)),
+    Field("steepness", "float", 0.5, "Random set: the Gerstner steepness of every wave.", UNIT),
+    Field("seed", "int", 0, "Random set: the seed; the same seed gives the same waves.", NON_NEGATIVE),
+)
 
 GENERATORS = (
     Generator("terrain", "A height field over a square grid in the local xz plane, centred at "
@@ -784,25 +538,13 @@ GENERATORS = (
                Field("waves", "tables", (), "The waves, one table each (fields below). Absent or "
                      "empty: a random set from the fields that follow.", default_doc="none (a random set)",
                      allowed_doc="see below", items=WAVE_FIELDS),
-               Field("wave_count", "int", 4, "Random set: how many waves.", Range(1, 64)),
-               Field("wavelength", "float", 1.0, "Random set: the longest wavelength, metres; the "
-                     "others are log-uniform down to a quarter of it.", POSITIVE),
-               Field("amplitude", "float", 0.02, "Random set: the amplitude of a wave `wavelength` "
-                     "long, metres; shorter waves are proportionally lower (equally steep).",
-                     NON_NEGATIVE),
-               Field("direction", "float", 0.0, "Random set: mean direction of travel, degrees "
-                     "from +x towards +z."),
-               Field("spread", "float", 30.0, "Random set: directions are uniform within "
-                     "`direction` +- `spread`, degrees.", Range(0.0, 180.0)),
-               Field("steepness", "float", 0.5, "Random set: the Gerstner steepness of every wave.",
-                     UNIT),
-               Field("seed", "int", 0, "Random set: the seed; the same seed gives the same waves.",
-                     NON_NEGATIVE)),
+               *WATER_RANDOM_SET),
               (Rule("`waves` and the random-set fields (`wave_count`, `wavelength`, `amplitude`, "
-                    "`direction`, `spread`, `steepness`, `seed`) exclude each other.", _check_water_fields),
+                    "`direction`, `spread`, `steepness`, `seed`) exclude each other.",
+                    water_fields_check(WATER_RANDOM_SET)),
                Rule("Every wavelength spans at least two grid cells (2 * `size` / `resolution`), and "
                     "the sum over the waves of steepness * 2 pi * amplitude / wavelength stays below 1 "
-                    "(else Gerstner crests loop and the surface intersects itself).", _check_water_waves))),
+                    "(else Gerstner crests loop and the surface intersects itself).", check_water_waves))),
 )
 
 GENERATORS_BY_NAME = {g.name: g for g in GENERATORS}
@@ -813,351 +555,3 @@ SECTIONS = (SCENE, CAMERA, RENDER, MARCH, ENVIRONMENT, MATERIAL, MEDIUM, FOG)
 
 ENV_MAP_EXTENSIONS = (".exr", ".hdr")
 SCENE_EXTENSIONS = (".toml",)
-
-
-# --- documentation ---------------------------------------------------------------------------
-
-INTRO = """\
-# Scene file format
-
-A scene is a [TOML](https://toml.io) file with the extension `.toml`. Units are metres and
-angles are degrees. Colours are linear RGB. Relative file paths (such as an environment map)
-are relative to the folder of the scene file.
-
-A scene holds one kind of geometry, named by `[scene] geometry`: `sdf` (signed distance
-fields, sphere traced) or `mesh` (triangle meshes with a BVH, plus analytic spheres, discs and
-quads, and Bezier surfaces of revolution). The two kinds share `[camera]`, `[render]`, `[environment]` and `[materials]`; they differ
-in what `[[objects]]` may hold, and `[render.march]` belongs to `sdf` scenes only.
-
-Only `[scene]` (for its `geometry` field) and at least one object are required; every other
-field has the default listed below. The loader is strict: an unknown section or field, a value
-of the wrong type (including `true`/`false` where a number is expected), a vector of the wrong
-length, `nan` or `inf`, or a value out of range is an error. Every error is one line naming the
-file and the place in it, for example:
-
-```text
-assets/scenes/x.toml: unknown material 'golde' in objects[2] (known: gold, floor)
-assets/scenes/x.toml: materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, emission, emission_strength)
-```
-
-Coming from another renderer? [conventions.md](conventions.md) lists what to match to
-reproduce a Mitsuba 3 or pbrt scene: perceptual roughness, the Smith masking term, two-sided
-materials, the pixel filter, the environment map's orientation, energy compensation, metals.
-
-This document is generated from `renderer/scene/schema.py`; edit that file, then run
-`python -c "from renderer.scene.schema import write_markdown; write_markdown()"`.
-"""
-
-EXAMPLE = """\
-[scene]
-name = "showcase"
-description = "A gold sphere and a glass blob on a floor, lit by a park."
-geometry = "sdf"
-
-[camera]
-position = [0, 1.2, 5]
-look_at = [0, 0.5, 0]
-fov = 40
-aperture = 0.02
-focus_distance = 5.0
-
-[render]
-width = 960
-height = 540
-spp = 128
-max_depth = -1
-integrator = "mis"
-seed = 7
-
-[render.march]
-max_steps = 400
-over_relaxation = 1.5
-
-[environment]
-type = "map"
-file = "../envmaps/park.exr"
-intensity = 1.2
-rotation = 90
-
-[materials.gold]
-type = "conductor"
-base_color = [1.0, 0.78, 0.34]
-roughness = 0.2
-
-[materials.glass]
-type = "dielectric"
-base_color = [1, 1, 1]
-roughness = 0.0
-ior = 1.5
-
-[materials.floor]
-base_color = [0.6, 0.6, 0.6]
-roughness = 0.8
-
-[materials.lamp]
-emission = [1.0, 0.9, 0.8]
-emission_strength = 5.0
-
-[[objects]]
-type = "sphere"
-material = "gold"
-radius = 0.5
-translate = [-1, 0.5, 0]
-
-[[objects]]
-type = "smooth_union"
-material = "glass"
-k = 0.2
-translate = [1, 0.6, 0]
-rotate = [0, 45, 0]
-[[objects.children]]
-type = "rounded_box"
-size = [0.8, 0.8, 0.8]
-radius = 0.1
-[[objects.children]]
-type = "sphere"
-radius = 0.5
-translate = [0, 0.4, 0]
-
-[[objects]]
-type = "repeat"
-material = "lamp"
-period = [2, 0, 2]
-limit = [2, 0, 2]
-translate = [0, 3, 0]
-[[objects.children]]
-type = "torus"
-major_radius = 0.3
-minor_radius = 0.05
-
-[[objects]]
-type = "plane"
-material = "floor"
-normal = [0, 1, 0]
-offset = 0
-"""
-
-
-MESH_EXAMPLE = """\
-[scene]
-name = "bunny on a table"
-description = "A model file, analytic shapes and a generated mesh."
-geometry = "mesh"
-
-[camera]
-position = [0, 1.5, 4]
-look_at = [0, 0.5, 0]
-fov = 35
-
-[render]
-width = 640
-height = 360
-spp = 64
-max_depth = 8
-
-[environment]
-type = "map"
-file = "../envmaps/sky.exr"
-
-[materials.copper]
-type = "conductor"
-base_color = [0.955, 0.638, 0.538]
-roughness = 0.25
-
-[materials.plastic]
-type = "principled"
-base_color = [0.1, 0.3, 0.8]
-metallic = 0.0
-roughness = 0.3
-ior = 1.45
-
-[materials.floor]
-base_color = [0.5, 0.5, 0.5]
-
-[materials.lamp]
-base_color = [0, 0, 0]
-emission = [1, 0.9, 0.8]
-emission_strength = 10
-
-[[objects]]
-type = "mesh"
-file = "../models/bunny.glb"
-material = "copper"
-translate = [0, 0.45, 0]
-rotate = [0, 30, 0]
-scale = 0.5
-
-[[objects]]
-type = "sphere"
-material = "plastic"
-radius = 0.3
-translate = [1, 0.3, 0]
-
-[[objects]]
-type = "quad"
-material = "floor"
-size = [20, 20]
-
-[[objects]]
-type = "disc"
-material = "lamp"
-radius = 0.5
-translate = [0, 3, 0]
-rotate = [180, 0, 0]
-
-[[objects]]
-type = "generated"
-generator = "terrain"
-material = "floor"
-resolution = 64
-size = 20
-height = 0.3
-seed = 1
-translate = [0, -0.35, -15]
-scale = [1, 1, 0.5]
-"""
-
-
-def _format_value(value: object) -> str:
-    if isinstance(value, str):
-        return f'"{value}"'
-    if isinstance(value, (tuple, list)):
-        return "[" + ", ".join(_format_value(v) for v in value) + "]"
-    if isinstance(value, float):
-        return repr(value)
-    return str(value)
-
-
-def _default_text(f: Field) -> str:
-    if f.default_doc is not None:
-        return f.default_doc
-    if f.required:
-        return "required"
-    return f"`{_format_value(f.default)}`"
-
-
-def _allowed_text(f: Field) -> str:
-    if f.allowed_doc is not None:
-        return f.allowed_doc
-    parts = []
-    if f.choices:
-        parts.append(", ".join(f"`\"{c}\"`" for c in f.choices))
-    if f.kind == "dir3":
-        parts.append("non-zero")
-    if f.range is not None:
-        each = "each component " if f.kind in ("vec3", "vec2", "int3", "dir3", "scale3") else ""
-        parts.append(f"{each}{f.range}")
-    return "; ".join(parts) or "any"
-
-
-def _description_text(f: Field) -> str:
-    text = f.description
-    if f.only_for:
-        kinds = " or ".join(f'`type = "{k}"`' for k in f.only_for)
-        text += f" Only with {kinds}."
-    if f.geometries:
-        kinds = " or ".join(f"`{g}`" for g in f.geometries)
-        text += f" Only in {kinds} scenes."
-    return text
-
-
-def _field_table(fields: tuple[Field, ...]) -> list[str]:
-    lines = ["| Field | Type | Default | Allowed | Description |",
-             "| --- | --- | --- | --- | --- |"]
-    for f in fields:
-        lines.append(f"| `{f.name}` | {VALUE_KINDS[f.kind]} | {_default_text(f)} | "
-                     f"{_allowed_text(f)} | {_description_text(f)} |")
-    return lines
-
-
-def _rules_list(rules: tuple[Rule, ...]) -> list[str]:
-    return ["", *(f"- {r.text}" for r in rules)] if rules else []
-
-
-def _section_heading(section: Section) -> str:
-    return section.heading if section.heading is not None else f"`[{section.name}]`"
-
-
-def _items_markdown(fields: tuple[Field, ...]) -> list[str]:
-    """The fields of each table of a field of tables (a camera's keyframes, a water surface's waves)."""
-    lines = []
-    for f in fields:
-        if f.items:
-            lines += ["", f"Each table of `{f.name}`:", "", *_field_table(f.items)]
-    return lines
-
-
-def _section_markdown(section: Section) -> list[str]:
-    return ["", f"## {_section_heading(section)}", "", section.description, "",
-            *_field_table(section.fields), *_items_markdown(section.fields), *_rules_list(section.rules)]
-
-
-def _node_kind_markdown(kind: NodeKind) -> list[str]:
-    lines = ["", f"#### `{kind.name}`", "", kind.description]
-    if kind.is_operator:
-        lines[-1] += f" Takes {kind.children_text()}."
-    if kind.params:
-        lines += ["", *_field_table(kind.params)]
-    else:
-        lines += ["", "No parameters."]
-    return lines + _rules_list(kind.rules)
-
-
-def _mesh_kind_markdown(kind: MeshKind) -> list[str]:
-    lines = ["", f"#### `{kind.name}`", "", kind.description]
-    notes = []
-    if kind.needs_material:
-        notes.append("Needs `material`.")
-    if kind.uniform_scale_reason:
-        notes.append(f"Needs a uniform `scale` ({kind.uniform_scale_reason}).")
-    if notes:
-        lines[-1] += " " + " ".join(notes)
-    return lines + ["", *_field_table(kind.params), *_rules_list(kind.rules)]
-
-
-def _generator_markdown(generator: Generator) -> list[str]:
-    return ["", f"#### `{generator.name}`", "", generator.description, "",
-            *_field_table(generator.params), *_items_markdown(generator.params), *_rules_list(generator.rules)]
-
-
-def render_markdown() -> str:
-    """The complete text of docs/scene-format.md."""
-    lines = [INTRO.rstrip("\n")]
-    for section in SECTIONS:
-        lines += _section_markdown(section)
-    lines += _section_markdown(NODE)
-    lines += ["", "### Primitives", "",
-              "Primitives sit in their own frame, centred at the origin; y is the axis where "
-              "there is one. Lengths must be greater than 0."]
-    for kind in PRIMITIVES:
-        lines += _node_kind_markdown(kind)
-    lines += ["", "### Operators"]
-    for kind in OPERATORS:
-        lines += _node_kind_markdown(kind)
-    lines += _section_markdown(MESH_OBJECT)
-    lines += ["", "### Object types", "",
-              "Analytic shapes and generated meshes sit in their own frame, centred at the "
-              "origin. Lengths must be greater than 0. A field of another type is an error."]
-    for kind in MESH_KINDS:
-        lines += _mesh_kind_markdown(kind)
-    lines += ["", "### Generators", "",
-              "The parameters of the chosen `generator` are written as fields of its "
-              "`generated` object; a parameter of another generator is an error. Generators "
-              "are deterministic: the same parameters give the same mesh."]
-    for generator in GENERATORS:
-        lines += _generator_markdown(generator)
-    lines += ["", "## Complete examples", "",
-              "With the scenes in `assets/scenes/`, the maps in `assets/envmaps/` and the models "
-              "in `assets/models/`. An `sdf` scene:", "",
-              "```toml", EXAMPLE.rstrip("\n"), "```", "",
-              "A `mesh` scene:", "",
-              "```toml", MESH_EXAMPLE.rstrip("\n"), "```"]
-    return "\n".join(lines) + "\n"
-
-
-# docs/scene-format.md, found from this file: renderer/scene/schema.py -> repository root.
-DOC_PATH = Path(__file__).resolve().parents[2] / "docs" / "scene-format.md"
-
-
-def write_markdown(path: Path = DOC_PATH) -> None:
-    Path(path).write_text(render_markdown(), encoding="utf-8")

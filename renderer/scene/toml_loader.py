@@ -31,7 +31,7 @@ from .description import (
 )
 from .model_files import ModelFiles
 from .references import missing_file_problem
-from .schema import Field, MeshKind, NodeKind, Section, format_number
+from .schema_types import WRITTEN, Field, Generator, MeshKind, NodeKind, Section, format_number
 
 # Python objects of a parsed TOML file per byte of its text (a file of empty inline tables comes
 # to ~60; tests/scene/test_input_limits.py measures it): checked against the memory budget first.
@@ -290,14 +290,14 @@ def _read_fields(table: dict, fields: tuple[Field, ...], where: str,
         if not field.applies_to(kind):
             # not this kind's field (_check_keys refused it in the table); its default stands
             # unless a field of the same name belongs to this kind
-            values.setdefault(field.name, None if field.required else field.default)
+            values.setdefault(field.name, None if field.required else field.default_for(kind))
             continue
         if field.name in table:
             values[field.name] = _convert(field, table[field.name], f"{where}.{field.name}")
         elif field.required and field.applies_to(kind):
             raise _Invalid(where, f"missing required field '{field.name}'")
         else:
-            values[field.name] = None if field.required else field.default
+            values[field.name] = None if field.required else field.default_for(kind)
     return values
 
 
@@ -312,7 +312,7 @@ def _read_section(raw: object, section: Section, where: str) -> dict:
         if "type" in table:
             kind = _convert(type_field, table["type"], f"{where}.type")
     values = _read_fields(table, section.fields, where, kind)
-    _apply_rules(section.rules, {**values, schema.WRITTEN: frozenset(table)}, where)
+    _apply_rules(section.rules, {**values, WRITTEN: frozenset(table)}, where)
     return values
 
 
@@ -529,7 +529,7 @@ def _mesh_kind(table: dict, where: str) -> MeshKind:
     return kind
 
 
-def _generator(table: dict, where: str) -> schema.Generator:
+def _generator(table: dict, where: str) -> Generator:
     if "generator" not in table:
         raise _Invalid(where, "missing required field 'generator'")
     field = schema.MESH_KINDS_BY_NAME["generated"].params[0]

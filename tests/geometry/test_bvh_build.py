@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from renderer.geometry.bvh_build import (C_ISECT, C_TRAV, STRATEGIES, FlatBVH, build_bvh,
-                                         sah_cost)
+from renderer.geometry.bvh_build import STRATEGIES, build_bvh
+from renderer.geometry.bvh_tree import C_ISECT, C_TRAV, FlatBVH, sah_cost
 
 HARD = 16  # build_bvh's default max_leaf_hard
 
@@ -282,14 +282,15 @@ def test_deterministic_and_thread_independent():
         assert np.array_equal(getattr(one, f), getattr(two, f)), f
 
 
-@pytest.mark.parametrize("knob, value", [("_CELLS_MAX_RATIO", 0.0), ("_COMPACT_FRACTION", 0.0),
-                                         ("_COMPACT_FRACTION", 1.01)])
-def test_fast_paths_are_exact(monkeypatch, knob, value):
+@pytest.mark.parametrize("module, knob, value", [("bvh_split", "_CELLS_MAX_RATIO", 0.0),
+                                                 ("bvh_build", "_COMPACT_FRACTION", 0.0),
+                                                 ("bvh_build", "_COMPACT_FRACTION", 1.01)])
+def test_fast_paths_are_exact(monkeypatch, module, knob, value):
     """Binning through cells (top levels) and compacting the active set change nothing."""
-    import renderer.geometry.bvh_build as bb
+    import importlib
     lo, hi, c = random_triangles(30_000, seed=15)
     ref = build_bvh(lo, hi, c)
-    monkeypatch.setattr(bb, knob, value)
+    monkeypatch.setattr(importlib.import_module(f"renderer.geometry.{module}"), knob, value)
     other = build_bvh(lo, hi, c)
     for f in ("node_lo", "node_a", "node_count", "prim_order"):
         assert np.array_equal(getattr(ref, f), getattr(other, f)), f
@@ -325,12 +326,12 @@ def test_bin_counts(bins):
 def test_cell_binning_matches_per_axis_binning(monkeypatch):
     # 64 bins on a root of more than 64**3 primitives takes the b x b x b cell path (its cell index
     # once overflowed int16 there and crashed); it must give the per-axis scatter's tree exactly.
-    import renderer.geometry.bvh_build as builder
+    import renderer.geometry.bvh_split as split
 
     lo, hi, c = (x.astype(np.float32) for x in random_triangles(64 ** 3 + 5_000, seed=15))
     cells = build_bvh(lo, hi, c, bins=64)
     check_bvh(cells, lo, hi, HARD)
-    monkeypatch.setattr(builder, "_CELLS_MAX_RATIO", 0.0)
+    monkeypatch.setattr(split, "_CELLS_MAX_RATIO", 0.0)
     per_axis = build_bvh(lo, hi, c, bins=64)
     for name in ("node_lo", "node_hi", "node_a", "node_count", "prim_order"):
         assert np.array_equal(getattr(cells, name), getattr(per_axis, name)), name

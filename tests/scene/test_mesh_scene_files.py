@@ -15,7 +15,7 @@ from renderer.scene import (
     Scene,
     load_scene,
 )
-from renderer.scene import schema
+from renderer.scene import schema_docs
 from renderer.scene.model_formats import MESH_EXTENSIONS
 from renderer.scene.description import MeshObject
 from tests.scene.scene_file_helpers import MATERIAL, load_error, scene_text, write
@@ -215,7 +215,7 @@ def test_documented_mesh_example_loads(tmp_path):
     touch(tmp_path / "envmaps" / "sky.exr")
     touch(tmp_path / "models" / "bunny.glb")
     (tmp_path / "scenes").mkdir()
-    scene = load_scene(write(tmp_path / "scenes", schema.MESH_EXAMPLE))
+    scene = load_scene(write(tmp_path / "scenes", schema_docs.MESH_EXAMPLE))
     assert scene.geometry == "mesh"
     assert tuple(o.kind for o in scene.mesh_objects) == ("mesh", "sphere", "quad", "disc", "generated")
     assert {m.kind for m in scene.materials} == {"conductor", "principled", "diffuse"}

@@ -1,4 +1,4 @@
-"""The scene format's schema (renderer/scene/schema.py) against the model's defaults and kinds,
+"""The scene format's tables (renderer/scene/schema.py) against the model's defaults and kinds,
 and docs/scene-format.md against the text generated from the schema."""
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from renderer.scene import (
     Scene,
     Transform,
 )
-from renderer.scene import schema
+from renderer.scene import schema, schema_docs, schema_types
 from renderer.scene.model_formats import MESH_EXTENSIONS
 from renderer.scene.description import MESH_GENERATORS, MESH_OBJECT_KINDS, MeshObject
 from tests.scene.scene_file_helpers import REPO
@@ -53,7 +53,10 @@ def test_schema_defaults_equal_model_defaults(section, model, not_fields):
         if not field.in_model:
             continue
         covered.add(field.model_attr)
-        if not field.required:
+        if field.type_defaults:  # a default per material kind: the model resolves the same one
+            for kind in MATERIAL_KINDS:
+                assert getattr(model(name="m", kind=kind), field.model_attr) == field.default_for(kind), kind
+        elif not field.required:
             assert field.default == defaults[field.model_attr], f"{section.name}.{field.name}"
     # Every model field is described by the schema, and nothing else is.
     assert covered | not_fields == {f.name for f in dataclasses.fields(model)}
@@ -109,18 +112,18 @@ def test_every_field_has_a_description_and_known_kind():
     fields += [f for k in schema.MESH_KINDS + schema.GENERATORS for f in k.params]
     for f in fields:
         assert f.description.strip(), f.name
-        assert f.kind in schema.VALUE_KINDS, f.name
+        assert f.kind in schema_types.VALUE_KINDS, f.name
 
 
 def test_docs_equal_generated_text():
     doc = REPO / "docs" / "scene-format.md"
-    assert doc.read_text(encoding="utf-8") == schema.render_markdown(), (
+    assert doc.read_text(encoding="utf-8") == schema_docs.render_markdown(), (
         "docs/scene-format.md is stale; regenerate it with "
-        "python -c \"from renderer.scene.schema import write_markdown; write_markdown()\"")
+        "python -c \"from renderer.scene.schema_docs import write_markdown; write_markdown()\"")
 
 
 def test_docs_mention_every_section_field_and_kind():
-    text = schema.render_markdown()
+    text = schema_docs.render_markdown()
     for section in schema.SECTIONS:
         assert section.name in text
         for f in section.fields:
@@ -137,20 +140,20 @@ def test_docs_mention_every_section_field_and_kind():
 
 
 @pytest.mark.parametrize("value, text", [
-    (schema.Range(1.0, 179.0), "[1, 179]"),
-    (schema.Range(1.0, 2.0, hi_open=True), "[1, 2)"),
-    (schema.Range(1.0, 4.0, lo_open=True), "(1, 4]"),
-    (schema.POSITIVE, "> 0"),
-    (schema.NON_NEGATIVE, ">= 0"),
-    (schema.Range(1, also=(-1,)), "-1 or >= 1"),
+    (schema_types.Range(1.0, 179.0), "[1, 179]"),
+    (schema_types.Range(1.0, 2.0, hi_open=True), "[1, 2)"),
+    (schema_types.Range(1.0, 4.0, lo_open=True), "(1, 4]"),
+    (schema_types.POSITIVE, "> 0"),
+    (schema_types.NON_NEGATIVE, ">= 0"),
+    (schema_types.Range(1, also=(-1,)), "-1 or >= 1"),
 ])
 def test_range_text(value, text):
     assert str(value) == text
 
 
 def test_range_membership():
-    depth = schema.Range(1, also=(-1,))
+    depth = schema_types.Range(1, also=(-1,))
     assert -1 in depth and 1 in depth and 100 in depth
     assert 0 not in depth and -2 not in depth
-    relax = schema.Range(1.0, 2.0, hi_open=True)
+    relax = schema_types.Range(1.0, 2.0, hi_open=True)
     assert 1.0 in relax and 1.999 in relax and 2.0 not in relax

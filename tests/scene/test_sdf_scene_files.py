@@ -19,7 +19,7 @@ from renderer.scene import (
     Transform,
     load_scene,
 )
-from renderer.scene import schema
+from renderer.scene import schema_docs
 from tests.scene.scene_file_helpers import HEADER, MATERIAL, SPHERE, load_error, node, scene_text, write
 
 
@@ -260,7 +260,7 @@ def test_documented_example_loads(tmp_path):
     (tmp_path / "envmaps").mkdir()
     (tmp_path / "envmaps" / "park.exr").write_bytes(b"")
     (tmp_path / "scenes").mkdir()
-    scene = load_scene(write(tmp_path / "scenes", schema.EXAMPLE))
+    scene = load_scene(write(tmp_path / "scenes", schema_docs.EXAMPLE))
     assert scene.name == "showcase"
     assert {n.kind for o in scene.sdf_objects for n in o.walk()} >= {"sphere", "repeat", "plane"}
 
