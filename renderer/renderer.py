@@ -37,7 +37,7 @@ class MeshOptions:
     strategy: str = "sah"
     # "wide8" (the binary tree collapsed into 8-wide nodes), "wide4", or the binary tree's "stack" or
     # "stackless" (renderer/geometry/mesh_geometry.py; `bench bvh` compares them). 8-wide since its
-    # visits lost their sorting network (docs/architecture.md, "Nearest child first"): whole `mis`
+    # visits lost their sorting network (docs/findings.md, "Nearest child first"): whole `mis`
     # renders 1.02-1.12x faster than 4-wide, the 1M terrain's incoherent rays 1.17x.
     traversal: str = "wide8"
     triangle_test: str = "watertight"
@@ -52,7 +52,7 @@ class MeshOptions:
     instancing: bool = True  # False: every instance flattened into world triangles (a reference)
 
 
-# Measured (docs/architecture.md, "Leaves tested four at a time"): with packet leaves, bench bvh's
+# Measured (docs/findings.md, "Leaves tested four at a time"): with packet leaves, bench bvh's
 # leaf sweep on the 100k terrain gave 3.99/3.88/4.36/4.92/4.85 Mrays/s incoherent at max leaf
 # 1/2/4/8/16, and whole `mis` renders ran 1.02-1.05x (stress) and 1.01x (bunnies) at 8 against 4;
 # scalar leaves of triangles keep 4 (textured with scalar leaves: 1 and 2 ran 0.95x of 4).
@@ -61,7 +61,7 @@ MAX_LEAF_SIZE = {"scalar": 4, "packets": 8}
 # forced leaf size, SAH decides where to stop (its leaves hold at most 16). Under 8-wide nodes, whose
 # eight boxes are tested together, a leaf of four quads cost the Cornell box four scalar tests where
 # the node would have culled most: whole `mis` renders at max leaf 1 against 4, in one process
-# (docs/architecture.md, "Analytic scenes"): Cornell box 1.25x, goblet 1.09x, weekend 0.99x.
+# (docs/findings.md, "Analytic scenes"): Cornell box 1.25x, goblet 1.09x, weekend 0.99x.
 ANALYTIC_MAX_LEAF_SIZE = 1
 
 

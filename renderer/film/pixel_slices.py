@@ -10,7 +10,7 @@ cell by pairs of rows, the pairs in bit-reversed order: a pass over Bayer slices
 row of every cell for a few pixels of each (the film's memory in many scattered pieces), one
 over row slices a few whole rows of each cell: a first round in one 40 ms frame's passes costs
 1.03-1.09x a whole round's launch at 960x540 (`python scripts/slice_order_cost.py`; with Bayer
-order throughout 1.07-1.18x; docs/architecture.md).
+order throughout 1.07-1.18x; docs/findings.md).
 
 A pixel's sample index is its own count of samples so far (the film's accepted plus rejected
 counts), not a global counter: pixels may be one sample apart within a round, and a pixel's

@@ -14,7 +14,7 @@ bytes a triangle the BVH and intersection data may take.)
 
 The four triangles are tested with 4-lane arithmetic, written so that LLVM's SLP vectoriser on
 the CPU keeps it 4 lanes wide (every lane's edge functions, determinant and distance computed
-unconditionally, the hit mask folded before any branch; docs/architecture.md has the evidence):
+unconditionally, the hit mask folded before any branch; docs/findings.md has the evidence):
 the watertight test of Woop, Benthin and Wald 2013 with the per-ray axis permutation choosing
 the rows (so the test is the scalar intersect.triangle_watertight's, lane by lane), or Moller-
 Trumbore. Lanes holding other primitives (spheres, quads, discs, Bezier patches) have zero

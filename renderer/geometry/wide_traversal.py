@@ -2,7 +2,7 @@
 traversal.
 
 A visit tests the node's children together, written so that LLVM's SLP vectoriser turns the test
-into 4-lane (8-lane) instructions on the CPU (docs/architecture.md, "Decisions worth knowing",
+into 4-lane (8-lane) instructions on the CPU (docs/findings.md, "BVH traversal",
 has the evidence; scripts/wide_bvh_ir.py shows it): every child's entry and exit distances and
 the hit mask are computed unconditionally and folded into one key per child (its entry
 distance, or MISS_KEY) before the first branch, and the keys are also stored to a local array

@@ -42,7 +42,7 @@ def cpu_scheduling_options() -> dict:
     the threads take in turn as they finish, so every thread works to the loop's end: whole
     rounds of uneven scenes 1.5-1.9x faster than under the static shares, a viewer still
     frame's passes ~1.1x (scripts/cpu_scheduling_cost.py; figures in
-    docs/architecture.md). GPUs schedule blocks dynamically anyway. Taichi reads the setting when
+    docs/findings.md). GPUs schedule blocks dynamically anyway. Taichi reads the setting when
     a kernel compiles, and its offline cache key leaves it out: see default_cache_dir.
     """
     return {"make_cpu_multithreading_loop": False}
