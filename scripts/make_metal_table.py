@@ -14,44 +14,33 @@ Where the spectra come from
         Fe, Ni, Ti: Johnson and Christy 1974, Phys. Rev. B 9, 5056 (measured; nk/Johnson.yml);
         Pt: Rakic et al. 1998, Appl. Opt. 37, 5271 (their Brendel-Bormann fit of measured data,
             tabulated; nk/Rakic-BB.yml); Johnson and Christy did not measure platinum.
-    * The CIE 1931 2-degree colour matching functions, 360-830 nm: the CIE's own table (CIE
-      015:2018, dataset DOI 10.25039/CIE.DS.xvudnb9b, file CIE_xyz_1931_2deg.csv: lines
-      "nm,x,y,z" at 1 nm); Mitsuba stores its rows at every 5 nm as float32.
+    * The CIE 1931 colour matching functions: renderer/spectral/data/cie1931_d65_5nm.csv.
 
-How Mitsuba 3 makes RGB of a spectrum (include/mitsuba/render/ior.h `ior_from_file` calls
-src/core/spectrum.cpp `spectrum_list_to_srgb(wavelengths, values, bounded=false, d65=false)`),
-reproduced by `spectrum_to_rgb` below:
-    * 1000 wavelengths w_i = 360 + 470 i / 999 nm; those outside the spectrum's first and last
-      wavelength are skipped (they add 0: a spectrum that stops at 590 nm loses its red);
-    * the spectrum is interpolated linearly between its samples, the CMFs linearly between the
-      5 nm rows of the table (as float32);
-    * XYZ = sum cmf(w_i) value(w_i) * 470 / 1000 / 106.7502593994140625 (Mitsuba's
-      MI_CIE_Y_NORMALIZATION), in double precision;
-    * RGB = the XYZ -> linear sRGB (Rec. 709) matrix of include/mitsuba/core/spectrum.h, with its
-      float32 coefficients, and negative channels clamped to 0; stored as float32.
-No white point or illuminant enters: each of eta and k is treated as a plain spectrum, so RGB
-(1, 1, 1) is the constant spectrum 1 integrated against unit-area CMFs.
+How Mitsuba 3 makes RGB of a spectrum: include/mitsuba/render/ior.h `ior_from_file` calls
+`spectrum_list_to_srgb(wavelengths, values, bounded=false, d65=false)`, reproduced by
+renderer/spectral/mitsuba_rgb.py (its docstring gives the rule), which the Mitsuba scene reader
+uses too. No illuminant enters: each of eta and k is a plain spectrum.
 
 Usage:
     python scripts/make_metal_table.py --mitsuba-ior PATH/mitsuba-data/ior \
-        --refractiveindex PATH/refractiveindex.info-database/database/data/main \
-        --cie PATH/CIE_xyz_1931_2deg.csv
+        --refractiveindex PATH/refractiveindex.info-database/database/data/main
 (writes renderer/materials/data/metals.csv; tests/materials/test_metals.py checks a few rows
 against the values Mitsuba 3 itself reports).
 """
 import argparse
 import csv
+import sys
 from pathlib import Path
 
 import numpy as np
 
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from renderer.spectral.mitsuba_rgb import CIE_MAX, CIE_MIN, spectrum_to_rgb  # noqa: E402
+
 OUT = Path(__file__).resolve().parents[1] / "renderer" / "materials" / "data" / "metals.csv"
-CIE_MIN, CIE_MAX, CIE_SAMPLES = 360.0, 830.0, 95
-STEPS = 1000
-Y_NORMALIZATION = 1.0 / 106.7502593994140625
-XYZ_TO_SRGB = np.array([[3.240479, -1.537150, -0.498535],
-                        [-0.969256, 1.875991, 0.041556],
-                        [0.055648, -0.204043, 1.057311]], np.float32).astype(np.float64)
 # (name, folder under refractiveindex.info's data/main, file, citation)
 EXTRA = (("Fe", "Fe/nk/Johnson.yml", "Johnson and Christy 1974"),
          ("Ni", "Ni/nk/Johnson.yml", "Johnson and Christy 1974"),
@@ -59,51 +48,9 @@ EXTRA = (("Fe", "Fe/nk/Johnson.yml", "Johnson and Christy 1974"),
          ("Ti", "Ti/nk/Johnson.yml", "Johnson and Christy 1974"))
 
 
-def read_cie(path: Path) -> np.ndarray:
-    """(95, 3) float32: x, y, z at 360, 365, ..., 830 nm."""
-    rows = {}
-    for line in path.read_text().splitlines():
-        parts = line.strip().split(",")
-        try:
-            nm = float(parts[0])
-        except ValueError:
-            continue  # a header
-        rows[nm] = [float(p) for p in parts[1:4]]
-    grid = CIE_MIN + 5.0 * np.arange(CIE_SAMPLES)
-    missing = [nm for nm in grid if nm not in rows]
-    if missing:
-        raise SystemExit(f"error: {path}: no CIE rows for {missing[:3]}... (need 360-830 nm)")
-    return np.array([rows[nm] for nm in grid], np.float32)
-
-
-def cmf(table: np.ndarray, w: float) -> np.ndarray:
-    """Mitsuba's cie1931_xyz: linear between the 5 nm rows, 0 outside [360, 830]."""
-    if w < CIE_MIN or w > CIE_MAX:
-        return np.zeros(3)
-    t = (w - CIE_MIN) * ((CIE_SAMPLES - 1) / (CIE_MAX - CIE_MIN))
-    i0 = min(max(int(t), 0), CIE_SAMPLES - 2)
-    w1 = t - i0
-    return (1.0 - w1) * table[i0].astype(np.float64) + w1 * table[i0 + 1].astype(np.float64)
-
-
-def spectrum_to_rgb(wavelengths, values, table) -> np.ndarray:
-    """Mitsuba 3's spectrum_list_to_srgb(bounded=false, d65=false), as float32."""
-    wavelengths = np.asarray(wavelengths, np.float64)
-    values = np.asarray(values, np.float64)
-    xyz = np.zeros(3)
-    for i in range(STEPS):
-        w = CIE_MIN + (i / (STEPS - 1)) * (CIE_MAX - CIE_MIN)
-        if w < wavelengths[0] or w > wavelengths[-1]:
-            continue
-        # the last interval whose left end is <= w (clamped to a valid interval)
-        index = int(np.clip(np.searchsorted(wavelengths, w, side="right") - 1, 0, len(wavelengths) - 2))
-        w0, w1 = wavelengths[index], wavelengths[index + 1]
-        v0, v1 = values[index], values[index + 1]
-        v = ((w - w1) * v0 + (w0 - w) * v1) / (w0 - w1)
-        xyz += cmf(table, w) * v
-    xyz *= (CIE_MAX - CIE_MIN) * Y_NORMALIZATION / STEPS
-    rgb = np.maximum(XYZ_TO_SRGB @ xyz, 0.0)
-    return rgb.astype(np.float32)
+def metal_rgb(wavelengths, values) -> np.ndarray:
+    """An eta or k spectrum as Mitsuba's ior_from_file makes it RGB: unbounded, without D65."""
+    return np.array(spectrum_to_rgb(wavelengths, values, bounded=False, d65=False), np.float32)
 
 
 def read_spd(path: Path):
@@ -140,9 +87,7 @@ def main():
     parser.add_argument("--mitsuba-ior", type=Path, required=True, help="mitsuba-data's ior/ folder")
     parser.add_argument("--refractiveindex", type=Path, required=True,
                         help="refractiveindex.info-database's database/data/main folder")
-    parser.add_argument("--cie", type=Path, required=True, help="CIE_xyz_1931_2deg.csv (360-830 nm)")
     args = parser.parse_args()
-    table = read_cie(args.cie)
     rows = []
     for eta_file in sorted(args.mitsuba_ior.glob("*.eta.spd")):
         name = eta_file.name[:-len(".eta.spd")]
@@ -152,10 +97,10 @@ def main():
         source = "Mitsuba 3 preset (Luxpop: Palik; CXRO/LLNL)"
         if eta_w[0] > CIE_MIN or eta_w[-1] < CIE_MAX or k_w[0] > CIE_MIN or k_w[-1] < CIE_MAX:
             source += f"; spectrum covers {min(eta_w[0], k_w[0]):.0f}-{max(eta_w[-1], k_w[-1]):.0f} nm only"
-        rows.append((name, spectrum_to_rgb(eta_w, eta_v, table), spectrum_to_rgb(k_w, k_v, table), source))
+        rows.append((name, metal_rgb(eta_w, eta_v), metal_rgb(k_w, k_v), source))
     for name, file, citation in EXTRA:
         nm, n, k = read_tabulated_nk(args.refractiveindex / file)
-        rows.append((name, spectrum_to_rgb(nm, n, table), spectrum_to_rgb(nm, k, table),
+        rows.append((name, metal_rgb(nm, n), metal_rgb(nm, k),
                      f"refractiveindex.info: {citation}"))
     rows.sort(key=lambda r: r[0].lower())
     OUT.parent.mkdir(parents=True, exist_ok=True)

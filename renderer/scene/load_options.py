@@ -17,10 +17,24 @@ class LoadOptions:
     # model's folder unless this is set (--allow-outside-files): a downloaded model must not read
     # files elsewhere on the machine. Scene files may name any file: the user wrote them.
     allow_outside_files: bool = False
+    # A Mitsuba scene's parameters from the command line (-D name=value), overriding its <default>s.
+    defines: tuple[tuple[str, str], ...] = ()
 
 
 def options_from_arguments(args) -> LoadOptions:
-    """The options a command line asked for (`--memory-limit`, `--allow-outside-files`; commands
-    without them get the defaults)."""
+    """The options a command line asked for (`--memory-limit`, `--allow-outside-files`, `-D`;
+    commands without them get the defaults)."""
     return LoadOptions(MemoryBudget.from_settings(getattr(args, "memory_limit", None)),
-                       bool(getattr(args, "allow_outside_files", False)))
+                       bool(getattr(args, "allow_outside_files", False)),
+                       parse_defines(getattr(args, "define", None) or ()))
+
+
+def parse_defines(items) -> tuple[tuple[str, str], ...]:
+    """NAME=VALUE strings (-D) as pairs; a malformed one is a ValueError naming it."""
+    pairs = []
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip() or not name.strip().replace("_", "a").isalnum():
+            raise ValueError(f"-D {item}: expected NAME=VALUE")
+        pairs.append((name.strip(), value))
+    return tuple(pairs)

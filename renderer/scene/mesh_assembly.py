@@ -176,12 +176,14 @@ class _Assembler:
             self.world.add(place_mesh(TriangleMesh(positions, indices, normals=normals), matrix),
                            self.material(obj.material, where))
         elif obj.kind == "sphere":
-            self.parts["spheres"].append([*obj.translate, obj.radius * obj.scale[0]])
+            centre, scale = obj.centre_and_scale()
+            self.parts["spheres"].append([*centre, obj.radius * scale])
             self.parts["sphere_mat"].append(self.material(obj.material, where))
         elif obj.kind == "disc":
             normal = matrix[:3, :3] @ np.array([0.0, 1.0, 0.0])
             normal /= np.linalg.norm(normal)
-            self.parts["discs"].append([*obj.translate, *normal, obj.radius * obj.scale[0]])
+            centre, scale = obj.centre_and_scale()
+            self.parts["discs"].append([*centre, *normal, obj.radius * scale])
             self.parts["disc_mat"].append(self.material(obj.material, where))
         elif obj.kind == "quad":
             sx, sz = obj.size

@@ -1,0 +1,188 @@
+"""Mitsuba 3 plugins made into Lantern's scene description: the Cornell box written as Mitsuba XML
+is the catalog's Cornell box, sensors' fields of view convert by axis, shapes face where Mitsuba's
+do, BSDFs and media map onto Lantern's kinds, and what is left out is one warning each."""
+from __future__ import annotations
+
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from renderer.scene.catalog import load_any, resolve_scene
+from renderer.scene.errors import SceneError
+from renderer.scene.mesh_assembly import assemble
+from renderer.scene.mitsuba import MitsubaSceneWarning, load_mitsuba_scene
+from renderer.spectral.mitsuba_rgb import spectrum_to_rgb
+
+DATA = Path(__file__).resolve().parents[2] / "data" / "mitsuba"
+SHAPE = '<shape type="sphere"><bsdf type="diffuse"/></shape>'
+
+
+def load(tmp_path, body: str, expect_warnings: int | None = 0):
+    path = tmp_path / "s.xml"
+    path.write_text(f'<scene version="3.0.0">\n{body}\n</scene>\n')
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = load_mitsuba_scene(path)
+    messages = [str(w.message) for w in caught if issubclass(w.category, MitsubaSceneWarning)]
+    if expect_warnings is not None:
+        assert len(messages) == expect_warnings, messages
+    return scene, messages
+
+
+def quad_set(scene):
+    """Each quad as (its corners, its facing, its material's colour and emission), rounded."""
+    assembly = assemble(scene)
+    out = []
+    for (corner, u, v), index in zip(assembly.data.quads, assembly.data.quad_material):
+        material = assembly.materials[index]
+        corners = tuple(sorted(tuple(np.round(p, 5)) for p in (corner, corner + u, corner + v, corner + u + v)))
+        normal = np.cross(u, v) / np.linalg.norm(np.cross(u, v))
+        out.append((corners, tuple(np.round(normal, 5)), tuple(np.round(material.base_color, 6)),
+                    tuple(np.round(material.emission, 5))))
+    return sorted(out)
+
+
+def test_the_cornell_box_in_mitsuba_xml_is_the_catalogs():
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        xml = load_any(DATA / "cornell_box.xml")
+    # Mitsuba's film filters with a Gaussian unless told otherwise: the one thing left out.
+    assert [str(w.message) for w in caught] == [
+        f"{DATA / 'cornell_box.xml'}: line 23: <film type=\"hdrfilm\">: the gaussian reconstruction filter is "
+        "rendered with Lantern's box filter"]
+    toml = load_any(resolve_scene("cornell_box"))
+    assert quad_set(xml) == quad_set(toml) and len(quad_set(xml)) == 18
+    assert xml.camera.position == toml.camera.position and xml.camera.up == toml.camera.up
+    forward = np.subtract(xml.camera.look_at, xml.camera.position)
+    np.testing.assert_allclose(forward / np.linalg.norm(forward), (0, 0, -1))
+    assert xml.camera.fov == pytest.approx(toml.camera.fov, abs=1e-9)
+    r = xml.render
+    assert (r.width, r.height, r.spp, r.max_depth, r.integrator) == (256, 256, 64, 8, "mis")
+
+
+@pytest.mark.parametrize("axis, size, expected", [
+    ("x", (200, 100), 2 * math.atan(math.tan(math.radians(30)) * 100 / 200)),
+    ("y", (200, 100), math.radians(60)),
+    ("diagonal", (200, 100), 2 * math.atan(math.tan(math.radians(30)) * 100 / math.hypot(200, 100))),
+    ("smaller", (100, 200), 2 * math.atan(math.tan(math.radians(30)) * 200 / 100)),
+    ("larger", (100, 200), math.radians(60)),
+])
+def test_field_of_view_by_axis(tmp_path, axis, size, expected):
+    scene, _ = load(tmp_path, f'''<sensor type="perspective"><float name="fov" value="60"/>
+        <string name="fov_axis" value="{axis}"/><film type="hdrfilm"><rfilter type="box"/>
+        <integer name="width" value="{size[0]}"/><integer name="height" value="{size[1]}"/></film></sensor>''' + SHAPE)
+    assert scene.camera.fov == pytest.approx(math.degrees(expected), rel=1e-12)
+
+
+def test_focal_length_is_against_35mm_films_diagonal(tmp_path):
+    scene, _ = load(tmp_path, '''<sensor type="perspective"><string name="focal_length" value="50mm"/>
+        <film type="hdrfilm"><rfilter type="box"/><integer name="width" value="100"/>
+        <integer name="height" value="100"/></film></sensor>''' + SHAPE)
+    diagonal = 2 * math.atan(math.hypot(36, 24) / 100)
+    expected = 2 * math.atan(math.tan(diagonal / 2) * 100 / math.hypot(100, 100))
+    assert scene.camera.fov == pytest.approx(math.degrees(expected), rel=1e-12)
+
+
+def test_rectangle_disk_and_cube_face_as_mitsubas(tmp_path):
+    scene, _ = load(tmp_path, '''<shape type="rectangle"/><shape type="disk"/>
+        <shape type="cube"><transform name="to_world"><scale value="0.5"/><translate x="3"/></transform></shape>''')
+    data = assemble(scene).data
+    corner, u, v = data.quads[0]
+    np.testing.assert_allclose(np.cross(u, v) / np.linalg.norm(np.cross(u, v)), (0, 0, 1), atol=1e-7)
+    np.testing.assert_allclose(sorted(map(tuple, (corner, corner + u, corner + v, corner + u + v))),
+                               [(-1, -1, 0), (-1, 1, 0), (1, -1, 0), (1, 1, 0)], atol=1e-7)
+    np.testing.assert_allclose(data.discs[0], (0, 0, 0, 0, 0, 1, 1), atol=1e-7)
+    faces = data.quads[1:]
+    assert len(faces) == 6
+    for corner, u, v in faces:
+        centre = corner + (u + v) / 2
+        normal = np.cross(u, v) / np.linalg.norm(np.cross(u, v))
+        outward = (centre - (3, 0, 0)) / np.linalg.norm(centre - (3, 0, 0))
+        np.testing.assert_allclose(normal, outward, atol=1e-6)  # every face looks out of the cube
+        np.testing.assert_allclose(np.abs(centre - (3, 0, 0)).max(), 0.5, atol=1e-6)
+
+
+def test_sphere_centre_radius_and_a_non_uniform_scale(tmp_path):
+    scene, _ = load(tmp_path, '''<shape type="sphere"><point name="center" x="1" y="0" z="0"/>
+        <float name="radius" value="0.5"/><transform name="to_world"><scale value="2"/>
+        <translate y="1"/></transform></shape>''')
+    np.testing.assert_allclose(assemble(scene).data.spheres[0], (2, 1, 0, 1), atol=1e-6)
+    with pytest.raises(SceneError, match="a sphere's to_world must scale uniformly"):
+        load(tmp_path, '<shape type="sphere"><transform name="to_world"><scale x="2"/></transform></shape>')
+
+
+def materials(tmp_path, bsdf: str, expect_warnings=0):
+    scene, messages = load(tmp_path, f'<shape type="sphere">{bsdf}</shape>', expect_warnings)
+    return scene.materials[0], messages
+
+
+def test_conductors(tmp_path):
+    gold, _ = materials(tmp_path, '''<bsdf type="roughconductor"><string name="material" value="Au"/>
+        <string name="distribution" value="ggx"/><float name="alpha" value="0.09"/></bsdf>''')
+    assert (gold.kind, gold.metal, gold.roughness) == ("conductor", "Au", pytest.approx(0.3))
+    mirror, _ = materials(tmp_path, '<bsdf type="conductor"/>')
+    assert (mirror.kind, mirror.roughness, mirror.base_color, mirror.eta) == ("conductor", 0.0, (1, 1, 1), None)
+    beckmann, messages = materials(tmp_path, '<bsdf type="roughconductor"/>', expect_warnings=1)
+    assert beckmann.roughness == pytest.approx(math.sqrt(0.1)) and "beckmann distribution" in messages[0]
+    with pytest.raises(SceneError, match="unknown conductor material 'Unobtainium'"):
+        materials(tmp_path, '<bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf>')
+
+
+def test_dielectrics_and_named_indices(tmp_path):
+    glass, _ = materials(tmp_path, '''<bsdf type="dielectric"><string name="int_ior" value="diamond"/>
+        <string name="ext_ior" value="water"/></bsdf>''')
+    assert (glass.kind, glass.roughness, glass.thin) == ("dielectric", 0.0, False)
+    assert glass.ior == pytest.approx(2.419 / 1.333)
+    thin, _ = materials(tmp_path, '<bsdf type="thindielectric"><float name="int_ior" value="1.33"/></bsdf>')
+    assert thin.thin and thin.ior == pytest.approx(1.33 / 1.00028)
+    with pytest.raises(SceneError, match="unknown int_ior 'unobtainium'"):
+        materials(tmp_path, '<bsdf type="dielectric"><string name="int_ior" value="unobtainium"/></bsdf>')
+
+
+def test_twosided_wraps_and_spectra_become_mitsubas_rgb(tmp_path):
+    spectrum = "400:0.2, 500:0.4, 600:0.6, 700:0.8"
+    diffuse, _ = materials(tmp_path, f'''<bsdf type="twosided"><bsdf type="diffuse">
+        <spectrum name="reflectance" value="{spectrum}"/></bsdf></bsdf>''')
+    expected = spectrum_to_rgb([400, 500, 600, 700], [0.2, 0.4, 0.6, 0.8], bounded=True, d65=True)
+    assert diffuse.kind == "diffuse" and diffuse.base_color == pytest.approx(expected)
+    scene, _ = load(tmp_path, f'''<shape type="sphere"><emitter type="area">
+        <spectrum name="radiance" value="{spectrum}"/></emitter></shape>''')
+    emission = spectrum_to_rgb([400, 500, 600, 700], [0.2, 0.4, 0.6, 0.8], bounded=False, d65=False)
+    assert scene.materials[-1].emission == pytest.approx(emission)
+    assert emission != pytest.approx(expected)  # emission is integrated without D65
+
+
+def test_homogeneous_medium_inside_a_shape(tmp_path):
+    scene, _ = load(tmp_path, '''<medium type="homogeneous" id="fog"><float name="scale" value="2"/>
+        <rgb name="sigma_t" value="1, 2, 3"/><rgb name="albedo" value="0.5, 0.25, 1"/>
+        <phase type="hg"><float name="g" value="0.3"/></phase></medium>
+        <shape type="sphere"><bsdf type="null"/><ref name="interior" id="fog"/></shape>''')
+    (medium,) = scene.media
+    assert medium.name == "fog" and medium.g == 0.3
+    np.testing.assert_allclose(medium.sigma_s, (1.0, 1.0, 6.0))
+    np.testing.assert_allclose(medium.sigma_a, (1.0, 3.0, 0.0))
+    material = scene.materials[scene.material_index(scene.mesh_objects[0].material)]
+    assert (material.kind, material.medium) == ("null", "fog")
+
+
+def test_unsupported_plugins_are_one_warning_each(tmp_path):
+    scene, messages = load(tmp_path, '''<emitter type="point"><point name="position" x="1"/>
+        <rgb name="intensity" value="3"/></emitter>
+        <shape type="hair"><string name="filename" value="x.hair"/></shape>''' + SHAPE, expect_warnings=2)
+    assert "line 2: <emitter type=\"point\">: this emitter type is not supported yet and is left out" in messages[0]
+    assert "line 4: <shape type=\"hair\">: this shape type is not supported yet" in messages[1]
+    assert len(scene.mesh_objects) == 1
+
+
+def test_an_unread_parameter_is_a_warning(tmp_path):
+    _, messages = load(tmp_path, '<shape type="sphere"><bsdf type="diffuse"><float name="sparkle" value="1"/>'
+                                 '</bsdf></shape>', expect_warnings=1)
+    assert "<bsdf type=\"diffuse\">: parameter 'sparkle' is not supported and was ignored" in messages[0]
+
+
+def test_nothing_left_to_render_is_one_error(tmp_path):
+    with pytest.raises(SceneError, match="nothing Lantern can render"):
+        load(tmp_path, '<shape type="hair"/>', expect_warnings=None)
