@@ -8,9 +8,9 @@ Taichi and compile kernels.
 """
 from importlib import import_module
 
-BENCHMARKS = {name: f"renderer.bench.{name}" for name in ("sdf", "startup", "bvh", "integrators", "features",
-                                                          "photons", "interactive", "denoise", "scale",
-                                                          "report")}
+BENCHMARKS = {name: f"renderer.bench.{name.replace('-', '_')}"
+              for name in ("sdf", "startup", "bvh", "integrators", "features", "photons", "interactive", "denoise",
+                           "scale", "mitsuba-tests", "report")}
 
 
 def run_benchmark(name: str, **options) -> int:

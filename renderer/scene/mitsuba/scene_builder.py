@@ -35,7 +35,7 @@ DISNEY_ONLY = ("anisotropic", "clearcoat", "clearcoat_gloss", "sheen", "sheen_ti
                "spec_tint", "specular")
 FILM_DEFAULT_SIZE = (768, 576)  # Mitsuba's hdrfilm
 DEFAULT_SPP = 4  # Mitsuba's samplers
-DEFAULT_FOV = 39.3077  # Mitsuba's perspective sensor (a 50 mm lens on 35 mm film), degrees along x
+DEFAULT_FOCAL_LENGTH = "50mm"  # Mitsuba's perspective sensor without fov or focal_length
 FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # focal_length converts against 35 mm film's diagonal
 DEFAULT_REFLECTANCE = (0.5, 0.5, 0.5)  # Mitsuba's diffuse
 # Lantern's local frame for quads and discs lies in xz and faces +y; Mitsuba's rectangle and disk lie
@@ -176,15 +176,17 @@ class _Builder:
     @staticmethod
     def vertical_fov(sensor: Plugin, width: int, height: int) -> float:
         """Lantern's vertical field of view for Mitsuba's fov along fov_axis (or focal_length)."""
-        if sensor.has("focal_length"):
-            text = sensor.text("focal_length")
+        if sensor.has("fov") and sensor.has("focal_length"):
+            raise sensor.error("give fov or focal_length, not both")
+        if not sensor.has("fov"):
+            text = sensor.text("focal_length", DEFAULT_FOCAL_LENGTH)
             try:
                 mm = float(text.lower().removesuffix("mm"))
             except ValueError:
                 raise sensor.error(f"focal_length '{text}' is not a length in mm") from None
             fov, axis = math.degrees(2.0 * math.atan(FILM_DIAGONAL_MM / (2.0 * mm))), "diagonal"
         else:
-            fov, axis = sensor.number("fov", DEFAULT_FOV), sensor.text("fov_axis", "x").lower()
+            fov, axis = sensor.number("fov", 0.0), sensor.text("fov_axis", "x").lower()
         if not 0.0 < fov < 180.0:
             raise sensor.error(f"fov {fov:g} is not between 0 and 180 degrees")
         if axis == "smaller":

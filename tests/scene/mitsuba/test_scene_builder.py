@@ -77,11 +77,13 @@ def test_field_of_view_by_axis(tmp_path, axis, size, expected):
     assert scene.camera.fov == pytest.approx(math.degrees(expected), rel=1e-12)
 
 
-def test_focal_length_is_against_35mm_films_diagonal(tmp_path):
-    scene, _ = load(tmp_path, '''<sensor type="perspective"><string name="focal_length" value="50mm"/>
+@pytest.mark.parametrize("lens, mm", [('<string name="focal_length" value="35mm"/>', 35.0), ("", 50.0)])
+def test_focal_length_is_against_35mm_films_diagonal(tmp_path, lens, mm):
+    """A focal length, or Mitsuba's default of 50 mm when the sensor gives neither it nor a fov."""
+    scene, _ = load(tmp_path, f'''<sensor type="perspective">{lens}
         <film type="hdrfilm"><rfilter type="box"/><integer name="width" value="100"/>
         <integer name="height" value="100"/></film></sensor>''' + SHAPE)
-    diagonal = 2 * math.atan(math.hypot(36, 24) / 100)
+    diagonal = 2 * math.atan(math.hypot(36, 24) / (2 * mm))
     expected = 2 * math.atan(math.tan(diagonal / 2) * 100 / math.hypot(100, 100))
     assert scene.camera.fov == pytest.approx(math.degrees(expected), rel=1e-12)
 
