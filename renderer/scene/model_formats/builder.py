@@ -8,6 +8,7 @@ the package: "Checks"), places world meshes with their node transform (by mesh_m
 from __future__ import annotations
 
 import os
+import re
 import warnings
 from pathlib import Path
 from typing import Callable, Optional
@@ -50,11 +51,21 @@ TRIMESH_PARSE_BYTES_PER_BYTE = 20
 
 
 class MissingTexture(Exception):
-    """A texture file that is not there (the loader warns and goes on without it)."""
+    """A texture file that is not there, or is there but not an image the decoders read (the
+    loader warns and goes on without it); `reason` says which."""
 
-    def __init__(self, file_name: str):
-        super().__init__(file_name)
+    def __init__(self, file_name: str, reason: str = "not found"):
+        super().__init__(file_name, reason)
         self.file_name = file_name
+        self.reason = reason
+
+
+def decode_failure(error: Exception) -> str:
+    """Why an image did not decode, in words: never a library object's repr."""
+    if type(error).__name__ == "UnidentifiedImageError":
+        return "not an image format the decoders read"
+    text = re.sub(r"<[^<>]* at 0x[0-9a-fA-F]+>", "the data", str(error)).strip()
+    return f"{type(error).__name__}: {text}" if text else type(error).__name__
 
 
 def file_reader(builder: "AssetBuilder", reference: str, what: str,
@@ -123,7 +134,7 @@ class AssetBuilder:
             try:
                 width, height, decoding = image_header(data)
             except Exception as e:  # Pillow raises many types for bad data
-                raise self.error(f"cannot decode image {label} ({type(e).__name__}: {e})") from e
+                raise MissingTexture(label, f"cannot be decoded ({decode_failure(e)})") from None
             pixels = width * height
             self.charge(f"image {label} ({width}x{height})", pixels * DECODED[decoding] * IMAGE_COPIES)
             self.check_peak(f"decoding image {label} ({width}x{height})",
@@ -131,12 +142,13 @@ class AssetBuilder:
             try:
                 self._decoded[key] = decode_image(data)
             except Exception as e:  # Pillow raises many types for bad data
-                raise self.error(f"cannot decode image {label} ({type(e).__name__}: {e})") from e
+                raise MissingTexture(label, f"cannot be decoded ({decode_failure(e)})") from None
         return self._decoded[key]
 
-    def note_missing(self, key, file_name: str, user: str) -> None:
-        """Remember that `user` (e.g. "material 'wood' base colour") wanted a missing file."""
-        self._missing.setdefault(key, (file_name, []))[1].append(user)
+    def note_missing(self, key, file_name: str, user: str, reason: str = "not found") -> None:
+        """Remember that `user` (e.g. "material 'wood' base colour") wanted a file that is
+        missing or does not decode (`reason`)."""
+        self._missing.setdefault(key, (file_name, reason, []))[2].append(user)
 
     def image(self, key, srgb: bool, label: str, load: Callable[[], bytes],
               user: str) -> Optional[int]:
@@ -145,12 +157,13 @@ class AssetBuilder:
         slot = (key, bool(srgb))
         if slot not in self._image_index:
             if key in self._missing:
-                self.note_missing(key, self._missing[key][0], user)
+                file_name, reason, _ = self._missing[key]
+                self.note_missing(key, file_name, user, reason)
                 return None
             try:
                 pixels = self.decoded_image(key, label, load)
             except MissingTexture as e:
-                self.note_missing(key, e.file_name, user)
+                self.note_missing(key, e.file_name, user, e.reason)
                 return None
             self.images.append(TextureImage(pixels, srgb, label))
             self._image_index[slot] = len(self.images) - 1
@@ -336,9 +349,9 @@ class AssetBuilder:
         if self.repaired_normals:
             self.warn(f"replaced {self.repaired_normals} zero-length or non-finite normals by "
                       "averaged face normals")
-        for file_name, users in self._missing.values():
-            self.warn(f"texture file '{file_name}' not found; drawn without it (factors alone): "
-                      + ", ".join(dict.fromkeys(users)))
+        for file_name, reason, users in self._missing.values():
+            what = f"texture file '{file_name}' not found" if reason == "not found" else f"texture {file_name} {reason}"
+            self.warn(f"{what}; drawn without it (factors alone): " + ", ".join(dict.fromkeys(users)))
         lo = np.full(3, np.inf)
         hi = np.full(3, -np.inf)
         placed = [(m, None) for m in self.meshes] + [(i.mesh, i.matrices) for i in self.instanced]
