@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Lantern: an interactive, progressive path tracer.
 
-  python app.py                      open the viewer (or, without a display, render the default scene)
+  python app.py                      open the viewer (or, without a display, render the default scene,
+                                     denoised where Open Image Denoise is installed; --no-denoise: raw)
   python app.py view [SCENE]         the interactive viewer
   python app.py render SCENE ...     render headless to a PNG (tone-mapped) or EXR (linear)
   python app.py list                 scenes and integrators
@@ -118,6 +119,9 @@ def build_parser() -> argparse.ArgumentParser:
     from renderer.commands.render import DEFAULT_CHECKPOINT_EVERY
 
     parser = OneLineErrorParser(prog="app.py", description="Lantern path tracer")
+    parser.add_argument("--no-denoise", action="store_true",
+                        help="with no command and no display: write the default scene's render raw (by default "
+                             "it is denoised where Open Image Denoise is installed, the raw image kept beside it)")
     sub = parser.add_subparsers(dest="command")
 
     view = sub.add_parser("view", help="open the interactive viewer")
@@ -153,14 +157,17 @@ def build_parser() -> argparse.ArgumentParser:
                              "compiles several times longer); default: run for renders long enough to repay that "
                              "(renderer/runtime/optimize_choice.py), else compile; on --resume, the checkpoint's")
     render.add_argument("--checkpoint", type=Path,
-                        help="save the film here every --checkpoint-every seconds and when stopped (default: "
-                             "OUT.ckpt for renders expected to take over a minute, removed when they complete)")
+                        help="save the film to this file (any name; an existing file is replaced only if it is "
+                             "a checkpoint) every --checkpoint-every seconds and when stopped (default: OUT.ckpt "
+                             "once a render is measured to need over a minute, removed when it completes)")
     render.add_argument("--checkpoint-every", type=_positive_seconds, default=DEFAULT_CHECKPOINT_EVERY,
                         metavar="SECONDS", help=f"seconds between checkpoints (default {DEFAULT_CHECKPOINT_EVERY:g})")
     render.add_argument("--resume", type=Path, metavar="CHECKPOINT",
                         help="continue a checkpointed render (its scene and options unless given)")
-    render.add_argument("--denoise", action="store_true",
-                        help="write the image denoised by Intel Open Image Denoise (fed the albedo and normal AOVs)")
+    render.add_argument("--denoise", action=argparse.BooleanOptionalAction,
+                        help="write the image denoised by Intel Open Image Denoise (fed the albedo and normal "
+                             "AOVs), the raw render beside it as OUT.raw.png (or .raw.exr); --no-denoise: the raw "
+                             "render only (the default; on --resume, the checkpoint's choice unless given)")
     render.add_argument("--aovs", action="store_true",
                         help="also write albedo, normal, variance, raw colour and spp per pixel: as layers of an "
                              ".exr --out, or to OUT.aovs.exr beside a .png")
@@ -330,8 +337,15 @@ def main(argv: list[str] | None = None) -> int:
         if has_display():
             args = parser.parse_args(["view"])
         else:
-            print("no display: rendering the default scene headless instead of opening the viewer", file=sys.stderr)
-            args = parser.parse_args(["render", "showcase", "--spp", "32"])
+            from renderer.commands.first_run import first_run_arguments
+
+            argv, said = first_run_arguments(denoise=not args.no_denoise)
+            print(said, file=sys.stderr)
+            args = parser.parse_args(argv)
+    elif args.no_denoise:
+        print("error: --no-denoise before a command is for the default run (python app.py --no-denoise); "
+              "a render takes it after its options (app.py render SCENE ... --no-denoise)", file=sys.stderr)
+        return 2
     handlers = {"view": cmd_view, "render": cmd_render, "list": cmd_list, "info": cmd_info, "bench": cmd_bench,
                 "warm-cache": cmd_warm_cache}
     try:

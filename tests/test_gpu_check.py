@@ -1,6 +1,8 @@
 """scripts/gpu_check.py without a GPU: the skip path, and its comparison of two renders (the
 suite's z-test) on CPU renders of a small scene: independent seeds agree, altered images do not."""
+import os
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -21,8 +23,10 @@ def test_without_cuda_the_check_says_skipped_in_one_line():
     if probe_arch("cuda") == "cuda":
         pytest.skip("this machine has a CUDA device: the check would run in full")
     start = time.perf_counter()
+    # The script's Python is $PYTHON (else .venv/bin/python, else python3): this interpreter, the
+    # one that runs the suite and has the project's packages, whatever it is.
     proc = subprocess.run(["bash", str(ROOT / "scripts" / "gpu_check.sh")], capture_output=True, text=True,
-                          timeout=60, cwd=ROOT)
+                          timeout=60, cwd=ROOT, env={**os.environ, "PYTHON": sys.executable})
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout == "skipped: no CUDA device\n"
     assert time.perf_counter() - start < 30.0  # a probe, not a render

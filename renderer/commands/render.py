@@ -12,8 +12,8 @@ import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from renderer.output.checkpoint import CHECKPOINT_EXTENSION, CheckpointHeader, load_checkpoint, read_header, \
-    save_checkpoint, scene_fingerprint
+from renderer.output.checkpoint import CHECKPOINT_EXTENSION, CheckpointHeader, is_checkpoint, load_checkpoint, \
+    read_header, save_checkpoint, scene_fingerprint
 from renderer.commands.headless import FilmSource
 from renderer.commands.headless import (Checkpoints, RenderJob, RenderResult, Resume, check_output_path, check_variance_path,
                                check_writable, display_tonemapper, image_metadata, progress_bar, render, save,
@@ -21,7 +21,7 @@ from renderer.commands.headless import (Checkpoints, RenderJob, RenderResult, Re
 from renderer.commands.interrupts import StopRequests
 from renderer.commands.render_job import check_denoising, job_from_arguments
 from renderer.runtime.optimize_choice import choose_for_render
-from renderer.output.render_outputs import aovs_path
+from renderer.output.render_outputs import aovs_path, raw_path
 from renderer.film.pixel_slices import ROUND_SLICES, spp_text
 from renderer.scene.errors import SceneError
 from renderer.scene.description import Scene
@@ -48,10 +48,10 @@ class CheckpointPolicy(Checkpoints):
         self.stream = stream
         self.last_save = time.monotonic()
 
-    def after_pass(self, film: FilmSource, spp_done: int, seconds_rendered: float, expected_seconds: float,
+    def after_pass(self, film: FilmSource, spp_done: int, seconds_rendered: float, expected_seconds: float | None,
                    slices_in_round: int = 0) -> None:
         if not self.active:
-            if expected_seconds <= LONG_RENDER_SECONDS:
+            if expected_seconds is None or expected_seconds <= LONG_RENDER_SECONDS:
                 return
             self.active = True
             self.last_save = time.monotonic()
@@ -171,11 +171,15 @@ def plan_render(args) -> RenderPlan:
             raise ValueError(f"--spp {job.spp}: the checkpoint {args.resume} already has {previous.spp_done} spp")
     checkpoints = _checkpoint_policy(args, job, out, header, previous)
     aovs = aovs_path(out) if job.aovs and aovs_path(out) != out else None
-    if aovs is not None:
-        check_writable(aovs)
-    distinct = [p.resolve() for p in (out, variance, checkpoints.path if checkpoints else None, aovs) if p is not None]
+    raw = raw_path(out) if job.denoise else None
+    for beside in (aovs, raw):
+        if beside is not None:
+            check_writable(beside)
+    distinct = [p.resolve() for p in (out, variance, checkpoints.path if checkpoints else None, aovs, raw)
+                if p is not None]
     if len(set(distinct)) != len(distinct):
-        raise ValueError(f"{out}: --out, --variance, --checkpoint and the AOV file must be different files")
+        raise ValueError(f"{out}: --out, --variance, --checkpoint, the AOV file and the raw image must be "
+                         "different files")
     resume = None
     if previous is not None:
         _, state = load_checkpoint(args.resume)
@@ -240,8 +244,8 @@ def write_outputs(plan: RenderPlan, result: RenderResult) -> None:
         metadata["denoised"] = "Intel Open Image Denoise"
         denoising = f", denoised in {time.perf_counter() - start:.1f} s"
     layers = aov_layers(result, raw) if plan.job.aovs else None
-    save(image, plan.out, plan.job.exposure, display_tonemapper(plan.job.integrator, plan.job.tonemapper), metadata,
-         layers)
+    tonemapper = display_tonemapper(plan.job.integrator, plan.job.tonemapper)
+    save(image, plan.out, plan.job.exposure, tonemapper, metadata, layers)
     rejected = f", {result.rejected} non-finite samples dropped" if result.rejected else ""
     stopped = ", interrupted" if result.interrupted else ""
     adaptive = ""
@@ -250,6 +254,11 @@ def write_outputs(plan: RenderPlan, result: RenderResult) -> None:
         adaptive = (f", adaptive: {result.pixel_mean_spp:.1f} spp per pixel on average, "
                     f"{100.0 * (pixels - result.pixels_active) / pixels:.0f}% of pixels stopped")
     print(f"{plan.out}  ({result.spp_text()} spp in {result.seconds:.1f} s{adaptive}{rejected}{stopped}{denoising})")
+    if raw is not None:
+        raw_metadata = {key: value for key, value in metadata.items() if key != "denoised"}
+        save(raw, raw_path(plan.out), plan.job.exposure, tonemapper,
+             {**raw_metadata, "content": "the raw render, before denoising"})
+        print(f"{raw_path(plan.out)}  (the raw render, before denoising)")
     if layers and aovs_path(plan.out) != plan.out:
         print(f"{aovs_path(plan.out)}  (AOVs: {', '.join(layers)})")
     if plan.variance is not None:
@@ -261,11 +270,15 @@ def write_outputs(plan: RenderPlan, result: RenderResult) -> None:
             print(written)
 
 
-def check_checkpoint_path(path: Path) -> None:
-    if path.suffix.lower() != CHECKPOINT_EXTENSION:
-        # A fixed extension keeps a slip of the keyboard from replacing an image with a checkpoint.
-        raise ValueError(f"{path}: a checkpoint file name ends in {CHECKPOINT_EXTENSION}, not '{path.suffix}'")
+def check_checkpoint_path(path: Path, automatic: bool = False) -> None:
+    """A checkpoint may have any name (as --out may), but replaces only a checkpoint: a slip of the
+    keyboard (--checkpoint a.png for --out a.png) must not replace an image."""
     check_writable(path)
+    if path.exists() and not is_checkpoint(path):
+        remedy = ("the automatic checkpoint beside --out would replace it (move it away, or give "
+                  "--checkpoint FILE)" if automatic else "refusing to replace it with a checkpoint "
+                  "(choose another file, or remove it)")
+        raise ValueError(f"{path}: exists and is not a Lantern checkpoint; {remedy}")
 
 
 def _header(scene, job: RenderJob, out: Path, variance: Path | None, arch: str, optimize: str) -> CheckpointHeader:
@@ -293,10 +306,11 @@ def _checkpoint_policy(args, job: RenderJob, out: Path, header: CheckpointHeader
     if args.checkpoint is not None:
         return CheckpointPolicy(args.checkpoint, args.checkpoint_every, header, active=True)
     if previous is not None:  # the checkpoint continued is kept up to date (and stays automatic or not)
+        check_writable(args.resume)
         return CheckpointPolicy(args.resume, args.checkpoint_every, replace(header, automatic=previous.automatic),
                                 active=True)
     path = out.with_name(out.name + CHECKPOINT_EXTENSION)
-    check_writable(path)  # beside --out, whose directory has just been checked
+    check_checkpoint_path(path, automatic=True)  # beside --out, which has just been checked
     return CheckpointPolicy(path, args.checkpoint_every, replace(header, automatic=True), active=False)
 
 

@@ -17,7 +17,7 @@ def job_from_arguments(args, scene, previous: CheckpointHeader | None) -> Render
         spp, seconds = previous.spp_target, previous.seconds_budget
     exposure = args.exposure if args.exposure is not None else (previous.exposure if previous else 0.0)
     job = RenderJob(spp=spp, seconds=seconds, size=args.size, integrator=args.integrator, max_depth=args.max_depth,
-                    seed=args.seed, exposure=exposure, tonemapper=args.tonemapper, denoise=args.denoise,
+                    seed=args.seed, exposure=exposure, tonemapper=args.tonemapper, denoise=bool(args.denoise),
                     aovs=args.aovs, noise_threshold=args.noise_threshold,
                     min_spp=args.min_spp if args.min_spp is not None else DEFAULT_MIN_SPP)
     if previous is not None:
@@ -26,7 +26,8 @@ def job_from_arguments(args, scene, previous: CheckpointHeader | None) -> Render
                       max_depth=previous.max_depth if job.max_depth is None else job.max_depth,
                       seed=previous.seed if job.seed is None else job.seed,
                       tonemapper=job.tonemapper or previous.tonemapper,
-                      denoise=job.denoise or previous.denoise, aovs=job.aovs or previous.aovs,
+                      denoise=previous.denoise if args.denoise is None else args.denoise,
+                      aovs=job.aovs or previous.aovs,
                       noise_threshold=(previous.noise_threshold if job.noise_threshold is None
                                        else job.noise_threshold),
                       min_spp=previous.min_spp if args.min_spp is None else job.min_spp)

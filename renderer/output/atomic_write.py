@@ -30,6 +30,34 @@ def temporary_sibling(path: Path) -> Path:
             continue
 
 
+def creation_problem(path: str | os.PathLike) -> str | None:
+    """Why `atomic_output(path)` could not create its file, in words, or None when it can: the
+    folders it would make and the temporary sibling it would write are made and removed again.
+    Asking the file system itself is the only reliable check (permissions say nothing of /proc, a
+    read-only mount or a full quota, and root passes every permission test)."""
+    path = Path(path)
+    made = []
+    try:
+        missing = [folder for folder in (path.parent, *path.parent.parents) if not folder.exists()]
+        for folder in reversed(missing):
+            try:
+                folder.mkdir()
+            except FileExistsError:
+                continue
+            except OSError as error:
+                return f"cannot create the folder {folder} ({error.strerror or error})"
+            made.append(folder)
+        try:
+            temporary_sibling(path).unlink()
+        except OSError as error:
+            return f"cannot create a file in {path.parent} ({error.strerror or error})"
+        return None
+    finally:
+        for folder in reversed(made):
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+
+
 @contextlib.contextmanager
 def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path to write `path`'s new content to; on a clean exit it replaces `path`.

@@ -123,6 +123,20 @@ def load_checkpoint(path: str | os.PathLike) -> tuple[CheckpointHeader, FilmStat
     return header, state
 
 
+def is_checkpoint(path: str | os.PathLike) -> bool:
+    """Whether `path` is a Lantern checkpoint of any format (a zip archive whose header names a
+    Lantern version): what a new checkpoint may replace. Reads the header alone."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            if f"{HEADER}.npy" not in archive.namelist():
+                return False
+        with np.load(path, allow_pickle=False) as arrays:
+            values = json.loads(str(arrays[HEADER]))
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+        return False
+    return isinstance(values, dict) and "lantern_version" in values
+
+
 def _open(path):
     if not Path(path).is_file():
         raise SceneError(path, "checkpoint not found")

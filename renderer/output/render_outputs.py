@@ -1,7 +1,9 @@
 """What `render --denoise` and `--aovs` add to a render's files.
 
 --denoise: the image written to --out is Open Image Denoise's output (renderer/output/denoise.py), fed the
-render's colour and, where the integrator writes them, its albedo and normal AOVs.
+render's colour and, where the integrator writes them, its albedo and normal AOVs. The raw render
+is kept beside it, in the same format: OUT.raw.png (tone-mapped as OUT) or OUT.raw.exr (linear),
+so the estimate itself is never lost to a denoised image.
 --aovs: the layers beside the colour: `albedo`, `normal` (the denoising AOVs), `variance` (of each
 pixel's mean), `raw` (the colour before denoising, with --denoise), `spp` (samples each pixel took)
 and `stopped` (1 where adaptive sampling stopped the pixel). In an .exr --out they are layers of
@@ -18,6 +20,7 @@ from renderer.output.denoise import DenoiseInput, Denoiser
 from renderer.integrators import make_integrator
 
 AOVS_SUFFIX = ".aovs.exr"
+RAW_SUFFIX = ".raw"  # before the extension: OUT.raw.png beside a denoised OUT.png
 
 
 def denoise_input(result) -> DenoiseInput:
@@ -60,3 +63,8 @@ def aov_layers(result, raw: np.ndarray | None) -> dict[str, np.ndarray]:
 def aovs_path(out: Path) -> Path:
     """Where the AOVs of a render to `out` go: `out` itself for an EXR, else OUT.aovs.exr."""
     return out if out.suffix.lower() == ".exr" else out.with_name(out.stem + AOVS_SUFFIX)
+
+
+def raw_path(out: Path) -> Path:
+    """Where a denoised render to `out` keeps its raw image: OUT.raw.png beside OUT.png."""
+    return out.with_name(out.stem + RAW_SUFFIX + out.suffix)
