@@ -109,6 +109,8 @@ def _add_input_options(command: argparse.ArgumentParser) -> None:
                               "else half of the physical memory)")
     command.add_argument("--allow-outside-files", action="store_true",
                          help="let a model file read files outside its own folder")
+    command.add_argument("-D", dest="define", action="append", metavar="NAME=VALUE",
+                         help="a Mitsuba scene's parameter ($NAME in the .xml), over its <default>; repeatable")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -125,7 +127,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command")
 
     view = sub.add_parser("view", help="open the interactive viewer")
-    view.add_argument("scene", nargs="?", default=None, help="scene name, scene file or model file (default: showcase)")
+    view.add_argument("scene", nargs="?", default=None,
+                      help="scene name, scene file (.toml, Mitsuba 3 .xml) or model file (default: showcase)")
     view.add_argument("--size", type=_size, default=(960, 540), help="window size WxH (default 960x540)")
     view.add_argument("--arch", choices=ARCHES, default="auto")
     view.add_argument("--integrator", default=None)
@@ -136,7 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     render = sub.add_parser("render", help="render headless to a file")
     render.add_argument("scene", nargs="?",
-                        help="scene name, scene file (.toml) or model file (.glb .gltf .obj .ply .stl); "
+                        help="scene name, scene file (.toml, Mitsuba 3 .xml) or model file (.glb .gltf .obj .ply .stl); "
                              "with --resume, the checkpoint's scene by default")
     budget = render.add_mutually_exclusive_group()
     budget.add_argument("--spp", type=_render_setting("spp", I32_MAX), help="samples per pixel (default: the scene's)")
@@ -213,6 +216,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("name", choices=sorted(BENCHMARKS))
     bench.add_argument("--quick", action="store_true", help="a short run (smaller sizes, fewer repeats)")
     bench.add_argument("--out-dir", type=Path, default=ROOT / "reports")
+    bench.add_argument("--data", type=Path, metavar="DIR",
+                       help="mitsuba-tests: a checkout of the mitsuba-data repository (its tests/scenes)")
+    bench.add_argument("--only", metavar="TEXT", help="mitsuba-tests: only the scenes whose name contains TEXT")
     return parser
 
 
@@ -311,10 +317,18 @@ def cmd_warm_cache(args) -> int:
     return 1 if any(result["error"] for result in results) else 0
 
 
+DATA_BENCHMARKS = ("mitsuba-tests",)  # the benchmarks that read a data set of their own (--data, --only)
+
+
 def cmd_bench(args) -> int:
     from renderer.bench import run_benchmark
 
-    return run_benchmark(args.name, quick=args.quick, out_dir=args.out_dir)
+    options = {"quick": args.quick, "out_dir": args.out_dir}
+    if args.name in DATA_BENCHMARKS:
+        options.update(data=args.data, only=args.only)
+    elif args.data is not None or args.only is not None:
+        raise ValueError(f"--data and --only are for bench {', '.join(DATA_BENCHMARKS)}, not {args.name}")
+    return run_benchmark(args.name, **options)
 
 
 def _one_line_warning(message, category, filename, lineno, line=None):

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from renderer.geometry.mesh_data import MeshData
 from renderer.materials.table import NO_MEDIUM, MaterialRows
 from renderer.scene.description import Scene
@@ -24,7 +26,7 @@ class MeshScene:
     data: MeshData
     rows: MaterialRows
     atlas: TextureAtlas | None
-    texture_slots: list  # (rect, wrap_s, wrap_t, uv_set, matrix) per texture slot
+    texture_slots: list  # (rect, wrap_s, wrap_t, uv_set, matrix[, nearest]) per texture slot
     volume_media: tuple = ()  # MediumSpec of model files' volumes, numbered after the scene's media
 
     def material_uses(self) -> dict:
@@ -43,10 +45,17 @@ def prepare_mesh_scene(scene: Scene, instancing: bool = True) -> MeshScene:
     materials as device rows and its model files' textures as slots over packed pages."""
     assembly = assemble(scene, instancing)
     rows = MaterialRows(scene.medium_names())
-    slots: list = []  # (image index, wrap_s, wrap_t, uv_set, matrix)
-    for material in assembly.materials:
+    slots: list = []  # (image index, wrap_s, wrap_t, uv_set, matrix[, nearest])
+    for index, material in enumerate(assembly.materials):
         if not isinstance(material, ModelMaterial):
-            rows.add_spec(material)
+            texture = material.base_color_texture
+            if texture is None:
+                rows.add_spec(material)
+                continue
+            wrap = WRAP_CODES[texture.wrap]
+            slots.append((assembly.spec_images[index], wrap, wrap, 0, np.array(texture.transform, np.float32),
+                          texture.nearest))
+            rows.add_spec(material, base_color_texture=len(slots) - 1)
             continue
 
         def texture_id(ref, first_image=material.first_image):
@@ -59,5 +68,5 @@ def prepare_mesh_scene(scene: Scene, instancing: bool = True) -> MeshScene:
     atlas, texture_slots = None, []
     if slots:
         atlas = pack_atlas(assembly.images)
-        texture_slots = [(atlas.rects[image], ws, wt, uv_set, matrix) for image, ws, wt, uv_set, matrix in slots]
+        texture_slots = [(atlas.rects[slot[0]], *slot[1:]) for slot in slots]
     return MeshScene(assembly.data, rows, atlas, texture_slots, assembly.volume_media)

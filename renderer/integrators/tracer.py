@@ -124,7 +124,11 @@ class PathTracerBase:
         spectral = False  # the path carries one wavelength from its first dispersive surface on
         lam = 0.0
         ending = False  # the path is over once its pending shadow ray is traced
-        depth = 0
+        depth = 0  # path vertices so far: each takes its own sampler dimensions
+        # Bounces as max_depth and roulette count them (Mitsuba's and pbrt's depth): scattering at a
+        # surface or in a medium, never the crossing of an invisible (null) boundary.
+        bounces = 0
+        at_null = False
         # Denoising AOVs (renderer/film/aovs.py): the first non-delta vertex's albedo, scaled by the
         # delta bounces before it, and its shading normal; a delta vertex is a stand-in until then.
         aov_albedo = vec3(0.0)
@@ -197,7 +201,7 @@ class PathTracerBase:
                     rec = ctx.media.table[medium]
                     p = ray.o + scatter_t * ray.d
                     wo = -ray.d
-                    if max_depth >= 0 and depth + 1 >= max_depth:
+                    if max_depth >= 0 and bounces + 1 >= max_depth:
                         break
                     s = _medium_point(p, ray.cone_width + ray.cone_spread * scatter_t, ray.cone_spread)
                     if ti.static(ctx.writes_aovs):
@@ -264,8 +268,10 @@ class PathTracerBase:
                         if ti.static(self.light_sampling):
                             weight = emission_weight(ctx.lights, self.mis, prev_delta, prev_pdf, prev_p, prev_n, s)
                         radiance += throughput * weight * _tint(ctx, mat.emission, spectral, lam)
+                if ti.static(ctx.features.has_kind("null")):
+                    at_null = mat.kind == NULL_KIND
                 # Mitsuba's convention: max_depth counts path vertices, 1 = emitters seen directly.
-                if max_depth >= 0 and depth + 1 >= max_depth:
+                if max_depth >= 0 and bounces + 1 >= max_depth and not at_null:
                     break
                 if ti.static(self.light_sampling):
                     if ctx.bsdf.has_smooth_part(mat):
@@ -292,10 +298,7 @@ class PathTracerBase:
                     if ti.static(ctx.writes_aovs):
                         if aov_open:
                             aov_weight *= bs.weight
-                    crossed_null = False
-                    if ti.static(ctx.features.has_kind("null")):
-                        crossed_null = mat.kind == NULL_KIND
-                    if not crossed_null:
+                    if not at_null:
                         # An invisible boundary changes nothing about how the light at the end of
                         # this ray was sampled: MIS keeps the vertex before it.
                         prev_p = s.p
@@ -305,7 +308,7 @@ class PathTracerBase:
                     next_dir = bs.wi
                     if ti.static(ctx.features.has_media):
                         medium = _medium_beyond(ctx, s, wo, bs.wi, medium)
-            if not ending and depth >= RR_DEPTH:
+            if not ending and bounces >= RR_DEPTH:
                 q = ti.min(throughput.max(), 0.95)
                 if ctx.sampler.get1d(state, dim + dims.ROULETTE) >= q:
                     ending = True
@@ -313,6 +316,9 @@ class PathTracerBase:
                     throughput /= q
             if ending and not shadow_pending:
                 break
+            if scattered or not at_null:
+                bounces += 1
+            at_null = False
             depth += 1
         if ti.static(ctx.features.analytic_fog):
             fog = ctx.media.fog[None]

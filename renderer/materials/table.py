@@ -61,9 +61,12 @@ class MaterialRows:
         self.rows = []
         self.medium_ids = {name: i for i, name in enumerate(medium_names)}
 
-    def add_spec(self, spec) -> int:
+    def add_spec(self, spec, base_color_texture: int = NO_TEXTURE) -> int:
+        """A scene file's material; base_color_texture: the texture-table index of its base colour
+        texture, if it has one."""
         row = _default_row()
         row.update({c.name: getattr(spec, c.name) for c in COLUMNS if c.from_spec})
+        row["textures"] = (base_color_texture, *row["textures"][1:])
         row.update(kind=KIND_IDS[spec.kind], medium=self.medium_ids[spec.medium] if spec.medium else NO_MEDIUM,
                    thin=int(spec.thin), **dispersion_row(spec), **conductor_ior_row(spec))
         self.rows.append(row)

@@ -16,19 +16,21 @@ from renderer.scene.srgb import SRGB8_TO_LINEAR
 from renderer.scene.textures import STORE_FLOAT, STORE_HALF, STORE_RGBA8, WRAP_CLAMP, WRAP_MIRROR, pack_atlas
 from renderer.runtime.upload import upload_fields
 
-# Texture table row: rect x, y, w, h in its page | wrap s, wrap t, uv set | storage, sRGB |
+# Texture table row: rect x, y, w, h in its page | wrap s, wrap t, uv set, nearest | storage, sRGB |
 # uv matrix rows 0 and 1.
-TextureSlot = ti.types.struct(rect=ti.math.ivec4, modes=ti.math.ivec3, format=ti.math.ivec2,
+TextureSlot = ti.types.struct(rect=ti.math.ivec4, modes=ti.math.ivec4, format=ti.math.ivec2,
                               m0=ti.math.vec3, m1=ti.math.vec3)
 
 
 def slot_arrays(slots) -> dict:
-    """slots: list of (atlas rect row (x, y, w, h, storage, srgb), wrap_s, wrap_t, uv_set, matrix (3, 3))."""
+    """slots: list of (atlas rect row (x, y, w, h, storage, srgb), wrap_s, wrap_t, uv_set, matrix (3, 3)
+    [, nearest]): `nearest` (default False) reads the nearest texel instead of filtering bilinearly."""
     n = len(slots)
     rows = np.array([np.asarray(s[0]) for s in slots], np.int32).reshape(n, 6)
     return {
         "rect": rows[:, :4].copy(),
-        "modes": np.array([[s[1], s[2], s[3]] for s in slots], np.int32).reshape(n, 3),
+        "modes": np.array([[s[1], s[2], s[3], int(len(s) > 5 and bool(s[5]))] for s in slots],
+                          np.int32).reshape(n, 4),
         "format": rows[:, 4:6].copy(),
         "m0": np.array([np.asarray(s[4], np.float32)[0] for s in slots], np.float32).reshape(n, 3),
         "m1": np.array([np.asarray(s[4], np.float32)[1] for s in slots], np.float32).reshape(n, 3),
@@ -84,6 +86,7 @@ class TextureTable:
             atlas, slots = pack_atlas([]), []
         words = page_words(atlas)
         self.storages = frozenset(int(np.asarray(s[0])[4]) for s in slots)  # compiled in
+        self.nearest = any(len(s) > 5 and bool(s[5]) for s in slots)  # nearest filtering compiled in
         self.rgba8 = ti.field(ti.i32, shape=words[STORE_RGBA8].shape[:2])
         self.half = ti.Vector.field(2, ti.i32, shape=words[STORE_HALF].shape[:2])
         self.full = ti.Vector.field(4, ti.f32, shape=words[STORE_FLOAT].shape[:2])
@@ -140,6 +143,10 @@ class TextureTable:
         h = slot.rect.w
         s = u * w - 0.5
         t = v * h - 0.5
+        if ti.static(self.nearest):
+            if slot.modes.w != 0:  # nearest: the texel under (u, v), at full weight (fx = fy = 0 below)
+                s = ti.floor(u * w)
+                t = ti.floor(v * h)
         s0 = ti.floor(s)
         t0 = ti.floor(t)
         fx = s - s0

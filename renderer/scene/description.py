@@ -80,6 +80,26 @@ class EnvironmentSpec:
     ground: Vec3 = (0.3, 0.28, 0.25)
 
 
+IDENTITY_UV = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+TEXTURE_KINDS = ("bitmap", "checkerboard")
+
+
+@dataclass(frozen=True)
+class TextureSpec:
+    """An image on a material parameter, from a scene format that puts one there (a Mitsuba
+    `bitmap` or `checkerboard`); the image is read when the scene is assembled
+    (renderer/scene/texture_images.py). Its value multiplies the parameter's."""
+
+    kind: str  # one of TEXTURE_KINDS
+    file: Optional[Path] = None  # bitmap: the image file
+    srgb: bool = True  # bitmap: colours stored sRGB-encoded (decoded to linear); False: as stored
+    wrap: str = "repeat"  # "repeat" | "clamp" | "mirror", both directions
+    nearest: bool = False  # the nearest texel instead of bilinear filtering
+    transform: tuple[tuple[float, float, float], ...] = IDENTITY_UV  # uv' = transform @ (u, v, 1)
+    color0: Vec3 = (0.4, 0.4, 0.4)  # checkerboard: where frac(u') and frac(v') fall on the same side of 1/2
+    color1: Vec3 = (0.2, 0.2, 0.2)  # checkerboard: elsewhere
+
+
 @dataclass(frozen=True)
 class MaterialSpec:
     name: str
@@ -106,6 +126,7 @@ class MaterialSpec:
     sheen_roughness: float = 0.0
     specular: float = 1.0
     specular_color: Vec3 = (1.0, 1.0, 1.0)
+    base_color_texture: Optional[TextureSpec] = None  # multiplies base_color where given
 
     def __post_init__(self):
         if self.roughness is None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Optional, Union
 
 import numpy as np
@@ -26,6 +26,7 @@ from renderer.scene.generators import generate
 from renderer.scene.mesh_model import PbrMaterial, TextureImage, TriangleMesh, place_mesh
 from renderer.scene.model_formats import MeshWarning
 from renderer.scene.orientation import rewind_to_normals
+from renderer.scene.texture_images import texture_image
 
 # An attenuation colour of 0 would absorb infinitely: 1e-4 is gone after one attenuation distance
 # to the eye already, and keeps sigma_a finite (9.2 / distance).
@@ -49,13 +50,15 @@ class ModelMaterial:
 @dataclass
 class MeshAssembly:
     """data: the primitives, their material ids indexing `materials`; materials: the scene
-    file's materials (all of them, first), then each model object's materials; images: every
-    model object's images, in that order; volume_media: the model materials' media, numbered
-    after the scene's own."""
+    file's materials (all of them, first), then each model object's materials; images: the scene
+    file's materials' texture images, then every model object's images, in that order;
+    spec_images: which image each scene-file material with a base colour texture reads (material
+    index -> image index); volume_media: the model materials' media, numbered after the scene's own."""
 
     data: MeshData
     materials: tuple[Union[MaterialSpec, ModelMaterial], ...]
     images: list[TextureImage]
+    spec_images: dict = field(default_factory=dict)
 
     @property
     def volume_media(self) -> tuple[MediumSpec, ...]:
@@ -121,6 +124,11 @@ class _Assembler:
         self.instanced: list = []  # (first triangle in self.object, count) per instanced mesh
         self.instances: list = []  # (instanced mesh, (N, 3, 4) object-to-world matrices)
         self.beziers: list = []  # (cubic segments, matrix, material, spans, sectors) per object
+        self.spec_images: dict[int, int] = {}  # scene material index -> its base colour texture's image
+        for index, material in enumerate(scene.materials):
+            if material.base_color_texture is not None:
+                self.images.append(texture_image(material.base_color_texture, scene.model_files.ledger))
+                self.spec_images[index] = len(self.images) - 1
 
     def material(self, name, where):
         if name not in self.material_ids:
@@ -238,7 +246,7 @@ class _Assembler:
             instance_to_world=(np.concatenate([m for _, m in self.instances]) if self.instances
                                else np.zeros((0, 3, 4))),
             **bezier_fields(self.beziers))
-        return MeshAssembly(data, tuple(self.materials), self.images)
+        return MeshAssembly(data, tuple(self.materials), self.images, self.spec_images)
 
 
 def assemble(scene: Scene, instancing: bool = True) -> MeshAssembly:

@@ -214,8 +214,8 @@ MATERIAL = Section(
     "dielectric base (diffuse plus a specular layer with the given `ior`) blended with a metal of "
     "colour `base_color` by `metallic`, and a `transmission` fraction of the dielectric base that "
     "refracts instead of scattering diffusely. `null` is an invisible boundary: light passes "
-    "straight through it (a path still counts it as a vertex); with `medium` it bounds a "
-    "participating medium such as smoke in a box.",
+    "straight through it (crossing it is no bounce: `max_depth` does not count it, as in Mitsuba and "
+    "pbrt); with `medium` it bounds a participating medium such as smoke in a box.",
     _kind_fields((
         Field("type", "string", "diffuse", "Kind of material.", choices=MATERIAL_KINDS, attr="kind"),
         Field("base_color", "vec3", (0.8, 0.8, 0.8), "Albedo (diffuse), reflectance at normal "

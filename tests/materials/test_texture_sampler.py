@@ -6,7 +6,7 @@ import taichi as ti
 
 from renderer.materials.texture_sampler import TextureTable
 from renderer.scene.mesh_model import TextureImage, uv_transform_matrix
-from renderer.scene.textures import WRAP_CODES, pack_atlas, sample_bilinear
+from renderer.scene.textures import WRAP_CODES, pack_atlas, sample_bilinear, wrap_index
 
 
 @ti.kernel
@@ -74,3 +74,29 @@ def test_only_used_storage_kinds_are_uploaded():
     assert table.storages == {0}
     assert table.half.shape == (1, 1) and table.full.shape == (1, 1)
     assert table.rgba8.shape == atlas.pages[0].shape[:2]
+
+
+@pytest.mark.parametrize("wrap", ["repeat", "clamp", "mirror"])
+def test_nearest_slots_read_the_texel_under_the_point(wrap):
+    """A slot with nearest filtering returns the texel whose cell holds the (transformed, wrapped)
+    point, exactly; a bilinear slot of the same table still blends."""
+    rng = np.random.default_rng(8)
+    pixels = rng.uniform(0, 1, (3, 5, 4)).astype(np.float32)
+    atlas = pack_atlas([TextureImage(pixels)])
+    matrix = uv_transform_matrix(offset=(0.1, 0.2), rotation=0.3, scale=(2.0, 1.5))
+    code = WRAP_CODES[wrap]
+    table = TextureTable(atlas, [(atlas.rects[0], code, code, 0, matrix, True),
+                                 (atlas.rects[0], code, code, 0, matrix, False)])
+    uv = rng.uniform(-2.0, 3.0, (3000, 2)).astype(np.float32)
+    out = np.zeros((len(uv), 4), np.float32)
+    _sample(table, 0, uv, out)
+    moved = np.c_[uv, np.ones(len(uv))] @ np.asarray(matrix, np.float64).T
+    i = wrap_index(np.floor(moved[:, 0] * 5).astype(np.int64), 5, wrap)
+    j = wrap_index(np.floor(moved[:, 1] * 3).astype(np.int64), 3, wrap)
+    # f32 against f64 UVs: a point within ~1e-5 of a cell edge may land in the neighbour.
+    edge = np.minimum(np.abs(moved[:, 0] * 5 - np.round(moved[:, 0] * 5)),
+                      np.abs(moved[:, 1] * 3 - np.round(moved[:, 1] * 3))) < 1e-4
+    np.testing.assert_array_equal(out[~edge], pixels[j, i][~edge])
+    blended = np.zeros_like(out)
+    _sample(table, 1, uv, blended)
+    assert np.abs(blended - out).max() > 0.05

@@ -41,7 +41,8 @@ SECTION_MODELS = [
     (schema.RENDER, RenderSettings, {"march"}),
     (schema.MARCH, MarchSettings, set()),
     (schema.ENVIRONMENT, EnvironmentSpec, set()),
-    (schema.MATERIAL, MaterialSpec, {"name"}),  # the name is the table key
+    # the name is the table key; textures come from scene readers that have them (Mitsuba), not TOML
+    (schema.MATERIAL, MaterialSpec, {"name", "base_color_texture"}),
 ]
 
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from renderer.materials.metals import metal_names
 from renderer.scene.description import (CameraSpec, EnvironmentSpec, MaterialSpec, MediumSpec, MeshObject,
-                                        RenderSettings, Scene)
+                                        RenderSettings, Scene, TextureSpec)
 from renderer.scene.errors import SceneError
 from renderer.scene.mitsuba.ior_names import IOR_NAMES
 from renderer.scene.mitsuba.plugins import Plugin, Rgb, Spectrum
@@ -39,8 +39,9 @@ DEFAULT_FOCAL_LENGTH = "50mm"  # Mitsuba's perspective sensor without fov or foc
 FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # focal_length converts against 35 mm film's diagonal
 DEFAULT_REFLECTANCE = (0.5, 0.5, 0.5)  # Mitsuba's diffuse
 # Lantern's local frame for quads and discs lies in xz and faces +y; Mitsuba's rectangle and disk lie
-# in xy and face +z: rotating +90 degrees about x takes the one to the other.
-XZ_TO_XY = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+# in xy and face +z. This rotation takes local z to x, x to y and y (the normal) to z, so a quad's
+# edge parameters (along its local z, then x) are the rectangle's texture coordinates (u, v).
+XZ_TO_XY = np.array([[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
 # Mitsuba's cube is [-1, 1]^3: six unit-square faces, each a rectangle moved out along its normal.
 CUBE_FACES = tuple(
     np.array(f, np.float64) for f in (
@@ -305,9 +306,13 @@ class _Builder:
         medium = self.interior(shape)
         if max(emission) <= 0.0 and not medium:
             return base.name
-        variant = replace(base, name=f"{base.name}+{len(self.materials)}", emission=emission, medium=medium)
-        self.materials.append(variant)
-        return variant.name
+        suffix = "+".join(part for part in ("emitter" if max(emission) > 0.0 else "", medium) if part)
+        name = f"{base.name}+{suffix}"
+        taken = {m.name for m in self.materials}
+        if name in taken:
+            name = next(f"{name}#{k}" for k in range(2, len(taken) + 2) if f"{name}#{k}" not in taken)
+        self.materials.append(replace(base, name=name, emission=emission, medium=medium))
+        return name
 
     def interior(self, shape: Plugin) -> str:
         """The name of the homogeneous medium inside a shape ("" for none)."""
@@ -378,7 +383,8 @@ class _Builder:
             bsdf.used.add("weight")
             return self.inner(bsdf)
         if t == "diffuse":
-            return MaterialSpec("", "diffuse", base_color=self.colour(bsdf, "reflectance", DEFAULT_REFLECTANCE))
+            colour, texture = self.base_colour(bsdf, "reflectance", DEFAULT_REFLECTANCE)
+            return MaterialSpec("", "diffuse", base_color=colour, base_color_texture=texture)
         if t in ("conductor", "roughconductor"):
             return self.conductor(bsdf)
         if t in ("dielectric", "roughdielectric", "thindielectric"):
@@ -389,7 +395,8 @@ class _Builder:
             warn(bsdf, f"Mitsuba's {t} model is not supported yet: rendered as a principled dielectric "
                        "with its diffuse colour, roughness and index")
             bsdf.used.update(("nonlinear", "specular_reflectance"))
-            return MaterialSpec("", "principled", base_color=self.colour(bsdf, "diffuse_reflectance", DEFAULT_REFLECTANCE),
+            colour, texture = self.base_colour(bsdf, "diffuse_reflectance", DEFAULT_REFLECTANCE)
+            return MaterialSpec("", "principled", base_color=colour, base_color_texture=texture,
                                 roughness=self.roughness(bsdf) if t == "roughplastic" else 0.0,
                                 ior=self.relative_ior(bsdf, default_int=1.49))
         if t in ("principled", "principledthin"):
@@ -468,12 +475,42 @@ class _Builder:
             warn(bsdf, f"{', '.join(different)}: Disney's lobes are not Lantern's (glTF) principled model; "
                        "left out")
             bsdf.used.update(different)
+        colour, texture = self.base_colour(bsdf, "base_color", DEFAULT_REFLECTANCE)
         return MaterialSpec(
-            "", "principled", base_color=self.colour(bsdf, "base_color", DEFAULT_REFLECTANCE),
+            "", "principled", base_color=colour, base_color_texture=texture,
             roughness=self.scalar(bsdf, "roughness", 0.5), metallic=self.scalar(bsdf, "metallic", 0.0),
             transmission=self.scalar(bsdf, "spec_trans", 0.0), ior=self.scalar(bsdf, "eta", 1.5), thin=thin)
 
     # --- values -----------------------------------------------------------------------------------
+
+    def base_colour(self, plugin: Plugin, name: str, default) -> tuple[tuple, TextureSpec | None]:
+        """A colour parameter that may hold a bitmap or checkerboard texture: (the colour the
+        texture multiplies, the texture or None)."""
+        value = plugin.properties.get(name)
+        if isinstance(value, Plugin) and value.kind == "texture" and value.type in ("bitmap", "checkerboard"):
+            plugin.used.add(name)
+            return (1.0, 1.0, 1.0), self.texture(self.visit(value))
+        return self.colour(plugin, name, default), None
+
+    def texture(self, texture: Plugin) -> TextureSpec:
+        matrix = texture.transform("to_uv")
+        to_uv = tuple(tuple(float(matrix[r, c]) for c in (0, 1, 3)) for r in (0, 1)) + ((0.0, 0.0, 1.0),)
+        if texture.type == "checkerboard":
+            return TextureSpec("checkerboard", transform=to_uv, nearest=True,
+                               color0=self.colour(texture, "color0", (0.4, 0.4, 0.4)),
+                               color1=self.colour(texture, "color1", (0.2, 0.2, 0.2)))
+        name = texture.text("filename")
+        if name is None:
+            raise texture.error("needs a filename")
+        filter_type = texture.text("filter_type", "bilinear")
+        wrap = texture.text("wrap_mode", "repeat")
+        if filter_type not in ("bilinear", "nearest"):
+            raise texture.error(f"filter_type '{filter_type}' (bilinear or nearest)")
+        if wrap not in ("repeat", "mirror", "clamp"):
+            raise texture.error(f"wrap_mode '{wrap}' (repeat, mirror or clamp)")
+        texture.used.add("format")
+        return TextureSpec("bitmap", file=self.find(texture, name), srgb=not texture.get("raw", False),
+                           wrap=wrap, nearest=filter_type == "nearest", transform=to_uv)
 
     def scalar(self, plugin: Plugin, name: str, default: float) -> float:
         value = plugin.get(name, default)

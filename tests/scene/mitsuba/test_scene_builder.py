@@ -188,3 +188,25 @@ def test_an_unread_parameter_is_a_warning(tmp_path):
 def test_nothing_left_to_render_is_one_error(tmp_path):
     with pytest.raises(SceneError, match="nothing Lantern can render"):
         load(tmp_path, '<shape type="hair"/>', expect_warnings=None)
+
+
+def test_bitmap_and_checkerboard_textures_become_texture_specs(tmp_path):
+    from renderer.scene.description import TextureSpec
+
+    (tmp_path / "wood.png").write_bytes(b"")  # read when the scene is assembled, not here
+    scene, _ = load(tmp_path, '''<shape type="sphere"><bsdf type="diffuse"><texture name="reflectance" type="bitmap">
+            <string name="filename" value="wood.png"/><string name="filter_type" value="nearest"/>
+            <string name="wrap_mode" value="mirror"/><boolean name="raw" value="true"/>
+            <transform name="to_uv"><scale x="2" y="3"/><translate x="0.5"/></transform></texture></bsdf></shape>
+        <shape type="sphere"><bsdf type="principled"><texture name="base_color" type="checkerboard">
+            <rgb name="color0" value="0.9"/></texture></bsdf></shape>''')
+    wood, checker = scene.materials
+    assert wood.base_color == (1.0, 1.0, 1.0)
+    assert wood.base_color_texture == TextureSpec("bitmap", file=tmp_path / "wood.png", srgb=False, wrap="mirror",
+                                                  nearest=True, transform=((2.0, 0.0, 0.5), (0.0, 3.0, 0.0),
+                                                                           (0.0, 0.0, 1.0)))
+    assert checker.base_color_texture == TextureSpec("checkerboard", nearest=True, color0=(0.9, 0.9, 0.9),
+                                                     color1=(0.2, 0.2, 0.2))
+    with pytest.raises(SceneError, match="wrap_mode 'tile'"):
+        load(tmp_path, '''<shape type="sphere"><bsdf type="diffuse"><texture name="reflectance" type="bitmap">
+            <string name="filename" value="wood.png"/><string name="wrap_mode" value="tile"/></texture></bsdf></shape>''')
