@@ -207,6 +207,15 @@ def build_parser() -> argparse.ArgumentParser:
     warm.add_argument("--integrators", metavar="A,B", help="comma-separated integrators (default: all)")
     warm.add_argument("--arch", choices=ARCHES, default="auto", help="the back-end the viewer will use")
 
+    compare = sub.add_parser("compare", help="Lantern and Mitsuba 3 on the same scene, at equal time")
+    compare.add_argument("scene", help="scene name, scene file (.toml, Mitsuba 3 .xml) or model file")
+    compare.add_argument("--time", type=_positive_seconds, default=10.0, dest="seconds",
+                         help="seconds each renderer renders (default 10); the reference takes four times that")
+    compare.add_argument("--size", type=_size, help="image size WxH (default: the scene's)")
+    compare.add_argument("--threads", type=_positive_int, help="Mitsuba's threads (default: all, as Lantern's)")
+    compare.add_argument("--out-dir", type=Path, default=ROOT / "out", help="where the PNG and JSON go (default out/)")
+    _add_input_options(compare)
+
     sub.add_parser("list", help="list scenes and integrators")
     info = sub.add_parser("info", help="describe a scene")
     info.add_argument("scene")
@@ -232,6 +241,12 @@ def cmd_render(args) -> int:
 
     with StopRequests() as stop:
         return run_render(args, stop)
+
+
+def cmd_compare(args) -> int:
+    from renderer.commands.compare import run_compare
+
+    return run_compare(args)
 
 
 def cmd_list(_args) -> int:
@@ -361,7 +376,7 @@ def main(argv: list[str] | None = None) -> int:
               "a render takes it after its options (app.py render SCENE ... --no-denoise)", file=sys.stderr)
         return 2
     handlers = {"view": cmd_view, "render": cmd_render, "list": cmd_list, "info": cmd_info, "bench": cmd_bench,
-                "warm-cache": cmd_warm_cache}
+                "warm-cache": cmd_warm_cache, "compare": cmd_compare}
     try:
         return handlers[args.command](args)
     except (SceneError, ValueError, RuntimeError) as error:

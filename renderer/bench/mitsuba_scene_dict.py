@@ -1,0 +1,197 @@
+"""A Lantern mesh scene (TOML, or a model file opened as a scene) as Mitsuba 3's scene dictionary,
+for `compare` and the benchmarks: the same camera, film (box filter), depth, geometry, materials,
+emitters and environment, in Mitsuba's own plugins.
+
+The geometry is taken from the scene's assembly (renderer/scene/mesh_assembly.py), so every
+primitive is placed exactly as Lantern places it: triangles as one Mitsuba mesh per material
+(with their vertex normals), analytic spheres, quads as rectangles and discs as disks, each with
+the to_world that puts Mitsuba's shape on Lantern's. Materials map kind for kind (diffuse;
+conductor from eta/k or a named metal; dielectric; principled; null with its medium); where the
+two renderers' models differ (a conductor given by its colour, a glTF texture) the nearest Mitsuba
+plugin is used and `notes` says so. What Mitsuba cannot express (SDF scenes, the procedural sky,
+dispersion, analytic fog) is a ValueError naming it.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from renderer.scene.description import MaterialSpec, Scene
+
+NOTE_LIMIT = 8  # notes listed one by one; the rest counted
+
+
+def scene_dict(scene: Scene, mesh_dir: Path, size: tuple[int, int] | None = None, max_depth: int | None = None,
+               spp: int = 16) -> tuple[dict, list[str]]:
+    """(Mitsuba's scene dictionary, notes on what is approximated). Triangles are written as PLY
+    files into `mesh_dir`, which must outlive the loaded Mitsuba scene. Needs the `mitsuba` package."""
+    from renderer.bench.mitsuba_side import _import_mitsuba
+    from renderer.scene.mesh_assembly import ModelMaterial, assemble
+
+    mi, _, _ = _import_mitsuba()
+    if scene.geometry != "mesh":
+        raise ValueError(f"{scene.name}: SDF scenes have no Mitsuba counterpart (Mitsuba traces meshes and shapes)")
+    if scene.fog.model == "analytic":
+        raise ValueError(f"{scene.name}: analytic fog is Lantern's own approximation; Mitsuba has none")
+    if any(m.is_dispersive for m in scene.materials):
+        raise ValueError(f"{scene.name}: dispersive glass needs Mitsuba's spectral variants; compared in RGB")
+    notes: list[str] = []
+    width, height = size or (scene.render.width, scene.render.height)
+    T = mi.ScalarTransform4f
+    cam = scene.camera
+    result = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": int(scene.render.max_depth if max_depth is None else max_depth)},
+        "sensor": {"type": "perspective", "fov": float(cam.fov), "fov_axis": "y",
+                   "to_world": T().look_at(origin=list(cam.position), target=list(cam.look_at), up=list(cam.up)),
+                   "film": {"type": "hdrfilm", "width": int(width), "height": int(height), "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": int(spp)}},
+    }
+    if cam.aperture > 0.0:
+        result["sensor"].update(type="thinlens", aperture_radius=float(cam.aperture),
+                                focus_distance=float(cam.focus_distance))
+    environment = _environment(scene, T)
+    if environment is not None:
+        result["environment"] = environment
+    assembly = assemble(scene, instancing=False)  # every triangle placed in the world
+    media = {m.name: m for m in scene.media}
+    bsdfs = [_bsdf(m, media, notes) if isinstance(m, MaterialSpec) else _gltf_bsdf(m, notes)
+             for m in assembly.materials]
+    emission = [m.emission if isinstance(m, MaterialSpec) else tuple(m.pbr.emissive_factor)
+                for m in assembly.materials]
+    if any(isinstance(m, ModelMaterial) and m.medium is not None for m in assembly.materials):
+        notes.append("glTF volume absorption left out")
+    data = assembly.data
+
+    def add(key, shape, material):
+        shape["bsdf"] = bsdfs[material]
+        if max(emission[material]) > 0.0:
+            shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": list(map(float, emission[material]))}}
+        if "interior" in bsdfs[material]:
+            shape["interior"] = bsdfs[material].pop("interior")
+        result[key] = shape
+
+    for material in np.unique(data.tri_material):
+        ply = _mesh_file(mi, data, data.tri_material == material, Path(mesh_dir) / f"mesh_{material}.ply")
+        add(f"mesh_{material}", {"type": "ply", "filename": str(ply)}, int(material))
+    for k, (sphere, material) in enumerate(zip(data.spheres, data.sphere_material)):
+        add(f"sphere_{k}", {"type": "sphere", "center": [float(x) for x in sphere[:3]], "radius": float(sphere[3])},
+            int(material))
+    for k, (quad, material) in enumerate(zip(data.quads, data.quad_material)):
+        add(f"quad_{k}", {"type": "rectangle", "to_world": _rectangle_frame(T, quad)}, int(material))
+    for k, (disc, material) in enumerate(zip(data.discs, data.disc_material)):
+        add(f"disc_{k}", {"type": "disk", "to_world": _disk_frame(T, disc)}, int(material))
+    if len(notes) > NOTE_LIMIT:
+        notes = notes[:NOTE_LIMIT] + [f"and {len(notes) - NOTE_LIMIT} more"]
+    return result, list(dict.fromkeys(notes))
+
+
+def _environment(scene: Scene, T) -> dict | None:
+    env = scene.environment
+    if env.intensity <= 0.0:
+        return None
+    if env.kind == "constant":
+        if max(env.color) <= 0.0:
+            return None
+        return {"type": "constant", "radiance": {"type": "rgb", "value": [c * env.intensity for c in env.color]}}
+    if env.kind == "map":
+        return {"type": "envmap", "filename": str(env.file), "scale": float(env.intensity),
+                "to_world": T().rotate(axis=[0, 1, 0], angle=float(env.rotation))}
+    raise ValueError(f"{scene.name}: the procedural sky environment has no Mitsuba counterpart")
+
+
+def _rgb(value) -> dict:
+    return {"type": "rgb", "value": [float(c) for c in value]}
+
+
+def _bsdf(spec: MaterialSpec, media: dict, notes: list[str]) -> dict:
+    alpha = float(spec.roughness) ** 2  # Lantern's perceptual roughness, Mitsuba's GGX alpha
+    if spec.base_color_texture is not None:
+        notes.append(f"material '{spec.name}': its texture is left out")
+    if spec.kind == "diffuse":
+        return {"type": "diffuse", "reflectance": _rgb(spec.base_color)}
+    if spec.kind == "conductor":
+        rough = {"type": "roughconductor", "distribution": "ggx", "alpha": alpha} if alpha > 0 else {"type": "conductor"}
+        if spec.metal:
+            return {**rough, "material": spec.metal}
+        if spec.eta is not None:
+            return {**rough, "eta": _rgb(spec.eta), "k": _rgb(spec.k)}
+        notes.append(f"material '{spec.name}': a conductor given by its colour is compared as a tinted mirror "
+                     "(Mitsuba's conductors take eta and k)")
+        return {**rough, "material": "none", "specular_reflectance": _rgb(spec.base_color)}
+    if spec.kind == "dielectric":
+        if spec.thin:
+            return {"type": "thindielectric", "int_ior": float(spec.ior), "ext_ior": 1.0}
+        glass = ({"type": "roughdielectric", "distribution": "ggx", "alpha": alpha} if alpha > 0
+                 else {"type": "dielectric"})
+        glass.update(int_ior=float(spec.ior), ext_ior=1.0, specular_transmittance=_rgb(spec.base_color))
+        return _with_medium(glass, spec, media)
+    if spec.kind == "principled":
+        if spec.clearcoat > 0 or max(spec.sheen_color) > 0:
+            notes.append(f"material '{spec.name}': its glTF clearcoat and sheen layers are not Disney's")
+        return {"type": "principledthin" if spec.thin else "principled", "base_color": _rgb(spec.base_color),
+                "roughness": float(spec.roughness), "metallic": float(spec.metallic),
+                "spec_trans": float(spec.transmission), "eta": max(float(spec.ior), 1.0001)}
+    if spec.kind == "null":
+        return _with_medium({"type": "null"}, spec, media)
+    raise ValueError(f"material '{spec.name}': kind '{spec.kind}' has no Mitsuba counterpart")
+
+
+def _with_medium(bsdf: dict, spec: MaterialSpec, media: dict) -> dict:
+    if spec.medium:
+        m = media[spec.medium]
+        sigma_t = np.add(m.sigma_a, m.sigma_s)
+        albedo = np.divide(m.sigma_s, sigma_t, out=np.zeros(3), where=sigma_t > 0)
+        bsdf["interior"] = {"type": "homogeneous", "sigma_t": _rgb(sigma_t), "albedo": _rgb(albedo),
+                            "phase": {"type": "hg", "g": float(m.g)}}
+    return bsdf
+
+
+def _gltf_bsdf(material, notes: list[str]) -> dict:
+    pbr = material.pbr
+    if pbr.texture_slots:
+        notes.append(f"model material '{pbr.name}': its textures are left out (their factors are compared)")
+    return {"type": "principled", "base_color": _rgb(pbr.base_color_factor[:3]), "roughness": float(pbr.roughness_factor),
+            "metallic": float(pbr.metallic_factor), "spec_trans": float(pbr.transmission_factor),
+            "eta": max(float(pbr.ior), 1.0001)}
+
+
+def _mesh_file(mi, data, mask, path: Path) -> Path:
+    """The triangles of one material written as a PLY file (corners not shared, normals kept
+    where every corner has one)."""
+    corners = np.ascontiguousarray(data.tri_vertices[mask], np.float32).reshape(-1, 3)
+    normals = None if data.tri_normals is None else np.asarray(data.tri_normals[mask], np.float32).reshape(-1, 3)
+    has_normals = normals is not None and bool(np.all(np.linalg.norm(normals, axis=1) > 0))
+    mesh = mi.Mesh(path.stem, len(corners), len(corners) // 3, has_vertex_normals=has_normals)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = corners.ravel()
+    params["faces"] = np.arange(len(corners), dtype=np.uint32)
+    if has_normals:
+        params["vertex_normals"] = normals.ravel()
+    params.update()
+    mesh.write_ply(str(path))
+    return path
+
+
+def _rectangle_frame(T, quad):
+    """Mitsuba's [-1, 1]^2 rectangle (facing +z) onto a quad (corner, edge_u, edge_v) facing edge_u x edge_v."""
+    corner, edge_u, edge_v = (np.asarray(v, np.float64) for v in quad)
+    normal = np.cross(edge_u, edge_v)
+    normal /= np.linalg.norm(normal)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = edge_u / 2, edge_v / 2, normal, corner + (edge_u + edge_v) / 2
+    return T(m.tolist())
+
+
+def _disk_frame(T, disc):
+    """Mitsuba's unit disk (facing +z) onto a disc (centre, normal, radius)."""
+    centre, normal, radius = np.asarray(disc[:3], np.float64), np.asarray(disc[3:6], np.float64), float(disc[6])
+    normal /= np.linalg.norm(normal)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, normal)
+    x /= np.linalg.norm(x)
+    y = np.cross(normal, x)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x * radius, y * radius, normal, centre
+    return T(m.tolist())
