@@ -141,5 +141,10 @@ class RenderProgram:
             ray = generate_ray(0, 0, 1, 1, self.sampler, state, origin, forward, right, up, tan_half_fov, 0.0, 1.0,
                                False)
             ray.d = d
+            # A ray without a cone: the SDF march stops within its finest threshold of the surface.
+            # (The 1x1 film above gives a cone as wide as the view, which stopped the march metres
+            # short; even a pixel's cone stops it some % short at a grazing floor.)
+            ray.cone_width = 0.0
+            ray.cone_spread = 0.0
             hit = self.geometry.intersect(ray, INF)
             out[None] = hit.t * d.dot(forward) if hit.hit == 1 else -1.0

@@ -2,8 +2,10 @@
 # Installs what Lantern needs on a Debian machine with Python 3.10/3.11:
 #  - Debian: the Vulkan loader and software driver (for the window and the Vulkan test), Xvfb,
 #    xdotool and ImageMagick (the end-to-end viewer test drives the window with xdotool and grabs
-#    the screen with ImageMagick's `import`), when missing and when apt-get can be used;
-#  - Python: a virtual environment in .venv with the project and its test extras.
+#    the screen with ImageMagick's `import`), and libllvm19 (the libLLVM of Mitsuba's LLVM
+#    variants, renderer/bench/mitsuba_side.py), when missing and when apt-get can be used;
+#  - Python: a virtual environment in .venv with the project and its test extras (which bring
+#    embreex and mitsuba for the benchmarks' tests).
 # Safe to run again; it only installs what is missing. A failing apt-get (no network, a lock held
 # by another apt) only skips the Debian packages, with a note of what that costs: the Python
 # environment is created either way, and headless CPU rendering needs nothing from apt.
@@ -17,6 +19,7 @@ skipped() {  # the packages not installed, and which tests will be skipped witho
   local uses=()
   case " $* " in *" libvulkan1 "*|*" mesa-vulkan-drivers "*) uses+=("the window and the Vulkan test");; esac
   case " $* " in *" xvfb "*|*" xdotool "*|*" imagemagick "*) uses+=("the end-to-end viewer test");; esac
+  case " $* " in *" libllvm19 "*) uses+=("Mitsuba's LLVM variants (Mitsuba then renders on its slow scalar one)");; esac
   local IFS=";"
   echo "setup: skipped installing $* (without them: ${uses[*]} will be skipped);" \
        "headless CPU rendering still works." >&2
@@ -24,7 +27,7 @@ skipped() {  # the packages not installed, and which tests will be skipped witho
 
 install_debian_packages() {
   local need=()
-  for pkg in libvulkan1 mesa-vulkan-drivers xvfb xdotool imagemagick; do
+  for pkg in libvulkan1 mesa-vulkan-drivers xvfb xdotool imagemagick libllvm19; do
     dpkg -s "$pkg" >/dev/null 2>&1 || need+=("$pkg")
   done
   [ ${#need[@]} -eq 0 ] && return 0
@@ -41,10 +44,23 @@ install_debian_packages() {
   echo "setup: installing Debian packages: ${need[*]}"
   local log
   log=$(mktemp)
-  if ! "${apt[@]}" update >"$log" 2>&1 || ! "${apt[@]}" install -y "${need[@]}" >>"$log" 2>&1; then
+  if ! "${apt[@]}" update >"$log" 2>&1; then
     echo "setup: apt-get failed: $(grep -E '^(E|W):' "$log" | head -n 2 | tr '\n' ' ')" >&2
-    skipped "${need[*]}"
+    skipped "${need[*]}"; rm -f "$log"; return 0
   fi
+  # libllvm19 in a call of its own: a release without it (it is Debian 12's) must not cost the others.
+  local main=() llvm=() group
+  for pkg in "${need[@]}"; do
+    if [ "$pkg" = libllvm19 ]; then llvm+=("$pkg"); else main+=("$pkg"); fi
+  done
+  for group in "${main[*]}" "${llvm[*]}"; do
+    [ -n "$group" ] || continue
+    # shellcheck disable=SC2086  # (package names, split on purpose)
+    if ! "${apt[@]}" install -y $group >"$log" 2>&1; then
+      echo "setup: apt-get failed: $(grep -E '^(E|W):' "$log" | head -n 2 | tr '\n' ' ')" >&2
+      skipped "$group"
+    fi
+  done
   rm -f "$log"
 }
 

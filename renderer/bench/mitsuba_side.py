@@ -8,8 +8,10 @@ to install when it cannot.
 Its LLVM variants (`llvm_ad_rgb`, `llvm_rgb`) JIT-compile through a system libLLVM found via the
 environment variable DRJIT_LIBLLVM_PATH; on Debian 12 that is the `libllvm19` package, at
 /usr/lib/x86_64-linux-gnu/libLLVM-19.so. The variable is set before `import mitsuba` when it is
-unset and that file exists. Without LLVM, the `scalar_rgb` variant (no JIT, much slower) is used,
-and `availability()` says so in its note.
+unset and that file exists. Without it (the variable unset and no such file) the LLVM variants are
+not tried: Dr.Jit would look for any libLLVM on the system, and one too old for it (Debian 12's
+LLVM 14 and 15) aborts the whole process at the first render, past any exception handler. The
+`scalar_rgb` variant (no JIT, much slower) is used then, and `availability()` says so in its note.
 
 The scene is `mi.cornell_box()` (the one assets/scenes/cornell_box.toml reproduces), with two
 changes made by `cornell_box_dict`: the film size, and a `box` reconstruction filter instead of
@@ -54,7 +56,11 @@ def _import_mitsuba():
         raise MitsubaUnavailable(f"Mitsuba 3 is not installed ({error}); {INSTALL_HINT}") from None
     available = set(mi.variants())
     note = ""
-    for variant in PREFERRED_VARIANTS:
+    llvm_variants = PREFERRED_VARIANTS
+    if "DRJIT_LIBLLVM_PATH" not in os.environ:
+        llvm_variants = ()
+        note = f"no libLLVM named (DRJIT_LIBLLVM_PATH unset, no {DEFAULT_LIBLLVM}: `apt-get install libllvm19`)"
+    for variant in llvm_variants:
         if variant not in available:
             continue
         try:

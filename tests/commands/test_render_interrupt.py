@@ -53,18 +53,26 @@ def assert_no_traceback(child: WatchedChild):
     assert "Traceback" not in child.stderr and "Traceback" not in child.stdout, child.stderr
 
 
+def assert_stopped_within_the_pass_in_flight(child: WatchedChild, signum: int):
+    """The handler says it stops when it runs (between bytecodes: at the latest when the pass in
+    flight returns); after that line the render loop shows at most that pass's progress, and
+    starts no other pass. Counted in passes, this holds however slow or busy the machine."""
+    parts = child.stderr.split(f"{signal.Signals(signum).name}: stopping after this pass")
+    assert len(parts) == 2, child.stderr
+    assert len(PROGRESS.findall(parts[1])) <= 1, parts[1]
+
+
 @pytest.mark.parametrize("signum, code, name", [(signal.SIGINT, 130, "a.png"), (signal.SIGTERM, 143, "a.exr")])
 def test_a_signal_stops_at_a_pass_and_writes_the_image_so_far(tmp_path, scene, signum, code, name):
     out = tmp_path / name
     child = render_child(scene, "--time", 600, "--out", out, *SMALL)
     child.wait_for(past_first_pass, timeout=240)
-    sent = time.monotonic()
     child.proc.send_signal(signum)
+    # A signal ignored (the render going on for its 600 s) fails here. How soon the render stops
+    # is counted in passes below, not in seconds, which a busy machine stretches.
     assert child.finish(timeout=60) == code, child.stderr
-    stopped_after = time.monotonic() - sent
     assert_no_traceback(child)
-    # A pass is about half a second; the rest is writing two small files and a checkpoint.
-    assert stopped_after < 10, stopped_after
+    assert_stopped_within_the_pass_in_flight(child, signum)
     line = [l for l in child.stdout.splitlines() if l.startswith(f"{out}  (")]
     assert len(line) == 1 and "interrupted" in line[0], child.stdout
     shown = re.search(r"\((\d+(?:\.\d+)?) spp", line[0]).group(1)  # '12', or '12.34' within a round
@@ -99,10 +107,10 @@ def test_a_second_ctrl_c_quits_at_once(tmp_path):
     child.wait_for(past_first_pass, timeout=240)
     child.proc.send_signal(signal.SIGINT)
     child.wait_for(lambda err: "Ctrl-C again" in err, timeout=60)
-    sent = time.monotonic()
     child.proc.send_signal(signal.SIGINT)
+    # (a hang fails here; "at once" is not measured in seconds, which a busy machine stretches,
+    # but by what was left undone: none of the three files the first Ctrl-C began to write)
     assert child.finish(timeout=60) == 130, child.stderr
-    assert time.monotonic() - sent < 3
     assert_no_traceback(child)
     assert "quitting now" in child.stderr
     assert not out.exists() and not variance.exists() and not checkpoint.exists()  # it did not wait

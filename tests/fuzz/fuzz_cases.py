@@ -83,10 +83,18 @@ class Case:
     path: Path  # the file to open
 
     @property
+    def origin(self) -> str:
+        return self.seed.source.name if self.seed.source else ("small sdf scene" if self.seed.text == SMALL_SDF
+                                                               else "small mesh scene")
+
+    @property
+    def kind(self) -> str:
+        """What reads it: the file format of a model (.gltf, .glb, .obj, .mtl, .ply), or the small scene."""
+        return self.seed.source.suffix if self.seed.source else self.origin
+
+    @property
     def label(self) -> str:
-        origin = self.seed.source.name if self.seed.source else ("small sdf scene" if self.seed.text == SMALL_SDF
-                                                                 else "small mesh scene")
-        return f"case {self.index}: {origin}, {self.damage}"
+        return f"case {self.index}: {self.origin}, {self.damage}"
 
 
 def write_case(root: Path, index: int) -> Case:

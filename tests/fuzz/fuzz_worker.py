@@ -1,10 +1,14 @@
 """Runs fuzz cases in-process and reports each outcome as one JSON line on stdout.
 
-    python -m tests.fuzz.fuzz_worker WORKSPACE FIRST_CASE DEADLINE BUDGET_BYTES RENDER_SECONDS
+    python -m tests.fuzz.fuzz_worker WORKSPACE FIRST_CASE END_CASE BUDGET_BYTES RENDERED_KINDS
 
-Cases FIRST_CASE, FIRST_CASE + 1, ... run until the wall-clock DEADLINE (time.time()). Before a
-case the worker prints {"start": i}; after it, the outcome. The parent (test_fuzz_inputs.py)
-kills a worker that stops talking (a hang) or dies (a crash) and starts another after that case.
+Cases FIRST_CASE, FIRST_CASE + 1, ..., END_CASE - 1 run in order; the first case of each kind
+(Case.kind: a model format, or one of the small scenes) that loads, and whose seed renders, also
+renders a tiny image, unless its kind is in RENDERED_KINDS (comma-separated: the kinds an earlier
+worker of the run rendered). Before a case the worker prints {"start": i}; after it, the outcome
+("rendering": true where it tried to render). The parent (test_fuzz_inputs.py) kills a worker
+that stops talking (a hang) or dies (a crash) and starts another after that case. Which cases
+run, and which of them render, is fixed: not a matter of the machine's speed.
 
 Outcomes: "loaded" and "rendered" (clean), "refused" (a one-line SceneError), and the failures:
 "traceback" (any other exception, or a SceneError of several lines), "memory" (a MemoryError, or
@@ -46,6 +50,7 @@ def _reset_peak() -> None:
 
 
 def run_case(case, options, render_allowed: bool) -> dict:
+    """Load `case` (and render it where allowed and its seed renders); the report of its outcome."""
     from renderer.scene.catalog import load_any
     from renderer.scene.errors import SceneError
 
@@ -72,6 +77,7 @@ def run_case(case, options, render_allowed: bool) -> dict:
                 from renderer.camera import CameraFrame
                 from renderer.renderer import Renderer
 
+                report["rendering"] = True
                 renderer = Renderer(scene, (4, 4))
                 renderer.render(CameraFrame.from_spec(scene.camera), 1, "depth", seed=1)
                 report["outcome"] = "rendered"
@@ -92,7 +98,7 @@ def run_case(case, options, render_allowed: bool) -> dict:
     return report
 
 
-def main(workspace: str, first: str, deadline: str, budget: str, render_seconds: str) -> int:
+def main(workspace: str, first: str, end: str, budget: str, rendered_kinds: str) -> int:
     resource.setrlimit(resource.RLIMIT_AS, (ADDRESS_SPACE, ADDRESS_SPACE))
     signal.signal(signal.SIGALRM, _alarm)
     from renderer.runtime.arch import init_taichi
@@ -102,16 +108,15 @@ def main(workspace: str, first: str, deadline: str, budget: str, render_seconds:
 
     init_taichi("cpu")
     options = LoadOptions(MemoryBudget(int(budget), "the fuzz test's budget"))
-    rendering_left = float(render_seconds)
-    index = int(first)
-    while time.time() < float(deadline):
+    rendered = set(filter(None, rendered_kinds.split(",")))
+    for index in range(int(first), int(end)):
         case = write_case(Path(workspace), index)
-        print(json.dumps({"start": index}), flush=True)
-        report = run_case(case, options, rendering_left > 0)
-        if report.get("outcome") == "rendered":
-            rendering_left -= report["seconds"]
+        print(json.dumps({"start": index, "kind": case.kind}), flush=True)
+        report = run_case(case, options, case.kind not in rendered)
+        report["kind"] = case.kind
+        if report.get("rendering"):
+            rendered.add(case.kind)
         print(json.dumps(report), flush=True)
-        index += 1
     return 0
 
 

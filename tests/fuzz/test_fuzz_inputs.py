@@ -8,9 +8,12 @@ lengths in glTF JSON, deleted fields, values of the wrong kind, extreme numbers,
 duplicated lines (tests/fuzz/mutations.py). Case i is a pure function of a fixed seed and i, so
 a failure names a case that can be run again.
 
-The cases run in a worker process (tests/fuzz/fuzz_worker.py) for LANTERN_FUZZ_SECONDS (12 by
-default) under a memory budget; a worker that stops reporting for WATCHDOG_SECONDS or dies is
-recorded as a hang or a crash of its case and replaced.
+The cases run in a worker process (tests/fuzz/fuzz_worker.py) under a memory budget: cases
+LANTERN_FUZZ_FIRST (0 by default) up to LANTERN_FUZZ_FIRST + LANTERN_FUZZ_CASES (1,000 by default;
+set other ranges to search further), and the first case of each kind of input (a model format,
+or one of the small scenes) that loads renders a tiny image too. The same cases run, and the same
+of them render, on every machine, however fast or busy. A worker that stops reporting for
+WATCHDOG_SECONDS or dies is recorded as a hang or a crash of its case and replaced.
 """
 from __future__ import annotations
 
@@ -26,20 +29,25 @@ from pathlib import Path
 from tests.fuzz.fuzz_cases import make_workspace
 
 REPO = Path(__file__).resolve().parents[2]
-SECONDS = float(os.environ.get("LANTERN_FUZZ_SECONDS", "12"))  # the suite's time budget; set more to search longer
+FIRST = int(os.environ.get("LANTERN_FUZZ_FIRST", "0"))
+CASES = int(os.environ.get("LANTERN_FUZZ_CASES", "1000"))
 BUDGET = 512 << 20  # what one case's files may ask for
-RENDER_SECONDS = 0.4  # of the run spent rendering tiny images of cases that load
+# The kinds of input (fuzz_cases.Case.kind) whose first case to load renders a tiny image (only the
+# first of each kind: a new SDF scene compiles its kernels, seconds).
+RENDERED_KINDS = {".gltf", ".glb", ".obj", ".mtl", ".ply", "small sdf scene", "small mesh scene"}
 WATCHDOG_SECONDS = 45  # longer than a case's own alarm: a case stuck inside native code
 CLEAN = ("loaded", "rendered", "refused")
 
 
-def run_worker(workspace: Path, first: int, deadline: float, render_seconds: float, reports: list) -> int:
-    """Run cases from `first` until `deadline`; returns the next case to run. Appends every
-    outcome, including "hang" and "crash" for a case the worker did not finish."""
+def run_worker(workspace: Path, first: int, end: int, reports: list) -> int:
+    """Run cases `first` to `end` - 1, the first of each kind that loads (of the kinds no report
+    rendered yet) also rendering; returns the next case to run. Appends every outcome, including
+    "hang" and "crash" for a case the worker did not finish."""
+    rendered = ",".join(sorted({r["kind"] for r in reports if r.get("rendering")}))
     errors = (workspace / f"worker_{first}.err").open("w+")  # a file: a full pipe would stall the worker
     worker = subprocess.Popen(
-        [sys.executable, "-m", "tests.fuzz.fuzz_worker", str(workspace), str(first), str(deadline), str(BUDGET),
-         str(render_seconds)],
+        [sys.executable, "-m", "tests.fuzz.fuzz_worker", str(workspace), str(first), str(end), str(BUDGET),
+         rendered],
         cwd=REPO, stdout=subprocess.PIPE, stderr=errors, text=True)
     selector = selectors.DefaultSelector()
     selector.register(worker.stdout, selectors.EVENT_READ)
@@ -51,7 +59,7 @@ def run_worker(workspace: Path, first: int, deadline: float, render_seconds: flo
             reports.append({"case": current, "outcome": "hang", "detail": f"no report for {WATCHDOG_SECONDS} s"})
             return (current if current is not None else next_case) + 1
         line = worker.stdout.readline()
-        if not line:  # the worker ended: at the deadline, or by dying in a case
+        if not line:  # the worker ended: after its last case, or by dying in a case
             code = worker.wait()
             errors.seek(0)
             stderr = errors.read()
@@ -73,11 +81,10 @@ def run_worker(workspace: Path, first: int, deadline: float, render_seconds: flo
 def test_damaged_inputs_load_render_or_are_refused_in_one_line(tmp_path, record_property):
     workspace = make_workspace(tmp_path / "workspace")
     start = time.time()
-    deadline = start + SECONDS
     reports: list[dict] = []
-    case = 0
-    while time.time() < deadline - 5:  # time for one more worker to start and run cases
-        case = run_worker(workspace, case, deadline, SECONDS * RENDER_SECONDS, reports)
+    case, end = FIRST, FIRST + CASES
+    while case < end:  # a worker replaced after a hang or a crash goes on with the next case
+        case = run_worker(workspace, case, end, reports)
     counts = Counter(r["outcome"] for r in reports)
     worst = max((r.get("grew_mb", 0) for r in reports), default=0)
     summary = (f"fuzz: {len(reports)} cases in {time.time() - start:.0f} s: "
@@ -87,5 +94,10 @@ def test_damaged_inputs_load_render_or_are_refused_in_one_line(tmp_path, record_
     failures = [r for r in reports if r["outcome"] not in CLEAN]
     assert not failures, "\n".join(f"{r.get('label', r['case'])}: {r['outcome']}: {r.get('detail')}"
                                    for r in failures[:10])
-    assert len(reports) >= min(100, SECONDS), "too few cases ran to mean anything"
+    assert CASES >= 100, "too few cases to mean anything"
+    assert [r["case"] for r in reports] == list(range(FIRST, end)), "every case once, in order"
     assert counts["refused"] and (counts["loaded"] + counts["rendered"]) and counts["rendered"]
+    rendered = [r["kind"] for r in reports if r.get("rendering")]
+    assert len(rendered) == len(set(rendered)) == counts["rendered"] and set(rendered) <= RENDERED_KINDS, rendered
+    if FIRST == 0 and CASES >= 400:  # (every kind has loaded by case 356)
+        assert set(rendered) == RENDERED_KINDS, rendered

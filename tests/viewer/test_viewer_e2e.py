@@ -1,9 +1,11 @@
 """End to end, as a person uses it: the real viewer window under Xvfb, driven by xdotool.
 
 Starts `app.py view showcase --size 320x180` on a private X display (software Vulkan draws the
-GGUI window), waits for its first image, holds 'w', drags with the left button, switches the
-integrator ('i') and the scene ('n'), saves a screenshot ('p') and quits (Escape). Then checks
-the screenshot files, a screenshot of the X screen, and the exit code.
+GGUI window), waits for its first image, hides the HUD ('h'), holds 'w', drags with the left
+button, switches the integrator ('i') and the scene ('n'), saves a screenshot ('p') and quits
+(Escape). Grabs of the X screen before and after each move show the view changed as the input
+asks: 'w' moves the camera forward, so the view grows about its centre; a drag to the right turns
+it right, so the view slides left. Then checks the screenshot files and the exit code.
 """
 import os
 import re
@@ -78,6 +80,60 @@ def window_pixels(screen: np.ndarray, geometry: dict) -> np.ndarray:
     return screen[y:y + SIZE[1], x:x + SIZE[0]]
 
 
+# Two grabs of a still view this close (mean absolute difference of 8-bit values) show the same
+# image: the normals view converges within a few samples, only its anti-aliased edges change.
+STILL_DIFFERENCE = 1.0
+# A move changes the view by far more than that (tens of levels where objects shift).
+MOVED_DIFFERENCE = 8.0
+
+
+def still_view(env, path: Path, geometry: dict, viewer, deadline: float) -> np.ndarray:
+    """The window's pixels once the view has stopped changing (moving frames are at a reduced
+    resolution; then still frames accumulate): two grabs in a row that agree."""
+    previous = None
+    while True:
+        assert viewer.poll() is None, "the viewer ended"
+        assert time.monotonic() < deadline, "the view did not settle within the time limit"
+        pixels = window_pixels(grab(env, path), geometry).astype(np.float64)
+        if previous is not None and np.abs(pixels - previous).mean() < STILL_DIFFERENCE:
+            return pixels
+        previous = pixels
+        time.sleep(0.3)
+
+
+def zoom_about_centre(image: np.ndarray, scale: float) -> np.ndarray:
+    """The view of a camera moved towards the centre of the image, for points at one depth: the
+    image magnified `scale` times about its centre (nearest pixel)."""
+    h, w = image.shape[:2]
+    rows = np.clip(np.round((h - 1) / 2 + (np.arange(h) - (h - 1) / 2) / scale).astype(int), 0, h - 1)
+    cols = np.clip(np.round((w - 1) / 2 + (np.arange(w) - (w - 1) / 2) / scale).astype(int), 0, w - 1)
+    return image[rows][:, cols]
+
+
+def best_zoom(before: np.ndarray, after: np.ndarray) -> float:
+    """The magnification about the centre that best maps `before` onto `after` (the middle half of
+    the image compared, which every scale tried maps from inside the image)."""
+    h, w = before.shape[:2]
+    middle = (slice(h // 4, 3 * h // 4), slice(w // 4, 3 * w // 4))
+    scales = np.round(np.arange(0.50, 3.0001, 0.02), 2)
+    errors = [np.abs(zoom_about_centre(before, s)[middle] - after[middle]).mean() for s in scales]
+    return float(scales[int(np.argmin(errors))])
+
+
+def best_shift(before: np.ndarray, after: np.ndarray, reach: tuple[int, int] = (60, 30)) -> tuple[int, int]:
+    """(dx, dy) in pixels such that after[y, x] best matches before[y - dy, x - dx]: how far the
+    view slid (positive: right, down). Compared in grey levels on the middle of `after` (where a
+    small turn of the camera is a slide; towards the edges it also stretches the view)."""
+    before, after = before.mean(axis=2), after.mean(axis=2)
+    h, w = before.shape
+    rx, ry = reach
+    y0, y1, x0, x1 = ry, h - ry, rx, w - rx  # every shift tried reads `before` inside the image
+    middle = after[y0:y1, x0:x1]
+    errors = {(dx, dy): np.abs(middle - before[y0 - dy:y1 - dy, x0 - dx:x1 - dx]).mean()
+              for dy in range(-ry, ry + 1) for dx in range(-rx, rx + 1)}
+    return min(errors, key=errors.get)
+
+
 def test_viewer_under_xvfb(xserver, tmp_path):
     env = dict(xserver, LANTERN_SCREENSHOT_DIR=str(tmp_path / "shots"))
     log = open(tmp_path / "viewer.log", "w")
@@ -108,17 +164,37 @@ def test_viewer_under_xvfb(xserver, tmp_path):
             time.sleep(0.5)
 
         xdo(env, "mousemove", "--window", window, 280, 90)
-        xdo(env, "keydown", "w")
+        xdo(env, "key", "h")  # the HUD off: the whole window shows the view
+        deadline = start + TIMEOUT
+        before = still_view(env, tmp_path / "screen_before.png", geometry, viewer, deadline)
+
+        xdo(env, "keydown", "w")  # forward, towards the centre of the view, at 2 m/s
         time.sleep(0.6)
         xdo(env, "keyup", "w")
-        xdo(env, "mousedown", 1)  # a left drag, starting right of the HUD panel
+        forward = still_view(env, tmp_path / "screen_forward.png", geometry, viewer, deadline)
+        assert np.abs(forward - before).mean() > MOVED_DIFFERENCE, "'w' did not change the view"
+        # Showcase's objects, about 5 m ahead, come a metre or two closer (how far depends on when
+        # the viewer's frames saw the key go down and up): the view grows about its centre, by
+        # ~1.5 here (backwards it would shrink). 0.4 m, a third of the least move, would give 1.08.
+        scale = best_zoom(before, forward)
+        assert scale >= 1.08, f"'w': the view grew {scale} times about its centre"
+
+        xdo(env, "mousedown", 1)  # a left drag, right and a little down (the HUD is hidden)
+        time.sleep(0.3)  # (frames see the button down before the cursor moves)
         for _ in range(5):
-            time.sleep(0.1)
             xdo(env, "mousemove_relative", "--", 6, 2)
+            time.sleep(0.1)
+        time.sleep(0.5)  # (and the last move before the button goes up)
         xdo(env, "mouseup", 1)
-        time.sleep(0.3)
-        screen = grab(env, tmp_path / "screen_moved.png")
-        assert window_pixels(screen, geometry).std() > MIN_PIXEL_STD
+        turned = still_view(env, tmp_path / "screen_turned.png", geometry, viewer, deadline)
+        assert turned.std() > MIN_PIXEL_STD
+        assert np.abs(turned - forward).mean() > MOVED_DIFFERENCE, "the drag did not change the view"
+        # 30 pixels right, 10 down, at 0.004 radians a pixel: the camera turns 0.12 rad right and
+        # 0.04 down, and the view slides ~30 pixels left (320 pixels span 2 tan(fov_x / 2) = 1.29)
+        # and ~10 up (180 span 2 tan(20 deg) = 0.73): (-32, -10) here. A move the viewer missed
+        # would leave out 6 and 2 of them.
+        dx, dy = best_shift(forward, turned)
+        assert -42 <= dx <= -18 and -16 <= dy <= -3, f"the drag slid the view by ({dx}, {dy}) pixels"
         # Keys typed while the viewer compiles are queued and run in order once it is done.
         for key in ("i", "n", "p", "Escape"):
             xdo(env, "key", key)
