@@ -1,6 +1,7 @@
 """`bench integrators`' whole-process comparison (renderer/bench/whole_process.py): its parsing,
 and its orchestration with stand-in commands that write known images (the real one runs Lantern's
 and Mitsuba's renders, minutes)."""
+import subprocess
 import sys
 
 import numpy as np
@@ -41,6 +42,35 @@ def test_compare_times_both_sides_and_reads_their_error(monkeypatch):
     rows = wp.summary_rows(result)
     assert [row[0] for row in rows] == ["Mitsuba (process)", "Lantern render mis"] and rows[0][-1] == "1.00x"
     assert ("PASS" if result["passed"] else "FAIL") in wp.caption(result)
+
+
+@pytest.mark.parametrize("lantern_s, mitsuba_s, passed", [(1.0, 2.0, True), (4.0, 2.0, False),
+                                                         (3.0, 2.0, True)],  # (the target itself: "at most")
+                         ids=["half-as-long", "twice-as-long", "at-the-target"])
+def test_the_verdict_follows_the_timed_ratio(monkeypatch, tmp_path, lantern_s, mitsuba_s, passed):
+    """Known timings in place of the clock: Lantern at 0.5x Mitsuba's time passes, at 2x fails,
+    at the target (1.5x) passes. The processes are stood in for too: each writes its image."""
+    from renderer.output.image_io import write_exr
+
+    seconds = {"lantern": lantern_s, "mitsuba": mitsuba_s}
+    monkeypatch.setattr(wp, "lantern_command", lambda config, seed, out: ["lantern", str(out)])
+    monkeypatch.setattr(wp, "mitsuba_command", lambda config, seed, out: ["mitsuba", str(out)])
+
+    def timed_process(command):
+        side, out = command
+        if side == "lantern":
+            write_exr(out, np.full((4, 4, 3), 0.75, np.float32))
+            return seconds[side], subprocess.CompletedProcess(command, 0, "(4 spp in 0.01 s)\n", "")
+        np.save(out, np.full((4, 4, 3), 0.25, np.float32))
+        return seconds[side], subprocess.CompletedProcess(command, 0, "", "")
+
+    monkeypatch.setattr(wp, "timed_process", timed_process)
+    result = wp.compare(wp.WholeProcessConfig(size=4, spp=4, runs=3), np.full((4, 4, 3), 0.5), reference_spp=64)
+    assert result["lantern"]["seconds"] == [lantern_s] * 3 and result["mitsuba"]["seconds"] == [mitsuba_s] * 3
+    assert result["ratio"] == pytest.approx(lantern_s / mitsuba_s)
+    assert result["passed"] is passed
+    assert f"{'PASS' if passed else 'FAIL'} ({lantern_s / mitsuba_s:.2f}x)" in wp.caption(result)
+    assert wp.summary_rows(result)[1][-1] == f"{lantern_s / mitsuba_s:.2f}x"
 
 
 def test_a_failing_process_is_a_note_not_a_crash(monkeypatch):
