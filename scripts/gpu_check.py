@@ -84,7 +84,7 @@ def compare(reference, checked, alpha: float | None = None) -> Agreement:
     `alpha`: the level for this image (default the suite's ALPHA)."""
     from scipy import stats
 
-    from tests.stats.image_tests import ALPHA, image_mean_z, pixel_z_test
+    from renderer.bench.agreement import ALPHA, image_mean_z, pixel_z_test
 
     alpha = ALPHA if alpha is None else alpha
     pixels_pass, fraction, _, _, level = pixel_z_test(*reference, *checked, alpha=alpha)

@@ -12,22 +12,27 @@ ALPHA = 0.01
 PASS_FRACTION = 0.9975  # Mitsuba's rule: at least 99.75 % of the pixel channels pass
 
 
-def pixel_z_test(mean_a, var_a, mean_b, var_b, alpha: float = ALPHA):
-    """(passed, fraction of pixel channels passing, pass mask, p-values, Sidak level, z)."""
-    from scipy import stats
-
+def pixel_z_scores(mean_a, var_a, mean_b, var_b) -> np.ndarray:
+    """|difference| / combined standard error per pixel channel (inf where neither image has noise
+    and they differ, 0 where they are equal)."""
     ma, va, mb, vb = (np.asarray(x, np.float64) for x in (mean_a, var_a, mean_b, var_b))
-    pixels = ma.shape[0] * ma.shape[1]
     difference = np.abs(ma - mb)
     combined = va + vb
-    exact = combined == 0.0  # no noise on either side: nothing but equality passes
     with np.errstate(divide="ignore", invalid="ignore"):
-        z = np.where(exact, np.where(difference == 0.0, 0.0, np.inf), difference / np.sqrt(combined))
-    p_value = np.where(exact, np.where(difference == 0.0, 1.0, 0.0), 2.0 * stats.norm.sf(z))
+        return np.where(combined == 0.0, np.where(difference == 0.0, 0.0, np.inf), difference / np.sqrt(combined))
+
+
+def pixel_z_test(mean_a, var_a, mean_b, var_b, alpha: float = ALPHA):
+    """(passed, fraction of pixel channels passing, pass mask, p-values, Sidak level)."""
+    from scipy import stats
+
+    z = pixel_z_scores(mean_a, var_a, mean_b, var_b)
+    pixels = z.shape[0] * z.shape[1]
+    p_value = 2.0 * stats.norm.sf(z)  # 1 where equal without noise, 0 where they differ without it
     level = -np.expm1(np.log1p(-alpha) / pixels)  # 1 - (1 - alpha)^(1/N) without cancellation
     success = p_value > level
     fraction = np.count_nonzero(success) / 3 / pixels
-    return fraction >= PASS_FRACTION, fraction, success, p_value, level, z
+    return fraction >= PASS_FRACTION, fraction, success, p_value, level
 
 
 def image_mean_z(a, b, channel: int = 1) -> float:

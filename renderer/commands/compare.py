@@ -154,7 +154,7 @@ def _errors(image, reference: Side) -> dict:
 
 
 def _judge(ours: Side, theirs: Side, reference: Side, lantern_start, mitsuba_start, rounds) -> dict:
-    from renderer.bench.agreement import image_mean_z, pixel_z_test
+    from renderer.bench.agreement import image_mean_z, pixel_z_scores, pixel_z_test
 
     lantern_errors, mitsuba_errors = _errors(ours.image, reference), _errors(theirs.image, reference)
 
@@ -163,7 +163,8 @@ def _judge(ours: Side, theirs: Side, reference: Side, lantern_start, mitsuba_sta
             return None
         return side.seconds * own["rel_mse_above_floor"] / target["rel_mse_above_floor"]
 
-    passed, fraction, _, _, level, z = pixel_z_test(ours.image, ours.variance, reference.image, reference.variance)
+    passed, fraction, _, _, level = pixel_z_test(ours.image, ours.variance, reference.image, reference.variance)
+    z = pixel_z_scores(ours.image, ours.variance, reference.image, reference.variance)
     mean_z = image_mean_z((ours.image, ours.variance), (reference.image, reference.variance))
     return {
         "lantern": {"spp": ours.spp, "render_seconds": ours.seconds, "start_seconds": lantern_start,

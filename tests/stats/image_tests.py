@@ -9,24 +9,8 @@ the whole image than any single pixel.
 import numpy as np
 from scipy import stats
 
-ALPHA = 0.01
-PASS_FRACTION = 0.9975  # Mitsuba's rule: at least 99.75 % of the pixels pass
-
-
-def pixel_z_test(mean_a, var_a, mean_b, var_b, alpha=ALPHA):
-    """(passed, fraction of pixel channels passing, pass mask, p-values, Sidak level)."""
-    ma, va, mb, vb = (np.asarray(x, np.float64) for x in (mean_a, var_a, mean_b, var_b))
-    pixels = ma.shape[0] * ma.shape[1]
-    difference = np.abs(ma - mb)
-    combined = va + vb
-    exact = combined == 0.0  # no noise on either side: nothing but equality passes
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z = np.where(exact, 0.0, difference / np.sqrt(combined))
-    p_value = np.where(exact, np.where(difference == 0.0, 1.0, 0.0), 2.0 * stats.norm.sf(z))
-    level = -np.expm1(np.log1p(-alpha) / pixels)  # 1 - (1 - alpha)^(1/N) without cancellation
-    success = p_value > level
-    fraction = np.count_nonzero(success) / 3 / pixels
-    return fraction >= PASS_FRACTION, fraction, success, p_value, level
+# The rule itself lives with the product (compare uses it too); the suite reads it from there.
+from renderer.bench.agreement import ALPHA, PASS_FRACTION, image_mean_z, pixel_z_test  # noqa: E402,F401
 
 
 def describe(a, b, p_value, names) -> str:
@@ -40,14 +24,6 @@ def describe(a, b, p_value, names) -> str:
         lines.append(f"  ({r}, {c}) {np.round(ma[r, c], 4)} vs {np.round(mb[r, c], 4)} "
                      f"({np.round(np.sqrt(va[r, c]), 4)}, {np.round(np.sqrt(vb[r, c]), 4)}), p = {p_value[r, c].min():.1e}")
     return "\n".join(lines)
-
-
-def image_mean_z(a, b, channel=1):
-    """z of the difference of the two image means of one channel (pixels independent)."""
-    (ma, va), (mb, vb) = a, b
-    n = ma.shape[0] * ma.shape[1]
-    difference = ma[..., channel].mean() - mb[..., channel].mean()
-    return difference / np.sqrt((va[..., channel].sum() + vb[..., channel].sum()) / n**2)
 
 
 def mean_z(mean, var_of_mean, expected, channel=1):
