@@ -206,11 +206,25 @@ class Renderer:
         """The scene's emitters for direct lighting, built on first use (light selection structures
         cost nothing to integrators that do not sample lights)."""
         if self._lights is None:
+            from renderer.lights.delta_lights import DeltaLights
             from renderer.lights.lights import Lights, emitter_table
 
             emitters = emitter_table(self.geometry, self.materials.arrays)
-            self._lights = Lights(self.geometry, emitters, self.environment, self.scene.environment, self._env_image)
+            delta = DeltaLights(self.scene.lights, self.scene_radius()) if self.scene.lights else None
+            self._lights = Lights(self.geometry, emitters, self.environment, self.scene.environment, self._env_image,
+                                  delta=delta)
         return self._lights
+
+    def scene_radius(self) -> float:
+        """The radius of a sphere about the scene (a directional light's power is what crosses it):
+        a mesh scene's bounding sphere; an SDF scene has no finite bounds (planes, repetition), so
+        the distance from its camera to the point it looks at stands in."""
+        data = getattr(self.geometry, "data", None)
+        if self.scene.geometry == "mesh" and data is not None and data.primitive_count:
+            lo, hi = data.scene_bounds()
+            return max(0.5 * float(np.linalg.norm(np.asarray(hi) - np.asarray(lo))), 1e-3)
+        camera = self.scene.camera
+        return max(float(np.linalg.norm(np.subtract(camera.look_at, camera.position))), 1e-3)
 
     def shared(self, name: str, build):
         """A device object built once per Renderer by `build()` and shared by the programs that ask

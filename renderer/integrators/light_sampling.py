@@ -5,6 +5,7 @@ continuation ray the BSDF samples, which may land on an emitter or leave the sce
 both count, weighted by the power heuristic (Veach 1997); without it, only the light sample
 counts for lights the light sampler can reach, and BSDF-sampled rays count only after the camera
 or a delta bounce, which light sampling cannot follow (`emission_weight`, `environment_weight`).
+Point, spot and directional lights are found by light samples alone: theirs take weight 1.
 """
 import taichi as ti
 
@@ -51,6 +52,20 @@ def environment_weight(lights: ti.template(), mis: ti.template(), prev_delta, pr
 
 
 @ti.func
+def light_weight(lights: ti.template(), ls, pdf_other):
+    """The MIS weight of light sample ls against the other strategy's density pdf_other: 1 for a
+    light without a surface, which no BSDF or phase sample can find."""
+    weight = 0.0
+    if ti.static(lights.has_delta):
+        weight = 1.0
+        if ls.delta == 0:
+            weight = power_heuristic(ls.pdf, pdf_other)
+    else:
+        weight = power_heuristic(ls.pdf, pdf_other)
+    return weight
+
+
+@ti.func
 def sample_direct(ctx: ti.template(), mis: ti.template(), mat, n, s, wo, u_select, u_point):
     """A light sample for the vertex s (material mat, shading normal n) seen from wo:
     (found, the light sample, f, weight / pdf). found is False when it carries nothing (no
@@ -66,6 +81,6 @@ def sample_direct(ctx: ti.template(), mis: ti.template(), mat, n, s, wo, u_selec
             found = True
             weight = 1.0
             if ti.static(mis):
-                weight = power_heuristic(ls.pdf, pdf_bsdf)
+                weight = light_weight(ctx.lights, ls, pdf_bsdf)
             scale = weight / ls.pdf
     return found, ls, f, scale

@@ -48,7 +48,8 @@ GPU back-ends. The kernels compile and run on Vulkan. On Mesa's software Vulkan 
 Taichi 1.7.4, loops whose body holds an atomic lose iterations in some threads (reproduced without
 SPPM), so there the photon deposits, which are atomics inside the query loop, come out low.
 
-Known limits. A VP is the first diffuse or rough vertex: at a BSDF that has a delta part too (a
+Known limits. Scenes with point, spot or directional lights are refused (they emit no photons
+yet). A VP is the first diffuse or rough vertex: at a BSDF that has a delta part too (a
 principled material with roughness 0: a mirror coat over a diffuse base), the light its delta part
 reflects is not followed. Emitters that light sampling cannot sample (SDF shapes other than
 spheres) emit no photons: their light reaches the image directly and through delta bounces only.
@@ -747,6 +748,11 @@ class StochasticProgressivePhotonMapping:
 
     def make_program(self, renderer, features, sampler, lights):
         from renderer.sampling.sampler import make_sampler
+
+        if renderer.scene.lights:
+            # Their direct light would be right, but without photons the indirect light is missing.
+            raise ValueError("sppm: point, spot and directional lights emit no photons yet; render this scene "
+                             "with mis or nee")
 
         options = renderer.integrator_options.get("sppm") or SppmOptions()
         state = renderer.shared("sppm_state", lambda: SppmState(renderer.film.max_width, renderer.film.max_height))

@@ -4,7 +4,9 @@ Static switches pick the estimator: `light_sampling` (next-event estimation at e
 `mis` (BSDF- and light-sampled contributions combined by the power heuristic, Veach 1997; without
 it, emitters the lights can sample count only through light samples, except after a delta
 bounce, which light sampling cannot follow). Emitters the lights cannot sample (SDF shapes other
-than spheres) are found by BSDF sampling alone, at full weight.
+than spheres) are found by BSDF sampling alone, at full weight; point, spot and directional lights
+(renderer/lights/delta_lights.py), which no ray can hit, by light samples alone, at full weight, so
+`path` never sees them.
 
 One loop traces every ray of the path, shadow rays included, at a single call site of the
 geometry: every call site of a traversal or of an SDF is compiled in again (the two-site form of
@@ -31,7 +33,7 @@ set of four: simpler, at the price of more colour noise behind dispersive glass.
 import taichi as ti
 
 from renderer.geometry.interface import INF, MEDIUM_POINT, Hit, Surface
-from renderer.integrators.light_sampling import emission_weight, environment_weight, power_heuristic, sample_direct
+from renderer.integrators.light_sampling import emission_weight, environment_weight, light_weight, sample_direct
 from renderer.materials import dispersion
 from renderer.materials.kinds import NULL_KIND
 from renderer.materials.table import NO_MEDIUM
@@ -218,7 +220,7 @@ class PathTracerBase:
                             f = phase.hg_phase(rec.g, wo, ls.wi)
                             weight = 1.0
                             if ti.static(self.mis):
-                                weight = power_heuristic(ls.pdf, f)
+                                weight = light_weight(ctx.lights, ls, f)
                             shadow_pending = True
                             shadow_s = s
                             shadow_medium = medium

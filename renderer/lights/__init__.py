@@ -1,7 +1,9 @@
 """Lights: every emitter of a scene, for direct lighting and for photon emission.
 
-lights.py             `Lights`: a light sample at a point and its densities (environment or an
-                      emissive primitive), and the emitter table (power per emissive primitive)
+lights.py             `Lights`: a light sample at a point and its densities (environment, an
+                      emissive primitive or a delta light), and the emitter table (power per
+                      emissive primitive)
+delta_lights.py       point, spot and directional lights: no surface, found by light samples alone
 environment.py        the environment's radiance (map, sky or constant colour)
 env_sampling.py       importance sampling of an environment map
 light_select.py       choosing one emissive primitive: uniform, by power (alias table) or the tree

@@ -1,6 +1,7 @@
 """Every emitter of a scene for direct lighting: emissive primitives (chosen by a light selector,
-then a point on the chosen one) and the environment (importance-sampled map, or uniform directions
-for a sky or constant colour).
+then a point on the chosen one), the environment (importance-sampled map, or uniform directions
+for a sky or constant colour), and lights without a surface (point, spot, directional:
+renderer/lights/delta_lights.py).
 
   sample(ctx, ref, ref_n, u_select, u_point) -> LightSample    one light, one point, its radiance
   pdf_hit(ref, ref_n, prim, p, n) -> f32    density of `sample` giving point p on primitive prim
@@ -8,6 +9,12 @@ for a sky or constant colour).
 All densities are per unit solid angle at `ref` and include the choice of the light, so MIS
 weights can compare them with BSDF densities directly. Emitters are one-sided (Lambertian, like
 Mitsuba's area lights): they emit from the side their normal faces.
+
+A sample of a light without a surface has `delta` = 1: its `pdf` is only the probability of
+choosing that light, its `radiance` the value that multiplies f / pdf (I falloff / r^2 or E), and
+it takes no MIS weight (no BSDF sample can find it). Where a scene has such lights, the samples
+not given to the environment are split between them and the emissive primitives in proportion to
+their powers (`delta_share`).
 """
 import math
 
@@ -23,7 +30,8 @@ from renderer.sampling.warps import PI
 from renderer.runtime.upload import upload_fields
 
 vec3 = ti.math.vec3
-LightSample = ti.types.struct(wi=vec3, dist=ti.f32, radiance=vec3, pdf=ti.f32, p=vec3, n=vec3, is_env=ti.i32)
+LightSample = ti.types.struct(wi=vec3, dist=ti.f32, radiance=vec3, pdf=ti.f32, p=vec3, n=vec3, is_env=ti.i32,
+                              delta=ti.i32)
 
 # Where an environment sample's "point" is placed, so that one shadow-ray routine serves every
 # light: far beyond any scene this renderer is meant for (1e4 km), near enough for f32 directions.
@@ -67,6 +75,20 @@ def choose_environment(has_env: ti.template(), share, u):
 
 
 @ti.func
+def choose_share(share, u):
+    """Whether the first of two groups is chosen (probability `share`), and u remapped to [0, 1)
+    within the chosen one."""
+    first = False
+    v = u
+    if v < share:
+        first = True
+        v = v / share
+    else:
+        v = (v - share) / (1.0 - share)
+    return first, v
+
+
+@ti.func
 def environment_direction(source, u):
     """(direction, solid-angle pdf, radiance) towards the environment of `source` (an object with
     env_is_map, env_sampler and environment): importance-sampled on a map, uniform otherwise."""
@@ -87,9 +109,11 @@ def environment_direction(source, u):
 
 @ti.data_oriented
 class Lights:
-    def __init__(self, geometry, emitters: dict, environment, env_spec, env_image, selector_kind="auto"):
+    def __init__(self, geometry, emitters: dict, environment, env_spec, env_image, selector_kind="auto",
+                 delta=None):
         """emitters: `emitter_table`'s rows (numpy, one per emissive primitive; kept for photon
-        emission); env_image: the map for kind "map", else None."""
+        emission); env_image: the map for kind "map", else None; delta: the scene's
+        `DeltaLights`, or None."""
         self.geometry = geometry
         self.emitters = emitters
         self.environment = environment
@@ -97,9 +121,18 @@ class Lights:
         self.has_area = self.count > 0
         self.has_env = environment_emits(env_spec)
         self.env_is_map = env_spec.kind == "map"
-        share = ENVIRONMENT_SHARE if (self.has_area and self.has_env) else (1.0 if self.has_env else 0.0)
+        self.delta = delta
+        self.has_delta = delta is not None and delta.count > 0
+        others = self.has_area or self.has_delta
+        share = ENVIRONMENT_SHARE if (others and self.has_env) else (1.0 if self.has_env else 0.0)
         self.env_share = ti.field(ti.f32, shape=())
         self.env_share[None] = share
+        if self.has_delta:
+            # The rest between the lights without a surface and the emissive primitives, by power.
+            delta_power = float(delta.power.sum())
+            area_power = float(np.sum(emitters["power"])) if self.has_area else 0.0
+            self.delta_share = ti.field(ti.f32, shape=())
+            self.delta_share[None] = delta_power / (delta_power + area_power) if area_power > 0.0 else 1.0
         prim_total = max(1, geometry.primitive_count())
         self.prim_emitter = ti.field(ti.i32, shape=prim_total)
         self.emitter_prim = ti.field(ti.i32, shape=max(1, self.count))
@@ -117,28 +150,46 @@ class Lights:
     @ti.func
     def sample(self, ctx, ref, ref_n, u_select, u_point):
         result = LightSample(wi=vec3(0.0, 0.0, 1.0), dist=INF, radiance=vec3(0.0), pdf=0.0, p=ref, n=vec3(0.0, 0.0, 1.0),
-                             is_env=0)
+                             is_env=0, delta=0)
         share = self.env_share[None]
         use_env, u = choose_environment(self.has_env, share, u_select)
         if use_env:
             if ti.static(self.has_env):
                 d, pdf, radiance = environment_direction(self, u_point)
                 result = LightSample(wi=d, dist=INF, radiance=radiance, pdf=pdf * share, p=ref + ENV_DISTANCE * d,
-                                     n=-d, is_env=1)
+                                     n=-d, is_env=1, delta=0)
         else:
+            use_delta = False
+            area_share = 1.0
+            if ti.static(self.has_delta):
+                delta_share = self.delta_share[None]
+                area_share = 1.0 - delta_share
+                use_delta, u = choose_share(delta_share, u)
+                if use_delta:
+                    e, pmf = self.delta.selector.select(ref, ref_n, ti.min(u, 0.99999994))
+                    wi, dist, value, position = self.delta.sample(ctx.features, e, ref)
+                    p = position
+                    if dist == INF:  # directional: the shadow ray's end far away, as the environment's
+                        p = ref + ENV_DISTANCE * wi
+                    result = LightSample(wi=wi, dist=dist, radiance=value, pdf=pmf * delta_share * (1.0 - share),
+                                         p=p, n=-wi, is_env=0, delta=1)
             if ti.static(self.has_area):
-                e, pmf = self.selector.select(ref, ref_n, ti.min(u, 0.99999994))
-                g = self.emitter_prim[e]
-                pt = self.geometry.sample_emitter(g, ref, u_point)
-                to = pt.p - ref
-                dist = to.norm()
-                if pt.pdf > 0.0 and dist > 0.0:
-                    wi = to / dist
-                    radiance = vec3(0.0)
-                    if pt.n.dot(wi) < 0.0:  # the emitting (front) side faces ref
-                        radiance = emitted_radiance(ctx, self.geometry, g, pt.p, pt.n, pt.uv, -wi)
-                    result = LightSample(wi=wi, dist=dist, radiance=radiance, pdf=pt.pdf * pmf * (1.0 - share),
-                                         p=pt.p, n=pt.n, is_env=0)
+                if not use_delta:
+                    e, pmf = self.selector.select(ref, ref_n, ti.min(u, 0.99999994))
+                    g = self.emitter_prim[e]
+                    pt = self.geometry.sample_emitter(g, ref, u_point)
+                    to = pt.p - ref
+                    dist = to.norm()
+                    if pt.pdf > 0.0 and dist > 0.0:
+                        wi = to / dist
+                        radiance = vec3(0.0)
+                        if pt.n.dot(wi) < 0.0:  # the emitting (front) side faces ref
+                            radiance = emitted_radiance(ctx, self.geometry, g, pt.p, pt.n, pt.uv, -wi)
+                        pdf = pt.pdf * pmf * (1.0 - share)
+                        if ti.static(self.has_delta):
+                            pdf *= area_share
+                        result = LightSample(wi=wi, dist=dist, radiance=radiance, pdf=pdf, p=pt.p, n=pt.n, is_env=0,
+                                             delta=0)
         return result
 
     @ti.func
@@ -148,6 +199,8 @@ class Lights:
             e = self.prim_emitter[g]
             if e >= 0:
                 pdf = self.selector.pmf(ref, ref_n, e) * (1.0 - self.env_share[None]) * self.geometry.emitter_pdf(g, ref, p, n)
+                if ti.static(self.has_delta):
+                    pdf *= 1.0 - self.delta_share[None]
         return pdf
 
     @ti.func

@@ -27,6 +27,7 @@ ENVIRONMENT_KINDS = ("map", "sky", "constant")
 GEOMETRY_KINDS = ("sdf", "mesh")
 MESH_OBJECT_KINDS = ("mesh", "sphere", "quad", "disc", "generated", "bezier")
 MESH_GENERATORS = ("terrain", "icosphere", "light_panels", "water")
+LIGHT_KINDS = ("point", "spot", "directional")
 
 
 @dataclass(frozen=True)
@@ -167,6 +168,34 @@ class FogSpec:
 
 
 @dataclass(frozen=True)
+class LightSpec:
+    """A light with no surface (Mitsuba 3's and pbrt-v4's point, spot and directional): a delta
+    in position or direction, so no ray can hit it; only light sampling (nee, mis) finds it.
+
+    point: `position`, radiant `intensity` (W/sr per channel, i.e. radiance times m^2): the
+    irradiance at distance r facing it is intensity / r^2.
+    spot: a point light limited to a cone about `direction`: full intensity within `beam_width`
+    degrees of the axis, falling linearly in angle to 0 at `cutoff_angle` (Mitsuba 3's profile);
+    None: 3/4 of the cutoff, as in Mitsuba.
+    directional: parallel light travelling along `direction` from outside the scene, `irradiance`
+    (W/m^2 per channel) on a surface facing it.
+    """
+
+    kind: str  # one of LIGHT_KINDS
+    position: Vec3 = (0.0, 0.0, 0.0)  # point, spot
+    direction: Vec3 = (0.0, 0.0, 1.0)  # spot: the cone's axis; directional: where the light travels (unit)
+    intensity: Vec3 = (1.0, 1.0, 1.0)  # point, spot
+    irradiance: Vec3 = (1.0, 1.0, 1.0)  # directional
+    cutoff_angle: float = 20.0  # spot, degrees from the axis
+    beam_width: Optional[float] = None  # spot, degrees; None: 3/4 of cutoff_angle
+
+    @property
+    def beam(self) -> float:
+        """The spot's beam width in degrees, the default resolved."""
+        return 0.75 * self.cutoff_angle if self.beam_width is None else self.beam_width
+
+
+@dataclass(frozen=True)
 class Transform:
     translate: Vec3 = (0.0, 0.0, 0.0)
     rotate: Vec3 = (0.0, 0.0, 0.0)  # Euler degrees, applied about x, then y, then z (R = Rz Ry Rx)
@@ -278,8 +307,12 @@ class Scene:
     mesh_objects: tuple[MeshObject, ...] = ()
     media: tuple[MediumSpec, ...] = ()
     fog: FogSpec = field(default_factory=FogSpec)
+    lights: tuple[LightSpec, ...] = ()  # point, spot and directional lights
     # The model files the scene reads, each parsed once (shared by camera framing and assembly).
     model_files: ModelFiles = field(default_factory=ModelFiles, compare=False, repr=False)
+    # Files the reader read besides `path` (a Mitsuba scene's includes and spectrum files): with the
+    # model files and textures they are what a checkpoint's fingerprint and a distributed bundle cover.
+    source_files: tuple[Path, ...] = ()
 
     def medium_names(self) -> tuple[str, ...]:
         return tuple(m.name for m in self.media)

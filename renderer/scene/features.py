@@ -11,7 +11,7 @@ from dataclasses import dataclass, fields, replace
 
 from renderer.geometry.mesh_data import KINDS as MESH_PRIMITIVES
 from renderer.materials.kinds import KIND_NAMES, LAYER_NAMES, always_compensated, compensated_when_rough, kind
-from renderer.scene.description import SDF_OPERATORS, SDF_PRIMITIVES, Scene
+from renderer.scene.description import LIGHT_KINDS, SDF_OPERATORS, SDF_PRIMITIVES, Scene
 
 
 @dataclass(frozen=True)
@@ -37,6 +37,10 @@ class Features:
     sdf_primitives: frozenset = frozenset()
     sdf_operators: frozenset = frozenset()
     mesh_primitives: frozenset = frozenset()
+    # Kinds of the scene's lights without a surface (point, spot, directional): light sampling
+    # compiles each kind's code only where the scene has one. Like `environment`, they describe the
+    # scene rather than an optional effect: with_everything() keeps them as they are.
+    light_kinds: frozenset = frozenset()
 
     def has_kind(self, name: str) -> bool:
         """Whether material kind `name` is compiled in (a registry name)."""
@@ -45,6 +49,14 @@ class Features:
     def has_layer(self, name: str) -> bool:
         """Whether the principled layer `name` is compiled in (a registry name)."""
         return name in self.material_layers
+
+    def has_light(self, kind: str) -> bool:
+        """Whether light kind `kind` (one of LIGHT_KINDS) is compiled in."""
+        return kind in self.light_kinds
+
+    @property
+    def has_delta_lights(self) -> bool:
+        return bool(self.light_kinds)
 
     def active_effects(self) -> list[str]:
         """Short names for the HUD and `app.py info`."""
@@ -57,7 +69,8 @@ class Features:
                  ("vertex colours", self.has_vertex_colors), ("instances", self.has_instances),
                  ("thin walls", self.has_thin),
                  *((layer, True) for layer in LAYER_NAMES if layer in self.material_layers),
-                 ("depth of field", self.depth_of_field))
+                 ("depth of field", self.depth_of_field),
+                 *((f"{k} lights", True) for k in LIGHT_KINDS if k in self.light_kinds))
         names = [name for name, on in flags if on]
         names.append(f"env:{self.environment}")
         return names
@@ -101,14 +114,16 @@ class Features:
 
 def features_from(geometry: str, material_uses: dict, environment: str, aperture: float,
                   sdf_nodes=(), mesh_kinds=frozenset(), energy_compensation: bool = True,
-                  fog: str = "none", vertex_colors: bool = False, instances: bool = False) -> Features:
+                  fog: str = "none", vertex_colors: bool = False, instances: bool = False,
+                  light_kinds=frozenset()) -> Features:
     """material_uses: {"kinds", "layers": sets of registry names, "textures", "normal_maps", "emission",
     "media": bool, "rough": whether a kind compensated where rough (conductor, dielectric) has
     roughness > 0}.
     energy_compensation: the scene's wish; compiled in only where such a rough material occurs, or
     a kind always compensated (principled, whose coat layering it also provides).
     fog: the scene's fog model ("none", "medium" or "analytic").
-    vertex_colors, instances: whether the mesh data carries vertex colours / instanced meshes."""
+    vertex_colors, instances: whether the mesh data carries vertex colours / instanced meshes.
+    light_kinds: the kinds of the scene's point, spot and directional lights (`scene_light_kinds`)."""
     kinds = material_uses["kinds"]
     layers = material_uses.get("layers", set())
     unknown = (set(kinds) - set(KIND_NAMES)) | (set(layers) - set(LAYER_NAMES))
@@ -135,7 +150,13 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         sdf_primitives=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_PRIMITIVES),
         sdf_operators=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_OPERATORS),
         mesh_primitives=frozenset(mesh_kinds),
+        light_kinds=frozenset(light_kinds),
     )
+
+
+def scene_light_kinds(scene: Scene) -> frozenset:
+    """The kinds of the scene's lights without a surface."""
+    return frozenset(light.kind for light in scene.lights)
 
 
 def scene_features(scene: Scene, aperture: float | None = None) -> Features:
@@ -150,4 +171,5 @@ def scene_features(scene: Scene, aperture: float | None = None) -> Features:
             "rough": any(compensated_when_rough(m.kind) and m.roughness > 0.0 for m in used)}
     lens = scene.camera.aperture if aperture is None else aperture
     return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes,
-                         energy_compensation=scene.render.energy_compensation, fog=scene.fog.model)
+                         energy_compensation=scene.render.energy_compensation, fog=scene.fog.model,
+                         light_kinds=scene_light_kinds(scene))

@@ -18,6 +18,7 @@ from .description import (
     ENVIRONMENT_KINDS,
     GEOMETRY_KINDS,
     FOG_MODELS,
+    LIGHT_KINDS,
     MATERIAL_KINDS,
     MESH_GENERATORS,
     MESH_OBJECT_KINDS,
@@ -27,6 +28,7 @@ from .schema_checks import (
     check_conductor_fresnel,
     check_fixed_relaxation,
     check_keyframes,
+    check_spot_beam,
     check_profile,
     check_rounded_box,
     check_torus,
@@ -315,6 +317,41 @@ FOG = Section(
     ),
 )
 
+_POSITIONED, _SPOT, _DIRECTIONAL = ("point", "spot"), ("spot",), ("directional",)
+
+LIGHT = Section(
+    "lights",
+    "Lights without a surface, one `[[lights]]` table each, as Mitsuba 3 and pbrt-v4 define them: "
+    "`point` (light from one point, equal in every direction), `spot` (a point light limited to a "
+    "cone) and `directional` (parallel light from outside the scene, like the sun). A field of "
+    "another `type` is an error. No ray can hit them, so only light sampling finds them: the "
+    "`nee` and `mis` integrators render their light; `path` (BSDF sampling alone) never sees them, "
+    "as in pbrt, and `sppm` refuses a scene with them (they emit no photons yet). Intensity is radiance times "
+    "area (W/sr per channel): a surface facing a point light at distance r receives the irradiance "
+    "`intensity` / r^2. Scenes without such lights compile none of their code. In error messages "
+    "lights are named by 0-based position, e.g. `lights[1]`.",
+    (
+        Field("type", "string", REQUIRED, "Kind of light.", choices=LIGHT_KINDS, attr="kind"),
+        Field("position", "vec3", REQUIRED, "Where the light is, metres.", only_for=_POSITIONED,
+              default_doc="required"),
+        Field("direction", "dir3", REQUIRED, "`spot`: the cone's axis, the way it shines; `directional`: "
+              "the way the light travels (from the light into the scene). Normalised on load.",
+              only_for=_SPOT + _DIRECTIONAL, default_doc="required"),
+        Field("intensity", "vec3", (1.0, 1.0, 1.0), "Radiant intensity, linear RGB, W/sr (a spot's, "
+              "along its axis).", NON_NEGATIVE, only_for=_POSITIONED),
+        Field("irradiance", "vec3", (1.0, 1.0, 1.0), "Irradiance on a surface facing the light, linear "
+              "RGB, W/m^2.", NON_NEGATIVE, only_for=_DIRECTIONAL),
+        Field("cutoff_angle", "float", 20.0, "Angle from the axis beyond which the spot is dark, "
+              "degrees.", Range(0.0, 180.0, lo_open=True, hi_open=True), only_for=_SPOT),
+        Field("beam_width", "float", None, "Angle from the axis within which the spot has its full "
+              "intensity, degrees; between it and `cutoff_angle` the intensity falls linearly in "
+              "angle to 0 (Mitsuba 3's profile).", NON_NEGATIVE, only_for=_SPOT,
+              default_doc="3/4 of `cutoff_angle` (Mitsuba's)"),
+    ),
+    (Rule("A spot's `beam_width` is at most its `cutoff_angle`.", check_spot_beam),),
+    heading="`[[lights]]`",
+)
+
 # Fields every [[objects]] node may have, whatever its type.
 NODE = Section(
     "objects",
@@ -550,8 +587,8 @@ GENERATORS = (
 GENERATORS_BY_NAME = {g.name: g for g in GENERATORS}
 
 # Top-level sections, in the order the documentation presents them.
-TOP_LEVEL = ("scene", "camera", "render", "environment", "materials", "media", "fog", "objects")
-SECTIONS = (SCENE, CAMERA, RENDER, MARCH, ENVIRONMENT, MATERIAL, MEDIUM, FOG)
+TOP_LEVEL = ("scene", "camera", "render", "environment", "lights", "materials", "media", "fog", "objects")
+SECTIONS = (SCENE, CAMERA, RENDER, MARCH, ENVIRONMENT, LIGHT, MATERIAL, MEDIUM, FOG)
 
 ENV_MAP_EXTENSIONS = (".exr", ".hdr")
 SCENE_EXTENSIONS = (".toml",)

@@ -53,6 +53,13 @@ def check_keyframes(v: dict) -> Optional[str]:
     return None
 
 
+def check_spot_beam(v: dict) -> Optional[str]:
+    if v["type"] == "spot" and v["beam_width"] is not None and v["beam_width"] > v["cutoff_angle"]:
+        return (f"beam_width {format_number(v['beam_width'])} is larger than cutoff_angle "
+                f"{format_number(v['cutoff_angle'])} (the full beam lies within the cutoff)")
+    return None
+
+
 def check_rounded_box(v: dict) -> Optional[str]:
     half = min(v["size"]) / 2.0
     if v["radius"] > half:

@@ -21,6 +21,7 @@ from .description import (
     EnvironmentSpec,
     MarchSettings,
     FogSpec,
+    LightSpec,
     MaterialSpec,
     MediumSpec,
     MeshObject,
@@ -424,6 +425,17 @@ def _read_fog(raw: object, media: tuple[MediumSpec, ...]) -> FogSpec:
     return FogSpec(**_model_kwargs(schema.FOG, values))
 
 
+def _read_lights(raw: object) -> tuple[LightSpec, ...]:
+    lights = []
+    for i, body in enumerate([] if raw is None else _tables(raw, "lights")):
+        values = _read_section(body, schema.LIGHT, f"lights[{i}]")
+        model = LightSpec(kind=values["type"])
+        # A field of another kind keeps the model's default (the loader refused it in the table).
+        lights.append(LightSpec(**{f.model_attr: getattr(model, f.model_attr) if values[f.name] is None
+                                   else values[f.name] for f in schema.LIGHT.fields}))
+    return tuple(lights)
+
+
 # --- SDF objects -----------------------------------------------------------------------------
 
 
@@ -613,6 +625,7 @@ def _build_scene(data: dict, path: Path, model_files: ModelFiles) -> Scene:
     camera = _read_section(data.get("camera"), schema.CAMERA, "camera")
     render = _read_render(data.get("render"), header["geometry"])
     environment = _read_environment(data.get("environment"), path)
+    lights = _read_lights(data.get("lights"))
     materials = _read_materials(data.get("materials"))
     media = _read_media(data.get("media"))
     for m in materials:
@@ -629,6 +642,7 @@ def _build_scene(data: dict, path: Path, model_files: ModelFiles) -> Scene:
         materials=materials,
         media=media,
         fog=fog,
+        lights=lights,
         description=header["description"],
         model_files=model_files,
         **geometry,

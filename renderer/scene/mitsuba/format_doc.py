@@ -38,14 +38,14 @@ mitsuba_rgb.py), reflectances under D65 and clamped to [0, 1], emission and indi
 | `obj`, `ply`, `sphere` (`center`, `radius`), `rectangle`, `disk`, `cube` | meshes, spheres, quads and discs placed by `to_world` |
 | `area` emitter on a shape | the shape's material with that emission (one-sided) |
 | `constant`, `envmap` (`scale`, `to_world` rotating about +y) | the environment |
+| `point` (`position` or `to_world`, `intensity`), `spot` (`to_world`, `intensity`, `cutoff_angle`, `beam_width`), `directional` (`direction` or `to_world`, `irradiance`) | `[[lights]]` of those types (a spot's projected `texture`: a warning, the spot is untextured) |
 | `homogeneous` medium as a shape's `interior` (`sigma_t`, `albedo`, `scale`, `isotropic` or `hg` phase) | a medium inside the shape's material |
 
-Left out with one warning each, naming file, line and plugin, while the rest renders: `point`,
-`spot`, `directional` and `projector` emitters, other shapes (`cylinder`, `serialized`,
-`shapegroup` and `instance`, curves, hair, `sdfgrid`), heterogeneous media and grid volumes,
-textures on other parameters, exterior media, crop windows, and any parameter no mapping reads. A
-scene with nothing left to render, malformed XML (line and column), a `$name` with no value, an
-include loop and a missing file are one-line errors.
+Left out with one warning each, naming file, line and plugin, while the rest renders: `projector`
+emitters, other shapes (`cylinder`, `serialized`, `shapegroup` and `instance`, curves, hair,
+`sdfgrid`), heterogeneous media and grid volumes, textures on other parameters, exterior media, crop
+windows, and any parameter no mapping reads. A scene with nothing left to render, malformed XML
+(line and column), a `$name` with no value, an include loop and a missing file are one-line errors.
 
 `python app.py bench mitsuba-tests --data DIR` renders Mitsuba's own render tests (the
 mitsuba-data repository's tests/scenes) and judges each by Mitsuba's z-test; its table is on the

@@ -1,9 +1,10 @@
 """Mitsuba 3 plugins (plugins.py) made into Lantern's plain scene description.
 
 Each plugin maps onto a registered kind: sensors onto the camera, films and samplers onto the render
-settings, BSDFs onto material rows, shapes onto mesh objects, emitters onto emissive materials or
-the environment. What has no counterpart yet is left out with one warning naming file, line and
-plugin (MitsubaSceneWarning); so is every parameter a plugin was given that nothing read.
+settings, BSDFs onto material rows, shapes onto mesh objects, emitters onto emissive materials, the
+environment or lights (point, spot, directional). What has no counterpart yet is left out with one
+warning naming file, line and plugin (MitsubaSceneWarning); so is every parameter a plugin was
+given that nothing read.
 docs/scene-format.md ("Mitsuba 3 scenes") lists the mapping.
 """
 from __future__ import annotations
@@ -16,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from renderer.materials.metals import metal_names
-from renderer.scene.description import (CameraSpec, EnvironmentSpec, MaterialSpec, MediumSpec, MeshObject,
-                                        RenderSettings, Scene, TextureSpec)
+from renderer.scene.description import (CameraSpec, EnvironmentSpec, LightSpec, MaterialSpec, MediumSpec,
+                                        MeshObject, RenderSettings, Scene, TextureSpec)
 from renderer.scene.errors import SceneError
 from renderer.scene.mitsuba.ior_names import IOR_NAMES
 from renderer.scene.mitsuba.plugins import Plugin, Rgb, Spectrum
@@ -84,6 +85,7 @@ class _Builder:
         self.media: list[MediumSpec] = []
         self.medium_of: dict[int, str] = {}  # id(medium plugin) -> its medium name
         self.objects: list[MeshObject] = []
+        self.lights: list[LightSpec] = []
         self.visited: list[Plugin] = []
 
     # --- the scene ----------------------------------------------------------------------------
@@ -106,7 +108,7 @@ class _Builder:
         self.warn_unused()
         return Scene(name=self.path.stem, path=self.path, geometry="mesh", camera=camera, render=render,
                      environment=environment, materials=tuple(self.materials), mesh_objects=tuple(self.objects),
-                     media=tuple(self.media),
+                     media=tuple(self.media), source_files=tuple(self.resolution.read), lights=tuple(self.lights),
                      description=f"Mitsuba 3 scene {self.path.name}", model_files=self.model_files)
 
     def visit(self, plugin: Plugin) -> Plugin:
@@ -233,9 +235,62 @@ class _Builder:
                     warn(emitter, "a second environment emitter is left out (Lantern has one environment)")
                     continue
                 chosen = self.constant(emitter) if emitter.type == "constant" else self.envmap(emitter)
+            elif emitter.type in ("point", "spot", "directional"):
+                self.lights.append(self.light(emitter))
             else:
                 leave_out(emitter, "this emitter type is not supported yet and is left out")
         return chosen or EnvironmentSpec(kind="constant", color=(0.0, 0.0, 0.0))
+
+    def light(self, emitter: Plugin) -> LightSpec:
+        """A point, spot or directional emitter (Mitsuba's local frame: a spot shines along +z, a
+        directional light travels along +z)."""
+        t = emitter.type
+        if t == "directional":
+            irradiance = self.colour(emitter, "irradiance", (1.0, 1.0, 1.0), emitter=True)
+            return LightSpec("directional", direction=self.frame_vector(emitter, "direction"), irradiance=irradiance)
+        intensity = self.colour(emitter, "intensity", (1.0, 1.0, 1.0), emitter=True)
+        if t == "point":
+            return LightSpec("point", position=self.light_position(emitter), intensity=intensity)
+        if emitter.has("texture"):
+            warn(emitter, "a spot's projected texture is not supported yet: ignored (the spot is untextured)")
+            emitter.used.add("texture")
+        cutoff = emitter.number("cutoff_angle", 20.0)
+        beam = emitter.number("beam_width", 0.75 * cutoff)
+        if not 0.0 < cutoff < 180.0:
+            raise emitter.error(f"cutoff_angle {cutoff:g} is not between 0 and 180 degrees")
+        if not 0.0 <= beam <= cutoff:
+            raise emitter.error(f"beam_width {beam:g} is not between 0 and cutoff_angle {cutoff:g}")
+        matrix = emitter.transform()
+        columns = matrix[:3, :3] / np.linalg.norm(matrix[:3, :3], axis=0)
+        if not np.allclose(columns.T @ columns, np.eye(3), atol=1e-5):
+            warn(emitter, "its to_world scales unevenly or shears, which would make the cone elliptical: "
+                          "the cone is kept round about its axis")
+        return LightSpec("spot", position=_vec(matrix[:3, 3]), direction=self.frame_vector(emitter, None),
+                         intensity=intensity, cutoff_angle=cutoff, beam_width=beam)
+
+    @staticmethod
+    def light_position(emitter: Plugin) -> tuple:
+        """A light's `position`, else its to_world's origin (not both, as in Mitsuba)."""
+        if emitter.has("position"):
+            if emitter.has("to_world"):
+                raise emitter.error("give position or to_world, not both")
+            return _vec(_triple(emitter, "position"))
+        return _vec(emitter.transform()[:3, 3])
+
+    @staticmethod
+    def frame_vector(emitter: Plugin, name: str | None) -> tuple:
+        """The unit direction of the light's local +z: the vector parameter `name` where given
+        (not with to_world, as in Mitsuba), else its to_world's."""
+        if name is not None and emitter.has(name):
+            if emitter.has("to_world"):
+                raise emitter.error(f"give {name} or to_world, not both")
+            v = np.asarray(_triple(emitter, name), np.float64)
+        else:
+            v = emitter.transform()[:3, :3] @ np.array([0.0, 0.0, 1.0])
+        length = float(np.linalg.norm(v))
+        if not np.isfinite(length) or length == 0.0:
+            raise emitter.error(f"its {name or 'to_world'} gives no direction (a zero vector)")
+        return _vec(v / length)
 
     def constant(self, emitter: Plugin) -> EnvironmentSpec:
         return EnvironmentSpec(kind="constant", color=self.colour(emitter, "radiance", (1.0, 1.0, 1.0), emitter=True))
@@ -555,6 +610,13 @@ class _Builder:
 
 def _vec(v) -> tuple[float, float, float]:
     return (float(v[0]), float(v[1]), float(v[2]))
+
+
+def _triple(plugin: Plugin, name: str) -> tuple:
+    value = plugin.get(name)
+    if not (isinstance(value, tuple) and len(value) == 3):
+        raise plugin.error(f"'{name}' must be a <point> or <vector>")
+    return value
 
 
 def _translation(offset) -> np.ndarray:

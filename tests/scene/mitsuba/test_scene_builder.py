@@ -171,10 +171,10 @@ def test_homogeneous_medium_inside_a_shape(tmp_path):
 
 
 def test_unsupported_plugins_are_one_warning_each(tmp_path):
-    scene, messages = load(tmp_path, '''<emitter type="point"><point name="position" x="1"/>
-        <rgb name="intensity" value="3"/></emitter>
+    scene, messages = load(tmp_path, '''<emitter type="projector"><float name="fov" value="30"/>
+        <rgb name="irradiance" value="3"/></emitter>
         <shape type="hair"><string name="filename" value="x.hair"/></shape>''' + SHAPE, expect_warnings=2)
-    assert "line 2: <emitter type=\"point\">: this emitter type is not supported yet and is left out" in messages[0]
+    assert "line 2: <emitter type=\"projector\">: this emitter type is not supported yet and is left out" in messages[0]
     assert "line 4: <shape type=\"hair\">: this shape type is not supported yet" in messages[1]
     assert len(scene.mesh_objects) == 1
 
