@@ -54,6 +54,8 @@ def scene_dict(scene: Scene, mesh_dir: Path, size: tuple[int, int] | None = None
     environment = _environment(scene, T)
     if environment is not None:
         result["environment"] = environment
+    for k, light in enumerate(scene.lights):
+        result[f"light_{k}"] = _light(light, T)
     assembly = assemble(scene, instancing=False)  # every triangle placed in the world
     media = {m.name: m for m in scene.media}
     bsdfs = [_bsdf(m, media, notes) if isinstance(m, MaterialSpec) else _gltf_bsdf(m, notes)
@@ -99,6 +101,20 @@ def _environment(scene: Scene, T) -> dict | None:
         return {"type": "envmap", "filename": str(env.file), "scale": float(env.intensity),
                 "to_world": T().rotate(axis=[0, 1, 0], angle=float(env.rotation))}
     raise ValueError(f"{scene.name}: the procedural sky environment has no Mitsuba counterpart")
+
+
+def _light(light, T) -> dict:
+    """Point, spot and directional lights as Mitsuba's (the same intensity, irradiance and profile)."""
+    if light.kind == "point":
+        return {"type": "point", "position": list(map(float, light.position)), "intensity": _rgb(light.intensity)}
+    if light.kind == "spot":
+        position = np.asarray(light.position, np.float64)
+        axis = np.asarray(light.direction, np.float64)
+        up = [0.0, 1.0, 0.0] if abs(axis[1]) < 0.99 * np.linalg.norm(axis) else [1.0, 0.0, 0.0]
+        return {"type": "spot", "intensity": _rgb(light.intensity), "cutoff_angle": float(light.cutoff_angle),
+                "beam_width": float(light.beam),
+                "to_world": T().look_at(origin=position.tolist(), target=(position + axis).tolist(), up=up)}
+    return {"type": "directional", "direction": list(map(float, light.direction)), "irradiance": _rgb(light.irradiance)}
 
 
 def _rgb(value) -> dict:

@@ -5,9 +5,11 @@ whose "benchmark" field names one; the latest by its "date" wins) and writes doc
 per benchmark the machine, date and command that produced its report, one or two sentences on
 what its knobs cost (computed from the figures), its main tables rendered from the JSON, and its
 plots, which are copied into docs/benchmarks/ (only those the page shows; others there are
-removed). A benchmark without a report gets the command that produces one. A benchmark the page
-has no section for (a new one) shows its header, its plots and the records of its report as
-plain tables. The page depends only on the reports: the same reports give the same bytes.
+removed). A benchmark without a report keeps its section of the page as it stands (reports are
+machine-local, so a later machine that reruns one benchmark must not wipe the others' figures),
+or, never reported, gets the command that produces one. A benchmark the page has no section for
+(a new one) shows its header, its plots and the records of its report as plain tables. The page
+depends only on the reports and the page before: the same inputs give the same bytes.
 """
 from __future__ import annotations
 
@@ -159,16 +161,51 @@ class Page:
     text: str  # the Markdown
     plots: dict[str, Path]  # the PNGs it shows: file name -> the report's PNG
     reported: tuple[str, ...]  # the benchmarks it shows a report of
+    kept_plots: tuple[str, ...] = ()  # PNGs of sections kept from the page before (already in place)
 
 
-def build_page(reports_dir: Path, warn: Callable[[str], None] = print) -> Page:
-    """The page from the latest reports in `reports_dir`."""
+_SECTION_HEADING = re.compile(r"^## (\S+)$")
+_INDEX_ROW = re.compile(r"^\| \[(\S+)\]\(#\S+\) \| .* \| (.+) \|$")
+_PLOT = re.compile(r"!\[[^\]]*\]\(" + re.escape(PLOT_FOLDER) + r"/([^)]+)\)")
+
+
+def previous_sections(text: str | None) -> dict[str, tuple[str, list[str]]]:
+    """{benchmark: (its 'latest report' cell, the lines of its section)} of a page written before,
+    for the benchmarks it showed a report of."""
+    if not text:
+        return {}
+    dates = {m.group(1): m.group(2) for m in map(_INDEX_ROW.match, text.splitlines()) if m}
+    sections, name = {}, None
+    for line in text.splitlines():
+        heading = _SECTION_HEADING.match(line)
+        if heading:
+            name = heading.group(1)
+            sections[name] = []
+        elif name is not None:
+            sections[name].append(line)
+    return {n: (dates.get(n, "earlier"), lines) for n, lines in sections.items()
+            if dates.get(n, "none yet") != "none yet" and not any(how_to_produce(n) in line for line in lines)}
+
+
+def build_page(reports_dir: Path, warn: Callable[[str], None] = print, previous: str | None = None) -> Page:
+    """The page from the latest reports in `reports_dir`; `previous`, the page as it stood, gives
+    the sections of benchmarks with no report here."""
     found = latest_reports(reports_dir, warn)
+    kept = previous_sections(previous)
     plots: dict[str, Path] = {}
+    kept_plots: list[str] = []
     index = ["| benchmark | measures | latest report |", "| --- | --- | --- |"]
     body = []
     for name in page_names(found):
         report, what = found.get(name), purpose(name)
+        if report is None and name in kept:
+            when, lines = kept[name]
+            index.append(f"| [{name}](#{name}) | {what.replace('|', '/')} | {when} |")
+            while lines and lines[-1] == "":
+                lines = lines[:-1]
+            body += ["", f"## {name}", *lines]
+            kept_plots += [m.group(1) for line in lines for m in _PLOT.finditer(line)]
+            continue
         when = (f"{_when(report.data):%Y-%m-%d}" + (" (--quick)" if report.data.get("quick") else "")
                 if report else "none yet")
         index.append(f"| [{name}](#{name}) | {what.replace('|', '/')} | {when} |")
@@ -202,7 +239,7 @@ def build_page(reports_dir: Path, warn: Callable[[str], None] = print) -> Page:
             "every knob that trades one for the other). `python app.py bench NAME` runs a benchmark and writes its "
             f"JSON and plots to reports/; `python app.py bench {THIS}` rebuilds this page from the latest report of "
             "each (the page is generated: edit the benchmarks or renderer/bench/report.py, not this file).", ""]
-    return Page("\n".join(head + index + body) + "\n", plots, tuple(sorted(found)))
+    return Page("\n".join(head + index + body) + "\n", plots, tuple(sorted(found)), tuple(kept_plots))
 
 
 def write_page(page: Page, docs_dir: Path) -> Path:
@@ -216,7 +253,7 @@ def write_page(page: Page, docs_dir: Path) -> Path:
         if not target.is_file() or target.read_bytes() != data:
             write_bytes_atomic(target, data)
     for stale in sorted(folder.glob("*.png")):
-        if stale.name not in page.plots:
+        if stale.name not in page.plots and stale.name not in page.kept_plots:
             stale.unlink()
     path = Path(docs_dir) / PAGE_NAME
     write_text_atomic(path, page.text)
@@ -231,8 +268,11 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), docs_dir: Path | N
         print(f"{out_dir}: no such folder of benchmark reports (run `python app.py bench NAME` first)",
               file=sys.stderr)
         return 1
-    page = build_page(out_dir, lambda line: print(line, file=sys.stderr))
-    path = write_page(page, docs_dir if docs_dir is not None else REPO_ROOT / "docs")
+    docs_dir = Path(docs_dir) if docs_dir is not None else REPO_ROOT / "docs"
+    before = docs_dir / PAGE_NAME
+    page = build_page(out_dir, lambda line: print(line, file=sys.stderr),
+                      before.read_text(encoding="utf-8") if before.is_file() else None)
+    path = write_page(page, docs_dir)
     print(f"wrote {path}: reports of {', '.join(page.reported) or 'no benchmark'}; {len(page.plots)} plots in "
           f"{path.parent / PLOT_FOLDER}")
     return 0

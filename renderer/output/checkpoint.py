@@ -168,9 +168,12 @@ def _header(path, archive) -> CheckpointHeader:
 # --- what defines the scene ------------------------------------------------------------------------
 
 def scene_files(scene: Scene) -> list[Path]:
-    """The files a render of `scene` reads: the scene file, its environment map, its model files,
-    the buffers and images a .gltf names beside it and an .obj's material libraries and textures."""
-    found = [scene.path, scene.environment.file if scene.environment.kind == "map" else None]
+    """The files a render of `scene` reads: the scene file and what its reader read besides (a Mitsuba
+    scene's includes), its environment map, its materials' textures, its model files, the buffers
+    and images a .gltf names beside it and an .obj's material libraries and textures."""
+    found = [scene.path, *scene.source_files, scene.environment.file if scene.environment.kind == "map" else None]
+    found += [m.base_color_texture.file for m in scene.materials
+              if m.base_color_texture is not None and m.base_color_texture.file is not None]
     for obj in scene.mesh_objects:
         if obj.file is not None:
             found.append(obj.file)

@@ -309,3 +309,25 @@ def test_the_mitsuba_comparison_says_how_its_best_samplers_were_measured(tmp_pat
             "rendered in turn, and timed by the 64-spp renders") in text
     best = next(f for f in section.findings if f.startswith("Best sampler against best"))
     assert "0.118 s (11.7 spp) against Mitsuba multijitter's 0.096 s (11.5 spp): 0.81x Mitsuba's speed" in best
+
+
+def test_a_later_run_of_one_benchmark_keeps_the_others_sections(reports, tmp_path):
+    """Reports are machine-local: rebuilding the page from one new report keeps every other
+    benchmark's section, its date and its plots as the page had them."""
+    folder, data = reports
+    docs = tmp_path / "docs"
+    full = make_page(folder, docs)
+    only = tmp_path / "only_photons"
+    only.mkdir()
+    for name in [*data["photons"]["plots"], "bench_photons.json"]:
+        shutil.copy(folder / name, only / name)
+    again = make_page(only, docs)
+    before, after = sections(full), sections(again)
+    for name in before:
+        assert after[name].rstrip() == before[name].rstrip(), name
+        row = f"| [{name}](#{name}) |"
+        assert full.split(row, 1)[1].split("\n", 1)[0] == again.split(row, 1)[1].split("\n", 1)[0]
+    assert sorted(p.name for p in (docs / PLOT_FOLDER).iterdir()) == sorted(l.split("/", 1)[1] for l in linked_plots(full))
+    # With no page before, the same single report leaves the others "none yet" (as it did).
+    fresh = make_page(only, tmp_path / "fresh_docs")
+    assert how_to_produce("sdf") in sections(fresh)["sdf"]

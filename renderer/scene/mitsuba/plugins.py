@@ -195,6 +195,7 @@ class _Reader:
             path = self.resolution.find(attrs["filename"], element.file)
             if not path.exists():
                 raise element.error(f"<spectrum> file {attrs['filename']} not found")
+            self.resolution.read.append(path)
             pairs = []
             for line in path.read_text(errors="replace").splitlines():
                 fields = line.split("#", 1)[0].split()

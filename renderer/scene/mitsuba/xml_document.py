@@ -73,6 +73,7 @@ class Resolution:
     parameters: dict[str, str]
     folders: list[Path]
     stack: list[Path] = field(default_factory=list)  # the files being included, outermost first
+    read: list[Path] = field(default_factory=list)  # every file read besides the scene file itself
 
     def substitute(self, element: Element) -> dict[str, str]:
         attrs = {}
@@ -145,6 +146,7 @@ def _include(element: Element, resolution: Resolution) -> list[Element]:
     if root.tag != "scene":
         raise root.error(f"an included file's root element is <{root.tag}>, not <scene>")
     resolution.stack.append(real)
+    resolution.read.append(file)
     try:
         return _resolve(root, resolution).children
     finally:

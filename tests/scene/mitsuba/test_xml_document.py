@@ -90,3 +90,18 @@ def test_define_arguments(items, problem):
     else:
         with pytest.raises(ValueError, match=problem):
             parse_defines(items)
+
+
+def test_the_files_read_are_what_checkpoints_and_bundles_cover(tmp_path):
+    from renderer.output.checkpoint import scene_files
+
+    write(tmp_path, "parts/ball.xml", scene_text(SPHERE.format(radius="1")))
+    write(tmp_path, "eta.spd", "400 1.5\n700 1.6\n")
+    write(tmp_path, "wood.png", "")
+    main = write(tmp_path, "main.xml", scene_text(
+        '<include filename="parts/ball.xml"/><shape type="sphere"><bsdf type="conductor">'
+        '<spectrum name="eta" filename="eta.spd"/><spectrum name="k" value="2"/></bsdf></shape>'
+        '<shape type="sphere"><bsdf type="diffuse"><texture name="reflectance" type="bitmap">'
+        '<string name="filename" value="wood.png"/></texture></bsdf></shape>'))
+    scene = load(main)
+    assert {p.name for p in scene_files(scene)} == {"main.xml", "ball.xml", "eta.spd", "wood.png"}
