@@ -1,6 +1,6 @@
-"""`python app.py bench mitsuba-tests --data DIR`: Mitsuba 3's own render tests, passed by Lantern.
+"""`python app.py bench mitsuba-tests`: Mitsuba 3's own render tests, passed by Lantern.
 
-DIR is a checkout of the public mitsuba-data repository (or its tests/scenes folder). Every scene
+`--data DIR` names a checkout of the public mitsuba-data repository (or its tests/scenes folder). Every scene
 `tests/scenes/<group>/<name>_<integrator>.xml` with an RGB reference `refs/<name>_ref_rgb.exr` and
 its per-sample variance `refs/<name>_ref_rgb_var.exr` is opened by Lantern's Mitsuba reader and
 rendered at the reference's resolution with Mitsuba's sample budget (2 million samples an image,
@@ -89,7 +89,8 @@ def render_scene(test: TestScene, spp_override: int | None = None) -> dict:
     variance = read_exr(test.variance)[..., :3]
     height, width = reference.shape[:2]
     spp = spp_override or max(1, SAMPLE_BUDGET // (width * height))
-    row = {"scene": test.name, "size": f"{width}x{height}", "spp": spp}
+    row = {"scene": test.name, "size": f"{width}x{height}", "spp": spp, "verdict": None, "failing_percent": None,
+           "mean_ratio_rgb": None, "render_s": None, "warnings": 0}
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -99,6 +100,7 @@ def render_scene(test: TestScene, spp_override: int | None = None) -> dict:
             return {**row, "verdict": "not loaded", "note": str(error)}
     row["load_s"] = time.perf_counter() - t0
     row["left_out"] = [str(w.message).split(": ", 2)[-1] for w in caught]
+    row["warnings"] = len(row["left_out"])
     if (scene.render.width, scene.render.height) != (width, height):
         return {**row, "verdict": "size differs", "note": f"the scene is {scene.render.width}x{scene.render.height}"}
     renderer = Renderer(scene, (width, height))
@@ -112,9 +114,9 @@ def render_scene(test: TestScene, spp_override: int | None = None) -> dict:
     image = renderer.image()
     row["render_s"] = time.perf_counter() - t0
     judged = mitsuba_verdict(image, spp, reference, variance)
-    row.update(verdict="PASS" if judged["passed"] else "FAIL", failing_fraction=judged["failing_fraction"],
-               mean_ratio=[float(a / b) if b > 0 else None for a, b in zip(image.mean(axis=(0, 1)),
-                                                                             reference.mean(axis=(0, 1)))])
+    ratios = [float(a / b) if b > 0 else None for a, b in zip(image.mean(axis=(0, 1)), reference.mean(axis=(0, 1)))]
+    row.update(verdict="PASS" if judged["passed"] else "FAIL", failing_percent=100.0 * judged["failing_fraction"],
+               mean_ratio_rgb=" ".join("-" if r is None else f"{r:.3f}" for r in ratios))
     row["_images"] = (image, reference, judged["failing"])
     return row
 
@@ -148,13 +150,20 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), data: Path | None 
         found = [t for t in found if t.scene.stem.rsplit("_", 1)[0] in QUICK_SCENES]
     if not found:
         raise ValueError(f"--data {data}: no scene with an RGB reference under tests/scenes")
+    import taichi as ti
+
     load_before = load_average()
-    init_taichi("cpu")
     out_dir.mkdir(parents=True, exist_ok=True)
     rows = []
     for test in found:
         log(f"[{test.name}] ...")
-        row = render_scene(test, spp)
+        # A fresh Taichi runtime per scene: one runtime holds a bounded number of field trees, and
+        # forty scenes' worth of fields in one crashed inside Taichi. Kernels come from the cache.
+        init_taichi("cpu")
+        try:
+            row = render_scene(test, spp)
+        finally:
+            ti.reset()
         if row.get("verdict") == "FAIL":
             row["error_map"] = str(write_error_map(row, out_dir))
         row.pop("_images", None)
@@ -162,10 +171,9 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), data: Path | None 
     passed = sum(r["verdict"] == "PASS" for r in rows)
     print_table(["scene", "size", "spp", "verdict", "failing %", "mean ratio (R, G, B)", "render s", "left out"],
                 [[r["scene"], r["size"], r["spp"], r["verdict"],
-                  f"{100 * r['failing_fraction']:.2f}" if "failing_fraction" in r else "",
-                  " ".join(f"{m:.3f}" if m is not None else "-" for m in r.get("mean_ratio", [])),
-                  f"{r['render_s']:.1f}" if "render_s" in r else "",
-                  f"{len(r.get('left_out', []))} warnings" if r.get("left_out") else r.get("note", "")]
+                  "" if r["failing_percent"] is None else f"{r['failing_percent']:.2f}", r["mean_ratio_rgb"] or "",
+                  "" if r["render_s"] is None else f"{r['render_s']:.1f}",
+                  f"{r['warnings']} warnings" if r["warnings"] else r.get("note", "")]
                  for r in rows], title=f"Mitsuba 3's render tests: {passed} of {len(rows)} pass")
     report = report_header("mitsuba-tests", quick, load_before, data=str(data), sample_budget=SAMPLE_BUDGET,
                            rule={"significance": SIGNIFICANCE, "pass_fraction": PASS_FRACTION,
