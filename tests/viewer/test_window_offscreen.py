@@ -562,3 +562,41 @@ def test_feature_samples_only_for_a_still_image_under_the_denoised_view(app):
         np.testing.assert_array_equal(aov_counts, counts + renderer.feature_boost * boosted)
     finally:
         app.session.denoise_view = False
+
+
+def test_a_mitsuba_scene_opens_as_a_toml_scene_does(app, tmp_path):
+    """A Mitsuba 3 .xml in the viewer: the film shows, integrators switch, a screenshot writes its
+    PNG and EXR, and the denoised view shows the denoiser's output."""
+    import warnings
+
+    from pathlib import Path
+
+    scene = Path(__file__).resolve().parents[1] / "data" / "mitsuba" / "cornell_box.xml"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # its Gaussian film filter (tests/scene/mitsuba checks the warning)
+        app.select_scene(scene)
+    app.session.set_integrator("mis")
+    app.session.hud_visible = False
+    settle(app, 2)
+    sample_every_pixel(app)
+    assert app.renderer.scene.path == scene
+    shown = window_buffer_to_image(app.last_frame)
+    assert np.abs(shown.astype(int) - expected_display(app).astype(int)).max() <= 1
+    assert shown.std() > MIN_PIXEL_STD
+    app.step(FrameInput(pressed=("i",)))  # the next integrator
+    assert app.session.integrator != "mis"
+    settle(app, 1)
+    assert window_buffer_to_image(app.last_frame).std() > MIN_PIXEL_STD
+    app.session.set_integrator("mis")
+    settle(app, 2)
+    app.screenshot_folder = tmp_path
+    app.save_screenshot()
+    assert sorted(p.suffix for p in tmp_path.iterdir()) == [".exr", ".png"]
+    assert all(p.name.startswith("cornell_box_mis_") for p in tmp_path.iterdir())
+    app.step(FrameInput(pressed=("x",)))
+    deadline = time.monotonic() + 60
+    while app.shown_denoised is None and time.monotonic() < deadline:
+        app.step()
+        app._denoiser.wait(5.0)
+    assert app.shown_denoised is not None and app.image_label.startswith("denoised")
+    app.step(FrameInput(pressed=("x",)))
