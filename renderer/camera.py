@@ -56,10 +56,10 @@ class CameraFrame:
 
 
 @ti.func
-def generate_ray(x, y, width, height, sampler: ti.template(), state, origin, forward, right, up, tan_half_fov,
-                 aperture, focus, depth_of_field: ti.template()):
-    """A camera ray through pixel (x, y) (y up), jittered within the pixel, through the lens."""
-    jitter = sampler.get2d(state, dims.PIXEL)
+def generate_ray(x, y, width, height, jitter, sampler: ti.template(), state, origin, forward, right, up,
+                 tan_half_fov, aperture, focus, depth_of_field: ti.template()):
+    """A camera ray through the point `jitter` of pixel (x, y)'s own [0, 1)^2 frame (y up; the pixel
+    filter may put it outside), through the lens."""
     aspect = width / height
     sx = (2.0 * (x + jitter.x) / width - 1.0) * tan_half_fov * aspect
     sy = (2.0 * (y + jitter.y) / height - 1.0) * tan_half_fov

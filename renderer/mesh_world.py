@@ -16,7 +16,7 @@ import numpy as np
 from renderer.geometry.mesh_data import MeshData
 from renderer.materials.table import NO_MEDIUM, MaterialRows
 from renderer.scene.description import Scene
-from renderer.scene.features import Features, features_from, scene_light_kinds
+from renderer.scene.features import Features, features_from, scene_light_kinds, scene_pixel_filter
 from renderer.scene.mesh_assembly import ModelMaterial, assemble
 from renderer.scene.textures import WRAP_CODES, TextureAtlas, pack_atlas
 
@@ -37,7 +37,8 @@ class MeshScene:
         return features_from("mesh", self.material_uses(), scene.environment.kind, scene.camera.aperture,
                              mesh_kinds=self.data.kinds(), energy_compensation=scene.render.energy_compensation,
                              fog=scene.fog.model, vertex_colors=self.data.tri_colors is not None,
-                             instances=self.data.has_instances, light_kinds=scene_light_kinds(scene))
+                             instances=self.data.has_instances, light_kinds=scene_light_kinds(scene),
+                             pixel_filter=scene_pixel_filter(scene))
 
 
 def prepare_mesh_scene(scene: Scene, instancing: bool = True) -> MeshScene:

@@ -11,7 +11,9 @@ from renderer.film.aovs import FEATURE_BOOSTED_SAMPLES, FEATURE_SEED_SALT
 from renderer.camera import generate_ray
 from renderer.geometry.interface import INF
 from renderer.materials.bsdf import Bsdf
+from renderer.film.pixel_filter import pixel_sample
 from renderer.film.pixel_slices import BANDS, ROUND_SLICES, interleaved_layout, pass_length, slice_pixel
+from renderer.sampling import dims
 from renderer.sampling.sampler import SampleState
 
 
@@ -111,9 +113,13 @@ class RenderProgram:
         The kernel's only call of the integrator: another call site would compile its tracing in
         again."""
         state = self.sampler.start(pixel, index, stream_seed)
-        ray = generate_ray(x, y, width, height, self.sampler, state, origin, forward, right, up, tan_half_fov,
-                           aperture, focus, self.features.depth_of_field)
+        jitter, weight = pixel_sample(self.sampler.get2d(state, dims.PIXEL), x, y, width, height,
+                                      self.features.pixel_filter)
+        ray = generate_ray(x, y, width, height, jitter, self.sampler, state, origin, forward, right, up,
+                           tan_half_fov, aperture, focus, self.features.depth_of_field)
         value, stats, albedo, normal = self._trace(ray, state, max_depth, features_only)
+        if ti.static(self.features.pixel_filter[0] != "box"):
+            value *= weight
         if not features_only:
             self.film.add_sample(x, y, value)
         if ti.static(self.writes_aovs):
@@ -138,8 +144,8 @@ class RenderProgram:
             d = ti.math.normalize(forward + (2.0 * u - 1.0) * tan_half_fov * aspect * right
                                   + (2.0 * v - 1.0) * tan_half_fov * up)
             state = SampleState(pixel=ti.u32(0), index=ti.u32(0), seed=ti.u32(0), key=ti.u32(0))
-            ray = generate_ray(0, 0, 1, 1, self.sampler, state, origin, forward, right, up, tan_half_fov, 0.0, 1.0,
-                               False)
+            ray = generate_ray(0, 0, 1, 1, ti.math.vec2(0.5), self.sampler, state, origin, forward, right, up,
+                               tan_half_fov, 0.0, 1.0, False)
             ray.d = d
             # A ray without a cone: the SDF march stops within its finest threshold of the surface.
             # (The 1x1 film above gives a cone as wide as the view, which stopped the march metres

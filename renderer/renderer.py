@@ -4,6 +4,8 @@ It is what the viewer, the command line and the benchmarks drive; it knows nothi
 """
 from __future__ import annotations
 
+import warnings
+
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -188,6 +190,9 @@ class Renderer:
             chosen = make_integrator(integrator)
             lights = self.lights() if getattr(chosen, "uses_lights", False) else None
             if hasattr(chosen, "make_program"):  # a multi-pass integrator (sppm) brings its own kernels
+                if features.pixel_filter[0] != "box":
+                    warnings.warn(f"{self.scene.name}: {integrator} gathers photons per pixel and renders with the "
+                                  f"box filter, not the scene's {features.pixel_filter[0]} filter", stacklevel=3)
                 self._programs[key] = chosen.make_program(self, features, make_sampler(sampler), lights)
             else:
                 self._programs[key] = RenderProgram(self.geometry, self.materials, self.environment, chosen,

@@ -45,7 +45,8 @@ def scene_dict(scene: Scene, mesh_dir: Path, size: tuple[int, int] | None = None
         "integrator": {"type": "path", "max_depth": int(scene.render.max_depth if max_depth is None else max_depth)},
         "sensor": {"type": "perspective", "fov": float(cam.fov), "fov_axis": "y",
                    "to_world": T().look_at(origin=list(cam.position), target=list(cam.look_at), up=list(cam.up)),
-                   "film": {"type": "hdrfilm", "width": int(width), "height": int(height), "rfilter": {"type": "box"}},
+                   "film": {"type": "hdrfilm", "width": int(width), "height": int(height),
+                            "rfilter": _rfilter(scene.render)},
                    "sampler": {"type": "independent", "sample_count": int(spp)}},
     }
     if cam.aperture > 0.0:
@@ -101,6 +102,14 @@ def _environment(scene: Scene, T) -> dict | None:
         return {"type": "envmap", "filename": str(env.file), "scale": float(env.intensity),
                 "to_world": T().rotate(axis=[0, 1, 0], angle=float(env.rotation))}
     raise ValueError(f"{scene.name}: the procedural sky environment has no Mitsuba counterpart")
+
+
+def _rfilter(render) -> dict:
+    if render.pixel_filter == "tent":
+        return {"type": "tent", "radius": float(render.filter_radius)}
+    if render.pixel_filter == "gaussian":
+        return {"type": "gaussian", "stddev": float(render.filter_stddev)}
+    return {"type": "box"}
 
 
 def _light(light, T) -> dict:

@@ -397,8 +397,10 @@ class SppmProgram(RenderProgram):
         for x, y in ti.ndrange(width, (row_first, row_end)):
             pixel = y * width + x
             sample = self.sampler.start(pixel, index, seed)
-            ray = generate_ray(x, y, width, height, self.sampler, sample, origin, forward, right, up, tan_half_fov,
-                               aperture, focus, self.features.depth_of_field)
+            # (The box filter: SPPM's visible points gather per pixel; Renderer warns of another filter.)
+            ray = generate_ray(x, y, width, height, self.sampler.get2d(sample, dims.PIXEL), self.sampler, sample,
+                               origin, forward, right, up, tan_half_fov, aperture, focus,
+                               self.features.depth_of_field)
             value, stats = self._trace_camera(x, y, ray, sample, max_depth, radius_pixels)
             # Plain stores, not +=: on a global field += compiles to an atomic add, and each pixel
             # has one writer here.

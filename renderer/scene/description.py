@@ -67,6 +67,9 @@ class RenderSettings:
     march: MarchSettings = field(default_factory=MarchSettings)
     sampler: str = "independent"  # "independent" | "sobol"
     energy_compensation: bool = True  # Kulla-Conty multiple scattering for rough GGX metals
+    pixel_filter: str = "box"  # "box" | "tent" | "gaussian" (renderer/film/pixel_filter.py)
+    filter_radius: float = 1.0  # tent, pixels
+    filter_stddev: float = 0.5  # gaussian, pixels (cut off at four deviations)
 
 
 @dataclass(frozen=True)

@@ -41,6 +41,7 @@ class Features:
     # compiles each kind's code only where the scene has one. Like `environment`, they describe the
     # scene rather than an optional effect: with_everything() keeps them as they are.
     light_kinds: frozenset = frozenset()
+    pixel_filter: tuple = ("box",)  # renderer/film/pixel_filter.py filter_key: compiled in
 
     def has_kind(self, name: str) -> bool:
         """Whether material kind `name` is compiled in (a registry name)."""
@@ -70,7 +71,8 @@ class Features:
                  ("thin walls", self.has_thin),
                  *((layer, True) for layer in LAYER_NAMES if layer in self.material_layers),
                  ("depth of field", self.depth_of_field),
-                 *((f"{k} lights", True) for k in LIGHT_KINDS if k in self.light_kinds))
+                 *((f"{k} lights", True) for k in LIGHT_KINDS if k in self.light_kinds),
+                 (f"{self.pixel_filter[0]} filter", self.pixel_filter[0] != "box"))
         names = [name for name, on in flags if on]
         names.append(f"env:{self.environment}")
         return names
@@ -115,7 +117,7 @@ class Features:
 def features_from(geometry: str, material_uses: dict, environment: str, aperture: float,
                   sdf_nodes=(), mesh_kinds=frozenset(), energy_compensation: bool = True,
                   fog: str = "none", vertex_colors: bool = False, instances: bool = False,
-                  light_kinds=frozenset()) -> Features:
+                  light_kinds=frozenset(), pixel_filter: tuple = ("box",)) -> Features:
     """material_uses: {"kinds", "layers": sets of registry names, "textures", "normal_maps", "emission",
     "media": bool, "rough": whether a kind compensated where rough (conductor, dielectric) has
     roughness > 0}.
@@ -151,7 +153,16 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         sdf_operators=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_OPERATORS),
         mesh_primitives=frozenset(mesh_kinds),
         light_kinds=frozenset(light_kinds),
+        pixel_filter=tuple(pixel_filter),
     )
+
+
+def scene_pixel_filter(scene: Scene) -> tuple:
+    """The scene's pixel filter as kernels compile it in."""
+    from renderer.film.filter_keys import filter_key
+
+    r = scene.render
+    return filter_key(r.pixel_filter, r.filter_stddev, r.filter_radius)
 
 
 def scene_light_kinds(scene: Scene) -> frozenset:
@@ -172,4 +183,4 @@ def scene_features(scene: Scene, aperture: float | None = None) -> Features:
     lens = scene.camera.aperture if aperture is None else aperture
     return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes,
                          energy_compensation=scene.render.energy_compensation, fog=scene.fog.model,
-                         light_kinds=scene_light_kinds(scene))
+                         light_kinds=scene_light_kinds(scene), pixel_filter=scene_pixel_filter(scene))

@@ -12,6 +12,7 @@ from dataclasses import replace
 
 from renderer.materials.kinds import SHARED_ROUGHNESS, kinds_with_param, own_defaults
 from renderer.materials.metals import metal_names
+from renderer.film.filter_keys import PIXEL_FILTERS
 from renderer.sampling.names import SAMPLERS
 
 from .description import (
@@ -135,6 +136,12 @@ RENDER = Section(
         Field("sampler", "string", "independent", "Where random numbers come from: `independent` "
               "(hashed uniform numbers) or `sobol` (Owen-scrambled Sobol points, lower error at equal spp).",
               choices=SAMPLERS),
+        Field("pixel_filter", "string", "box", "The reconstruction filter: `box` (each sample in its own "
+              "pixel), `tent` (radius `filter_radius`) or `gaussian` (deviation `filter_stddev`, cut off at four "
+              "deviations: Mitsuba's default filter). Samples are drawn from the filter, so each pixel stays an "
+              "unbiased mean.", choices=PIXEL_FILTERS),
+        Field("filter_radius", "float", 1.0, "The tent filter's radius, pixels.", POSITIVE),
+        Field("filter_stddev", "float", 0.5, "The Gaussian filter's standard deviation, pixels.", POSITIVE),
         Field("energy_compensation", "bool", True, "Give rough metals and rough glass back the light "
               "that single-scattering microfacet models lose between microfacets (Kulla and Conty 2017): "
               "without it a white metal of roughness 1 reflects 31% head-on, and a white glass ball of "

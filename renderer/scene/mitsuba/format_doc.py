@@ -22,7 +22,7 @@ mitsuba_rgb.py), reflectances under D65 and clamped to [0, 1], emission and indi
 | Mitsuba | Lantern |
 |---|---|
 | `perspective`, `thinlens` sensor (`fov` with `fov_axis` x, y, diagonal, smaller, larger; `focal_length`, by default 50 mm on 35 mm film) | the camera (vertical field of view; a thin lens with `aperture_radius`, `focus_distance`) |
-| `hdrfilm` `width`, `height` | the image size; the pixel filter is Lantern's box (other filters: a warning) |
+| `hdrfilm` `width`, `height`; `rfilter` `box`, `tent` (`radius`), `gaussian` (`stddev`; the default) | the image size and the pixel filter (other filters: the box, with a warning) |
 | `independent` sampler (`stratified`, `multijitter`, `orthogonal`, `ldsampler`: Lantern's `sobol`) | the sampler and `spp` |
 | `path`, `volpath`, `volpathmis`, `ptracer`, `direct` (inside `moment` too) | `mis`, with Mitsuba's `max_depth` (-1 unlimited; `direct` is 2) |
 | `depth`, `aov` | the `depth` view |

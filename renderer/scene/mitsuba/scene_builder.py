@@ -135,6 +135,7 @@ class _Builder:
             warn(sensor, "rendered as a perspective camera (only perspective and thinlens are supported)")
         films = sensor.objects("film")
         width, height = FILM_DEFAULT_SIZE
+        pixel_filter, radius, stddev = "gaussian", 1.0, 0.5  # Mitsuba's film without an rfilter
         if films:
             film = self.visit(films[0])
             if film.type != "hdrfilm":
@@ -147,10 +148,16 @@ class _Builder:
                     warn(film, f"'{crop}' is not supported: the whole image is rendered")
                     film.used.add(crop)
             filters = film.objects("rfilter")
-            pixel_filter = filters[0].type if filters else "gaussian"
-            if pixel_filter != "box":
-                where = filters[0] if filters else film
-                warn(where, f"the {pixel_filter} reconstruction filter is rendered with Lantern's box filter")
+            pixel_filter = filters[0].type if filters else "gaussian"  # Mitsuba's default filter
+            if filters:
+                rfilter = self.visit(filters[0])
+                radius = rfilter.number("radius", 1.0) if pixel_filter == "tent" else 1.0
+                stddev = rfilter.number("stddev", 0.5) if pixel_filter == "gaussian" else 0.5
+            if pixel_filter not in ("box", "tent", "gaussian"):
+                warn(filters[0], f"the {pixel_filter} reconstruction filter is rendered with the box filter")
+                pixel_filter = "box"
+            if radius <= 0 or stddev <= 0:
+                raise film.error("a reconstruction filter's radius and stddev must be positive")
         spp, sampler = DEFAULT_SPP, "independent"
         samplers = sensor.objects("sampler")
         if samplers:
@@ -174,7 +181,8 @@ class _Builder:
         camera = CameraSpec(position=_vec(position), look_at=_vec(position + forward / np.linalg.norm(forward)),
                             up=_vec(up / np.linalg.norm(up)), fov=self.vertical_fov(sensor, width, height),
                             aperture=aperture, focus_distance=focus)
-        return camera, RenderSettings(width=width, height=height, spp=spp, sampler=sampler)
+        return camera, RenderSettings(width=width, height=height, spp=spp, sampler=sampler, pixel_filter=pixel_filter,
+                                      filter_radius=radius, filter_stddev=stddev)
 
     @staticmethod
     def vertical_fov(sensor: Plugin, width: int, height: int) -> float:

@@ -49,10 +49,9 @@ def test_the_cornell_box_in_mitsuba_xml_is_the_catalogs():
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         xml = load_any(DATA / "cornell_box.xml")
-    # Mitsuba's film filters with a Gaussian unless told otherwise: the one thing left out.
-    assert [str(w.message) for w in caught] == [
-        f"{DATA / 'cornell_box.xml'}: line 23: <film type=\"hdrfilm\">: the gaussian reconstruction filter is "
-        "rendered with Lantern's box filter"]
+    assert [str(w.message) for w in caught] == []  # nothing left out
+    # Mitsuba's film filters with a Gaussian unless told otherwise, and so does Lantern's for it.
+    assert (xml.render.pixel_filter, xml.render.filter_stddev) == ("gaussian", 0.5)
     toml = load_any(resolve_scene("cornell_box"))
     assert quad_set(xml) == quad_set(toml) and len(quad_set(xml)) == 18
     assert xml.camera.position == toml.camera.position and xml.camera.up == toml.camera.up
@@ -210,3 +209,18 @@ def test_bitmap_and_checkerboard_textures_become_texture_specs(tmp_path):
     with pytest.raises(SceneError, match="wrap_mode 'tile'"):
         load(tmp_path, '''<shape type="sphere"><bsdf type="diffuse"><texture name="reflectance" type="bitmap">
             <string name="filename" value="wood.png"/><string name="wrap_mode" value="tile"/></texture></bsdf></shape>''')
+
+
+@pytest.mark.parametrize("rfilter, expected, warned", [
+    ("", ("gaussian", 0.5, 1.0), False),
+    ('<rfilter type="box"/>', ("box", 0.5, 1.0), False),
+    ('<rfilter type="tent"><float name="radius" value="1.5"/></rfilter>', ("tent", 0.5, 1.5), False),
+    ('<rfilter type="gaussian"><float name="stddev" value="0.25"/></rfilter>', ("gaussian", 0.25, 1.0), False),
+    ('<rfilter type="mitchell"/>', ("box", 0.5, 1.0), True),
+])
+def test_reconstruction_filters(tmp_path, rfilter, expected, warned):
+    scene, messages = load(tmp_path, f'''<sensor type="perspective"><film type="hdrfilm">{rfilter}
+        <integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>''' + SHAPE,
+                           expect_warnings=int(warned))
+    r = scene.render
+    assert (r.pixel_filter, r.filter_stddev, r.filter_radius) == expected
