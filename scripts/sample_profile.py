@@ -76,8 +76,8 @@ def stage_kernels(program, width: int, height: int):
                 acc = ti.math.vec3(0.0)
                 for s in range(spp):
                     state = ctx.sampler.start(y * width + x, s, seed)
-                    ray = generate_ray(x, y, width, height, ctx.sampler, state, origin, forward, right, up,
-                                       tan_half_fov, aperture, focus, False)
+                    ray = generate_ray(x, y, width, height, ctx.sampler.get2d(state, dims.PIXEL), ctx.sampler, state,
+                                       origin, forward, right, up, tan_half_fov, aperture, focus, False)
                     v = ray.d  # every stage adds to it, so that none is dead code
                     if ti.static(stage >= 1):
                         hit = ctx.geometry.trace(ray, INF, False)

@@ -5,6 +5,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.camera import CameraFrame, generate_ray
+from renderer.sampling import dims
 from renderer.sampling.sampler import IndependentSampler
 
 
@@ -23,8 +24,9 @@ def trace_camera(frame: CameraFrame, width, height, pixels, samples, dof):
         for i in range(n):
             p = i // samples
             state = sampler.start(p, i % samples, 3)
-            ray = generate_ray(px[p, 0], px[p, 1], width, height, sampler, state, origin, forward, right, up,
-                               tan_half, aperture, focus, dof)
+            jitter = sampler.get2d(state, dims.PIXEL)  # the box filter's jitter, as the renderer draws it
+            ray = generate_ray(px[p, 0], px[p, 1], width, height, jitter, sampler, state, origin, forward, right,
+                               up, tan_half, aperture, focus, dof)
             for c in ti.static(range(3)):
                 o[i, c] = ray.o[c]
                 d[i, c] = ray.d[c]
