@@ -78,7 +78,8 @@ class CheckpointHeader:
             problems.append(f"written by Lantern {self.lantern_version}, this is Lantern {other.lantern_version}")
         if other.scene_hash != self.scene_hash:
             if Path(other.scene) == Path(self.scene):
-                problems.append(f"the scene {other.scene} (or a file it reads) has changed since the checkpoint")
+                problems.append(f"the scene {other.scene} (a file it reads, or its -D parameters) has changed since "
+                                "the checkpoint")
             else:
                 problems.append(f"the scene {other.scene} is not the checkpoint's ({self.scene})")
         if (other.width, other.height) != (self.width, self.height):
@@ -191,8 +192,11 @@ def scene_files(scene: Scene) -> list[Path]:
 
 
 def scene_fingerprint(scene: Scene) -> str:
-    """SHA-256 over the contents of scene_files() (in order; a moved scene keeps its print)."""
+    """SHA-256 over the contents of scene_files() (in order; a moved scene keeps its print) and the
+    parameters the scene was read with (a Mitsuba scene's -D)."""
     digest = hashlib.sha256()
+    for name, value in scene.parameters:
+        digest.update(f"{name}={value}\0".encode())
     for path in scene_files(scene):
         file_digest = hashlib.sha256()
         with open(path, "rb") as f:

@@ -316,6 +316,9 @@ class Scene:
     # Files the reader read besides `path` (a Mitsuba scene's includes and spectrum files): with the
     # model files and textures they are what a checkpoint's fingerprint and a distributed bundle cover.
     source_files: tuple[Path, ...] = ()
+    # The parameters a reader substituted from the command line (a Mitsuba scene's -D NAME=VALUE): the
+    # same files with other parameters are another scene, to a checkpoint's fingerprint too.
+    parameters: tuple[tuple[str, str], ...] = ()
 
     def medium_names(self) -> tuple[str, ...]:
         return tuple(m.name for m in self.media)

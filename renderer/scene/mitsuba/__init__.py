@@ -26,4 +26,4 @@ def load_mitsuba_scene(path, options: LoadOptions | None = None) -> Scene:
     path = Path(path)
     resolution = Resolution(dict(options.defines), [path.parent], [path.resolve()])
     root = resolve_document(path, resolution)
-    return build_scene(read_plugins(root, resolution), path, resolution, ModelFiles(options))
+    return build_scene(read_plugins(root, resolution), path, resolution, ModelFiles(options), dict(options.defines))

@@ -73,13 +73,16 @@ def leave_out(plugin: Plugin, message: str) -> None:
     warn(plugin, message)
 
 
-def build_scene(root: Plugin, path: Path, resolution: Resolution, model_files: ModelFiles) -> Scene:
-    return _Builder(root, path, resolution, model_files).scene()
+def build_scene(root: Plugin, path: Path, resolution: Resolution, model_files: ModelFiles,
+                defines: dict[str, str] | None = None) -> Scene:
+    return _Builder(root, path, resolution, model_files, dict(defines or {})).scene()
 
 
 class _Builder:
-    def __init__(self, root: Plugin, path: Path, resolution: Resolution, model_files: ModelFiles):
+    def __init__(self, root: Plugin, path: Path, resolution: Resolution, model_files: ModelFiles,
+                 defines: dict[str, str]):
         self.root, self.path, self.resolution, self.model_files = root, path, resolution, model_files
+        self.defines = defines
         self.materials: list[MaterialSpec] = []
         self.material_of: dict[int, str] = {}  # id(bsdf plugin) -> its material name
         self.media: list[MediumSpec] = []
@@ -108,7 +111,8 @@ class _Builder:
         self.warn_unused()
         return Scene(name=self.path.stem, path=self.path, geometry="mesh", camera=camera, render=render,
                      environment=environment, materials=tuple(self.materials), mesh_objects=tuple(self.objects),
-                     media=tuple(self.media), source_files=tuple(self.resolution.read), lights=tuple(self.lights),
+                     media=tuple(self.media), source_files=tuple(self.resolution.read),
+                     parameters=tuple(sorted(self.defines.items())), lights=tuple(self.lights),
                      description=f"Mitsuba 3 scene {self.path.name}", model_files=self.model_files)
 
     def visit(self, plugin: Plugin) -> Plugin:

@@ -30,9 +30,6 @@ class Element:
     line: int
     children: list["Element"] = field(default_factory=list)
 
-    def where(self) -> str:
-        return f"line {self.line}"
-
     def error(self, message: str) -> SceneError:
         return SceneError(self.file, f"line {self.line}: {message}")
 

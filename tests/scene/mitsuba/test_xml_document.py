@@ -105,3 +105,13 @@ def test_the_files_read_are_what_checkpoints_and_bundles_cover(tmp_path):
         '<string name="filename" value="wood.png"/></texture></bsdf></shape>'))
     scene = load(main)
     assert {p.name for p in scene_files(scene)} == {"main.xml", "ball.xml", "eta.spd", "wood.png"}
+
+
+def test_other_parameters_are_another_scene_to_a_checkpoint(tmp_path):
+    """-D changes the scene: a checkpoint of one rendering refuses to continue as the other."""
+    from renderer.output.checkpoint import scene_fingerprint
+
+    path = write(tmp_path, "s.xml", scene_text('<default name="r" value="2"/>' + SPHERE.format(radius="$r")))
+    assert scene_fingerprint(load(path)) == scene_fingerprint(load(path))
+    assert scene_fingerprint(load(path, r="3")) != scene_fingerprint(load(path))
+    assert load(path, r="3").parameters == (("r", "3"),)
