@@ -16,7 +16,8 @@ import numpy as np
 from renderer.geometry.mesh_data import MeshData
 from renderer.materials.table import NO_MEDIUM, MaterialRows
 from renderer.scene.description import Scene
-from renderer.scene.features import Features, features_from, scene_light_kinds, scene_pixel_filter
+from renderer.scene.features import (Features, features_from, scene_grid_media, scene_light_kinds,
+                                     scene_light_textures, scene_pixel_filter)
 from renderer.scene.mesh_assembly import ModelMaterial, assemble
 from renderer.scene.textures import WRAP_CODES, TextureAtlas, pack_atlas
 
@@ -34,11 +35,14 @@ class MeshScene:
 
     def features(self, scene: Scene) -> Features:
         """The Features of `scene`, of which this is the assembly (with the scene camera's lens)."""
-        return features_from("mesh", self.material_uses(), scene.environment.kind, scene.camera.aperture,
+        uses = {**self.material_uses(), "grid_media": scene_grid_media(scene)}
+        return features_from("mesh", uses, scene.environment.kind, scene.camera.aperture,
                              mesh_kinds=self.data.kinds(), energy_compensation=scene.render.energy_compensation,
                              fog=scene.fog.model, vertex_colors=self.data.tri_colors is not None,
                              instances=self.data.has_instances, light_kinds=scene_light_kinds(scene),
-                             pixel_filter=scene_pixel_filter(scene))
+                             pixel_filter=scene_pixel_filter(scene),
+                             orthographic=scene.camera.projection == "orthographic",
+                             light_textures=scene_light_textures(scene))
 
 
 def prepare_mesh_scene(scene: Scene, instancing: bool = True) -> MeshScene:
@@ -49,14 +53,13 @@ def prepare_mesh_scene(scene: Scene, instancing: bool = True) -> MeshScene:
     slots: list = []  # (image index, wrap_s, wrap_t, uv_set, matrix[, nearest])
     for index, material in enumerate(assembly.materials):
         if not isinstance(material, ModelMaterial):
-            texture = material.base_color_texture
-            if texture is None:
-                rows.add_spec(material)
-                continue
-            wrap = WRAP_CODES[texture.wrap]
-            slots.append((assembly.spec_images[index], wrap, wrap, 0, np.array(texture.transform, np.float32),
-                          texture.nearest))
-            rows.add_spec(material, base_color_texture=len(slots) - 1)
+            texture_slots = {}
+            for role, texture in material.textures.items():
+                wrap = WRAP_CODES[texture.wrap]
+                slots.append((assembly.spec_images[(index, role)], wrap, wrap, 0,
+                              np.array(texture.transform, np.float32), texture.nearest))
+                texture_slots[role] = len(slots) - 1
+            rows.add_spec(material, texture_slots)
             continue
 
         def texture_id(ref, first_image=material.first_image):

@@ -8,13 +8,12 @@ import taichi as ti
 
 from renderer.film.adaptive import STOPPED
 from renderer.film.aovs import FEATURE_BOOSTED_SAMPLES, FEATURE_SEED_SALT
-from renderer.camera import generate_ray
-from renderer.geometry.interface import INF
+from renderer.camera import generate_ray, pinhole_ray
+from renderer.geometry.interface import INF, Ray
 from renderer.materials.bsdf import Bsdf
 from renderer.film.pixel_filter import pixel_sample
 from renderer.film.pixel_slices import BANDS, ROUND_SLICES, interleaved_layout, pass_length, slice_pixel
 from renderer.sampling import dims
-from renderer.sampling.sampler import SampleState
 
 
 @ti.data_oriented
@@ -62,7 +61,7 @@ class RenderProgram:
     @ti.kernel
     def _render(self, width: ti.i32, height: ti.i32, spp: ti.i32, slice_first: ti.i32, slice_count: ti.i32,
                 order: ti.i32, feature_boost: ti.i32, seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3,
-                right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32, aperture: ti.f32, focus: ti.f32):
+                right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32, aperture: ti.f32, focus: ti.f32):
         # A partial pass over bands visits its rows from the band table: the same pixels as
         # slice_pixel's, without its divisions and skipped indices (renderer/film/band_table.py).
         banded = order == BANDS and slice_count < ROUND_SLICES
@@ -97,17 +96,17 @@ class RenderProgram:
                                 if k > 0:
                                     stream_index, stream_seed = self.aovs.count[x, y], seed ^ FEATURE_SEED_SALT
                                 work += self._camera_sample(x, y, width, height, pixel, stream_index, stream_seed,
-                                                            k > 0, max_depth, origin, forward, right, up, tan_half_fov,
+                                                            k > 0, max_depth, origin, forward, right, up, half_height,
                                                             aperture, focus)
                         else:
                             work += self._camera_sample(x, y, width, height, pixel, index, seed, False, max_depth,
-                                                        origin, forward, right, up, tan_half_fov, aperture, focus)
+                                                        origin, forward, right, up, half_height, aperture, focus)
                     # One plain store per pixel: += on a global field would be an atomic add per sample.
                     self.work[x, y] = self.work[x, y] + work
 
     @ti.func
     def _camera_sample(self, x, y, width, height, pixel, index, stream_seed, features_only, max_depth, origin, forward,
-                       right, up, tan_half_fov, aperture, focus):
+                       right, up, half_height, aperture, focus):
         """One camera sample of pixel (x, y) at sampler `index` under `stream_seed`: added to the
         film unless `features_only`, and to the AOVs where they are kept; returns its work stats.
         The kernel's only call of the integrator: another call site would compile its tracing in
@@ -116,7 +115,8 @@ class RenderProgram:
         jitter, weight = pixel_sample(self.sampler.get2d(state, dims.PIXEL), x, y, width, height,
                                       self.features.pixel_filter)
         ray = generate_ray(x, y, width, height, jitter, self.sampler, state, origin, forward, right, up,
-                           tan_half_fov, aperture, focus, self.features.depth_of_field)
+                           half_height, aperture, focus, self.features.depth_of_field,
+                           self.features.orthographic)
         value, stats, albedo, normal = self._trace(ray, state, max_depth, features_only)
         if ti.static(self.features.pixel_filter[0] != "box"):
             value *= weight
@@ -136,21 +136,14 @@ class RenderProgram:
 
     @ti.kernel
     def probe(self, u: ti.f32, v: ti.f32, width: ti.i32, height: ti.i32, origin: ti.math.vec3,
-              forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32,
+              forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32,
               out: ti.template()):
         """Distance along `forward` to the surface under (u, v) in [0,1]^2 (y up); -1 on a miss."""
         for _ in range(1):  # a parallel loop of one: the march's `break` may not sit in the outermost scope
-            aspect = width / height
-            d = ti.math.normalize(forward + (2.0 * u - 1.0) * tan_half_fov * aspect * right
-                                  + (2.0 * v - 1.0) * tan_half_fov * up)
-            state = SampleState(pixel=ti.u32(0), index=ti.u32(0), seed=ti.u32(0), key=ti.u32(0))
-            ray = generate_ray(0, 0, 1, 1, ti.math.vec2(0.5), self.sampler, state, origin, forward, right, up,
-                               tan_half_fov, 0.0, 1.0, False)
-            ray.d = d
+            o, d = pinhole_ray(2.0 * u - 1.0, 2.0 * v - 1.0, width / height, origin, forward, right, up,
+                               half_height, self.features.orthographic)
             # A ray without a cone: the SDF march stops within its finest threshold of the surface.
-            # (The 1x1 film above gives a cone as wide as the view, which stopped the march metres
-            # short; even a pixel's cone stops it some % short at a grazing floor.)
-            ray.cone_width = 0.0
-            ray.cone_spread = 0.0
+            # (A pixel's cone stops it some % short at a grazing floor.)
+            ray = Ray(o=o, d=d, cone_width=0.0, cone_spread=0.0)
             hit = self.geometry.intersect(ray, INF)
             out[None] = hit.t * d.dot(forward) if hit.hit == 1 else -1.0

@@ -179,10 +179,11 @@ class Renderer:
 
     # --- programs ------------------------------------------------------------------------------
     def features(self, camera: CameraFrame | None = None) -> Features:
-        """The scene's Features, with the lens model of `camera` (the viewer's aperture slider)."""
+        """The scene's Features, with the lens model and projection of `camera` (the viewer's aperture
+        slider)."""
         if camera is None:
             return self._features
-        return replace(self._features, depth_of_field=camera.aperture > 0.0)
+        return replace(self._features, depth_of_field=camera.aperture > 0.0, orthographic=camera.orthographic)
 
     def program(self, integrator: str, features: Features, sampler: str = "independent") -> RenderProgram:
         key = self._program_key(integrator, features, sampler)
@@ -215,7 +216,8 @@ class Renderer:
             from renderer.lights.lights import Lights, emitter_table
 
             emitters = emitter_table(self.geometry, self.materials.arrays)
-            delta = DeltaLights(self.scene.lights, self.scene_radius()) if self.scene.lights else None
+            delta = (DeltaLights(self.scene.lights, self.scene_radius(), ledger=self.scene.model_files.ledger)
+                     if self.scene.lights else None)
             self._lights = Lights(self.geometry, emitters, self.environment, self.scene.environment, self._env_image,
                                   delta=delta)
         return self._lights

@@ -69,7 +69,7 @@ def stage_kernels(program, width: int, height: int):
 
         @ti.kernel
         def run(self, stage: ti.template(), spp: ti.i32, seed: ti.u32, origin: ti.math.vec3,
-                forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32,
+                forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32,
                 aperture: ti.f32, focus: ti.f32):
             ctx = self.ctx
             for x, y in ti.ndrange(width, height):
@@ -77,7 +77,8 @@ def stage_kernels(program, width: int, height: int):
                 for s in range(spp):
                     state = ctx.sampler.start(y * width + x, s, seed)
                     ray = generate_ray(x, y, width, height, ctx.sampler.get2d(state, dims.PIXEL), ctx.sampler, state,
-                                       origin, forward, right, up, tan_half_fov, aperture, focus, False)
+                                       origin, forward, right, up, half_height, aperture, focus, False,
+                                       False)
                     v = ray.d  # every stage adds to it, so that none is dead code
                     if ti.static(stage >= 1):
                         hit = ctx.geometry.trace(ray, INF, False)

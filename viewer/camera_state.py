@@ -29,6 +29,8 @@ class CameraState:
     fov: float = 45.0  # vertical field of view, degrees
     aperture: float = 0.0  # lens radius, metres (0 = pinhole)
     focus_distance: float = 1.0  # metres
+    projection: str = "perspective"  # or "orthographic": parallel rays, `ortho_height` metres tall
+    ortho_height: float = 2.0  # metres
 
     def __post_init__(self):
         position = tuple(float(c) for c in self.position)
@@ -40,12 +42,17 @@ class CameraState:
         object.__setattr__(self, "fov", float(self.fov))
         object.__setattr__(self, "aperture", float(self.aperture))
         object.__setattr__(self, "focus_distance", float(self.focus_distance))
+        object.__setattr__(self, "ortho_height", float(self.ortho_height))
         if not 0.0 < self.fov < 180.0:
             raise ValueError(f"fov must be in (0, 180) degrees, got {self.fov}")
         if self.aperture < 0.0:
             raise ValueError(f"aperture must be >= 0, got {self.aperture}")
         if self.focus_distance <= 0.0:
             raise ValueError(f"focus_distance must be > 0, got {self.focus_distance}")
+        if self.projection not in ("perspective", "orthographic"):
+            raise ValueError(f"projection must be perspective or orthographic, got {self.projection!r}")
+        if self.ortho_height <= 0.0:
+            raise ValueError(f"ortho_height must be > 0, got {self.ortho_height}")
 
     def forward(self) -> np.ndarray:
         cp = math.cos(self.pitch)
@@ -62,7 +69,7 @@ class CameraState:
 
     @classmethod
     def from_look_at(cls, position, look_at, up=(0.0, 1.0, 0.0), fov=45.0, aperture=0.0,
-                     focus_distance=None) -> "CameraState":
+                     focus_distance=None, projection="perspective", ortho_height=2.0) -> "CameraState":
         """Camera at ``position`` looking at ``look_at``.
 
         Only a +y world up is supported (yaw/pitch are relative to it). Looking
@@ -83,7 +90,8 @@ class CameraState:
         if focus_distance is None:
             focus_distance = dist if dist > 0.0 else 1.0
         return cls(position=tuple(position), yaw=yaw, pitch=pitch, fov=fov,
-                   aperture=aperture, focus_distance=focus_distance)
+                   aperture=aperture, focus_distance=focus_distance, projection=projection,
+                   ortho_height=ortho_height)
 
     def replace(self, **changes) -> "CameraState":
         return dataclasses.replace(self, **changes)

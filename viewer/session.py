@@ -266,7 +266,7 @@ def fix_max_depth(new: int, old: int) -> int:
 def camera_from_spec(spec) -> CameraState:
     """The viewer's camera for a scene's CameraSpec (only a +y up vector is supported)."""
     return CameraState.from_look_at(spec.position, spec.look_at, (0.0, 1.0, 0.0), spec.fov,
-                                    spec.aperture, spec.focus_distance)
+                                    spec.aperture, spec.focus_distance, spec.projection, spec.ortho_height)
 
 
 def scene_scale(spec) -> float:

@@ -90,7 +90,7 @@ def poll_input(window) -> FrameInput:
 def camera_frame(state: CameraState) -> CameraFrame:
     forward, right, up = state.basis()
     return CameraFrame(tuple(state.position), tuple(forward), tuple(right), tuple(up), state.fov,
-                       state.aperture, state.focus_distance)
+                       state.aperture, state.focus_distance, state.projection, state.ortho_height)
 
 
 def window_buffer_to_image(buffer: np.ndarray) -> np.ndarray:

@@ -49,7 +49,15 @@ def scene_dict(scene: Scene, mesh_dir: Path, size: tuple[int, int] | None = None
                             "rfilter": _rfilter(scene.render)},
                    "sampler": {"type": "independent", "sample_count": int(spp)}},
     }
-    if cam.aperture > 0.0:
+    if cam.projection == "orthographic":
+        if cam.aperture > 0.0:
+            raise ValueError(f"{scene.name}: an orthographic camera with a lens has no Mitsuba counterpart")
+        # Mitsuba's orthographic view is 2 x-scales wide and 2 y-scales / aspect tall.
+        half_width = 0.5 * cam.ortho_height * width / height
+        result["sensor"].update(type="orthographic", to_world=result["sensor"]["to_world"] @ T().scale(
+            [half_width, half_width, 1.0]))
+        del result["sensor"]["fov"], result["sensor"]["fov_axis"]
+    elif cam.aperture > 0.0:
         result["sensor"].update(type="thinlens", aperture_radius=float(cam.aperture),
                                 focus_distance=float(cam.focus_distance))
     environment = _environment(scene, T)
@@ -113,17 +121,38 @@ def _rfilter(render) -> dict:
 
 
 def _light(light, T) -> dict:
-    """Point, spot and directional lights as Mitsuba's (the same intensity, irradiance and profile)."""
+    """Point, spot, directional and projector lights as Mitsuba's (the same intensity, irradiance,
+    profile and projected image)."""
     if light.kind == "point":
         return {"type": "point", "position": list(map(float, light.position)), "intensity": _rgb(light.intensity)}
+    if light.kind == "directional":
+        return {"type": "directional", "direction": list(map(float, light.direction)),
+                "irradiance": _rgb(light.irradiance)}
+    from renderer.lights.light_projection import light_frame
+
+    position = np.asarray(light.position, np.float64)
+    to_world = T().look_at(origin=position.tolist(), target=(position + light_frame(light)[2]).tolist(),
+                           up=light_frame(light)[1].tolist())
     if light.kind == "spot":
-        position = np.asarray(light.position, np.float64)
-        axis = np.asarray(light.direction, np.float64)
-        up = [0.0, 1.0, 0.0] if abs(axis[1]) < 0.99 * np.linalg.norm(axis) else [1.0, 0.0, 0.0]
-        return {"type": "spot", "intensity": _rgb(light.intensity), "cutoff_angle": float(light.cutoff_angle),
-                "beam_width": float(light.beam),
-                "to_world": T().look_at(origin=position.tolist(), target=(position + axis).tolist(), up=up)}
-    return {"type": "directional", "direction": list(map(float, light.direction)), "irradiance": _rgb(light.irradiance)}
+        spot = {"type": "spot", "intensity": _rgb(light.intensity), "cutoff_angle": float(light.cutoff_angle),
+                "beam_width": float(light.beam), "to_world": to_world}
+        if light.texture is not None:
+            spot["texture"] = _image(light.texture)
+        return spot
+    irradiance = _rgb(light.irradiance) if light.texture is None else _image(light.texture)
+    scale = 1.0 if light.texture is None else float(light.irradiance[0])
+    if light.texture is not None and len(set(light.irradiance)) > 1:
+        raise ValueError("a textured projector with a coloured irradiance has no Mitsuba counterpart")
+    return {"type": "projector", "irradiance": irradiance, "scale": scale, "fov": float(light.fov),
+            "fov_axis": light.fov_axis, "to_world": to_world}
+
+
+def _image(texture) -> dict:
+    """A light's image as Mitsuba's bitmap texture."""
+    if texture.kind != "bitmap" or texture.transform != ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)):
+        raise ValueError("only an untransformed bitmap on a light has a Mitsuba counterpart here")
+    return {"type": "bitmap", "filename": str(texture.file), "raw": not texture.srgb, "wrap_mode": texture.wrap,
+            "filter_type": "nearest" if texture.nearest else "bilinear"}
 
 
 def _rgb(value) -> dict:
@@ -166,6 +195,8 @@ def _bsdf(spec: MaterialSpec, media: dict, notes: list[str]) -> dict:
 def _with_medium(bsdf: dict, spec: MaterialSpec, media: dict) -> dict:
     if spec.medium:
         m = media[spec.medium]
+        if m.kind == "grid":  # (its grids would need writing out as .vol files first)
+            raise ValueError(f"medium '{m.name}': grid media have no Mitsuba counterpart here yet")
         sigma_t = np.add(m.sigma_a, m.sigma_s)
         albedo = np.divide(m.sigma_s, sigma_t, out=np.zeros(3), where=sigma_t > 0)
         bsdf["interior"] = {"type": "homogeneous", "sigma_t": _rgb(sigma_t), "albedo": _rgb(albedo),

@@ -126,6 +126,17 @@ def sphere(o, d, center, radius, t_max):
     return hit, t
 
 
+@ti.func
+def sphere_uv(x, y, z):
+    """A sphere's texture coordinates at the unit direction (x, y, z) from its centre in its own
+    frame, as Mitsuba's sphere has them: (the angle about z from x towards y in [0, 2 pi), the
+    angle from z) scaled to [0, 1]."""
+    phi = ti.atan2(y, x)
+    if phi < 0.0:
+        phi += 2.0 * np.pi
+    return ti.math.vec2(phi / (2.0 * np.pi), ti.acos(ti.math.clamp(z, -1.0, 1.0)) / np.pi)
+
+
 # Unit roundoff of float32, 2^-24.
 F32_UNIT_ROUNDOFF = 5.9604645e-08
 # A primitive's spawn clearance in roundoffs of the magnitude its points are computed at

@@ -34,6 +34,10 @@ class MeshData:
     tri_material: np.ndarray = field(default_factory=_i32)
     spheres: np.ndarray = field(default_factory=lambda: _f32((0, 4)))  # centre xyz, radius
     sphere_material: np.ndarray = field(default_factory=_i32)
+    # (S, 3, 3) per sphere the unit x, y, z axes of its own frame (rows), in which its texture
+    # coordinates are Mitsuba's: u = the angle about z from x (towards y) / 2 pi, v = the angle from
+    # z / pi. Empty: every sphere in the world's axes.
+    sphere_frames: np.ndarray = field(default_factory=lambda: _f32((0, 3, 3)))
     quads: np.ndarray = field(default_factory=lambda: _f32((0, 3, 3)))  # corner, edge u, edge v
     quad_material: np.ndarray = field(default_factory=_i32)
     discs: np.ndarray = field(default_factory=lambda: _f32((0, 7)))  # centre xyz, normal xyz, radius
@@ -60,6 +64,12 @@ class MeshData:
     def counts(self) -> dict[str, int]:
         return {"triangle": len(self.tri_vertices), "sphere": len(self.spheres),
                 "quad": len(self.quads), "disc": len(self.discs), "bezier": len(self.bezier_patches)}
+
+    def sphere_axes(self) -> np.ndarray:
+        """(S, 3, 3) the spheres' frames, the world's axes where none are given."""
+        if len(self.sphere_frames) == len(self.spheres):
+            return self.sphere_frames.astype(np.float32)
+        return np.tile(np.eye(3, dtype=np.float32), (len(self.spheres), 1, 1))
 
     @property
     def primitive_count(self) -> int:

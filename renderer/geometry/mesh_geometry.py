@@ -32,8 +32,8 @@ from renderer.geometry.shading import consistent_shading_normal
 from renderer.geometry.triangle_packets import TrianglePackets, build_packets, nearest_lane, permuted_origin
 from renderer.geometry.wide_bvh import collapse, empty_wide_bvh
 from renderer.geometry.wide_traversal import WideNodes, stack_size
+from renderer.materials.kinds import BACK_CULLED
 from renderer.materials.table import ALPHA_OPAQUE
-from renderer.sampling.warps import PI
 from renderer.runtime.upload import upload_fields
 
 vec3 = ti.math.vec3
@@ -70,7 +70,9 @@ class MeshGeometry:
         self.has_tangents = data.tri_tangents is not None and len(data.tri_vertices) > 0
         self.has_colors = data.tri_colors is not None and len(data.tri_vertices) > 0
         self.materials = materials
-        self.has_alpha = materials is not None and bool(np.any(materials.arrays["alpha_mode"] != ALPHA_OPAQUE))
+        # Coverage is tested in traversal for alpha (glTF MASK / BLEND, Mitsuba's mask) and back-face culling.
+        self.has_alpha = materials is not None and bool(np.any(materials.arrays["alpha_mode"] != ALPHA_OPAQUE)
+                                                        or np.any(materials.arrays["sidedness"] == BACK_CULLED))
         self.has_instances = data.has_instances
         self.stack_size = STACK_SIZE
         if self.has_instances:
@@ -148,6 +150,7 @@ class MeshGeometry:
         if self.has_colors:
             self.tri_color = vec_field(t, data.tri_colors, 4, (3,))
         self.spheres = vec_field(len(data.spheres), data.spheres, 4)
+        self.sphere_frames = vec_field(len(data.spheres), data.sphere_axes(), 3, (3,))
         self.quads = vec_field(len(data.quads), data.quads, 3, (3,))
         self.quad_frames = vec_field(len(data.quads), isect.quad_frames(data.quads), 3, (3,))
         discs = data.discs
@@ -177,8 +180,8 @@ class MeshGeometry:
         attributes = sum(_field_bytes(getattr(self, name)) for name in ("tri_n", "tri_uv", "tri_uv1", "tri_tangent",
                                                                         "tri_color") if hasattr(self, name))
         instances = self.instances.device_bytes() if self.has_instances else 0
-        others = sum(_field_bytes(f) for f in (self.spheres, self.quads, self.quad_frames, self.discs_a, self.discs_n,
-                                               self.prim_material, self.range_end))
+        others = sum(_field_bytes(f) for f in (self.spheres, self.sphere_frames, self.quads, self.quad_frames,
+                                               self.discs_a, self.discs_n, self.prim_material, self.range_end))
         return {"bvh": nodes + slots, "triangles": triangles, "attributes": attributes, "instances": instances,
                 "total": nodes + slots + triangles + attributes + instances + others}
 
@@ -230,7 +233,7 @@ class MeshGeometry:
             g = self.slot_prim[j]
             h, t, b1, b2 = self._test_prim(g, o, d, k, s, hit.t)
             hit.tests += 1
-            if self._covered(h, g, b1, b2, ray, instance) == 1:
+            if self._covered(h, g, b1, b2, ray, instance, d) == 1:
                 self._take(hit, t, g, b1, b2, instance)
                 if any_hit:
                     break
@@ -257,7 +260,7 @@ class MeshGeometry:
                 if ti.static(self.has_alpha):  # lane by lane: the nearest hit may be uncovered
                     for lane in ti.static(range(4)):
                         if found[lane] == 1 and t[lane] < hit.t:
-                            if self._covered(1, prims[lane], b1[lane], b2[lane], ray, instance) == 1:
+                            if self._covered(1, prims[lane], b1[lane], b2[lane], ray, instance, d) == 1:
                                 self._take(hit, t[lane], prims[lane], b1[lane], b2[lane], instance)
                 else:
                     t_near, lane, u, v = nearest_lane(found, t, b1, b2)
@@ -268,20 +271,21 @@ class MeshGeometry:
                     g = prims[lane]
                     if mask[lane] == 1 and g >= self.range_end[0]:
                         h, t1, c1, c2 = self._test_prim(g, o, d, k, s, hit.t)
-                        if self._covered(h, g, c1, c2, ray, instance) == 1:
+                        if self._covered(h, g, c1, c2, ray, instance, d) == 1:
                             self._take(hit, t1, g, c1, c2, instance)
             if any_hit:
                 if hit.hit == 1:
                     break
 
     @ti.func
-    def _covered(self, h, g, b1, b2, ray, instance):
-        """h (a primitive test's hit flag), cleared where alpha coverage lets the ray pass there;
-        h itself in scenes without alpha materials (no coverage code compiled)."""
+    def _covered(self, h, g, b1, b2, ray, instance, d):
+        """h (a primitive test's hit flag), cleared where alpha coverage or back-face culling lets
+        the ray (direction d in the primitive's frame) pass there; h itself in scenes without
+        such materials (no coverage code compiled)."""
         out = h
         if ti.static(self.has_alpha):
             if h == 1:
-                out = coverage.covered(self, g, ti.math.vec2(b1, b2), ray.o, ray.d, instance)
+                out = coverage.covered(self, g, ti.math.vec2(b1, b2), ray.o, ray.d, instance, d)
         return out
 
     @ti.func
@@ -489,12 +493,14 @@ class MeshGeometry:
                     color = self.corners(self.tri_color, g, bary)
         if ti.static("sphere" in self.kinds):
             if g >= self.range_end[0] and g < self.range_end[1]:
-                sp = self.spheres[g - self.range_end[0]]
+                i = g - self.range_end[0]
+                sp = self.spheres[i]
                 n = ti.math.normalize(p - sp.xyz)
                 p = sp.xyz + sp.w * n  # back onto the sphere
                 ns = n
                 eps = isect.spawn_clearance(isect.max_abs(sp.xyz) + sp.w)
-                uv = ti.math.vec2(0.5 + ti.atan2(n.x, -n.z) / (2.0 * PI), ti.acos(ti.math.clamp(n.y, -1.0, 1.0)) / PI)
+                uv = isect.sphere_uv(self.sphere_frames[i, 0].dot(n), self.sphere_frames[i, 1].dot(n),
+                               self.sphere_frames[i, 2].dot(n))
         if ti.static("quad" in self.kinds):
             if g >= self.range_end[1] and g < self.range_end[2]:
                 i = g - self.range_end[1]

@@ -319,7 +319,7 @@ class SppmProgram(RenderProgram):
         """Steps from `first_step` that fit `seconds` at this state's measured costs (SppmState)."""
         return self.state.steps_within(seconds, first_step, height)
 
-    def advance(self, width, height, steps, first_step, seed, max_depth, origin, forward, right, up, tan_half_fov,
+    def advance(self, width, height, steps, first_step, seed, max_depth, origin, forward, right, up, half_height,
                 aperture, focus):
         """Steps [first_step, first_step + steps) of the iterations (step k is step k % ITERATION_STEPS
         of iteration k // ITERATION_STEPS); the state must have ended at first_step, or first_step
@@ -335,7 +335,7 @@ class SppmProgram(RenderProgram):
             state.reset()
         photons = options.photons or width * height
         table = table_size_for(width * height)
-        camera = (origin, forward, right, up, tan_half_fov, aperture, focus)
+        camera = (origin, forward, right, up, half_height, aperture, focus)
         step, end = first_step, first_step + steps
         while step < end:  # consecutive steps of one phase in one launch
             index, part = divmod(step, ITERATION_STEPS)
@@ -390,7 +390,7 @@ class SppmProgram(RenderProgram):
     @ti.kernel
     def camera_rows(self, width: ti.i32, height: ti.i32, row_first: ti.i32, row_end: ti.i32, index: ti.i32,
                     seed: ti.u32, max_depth: ti.i32, radius_pixels: ti.f32, origin: ti.math.vec3,
-                    forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, tan_half_fov: ti.f32,
+                    forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32,
                     aperture: ti.f32, focus: ti.f32):
         """The camera pass's paths for rows [row_first, row_end) (a whole pass: 0, height)."""
         st = self.state
@@ -399,8 +399,8 @@ class SppmProgram(RenderProgram):
             sample = self.sampler.start(pixel, index, seed)
             # (The box filter: SPPM's visible points gather per pixel; Renderer warns of another filter.)
             ray = generate_ray(x, y, width, height, self.sampler.get2d(sample, dims.PIXEL), self.sampler, sample,
-                               origin, forward, right, up, tan_half_fov, aperture, focus,
-                               self.features.depth_of_field)
+                               origin, forward, right, up, half_height, aperture, focus,
+                               self.features.depth_of_field, self.features.orthographic)
             value, stats = self._trace_camera(x, y, ray, sample, max_depth, radius_pixels)
             # Plain stores, not +=: on a global field += compiles to an atomic add, and each pixel
             # has one writer here.

@@ -19,8 +19,13 @@ Media (compiled only for scenes with them, Features.has_media): a path knows the
 Along each segment a free-flight distance is sampled (spectral MIS over RGB); a scattering event
 before the surface is a vertex with the Henyey-Greenstein phase function in place of a BSDF,
 light-sampled like any other. Shadow rays carry the transmittance of their medium and pass
-through `null` surfaces (switching medium); any other surface blocks them. Media do not nest:
-crossing out of a surface leads back to the scene's medium.
+through `null` surfaces and smooth thin dielectrics (times the wall's transmittance), switching
+medium; any other surface blocks them. Media do not nest: crossing out of a surface leads back to
+the scene's medium. As in Mitsuba, a smooth thin wall's straight passage is like a null crossing
+(no bounce, and MIS keeps the vertex before it), and a thin wall that bounds a medium of its own
+is entered like any other boundary. Grid media (Features.has_grid_media,
+renderer/media/grid.py) sample the free flight by delta tracking and the shadow rays'
+transmittance by ratio tracking, each segment from a hashed stream of its own.
 
 Dispersion (Features.has_dispersion): a path is RGB until it first meets a dispersive dielectric.
 There it draws one wavelength (visible-importance pdf) and becomes spectral: its throughput turns
@@ -34,10 +39,10 @@ import taichi as ti
 
 from renderer.geometry.interface import INF, MEDIUM_POINT, Hit, Surface
 from renderer.integrators.light_sampling import emission_weight, environment_weight, light_weight, sample_direct
-from renderer.materials import dispersion
-from renderer.materials.kinds import NULL_KIND
+from renderer.materials import dispersion, lobes
+from renderer.materials.kinds import KIND_IDS, NULL_KIND
 from renderer.materials.table import NO_MEDIUM
-from renderer.media import homogeneous, phase
+from renderer.media import grid, homogeneous, phase
 from renderer.sampling import dims
 from renderer.spectral.cie import spectral_rgb_weights
 from renderer.spectral.upsample import rgb_to_spectrum
@@ -67,13 +72,27 @@ def _medium_beyond(ctx, s, wo, wi, current):
     medium = current
     crosses = s.eps >= 0.0 and wi.dot(s.n_geo) * wo.dot(s.n_geo) < 0.0
     if ti.static(ctx.features.has_thin):
-        if ctx.bsdf.materials.table[s.material].thin == 1:
-            crosses = False  # a thin wall has no inside: the light stays in the medium it was in
+        row = ctx.bsdf.materials.table[s.material]
+        if row.thin == 1 and row.medium == NO_MEDIUM:
+            # A thin wall has no inside: the light stays in the medium it was in, unless the wall
+            # bounds a medium of its own (Mitsuba's thindielectric with an interior).
+            crosses = False
     if crosses:
         medium = ctx.media.outside()
         if wo.dot(s.n_geo) > 0.0:
             medium = ctx.bsdf.materials.table[s.material].medium
     return medium
+
+
+def _has_thin_walls(ctx) -> bool:
+    """Whether thin dielectrics are compiled in (Python, for ti.static)."""
+    return ctx.features.has_thin and ctx.features.has_kind("dielectric")
+
+
+@ti.func
+def _smooth_thin_wall(kind, thin, roughness_or_alpha):
+    """A smooth thin dielectric: light passes it straight through, as Mitsuba's thindielectric."""
+    return thin == 1 and kind == KIND_IDS["dielectric"] and roughness_or_alpha == 0.0
 
 
 @ti.func
@@ -128,9 +147,11 @@ class PathTracerBase:
         ending = False  # the path is over once its pending shadow ray is traced
         depth = 0  # path vertices so far: each takes its own sampler dimensions
         # Bounces as max_depth and roulette count them (Mitsuba's and pbrt's depth): scattering at a
-        # surface or in a medium, never the crossing of an invisible (null) boundary.
+        # surface or in a medium, never the crossing of an invisible (null) boundary, nor (Mitsuba's
+        # thindielectric marks it null) the straight passage through a smooth thin wall.
         bounces = 0
         at_null = False
+        through_thin = False
         # Denoising AOVs (renderer/film/aovs.py): the first non-delta vertex's albedo, scaled by the
         # delta bounces before it, and its shading normal; a delta vertex is a stand-in until then.
         aov_albedo = vec3(0.0)
@@ -146,10 +167,10 @@ class PathTracerBase:
                 ray, t_max = ctx.geometry.next_segment(origin, next_dir, shadow_target, shadow_n, shadow_pending)
             hit = Hit(hit=0, t=t_max, work=0, tests=0, inside=0, prim=-1, bary=ti.math.vec2(0.0))
             if t_max > 0.0:
-                # Shadow rays stop at the first hit they find, unless a null surface could be that
-                # hit: passing through it needs the nearest one.
+                # Shadow rays stop at the first hit they find, unless a null surface or a thin wall
+                # could be that hit: passing through it needs the nearest one.
                 any_hit = shadow_pending
-                if ti.static(ctx.features.has_kind("null")):
+                if ti.static(ctx.features.has_kind("null") or _has_thin_walls(ctx)):
                     any_hit = False
                 hit = ctx.geometry.trace(ray, t_max, any_hit)
                 stats += vec3(hit.work, hit.tests, 1.0)
@@ -164,11 +185,16 @@ class PathTracerBase:
                     ms = homogeneous.sample_distance(rec.sigma_a, rec.sigma_s, hit.t if hit.hit == 1 else INF,
                                                      ctx.sampler.get1d(state, dim + dims.MEDIUM_CHANNEL),
                                                      ctx.sampler.get1d(state, dim + dims.MEDIUM_DISTANCE))
+                    if ti.static(ctx.features.has_grid_media):
+                        if ctx.media.grids.holds(medium):  # (its homogeneous row is empty: ms passed through)
+                            ms = ctx.media.grids.free_flight(medium, ray, hit.t if hit.hit == 1 else INF, throughput,
+                                                             grid.tracking_key(state, dim + dims.MEDIUM_DISTANCE, 0))
                     throughput *= _tint(ctx, ms.weight, spectral, lam)
                     scattered = ms.scattered == 1
                     scatter_t = ms.t
             hs = s
-            if hit.hit == 1 and not scattered and (not shadow_pending or ti.static(ctx.features.has_kind("null"))):
+            if hit.hit == 1 and not scattered and (not shadow_pending
+                                                   or ti.static(ctx.features.has_kind("null") or _has_thin_walls(ctx))):
                 hs = ctx.geometry.surface(ray, hit)
 
             # --- a shadow ray -----------------------------------------------------------------------
@@ -179,11 +205,30 @@ class PathTracerBase:
                         shadow_value *= _tint(ctx, homogeneous.transmittance(rec.sigma_a + rec.sigma_s,
                                                                              ti.max(ti.min(hit.t, t_max), 0.0)),
                                               spectral, lam)
+                        if ti.static(ctx.features.has_grid_media):
+                            if ctx.media.grids.holds(shadow_medium):
+                                # The pieces of one shadow ray share a dimension: salted by where each starts.
+                                key = grid.tracking_key(state, dim + dims.MEDIUM_CHANNEL, grid.point_salt(ray.o))
+                                tr = ctx.media.grids.transmittance(shadow_medium, ray, ti.max(ti.min(hit.t, t_max), 0.0),
+                                                                   key)
+                                shadow_value *= _tint(ctx, tr, spectral, lam)
                 passes = False
                 if hit.hit == 1:
                     if ti.static(ctx.features.has_kind("null")):
                         if ctx.bsdf.materials.table[hs.material].kind == NULL_KIND:
                             passes = True  # on through the invisible boundary, into its other side
+                            if ti.static(ctx.features.has_media):
+                                shadow_medium = _medium_beyond(ctx, hs, -ray.d, ray.d, shadow_medium)
+                            shadow_s = hs
+                    if ti.static(_has_thin_walls(ctx)):
+                        row = ctx.bsdf.materials.table[hs.material]
+                        if _smooth_thin_wall(row.kind, row.thin, row.roughness):
+                            # Straight through a smooth thin wall, with its transmittance (Mitsuba's
+                            # thindielectric passes shadow rays so, as null surfaces pass them).
+                            passes = True
+                            cos_i = ti.abs(ray.d.dot(hs.n_shading))
+                            shadow_value *= _tint(ctx, row.base_color * (1.0 - lobes.thin_reflectance(cos_i, row.ior)),
+                                                  spectral, lam)
                             if ti.static(ctx.features.has_media):
                                 shadow_medium = _medium_beyond(ctx, hs, -ray.d, ray.d, shadow_medium)
                             shadow_s = hs
@@ -272,8 +317,11 @@ class PathTracerBase:
                         radiance += throughput * weight * _tint(ctx, mat.emission, spectral, lam)
                 if ti.static(ctx.features.has_kind("null")):
                     at_null = mat.kind == NULL_KIND
+                thin_wall = False  # a smooth thin wall: passing it is no bounce, reflecting off it is
+                if ti.static(_has_thin_walls(ctx)):
+                    thin_wall = _smooth_thin_wall(mat.kind, mat.thin, mat.alpha)
                 # Mitsuba's convention: max_depth counts path vertices, 1 = emitters seen directly.
-                if max_depth >= 0 and bounces + 1 >= max_depth and not at_null:
+                if max_depth >= 0 and bounces + 1 >= max_depth and not at_null and not thin_wall:
                     break
                 if ti.static(self.light_sampling):
                     if ctx.bsdf.has_smooth_part(mat):
@@ -300,9 +348,15 @@ class PathTracerBase:
                     if ti.static(ctx.writes_aovs):
                         if aov_open:
                             aov_weight *= bs.weight
-                    if not at_null:
-                        # An invisible boundary changes nothing about how the light at the end of
-                        # this ray was sampled: MIS keeps the vertex before it.
+                    if ti.static(_has_thin_walls(ctx)):
+                        if thin_wall:
+                            through_thin = bs.wi.dot(s.n_geo) * wo.dot(s.n_geo) < 0.0
+                            if not through_thin and max_depth >= 0 and bounces + 1 >= max_depth:
+                                ending = True  # a reflection beyond the last bounce
+                    if not at_null and not through_thin:
+                        # An invisible boundary (or a thin wall's straight passage, which shadow rays
+                        # take too) changes nothing about how the light at the end of this ray was
+                        # sampled: MIS keeps the vertex before it.
                         prev_p = s.p
                         prev_n = n
                         prev_pdf = bs.pdf
@@ -318,9 +372,10 @@ class PathTracerBase:
                     throughput /= q
             if ending and not shadow_pending:
                 break
-            if scattered or not at_null:
+            if scattered or not (at_null or through_thin):
                 bounces += 1
             at_null = False
+            through_thin = False
             depth += 1
         if ti.static(ctx.features.analytic_fog):
             fog = ctx.media.fog[None]

@@ -166,8 +166,8 @@ class Lights:
                 area_share = 1.0 - delta_share
                 use_delta, u = choose_share(delta_share, u)
                 if use_delta:
-                    e, pmf = self.delta.selector.select(ref, ref_n, ti.min(u, 0.99999994))
-                    wi, dist, value, position = self.delta.sample(ctx.features, e, ref)
+                    pmf, wi, dist, value, position = self.delta.choose(ctx.features, ref, ref_n,
+                                                                       ti.min(u, 0.99999994))
                     p = position
                     if dist == INF:  # directional: the shadow ray's end far away, as the environment's
                         p = ref + ENV_DISTANCE * wi

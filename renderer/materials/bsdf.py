@@ -30,15 +30,16 @@ import taichi as ti
 
 from renderer.geometry.shading import consistent_shading_normal
 from renderer.materials import lobes
+from renderer.materials import microfacet as mf
 from renderer.materials.lobes import BsdfSample
-from renderer.materials.kinds import KIND_IDS, KINDS
+from renderer.materials.kinds import BACK_BLACK, KIND_IDS, KINDS, TWO_SIDED
 from renderer.materials.principled import principled_has_smooth_part
 from renderer.materials.table import NO_TEXTURE, Material, alpha_of
 from renderer.sampling.warps import cosine_hemisphere, orthonormal_basis, to_local, to_world
 
 vec3 = ti.math.vec3
 # The kinds whose smooth part has_smooth_part cannot tell from the roughness alone.
-_DIFFUSE, _NULL, _PRINCIPLED = (KIND_IDS[name] for name in ("diffuse", "null", "principled"))
+_DIFFUSE, _NULL, _PRINCIPLED, _PLASTIC = (KIND_IDS[name] for name in ("diffuse", "null", "principled", "plastic"))
 
 
 @ti.data_oriented
@@ -74,7 +75,17 @@ class Bsdf:
                        complex_ior=rec.complex_ior, eta=rec.eta, k=rec.k, fresnel_avg=rec.fresnel_avg, thin=rec.thin,
                        clearcoat=rec.clearcoat, clearcoat_alpha=alpha_of(rec.clearcoat_roughness),
                        sheen_color=rec.sheen_color, sheen_roughness=rec.sheen_roughness, specular=rec.specular,
-                       specular_color=rec.specular_color, coat_normal=n)
+                       specular_color=rec.specular_color, coat_normal=n, microfacet=0, nonlinear=0, plastic_table=-1,
+                       internal_reflectance=0.0, specular_weight=0.0, sidedness=TWO_SIDED)
+        if ti.static(self.features.has_sidedness):
+            mat.sidedness = rec.sidedness
+        if ti.static(self.features.has_microfacet_models):
+            mat.microfacet = rec.microfacet
+        if ti.static(self.features.has_kind("plastic")):
+            mat.nonlinear = rec.nonlinear
+            mat.plastic_table = rec.plastic_table
+            mat.internal_reflectance = rec.internal_reflectance
+            mat.specular_weight = rec.specular_weight
         if ti.static(self.features.has_vertex_colors):
             mat.base_color *= surface.color.xyz
         if ti.static(self.features.has_textures):
@@ -164,12 +175,12 @@ class Bsdf:
             if ti.static(self.features.has_thin):
                 s = self._thin_sample(mat, wo, u1, u2)
         elif ti.static(self.compensate_glass):
-            if mat.alpha > 0.0:
+            if mat.alpha > 0.0 and mat.microfacet == mf.GGX:
                 s = self.dielectric_tables.sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
             else:
-                s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
+                s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2, mat.microfacet)
         else:
-            s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
+            s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2, mat.microfacet)
         return s
 
     @ti.func
@@ -183,10 +194,12 @@ class Bsdf:
             if ti.static(self.features.has_thin):
                 value, pdf = self._thin_eval(mat, wo, wi)
         elif ti.static(self.compensate_glass):
-            if mat.alpha > 0.0:
+            if mat.alpha > 0.0 and mat.microfacet == mf.GGX:
                 value, pdf = self.dielectric_tables.eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
+            else:
+                value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi, mat.microfacet)
         else:
-            value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
+            value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi, mat.microfacet)
         return value, pdf
 
     @ti.func
@@ -199,7 +212,7 @@ class Bsdf:
     def _thin_sample(self, mat, wo, u1, u2):
         s = lobes.invalid_sample()
         if ti.static(self.compensate):
-            if mat.alpha > 0.0:
+            if mat.alpha > 0.0 and mat.microfacet == mf.GGX:
                 # u1 picks the multiple-scattering lobe with its energy share, then (its
                 # remainder) reflection or transmission within the chosen lobe.
                 wi = vec3(0.0)
@@ -219,9 +232,9 @@ class Bsdf:
                     if pdf > 0.0:
                         s = BsdfSample(wi=wi, weight=value / pdf, pdf=pdf, delta=0, valid=1)
             else:
-                s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2)
+                s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2, mat.microfacet)
         else:
-            s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2)
+            s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2, mat.microfacet)
         return s
 
     @ti.func
@@ -230,9 +243,9 @@ class Bsdf:
         per microfacet R + T = 1, so what the wall loses is a white GGX mirror's loss, 1 - E(mu_o),
         returned by the symmetric lobe of energy.py split into reflection and transmission in the
         slab's mean proportion."""
-        value, pdf = lobes.thin_dielectric_eval(mat.base_color, mat.alpha, mat.ior, wo, wi)
+        value, pdf = lobes.thin_dielectric_eval(mat.base_color, mat.alpha, mat.ior, wo, wi, mat.microfacet)
         if ti.static(self.compensate):
-            if mat.alpha > 0.0:
+            if mat.alpha > 0.0 and mat.microfacet == mf.GGX:
                 r_share = self._thin_reflect_share(mat)
                 wr = vec3(wi.x, wi.y, ti.abs(wi.z))
                 v_ms, pdf_ms, share = self.energy.multiple_scattering(vec3(1.0), mat.alpha, wo, wr)
@@ -252,12 +265,15 @@ class Bsdf:
 
     # --- the principled model's helpers (renderer/materials/principled.py calls them) --------------
     @ti.func
-    def metal_eval(self, fresnel, f_avg, alpha, wo, wi):
-        """A GGX metal lobe with Fresnel `fresnel` at the half vector (and its mean f_avg)."""
+    def metal_eval(self, fresnel, f_avg, alpha, wo, wi, model=mf.GGX):
+        """A metal lobe with Fresnel `fresnel` at the half vector (and its mean f_avg); the
+        compensation's tables are GGX's, so other microfacet models go uncompensated."""
         value = vec3(0.0)
         pdf = 0.0
         if ti.static(not self.compensate):
-            value, pdf = lobes.ggx_reflection_eval(fresnel, alpha, wo, wi)
+            value, pdf = lobes.ggx_reflection_eval(fresnel, alpha, wo, wi, model)
+        elif model != mf.GGX:
+            value, pdf = lobes.ggx_reflection_eval(fresnel, alpha, wo, wi, model)
         else:
             value, pdf = _compensated_reflection_eval(self.energy, fresnel, f_avg, alpha, wo, wi)
         return value, pdf
@@ -290,6 +306,9 @@ class Bsdf:
         s = self.sample(mat, n, wo, u1, u2)
         if s.valid == 1 and not _sides_agree(n, ng, wo, s.wi):
             s.valid = 0
+        if ti.static(self.features.has_sidedness):
+            if mat.sidedness == BACK_BLACK and wo.dot(ng) < 0.0:
+                s.valid = 0  # a one-sided BSDF seen from behind scatters nothing
         return s
 
     @ti.func
@@ -298,6 +317,9 @@ class Bsdf:
         value, pdf = self.eval(mat, n, wo, wi)
         if not _sides_agree(n, ng, wo, wi):
             value = vec3(0.0)
+        if ti.static(self.features.has_sidedness):
+            if mat.sidedness == BACK_BLACK and wo.dot(ng) < 0.0:
+                value = vec3(0.0)
         return value, pdf
 
     @ti.func
@@ -315,7 +337,7 @@ class Bsdf:
         same as `flags(mat) & NON_DELTA`, written as a switch on the kinds whose answer is not their
         roughness's (LLVM's fast-math code for the flags test rounds some images differently)."""
         smooth = mat.alpha > 0.0
-        if mat.kind == _DIFFUSE:
+        if mat.kind == _DIFFUSE or mat.kind == _PLASTIC:  # a plastic's base is diffuse
             smooth = True
         elif mat.kind == _NULL:
             smooth = False

@@ -7,6 +7,7 @@ import taichi as ti
 from renderer.materials import lobes
 from renderer.materials.kinds import LobeFlags
 from renderer.materials.lobes import BsdfSample
+from renderer.materials.microfacet import GGX
 
 
 @ti.func
@@ -14,7 +15,7 @@ def sample(bsdf, mat, n_f, t, b, entering, wo, u1, u2):
     s = lobes.invalid_sample()
     if ti.static(not bsdf.compensate):
         s = lobes.conductor_sample(mat, wo, u2)
-    elif mat.alpha == 0.0:  # a smooth mirror scatters once: nothing to compensate
+    elif mat.alpha == 0.0 or mat.microfacet != GGX:  # a smooth mirror scatters once; the tables are GGX's
         s = lobes.conductor_sample(mat, wo, u2)
     else:
         wi = bsdf.metal_direction(mat.alpha, wo, u1, u2)
@@ -29,7 +30,7 @@ def sample(bsdf, mat, n_f, t, b, entering, wo, u1, u2):
 def evaluate(bsdf, mat, n_f, t, b, entering, wo, wi):
     h = ti.math.normalize(wo + wi)
     fresnel = lobes.conductor_reflectance(mat, wo.dot(h))
-    return bsdf.metal_eval(fresnel, lobes.conductor_reflectance_average(mat), mat.alpha, wo, wi)
+    return bsdf.metal_eval(fresnel, lobes.conductor_reflectance_average(mat), mat.alpha, wo, wi, mat.microfacet)
 
 
 @ti.func

@@ -30,8 +30,26 @@ class LobeFlags:
     NON_DELTA = DIFFUSE | GLOSSY  # what `eval` can return and light sampling can use
 
 
+# Only roughness == 0 is a delta lobe. Any other roughness is clamped to at least this GGX width so
+# that D(h) <= 1/(pi a^2) ~ 3e7 stays finite in f32.
+MIN_ALPHA = 1e-4
+
+
+def alpha_from_roughness(roughness: float) -> float:
+    """A microfacet width alpha from a perceptual roughness (0 stays a delta lobe)."""
+    return 0.0 if roughness == 0.0 else max(roughness * roughness, MIN_ALPHA)
+
+
 NO_TEXTURE = -1
 NO_MEDIUM = -1
+NO_TABLE = -1
+# Sidedness, one property for every reader: a surface shades alike from both sides (Lantern's and
+# glTF's doubleSided), its back face is black (Mitsuba's one-sided BSDFs), or its back face is
+# not there at all (glTF's doubleSided: false, back-face culling).
+SIDEDNESS = {"two_sided": 0, "back_black": 1, "back_culled": 2}
+TWO_SIDED, BACK_BLACK, BACK_CULLED = 0, 1, 2
+# Microfacet models (renderer/materials/microfacet.py): the distribution and the masking form.
+MICROFACET_MODELS = {"ggx": 0, "ggx_separable": 1, "beckmann": 2}
 
 
 @dataclass(frozen=True)
@@ -89,7 +107,7 @@ _THIN = Column("thin", "i32", 0)
 # The roughness of a material that names none, unless its kind has its own: what `principled`
 # starts from in Blender and Mitsuba 3 (diffuse and null surfaces ignore it).
 SHARED_ROUGHNESS = 0.5
-# Metals and glass are smooth unless a roughness is given, as in Mitsuba 3 and pbrt-v4.
+# Metals, glass and plastics are smooth unless a roughness is given, as in Mitsuba 3 and pbrt-v4.
 _SMOOTH = (("roughness", 0.0),)
 
 # Shared by every kind: what the base of any surface has (colour, roughness, emission, the
@@ -109,17 +127,22 @@ SHARED_COLUMNS = (
     # and (specular, specular colour, clearcoat normal, unused).
     Column("layer_textures", "ivec4", (NO_TEXTURE,) * 4),
     Column("layer_textures2", "ivec4", (NO_TEXTURE,) * 4),
+    # The microfacet model of the kinds that have one (renderer/materials/microfacet.py MODELS)
+    # and the sidedness (SIDEDNESS); set by the table's code from the spec's names.
+    Column("microfacet", "i32", 0),
+    Column("sidedness", "i32", TWO_SIDED),
+    Column("opacity_texture", "i32", NO_TEXTURE),  # coverage from a texture's first channel (Mitsuba's mask)
 )
 
 KINDS = (
     MaterialKind("diffuse", "diffuse", (), (), _F.REFLECTION | _F.DIFFUSE, "renderer.materials.diffuse"),
-    MaterialKind("conductor", "conductor", ("edge_tint", "eta", "k", "metal"),
+    MaterialKind("conductor", "conductor", ("edge_tint", "eta", "k", "metal", "microfacet"),
                  (Column("edge_tint", "vec3", (1.0, 1.0, 1.0), from_spec=True), Column("complex_ior", "i32", 0),
                   Column("eta", "vec3", (0.0, 0.0, 0.0)), Column("k", "vec3", (0.0, 0.0, 0.0)),
                   Column("fresnel_avg", "vec3", (0.0, 0.0, 0.0))),
                  _F.REFLECTION | _F.GLOSSY | _F.SPECULAR, "renderer.materials.conductor", compensation="rough",
                  defaults=_SMOOTH),
-    MaterialKind("dielectric", "glass", ("ior", "thin", "abbe", "glass"),
+    MaterialKind("dielectric", "glass", ("ior", "thin", "abbe", "glass", "microfacet"),
                  (_IOR, _THIN, Column("dispersion", "i32", 0), Column("dispersion_b", "vec4", (0.0,) * 4),
                   Column("dispersion_c", "vec4", (0.0,) * 4)),
                  _F.REFLECTION | _F.TRANSMISSION | _F.GLOSSY | _F.SPECULAR, "renderer.materials.dielectric",
@@ -130,6 +153,14 @@ KINDS = (
                  _F.REFLECTION | _F.TRANSMISSION | _F.DIFFUSE | _F.GLOSSY | _F.SPECULAR,
                  "renderer.materials.principled", compensation="always", refracts=True),
     MaterialKind("null", "null surfaces", (), (), _F.TRANSMISSION | _F.SPECULAR, "renderer.materials.null_boundary"),
+    # Mitsuba 3's plastic and roughplastic: a diffuse base under a smooth or rough dielectric
+    # coating, its internal reflections summed in closed form (renderer/materials/plastic.py).
+    MaterialKind("plastic", "plastic", ("ior", "nonlinear", "specular_color", "microfacet"),
+                 (_IOR, Column("nonlinear", "i32", 0), Column("specular_color", "vec3", (1.0, 1.0, 1.0), from_spec=True),
+                  Column("plastic_table", "i32", NO_TABLE), Column("internal_reflectance", "f32", 0.0),
+                  Column("specular_weight", "f32", 0.5)),
+                 _F.REFLECTION | _F.DIFFUSE | _F.GLOSSY | _F.SPECULAR, "renderer.materials.plastic",
+                 defaults=_SMOOTH),
 )
 
 LAYERS = (
@@ -148,8 +179,9 @@ LAYERS = (
                   (Column("specular", "f32", 1.0, from_spec=True, gltf="specular_factor"),
                    Column("specular_color", "vec3", (1.0, 1.0, 1.0), from_spec=True, gltf="specular_color_factor")),
                   _F.REFLECTION | _F.GLOSSY | _F.SPECULAR,
-                  lambda r: (r["specular"] != 1.0 or min(r["specular_color"]) != 1.0
-                             or r["layer_textures2"][0] != NO_TEXTURE or r["layer_textures2"][1] != NO_TEXTURE)),
+                  lambda r: r["kind"] == KIND_IDS["principled"] and (
+                      r["specular"] != 1.0 or min(r["specular_color"]) != 1.0
+                      or r["layer_textures2"][0] != NO_TEXTURE or r["layer_textures2"][1] != NO_TEXTURE)),
 )
 
 KIND_NAMES = tuple(k.name for k in KINDS)

@@ -101,29 +101,30 @@ def conductor_reflectance_average(mat):
 
 # --- GGX reflection (conductor, metal, dielectric coat) ------------------------------------------------
 @ti.func
-def ggx_reflection_eval(fresnel, alpha, wo, wi):
-    """fresnel: the Fresnel factor at wo.h (vec3); the caller computes it for h = normalize(wo + wi)."""
+def ggx_reflection_eval(fresnel, alpha, wo, wi, model=mf.GGX):
+    """fresnel: the Fresnel factor at wo.h (vec3); the caller computes it for h = normalize(wo + wi).
+    model: the microfacet model (microfacet.py; GGX unless a row names another)."""
     value = vec3(0.0)
     pdf = 0.0
     if wi.z > 0.0 and alpha > 0.0:
         h = ti.math.normalize(wo + wi)
         cos_oh = wo.dot(h)
         if cos_oh > 0.0:
-            value = fresnel * (mf.ggx_d(h, alpha) * mf.smith_g2(wo, wi, alpha) / (4.0 * wo.z))
-            pdf = mf.visible_normal_pdf(wo, h, alpha) / (4.0 * cos_oh)
+            value = fresnel * (mf.d(h, alpha, model) * mf.g2(wo, wi, alpha, model) / (4.0 * wo.z))
+            pdf = mf.normal_pdf(wo, h, alpha, model) / (4.0 * cos_oh)
     return value, pdf
 
 
 @ti.func
-def ggx_reflection_direction(alpha, wo, u2):
-    return mf.reflect(wo, mf.sample_visible_normal(wo, alpha, u2))
+def ggx_reflection_direction(alpha, wo, u2, model=mf.GGX):
+    return mf.reflect(wo, mf.sample_normal(wo, alpha, u2, model))
 
 
 @ti.func
 def conductor_eval(mat, wo, wi):
     """mat: a conductor Material (its alpha and Fresnel description)."""
     h = ti.math.normalize(wo + wi)
-    return ggx_reflection_eval(conductor_reflectance(mat, wo.dot(h)), mat.alpha, wo, wi)
+    return ggx_reflection_eval(conductor_reflectance(mat, wo.dot(h)), mat.alpha, wo, wi, mat.microfacet)
 
 
 @ti.func
@@ -134,20 +135,20 @@ def conductor_sample(mat, wo, u2):
         s = BsdfSample(wi=vec3(-wo.x, -wo.y, wo.z), weight=conductor_reflectance(mat, wo.z), pdf=1.0, delta=1,
                        valid=1)
     else:
-        h = mf.sample_visible_normal(wo, alpha, u2)
+        model = mat.microfacet
+        h = mf.sample_normal(wo, alpha, u2, model)
         wi = mf.reflect(wo, h)
-        if wi.z > 0.0:
-            cos_oh = wo.dot(h)
-            # f cos / pdf with pdf = G1 D (wo.h) / (4 wo.z wo.h): D and the Jacobian cancel.
-            s = BsdfSample(wi=wi, weight=conductor_reflectance(mat, cos_oh)
-                           * (mf.smith_g2(wo, wi, alpha) / mf.smith_g1(wo, alpha)),
-                           pdf=mf.visible_normal_pdf(wo, h, alpha) / (4.0 * cos_oh), delta=0, valid=1)
+        cos_oh = wo.dot(h)
+        if wi.z > 0.0 and cos_oh > 0.0:
+            # f cos / pdf: D and the Jacobian cancel (microfacet.sampled_weight).
+            s = BsdfSample(wi=wi, weight=conductor_reflectance(mat, cos_oh) * mf.sampled_weight(wo, wi, h, alpha, model),
+                           pdf=mf.normal_pdf(wo, h, alpha, model) / (4.0 * cos_oh), delta=0, valid=1)
     return s
 
 
 # --- Dielectric interface (rough: Walter et al. 2007; smooth: delta) -------------------------------------
 @ti.func
-def dielectric_eval(tint, alpha, eta, wo, wi):
+def dielectric_eval(tint, alpha, eta, wo, wi, model=mf.GGX):
     value = vec3(0.0)
     pdf = 0.0
     if alpha > 0.0 and wi.z != 0.0:
@@ -156,8 +157,8 @@ def dielectric_eval(tint, alpha, eta, wo, wi):
             cos_oh = wo.dot(h)
             if cos_oh > 0.0:
                 f, _ = mf.fresnel_dielectric(cos_oh, eta)
-                value = vec3(f * mf.ggx_d(h, alpha) * mf.smith_g2(wo, wi, alpha) / (4.0 * wo.z))
-                pdf = f * mf.visible_normal_pdf(wo, h, alpha) / (4.0 * cos_oh)
+                value = vec3(f * mf.d(h, alpha, model) * mf.g2(wo, wi, alpha, model) / (4.0 * wo.z))
+                pdf = f * mf.normal_pdf(wo, h, alpha, model) / (4.0 * cos_oh)
         else:
             # Generalised half vector of a refraction, on wo's side.
             h = ti.math.normalize(wo + eta * wi)
@@ -169,36 +170,37 @@ def dielectric_eval(tint, alpha, eta, wo, wi):
                 f, _ = mf.fresnel_dielectric(cos_oh, eta)
                 denom = cos_oh + eta * cos_ih
                 denom2 = denom * denom
-                d = mf.ggx_d(h, alpha)
-                value = tint * ((1.0 - f) * d * mf.smith_g2(wo, wi, alpha) * cos_oh * ti.abs(cos_ih) / (wo.z * denom2))
+                d = mf.d(h, alpha, model)
+                value = tint * ((1.0 - f) * d * mf.g2(wo, wi, alpha, model) * cos_oh * ti.abs(cos_ih)
+                                / (wo.z * denom2))
                 # Walter et al. 2007, eq. 17: d(h)/d(wi) = eta^2 |wi.h| / (wo.h + eta wi.h)^2
-                pdf = (1.0 - f) * mf.visible_normal_pdf(wo, h, alpha) * eta * eta * ti.abs(cos_ih) / denom2
+                pdf = (1.0 - f) * mf.normal_pdf(wo, h, alpha, model) * eta * eta * ti.abs(cos_ih) / denom2
     return value, pdf
 
 
 @ti.func
-def dielectric_sample(tint, alpha, eta, wo, u1, u2):
+def dielectric_sample(tint, alpha, eta, wo, u1, u2, model=mf.GGX):
     """Lobe choice by Fresnel, so F cancels in the weight."""
     s = BsdfSample(wi=vec3(0.0, 0.0, 1.0), weight=vec3(0.0), pdf=0.0, delta=1, valid=1)
     h = vec3(0.0, 0.0, 1.0)
     g_ratio = 1.0
     if alpha > 0.0:
-        h = mf.sample_visible_normal(wo, alpha, u2)
+        h = mf.sample_normal(wo, alpha, u2, model)
         s.delta = 0
     cos_oh = wo.dot(h)
-    f, cos_t = mf.fresnel_dielectric(cos_oh, eta)
+    f, cos_t = mf.fresnel_dielectric(ti.max(cos_oh, 0.0), eta)
     reflect = u1 < f
     if reflect:
         s.wi = mf.reflect(wo, h)
     else:
         s.wi = mf.refract(wo, h, eta, cos_t)
     # A rough microfacet can send wi to the wrong side of the macro surface: no contribution.
-    if (reflect and s.wi.z <= 0.0) or ((not reflect) and s.wi.z >= 0.0):
+    if (reflect and s.wi.z <= 0.0) or ((not reflect) and s.wi.z >= 0.0) or cos_oh <= 0.0:
         s.valid = 0
     else:
         if alpha > 0.0:
-            g_ratio = mf.smith_g2(wo, s.wi, alpha) / mf.smith_g1(wo, alpha)
-            d_vis = mf.visible_normal_pdf(wo, h, alpha)
+            g_ratio = mf.sampled_weight(wo, s.wi, h, alpha, model)
+            d_vis = mf.normal_pdf(wo, h, alpha, model)
             if reflect:
                 s.pdf = f * d_vis / (4.0 * cos_oh)
             else:
@@ -229,7 +231,7 @@ def _mirrored(w):
 
 
 @ti.func
-def thin_dielectric_eval(tint, alpha, ior, wo, wi):
+def thin_dielectric_eval(tint, alpha, ior, wo, wi, model=mf.GGX):
     """Rough thin wall: a GGX reflection lobe whose microfacets reflect with the slab's reflectance
     R(wo.h) and pass the rest straight through, i.e. into the reflected direction mirrored to the
     far side (no bending, no 1 / eta^2: the light leaves into the medium it came from).
@@ -242,8 +244,8 @@ def thin_dielectric_eval(tint, alpha, ior, wo, wi):
         cos_oh = wo.dot(h)
         if cos_oh > 0.0:
             r = thin_reflectance(cos_oh, ior)
-            f_cos = mf.ggx_d(h, alpha) * mf.smith_g2(wo, wr, alpha) / (4.0 * wo.z)
-            lobe_pdf = mf.visible_normal_pdf(wo, h, alpha) / (4.0 * cos_oh)
+            f_cos = mf.d(h, alpha, model) * mf.g2(wo, wr, alpha, model) / (4.0 * wo.z)
+            lobe_pdf = mf.normal_pdf(wo, h, alpha, model) / (4.0 * cos_oh)
             if wi.z > 0.0:
                 value = vec3(r * f_cos)
                 pdf = r * lobe_pdf
@@ -254,24 +256,24 @@ def thin_dielectric_eval(tint, alpha, ior, wo, wi):
 
 
 @ti.func
-def thin_dielectric_sample(tint, alpha, ior, wo, u1, u2):
+def thin_dielectric_sample(tint, alpha, ior, wo, u1, u2, model=mf.GGX):
     """Reflect with the slab's reflectance, else pass straight through (smooth: along -wo)."""
     s = BsdfSample(wi=vec3(0.0, 0.0, 1.0), weight=vec3(0.0), pdf=0.0, delta=1, valid=1)
     h = vec3(0.0, 0.0, 1.0)
     if alpha > 0.0:
-        h = mf.sample_visible_normal(wo, alpha, u2)
+        h = mf.sample_normal(wo, alpha, u2, model)
         s.delta = 0
     cos_oh = wo.dot(h)
     r = thin_reflectance(cos_oh, ior)
     wr = mf.reflect(wo, h)
-    if wr.z <= 0.0:
+    if wr.z <= 0.0 or cos_oh <= 0.0:
         s.valid = 0
     else:
         g_ratio = 1.0
         lobe_pdf = 1.0
         if alpha > 0.0:
-            g_ratio = mf.smith_g2(wo, wr, alpha) / mf.smith_g1(wo, alpha)
-            lobe_pdf = mf.visible_normal_pdf(wo, h, alpha) / (4.0 * cos_oh)
+            g_ratio = mf.sampled_weight(wo, wr, h, alpha, model)
+            lobe_pdf = mf.normal_pdf(wo, h, alpha, model) / (4.0 * cos_oh)
         if u1 < r:
             s.wi = wr
             s.weight = vec3(g_ratio)

@@ -9,7 +9,10 @@ import taichi as ti
 from renderer.materials.conductor_ior import conductor_ior_row
 from renderer.materials.dispersion import dispersion_row
 from renderer.materials.kinds import (COLUMNS, KIND_IDS, KIND_NAMES, LAYER_COLUMNS, LAYERS, NO_MEDIUM, NO_TEXTURE,
-                                      compensated_when_rough)
+                                      BACK_BLACK, BACK_CULLED, MIN_ALPHA, SIDEDNESS, TWO_SIDED, alpha_from_roughness,
+                                      compensated_when_rough)  # noqa: F401 (MIN_ALPHA, alpha_from_roughness: re-exported)
+from renderer.materials.microfacet import GGX, MODELS
+from renderer.materials.plastic_tables import plastic_row
 from renderer.materials.texture_sampler import TextureTable
 from renderer.runtime.upload import upload_fields
 
@@ -19,9 +22,6 @@ vec3 = ti.math.vec3
 # zero for the transmitted direction. Just above 1 the interface is as good as invisible and finite.
 MIN_IOR = 1.0001
 
-# Only roughness == 0 is a delta lobe. Any other roughness is clamped to at least this GGX width so
-# that D(h) <= 1/(pi a^2) ~ 3e7 stays finite in f32.
-MIN_ALPHA = 1e-4
 
 # As stored: one row per material, its members the registry's columns (renderer/materials/
 # kinds.py says what each holds and to which kind or layer it belongs). Texture slots hold a
@@ -38,14 +38,11 @@ Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=
                            ior=ti.f32, emission=vec3, edge_tint=vec3, complex_ior=ti.i32, eta=vec3, k=vec3,
                            fresnel_avg=vec3, thin=ti.i32, clearcoat=ti.f32, clearcoat_alpha=ti.f32,
                            sheen_color=vec3, sheen_roughness=ti.f32, specular=ti.f32, specular_color=vec3,
-                           coat_normal=vec3)
+                           coat_normal=vec3, microfacet=ti.i32, nonlinear=ti.i32, plastic_table=ti.i32,
+                           internal_reflectance=ti.f32, specular_weight=ti.f32, sidedness=ti.i32)
 
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = 0, 1, 2
 ALPHA_MODE_IDS = {"OPAQUE": ALPHA_OPAQUE, "MASK": ALPHA_MASK, "BLEND": ALPHA_BLEND}
-
-
-def alpha_from_roughness(roughness):
-    return 0.0 if roughness == 0.0 else max(roughness * roughness, MIN_ALPHA)
 
 
 @ti.func
@@ -60,15 +57,23 @@ class MaterialRows:
     def __init__(self, medium_names: tuple[str, ...] = ()):
         self.rows = []
         self.medium_ids = {name: i for i, name in enumerate(medium_names)}
+        self.plastic_tables: list[np.ndarray] = []  # renderer/materials/plastic_tables.py, one per rough plastic
 
-    def add_spec(self, spec, base_color_texture: int = NO_TEXTURE) -> int:
-        """A scene file's material; base_color_texture: the texture-table index of its base colour
-        texture, if it has one."""
+    def add_spec(self, spec, texture_slots: dict | None = None) -> int:
+        """A scene file's material; texture_slots: the texture-table index of each of its textures
+        by role (MaterialSpec.textures)."""
+        slots = texture_slots or {}
         row = _default_row()
         row.update({c.name: getattr(spec, c.name) for c in COLUMNS if c.from_spec})
-        row["textures"] = (base_color_texture, *row["textures"][1:])
+        row["textures"] = (slots.get("base_color", NO_TEXTURE), *row["textures"][1:3], slots.get("emission", NO_TEXTURE))
         row.update(kind=KIND_IDS[spec.kind], medium=self.medium_ids[spec.medium] if spec.medium else NO_MEDIUM,
-                   thin=int(spec.thin), **dispersion_row(spec), **conductor_ior_row(spec))
+                   thin=int(spec.thin), microfacet=MODELS[spec.microfacet], sidedness=SIDEDNESS[spec.sidedness],
+                   **dispersion_row(spec), **conductor_ior_row(spec))
+        if spec.opacity < 1.0 or "opacity" in slots:
+            row.update(alpha_mode=ALPHA_BLEND, base_alpha=spec.opacity,
+                       opacity_texture=slots.get("opacity", NO_TEXTURE))
+        if spec.kind == "plastic":
+            row.update(plastic_row(spec, self.plastic_tables))
         self.rows.append(row)
         return len(self.rows) - 1
 
@@ -99,6 +104,7 @@ class MaterialRows:
                                     tex(pbr.clearcoat_normal_texture), NO_TEXTURE),
                    alpha_mode=ALPHA_MODE_IDS.get(pbr.alpha_mode, ALPHA_OPAQUE), alpha_cutoff=pbr.alpha_cutoff,
                    base_alpha=pbr.base_color_factor[3],
+                   sidedness=TWO_SIDED if pbr.double_sided else BACK_CULLED,
                    thin=int(pbr.transmission_factor > 0.0 and pbr.thin_walled))
         self.rows.append(row)
         return len(self.rows) - 1
@@ -128,7 +134,9 @@ class MaterialRows:
                 "dispersion": any(r["dispersion"] != 0 for r in rows),
                 "rough": any(compensated_when_rough(KIND_NAMES[r["kind"]]) and r["roughness"] > 0.0 for r in rows),
                 "alpha": any(r["alpha_mode"] != ALPHA_OPAQUE for r in rows),
-                "thin": any(r["thin"] == 1 for r in rows)}
+                "thin": any(r["thin"] == 1 for r in rows),
+                "microfacet_models": any(r["microfacet"] != GGX for r in rows),
+                "sidedness": any(r["sidedness"] == BACK_BLACK for r in rows)}
 
 
 def _default_row() -> dict:
@@ -150,6 +158,13 @@ class MaterialTable:
         if self.count:
             upload_fields([(self.table, arrays)])
         self.textures = textures or TextureTable(None, [])
+        # Rough plastics' coating transmittance tables, one row each (only where a scene has them).
+        self.plastic_transmittance = None
+        self.has_plastic_tables = bool(rows.plastic_tables)
+        if rows.plastic_tables:
+            tables = np.stack(rows.plastic_tables).astype(np.float32)
+            self.plastic_transmittance = ti.field(ti.f32, shape=tables.shape)
+            self.plastic_transmittance.from_numpy(tables)
         self._ggx_albedo = None
         self._dielectric_albedo = None
         self._sheen_albedo = None

@@ -1,12 +1,14 @@
 """A scene's participating media on the device, and what fills the space between objects.
 
 Media are data (a struct row each), so a scene may hold any number without compiling anything
-new; only whether media occur at all is compile-time (Features.has_media).
+new; only whether media occur at all is compile-time (Features.has_media). Grid media keep their
+grids in `grids` (grid_table.py); their rows here hold only the phase function's g.
 """
 import numpy as np
 import taichi as ti
 
 from renderer.materials.table import NO_MEDIUM
+from renderer.media.grid_table import GridMedia
 from renderer.runtime.upload import upload_fields
 
 vec3 = ti.math.vec3
@@ -23,6 +25,7 @@ class MediaTable:
             upload_fields([(self.table, {"sigma_a": np.array([m.sigma_a for m in media], np.float32),
                                          "sigma_s": np.array([m.sigma_s for m in media], np.float32),
                                          "g": np.array([m.g for m in media], np.float32)})])
+        self.grids = GridMedia(media)
         fog = scene.fog
         # Data, not constants: editing a medium or the fog recompiles nothing.
         self.scene_medium = ti.field(ti.i32, shape=())

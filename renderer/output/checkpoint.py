@@ -170,11 +170,12 @@ def _header(path, archive) -> CheckpointHeader:
 
 def scene_files(scene: Scene) -> list[Path]:
     """The files a render of `scene` reads: the scene file and what its reader read besides (a Mitsuba
-    scene's includes), its environment map, its materials' textures, its model files, the buffers
-    and images a .gltf names beside it and an .obj's material libraries and textures."""
+    scene's includes), its environment map, its materials' and lights' textures, its media's grids, its model
+    files, the buffers and images a .gltf names beside it and an .obj's material libraries and textures."""
     found = [scene.path, *scene.source_files, scene.environment.file if scene.environment.kind == "map" else None]
-    found += [m.base_color_texture.file for m in scene.materials
-              if m.base_color_texture is not None and m.base_color_texture.file is not None]
+    found += [t.file for m in scene.materials for t in m.textures.values() if t.file is not None]
+    found += [light.texture.file for light in scene.lights if light.texture is not None and light.texture.file]
+    found += [grid.file for m in scene.media for grid in (m.density, m.albedo) if grid is not None and grid.file]
     for obj in scene.mesh_objects:
         if obj.file is not None:
             found.append(obj.file)

@@ -34,6 +34,9 @@ def _multi_index(local, shape):
     return index
 
 
+UNROLL_GROUP = 32  # Taichi warns above 32 unrolled iterations in one loop
+
+
 @ti.func
 def _store(field: ti.template(), I, value_base, element: ti.template(), buffer: ti.template()):
     # A vector or matrix element is stored whole: stored component by component, Taichi 1.7.4's
@@ -55,15 +58,18 @@ def _scatter(targets: ti.template(), cells: ti.i32, f32: ti.types.ndarray(dtype=
     # constants. One flat loop over every cell of every field: one parallel task, not one per
     # field (each task costs compile and load time).
     for cell in range(cells):
-        for k in ti.static(range(len(targets))):
-            field, first, offset, width, kind, element = ti.static(targets[k])
-            if first <= cell and cell < first + ti.static(_cell_count(field)):
-                local = cell - first
-                buffer = ti.static(f32 if kind == 0 else i32)
-                if ti.static(len(field.shape) == 1):  # most fields: the cell is the index
-                    _store(field, local, offset + local * width, element, buffer)
-                else:
-                    _store(field, _multi_index(local, ti.static(field.shape)), offset + local * width, element, buffer)
+        # Unrolled in groups of UNROLL_GROUP: the same code, each loop under Taichi's unrolling limit.
+        for g in ti.static(range(0, len(targets), UNROLL_GROUP)):
+            for k in ti.static(range(g, min(g + UNROLL_GROUP, len(targets)))):
+                field, first, offset, width, kind, element = ti.static(targets[k])
+                if first <= cell and cell < first + ti.static(_cell_count(field)):
+                    local = cell - first
+                    buffer = ti.static(f32 if kind == 0 else i32)
+                    if ti.static(len(field.shape) == 1):  # most fields: the cell is the index
+                        _store(field, local, offset + local * width, element, buffer)
+                    else:
+                        _store(field, _multi_index(local, ti.static(field.shape)), offset + local * width, element,
+                               buffer)
 
 
 def _members(pairs):

@@ -26,8 +26,11 @@ SDF_OPERATORS = ("union", "intersection", "subtraction", "smooth_union", "repeat
 ENVIRONMENT_KINDS = ("map", "sky", "constant")
 GEOMETRY_KINDS = ("sdf", "mesh")
 MESH_OBJECT_KINDS = ("mesh", "sphere", "quad", "disc", "generated", "bezier")
-MESH_GENERATORS = ("terrain", "icosphere", "light_panels", "water")
-LIGHT_KINDS = ("point", "spot", "directional")
+MESH_GENERATORS = ("terrain", "icosphere", "light_panels", "water", "cylinder", "disc_fan", "cube")
+LIGHT_KINDS = ("point", "spot", "directional", "projector")
+FOV_AXES = ("x", "y", "diagonal", "smaller", "larger")  # what a projector's fov spans (Mitsuba's)
+PROJECTIONS = ("perspective", "orthographic")
+MESH_NORMALS = ("file", "flat", "smooth")
 
 
 @dataclass(frozen=True)
@@ -38,6 +41,8 @@ class CameraSpec:
     fov: float = 45.0  # vertical field of view, degrees
     aperture: float = 0.0  # lens radius in metres; 0 is a pinhole
     focus_distance: float = 5.0  # metres along the view direction
+    projection: str = "perspective"  # one of PROJECTIONS
+    ortho_height: float = 2.0  # orthographic: the height of the view, metres (its width follows the image's)
     # A camera path (renderer/commands/animation/camera_path.py): per keyframe its fields as sorted (name,
     # value) pairs, as the loader reads tables of known fields (time, position, look_at; fov and up
     # None where the camera's apply). Empty: the camera stands still.
@@ -105,6 +110,18 @@ class TextureSpec:
 
 
 @dataclass(frozen=True)
+class MeshAttributeColor:
+    """A colour read, per vertex or per face, from an attribute a mesh file carries (Mitsuba's
+    `mesh_attribute` texture on a PLY mesh): offset + scale * the attribute's value (a
+    one-channel attribute is grey). `name` is Mitsuba's: vertex_<prefix> or face_<prefix> for the
+    PLY properties <prefix>_0, <prefix>_1, ... (vertex_color also for red, green, blue)."""
+
+    name: str
+    offset: Vec3 = (0.0, 0.0, 0.0)
+    scale: Vec3 = (1.0, 1.0, 1.0)
+
+
+@dataclass(frozen=True)
 class MaterialSpec:
     name: str
     kind: str = "diffuse"  # one of MATERIAL_KINDS
@@ -131,10 +148,31 @@ class MaterialSpec:
     specular: float = 1.0
     specular_color: Vec3 = (1.0, 1.0, 1.0)
     base_color_texture: Optional[TextureSpec] = None  # multiplies base_color where given
+    # The microfacet model of rough conductors, dielectrics and plastics: "ggx" (height-correlated
+    # masking), "ggx_separable" or "beckmann" (separable masking, Mitsuba 3's); see
+    # renderer/materials/microfacet.py.
+    microfacet: str = "ggx"
+    nonlinear: bool = False  # plastic: Mitsuba's `nonlinear` (the base's colour deepens under the coat)
+    sidedness: str = "two_sided"  # "two_sided", "back_black" (Mitsuba's one-sided BSDFs) or "back_culled"
+    # Coverage (Mitsuba's mask BSDF): the surface is there with probability opacity (times the
+    # opacity texture's first channel where given); 1 is opaque.
+    opacity: float = 1.0
+    opacity_texture: Optional[TextureSpec] = None
+    emission_texture: Optional[TextureSpec] = None  # multiplies emission where given (a textured area light)
+    # Multiplies base_color per vertex or face of each mesh drawn with this material (which must
+    # carry the attribute); the mesh's own vertex colours are replaced.
+    base_color_attribute: Optional[MeshAttributeColor] = None
 
     def __post_init__(self):
         if self.roughness is None:
             object.__setattr__(self, "roughness", default_on(self.kind, "roughness", SHARED_ROUGHNESS))
+
+    @property
+    def textures(self) -> dict[str, "TextureSpec"]:
+        """The material's textures by role ("base_color", "opacity", "emission"), those it has."""
+        roles = {"base_color": self.base_color_texture, "opacity": self.opacity_texture,
+                 "emission": self.emission_texture}
+        return {role: texture for role, texture in roles.items() if texture is not None}
 
     @property
     def is_dispersive(self) -> bool:
@@ -150,14 +188,41 @@ class MaterialSpec:
         return max(self.emission) > 0.0
 
 
+MEDIUM_KINDS = ("homogeneous", "grid")
+IDENTITY_4X4 = tuple(tuple(float(r == c) for c in range(4)) for r in range(4))
+
+
+@dataclass(frozen=True)
+class VolumeGridSpec:
+    """A quantity on a 3D grid (Mitsuba's gridvolume; a constant is a 1x1x1 grid): the grid fills
+    the unit cube [0, 1]^3 that `to_world` places in the scene, its voxel values at the cell
+    centres, read trilinearly (or from the nearest voxel) and clamped at the faces."""
+    values: np.ndarray = field(compare=False, repr=False)  # (zres, yres, xres, channels) f32, 1 or 3 channels
+    to_world: tuple[tuple[float, ...], ...] = IDENTITY_4X4
+    nearest: bool = False
+    file: Optional[Path] = None  # the .vol file the values came from (renderer/scene/vol_files.py)
+    constant: Optional[Vec3] = None  # or the constant they are (what compares, with the fields above)
+
+
 @dataclass(frozen=True)
 class MediumSpec:
-    """A homogeneous participating medium: coefficients per metre, RGB, and the Henyey-Greenstein
-    asymmetry g (0 isotropic, > 0 forward scattering)."""
+    """A participating medium and its Henyey-Greenstein asymmetry g (0 isotropic, > 0 forward).
+    kind "homogeneous": coefficients per metre, RGB. kind "grid" (Mitsuba's heterogeneous medium):
+    extinction sigma_t(x) = scale * density(x) and single-scattering albedo(x) from grids, the
+    medium only inside the density grid's box; its sigma_a and sigma_s are zero."""
     name: str
     sigma_a: Vec3 = (0.0, 0.0, 0.0)
     sigma_s: Vec3 = (0.1, 0.1, 0.1)
     g: float = 0.0
+    kind: str = "homogeneous"  # one of MEDIUM_KINDS
+    density: Optional[VolumeGridSpec] = None
+    albedo: Optional[VolumeGridSpec] = None
+    scale: float = 1.0
+
+    def __post_init__(self):
+        if self.kind == "grid":  # its homogeneous row must add nothing to the grid's tracking
+            object.__setattr__(self, "sigma_a", (0.0, 0.0, 0.0))
+            object.__setattr__(self, "sigma_s", (0.0, 0.0, 0.0))
 
 
 @dataclass(frozen=True)
@@ -172,8 +237,8 @@ class FogSpec:
 
 @dataclass(frozen=True)
 class LightSpec:
-    """A light with no surface (Mitsuba 3's and pbrt-v4's point, spot and directional): a delta
-    in position or direction, so no ray can hit it; only light sampling (nee, mis) finds it.
+    """A light with no surface (Mitsuba 3's and pbrt-v4's point, spot and directional; Mitsuba's
+    projector): a delta in position or direction, so no ray can hit it; only light sampling (nee, mis) finds it.
 
     point: `position`, radiant `intensity` (W/sr per channel, i.e. radiance times m^2): the
     irradiance at distance r facing it is intensity / r^2.
@@ -182,15 +247,25 @@ class LightSpec:
     None: 3/4 of the cutoff, as in Mitsuba.
     directional: parallel light travelling along `direction` from outside the scene, `irradiance`
     (W/m^2 per channel) on a surface facing it.
+    projector: Mitsuba 3's projector, a pinhole at `position` looking along `direction` (image
+    up towards `up`) that projects `texture` times `irradiance` (a constant colour without a
+    texture) through a field of view of `fov` degrees along `fov_axis`; a plane at
+    distance 1 facing it receives pi times that irradiance.
+    A spot's `texture` is an image projected over its cone (Mitsuba's: the cone's cutoff circle is
+    inscribed in the image), multiplying its intensity; `up` orients it.
     """
 
     kind: str  # one of LIGHT_KINDS
-    position: Vec3 = (0.0, 0.0, 0.0)  # point, spot
-    direction: Vec3 = (0.0, 0.0, 1.0)  # spot: the cone's axis; directional: where the light travels (unit)
+    position: Vec3 = (0.0, 0.0, 0.0)  # point, spot, projector
+    direction: Vec3 = (0.0, 0.0, 1.0)  # spot, projector: the axis; directional: where the light travels (unit)
     intensity: Vec3 = (1.0, 1.0, 1.0)  # point, spot
-    irradiance: Vec3 = (1.0, 1.0, 1.0)  # directional
+    irradiance: Vec3 = (1.0, 1.0, 1.0)  # directional, projector
     cutoff_angle: float = 20.0  # spot, degrees from the axis
     beam_width: Optional[float] = None  # spot, degrees; None: 3/4 of cutoff_angle
+    up: Vec3 = (0.0, 1.0, 0.0)  # spot, projector: the image's up direction (not parallel to direction)
+    texture: Optional[TextureSpec] = None  # spot: projected over the cone; projector: the image
+    fov: float = 45.0  # projector: field of view in degrees along fov_axis
+    fov_axis: str = "x"  # projector: x (the image's width), y, diagonal, smaller or larger
 
     @property
     def beam(self) -> float:
@@ -278,6 +353,16 @@ class MeshObject:
     # Any affine object-to-world matrix (4 rows of 4), from a format that places objects so (a
     # Mitsuba `to_world`); when given it replaces translate, rotate and scale.
     to_world: Optional[tuple[tuple[float, ...], ...]] = None
+    # How a triangle mesh (kinds mesh and generated) is taken from its source, for formats that say
+    # so (renderer/scene/mesh_adjustments.py): `normals` one of MESH_NORMALS ("file": the vertex
+    # normals it has, flat where it has none; "flat": face normals; "smooth": the file's, else
+    # vertex normals weighted by the faces' angles); `flip_normals` turns its front side over
+    # (winding and normals); `flip_v` takes v to 1 - v; `part` draws only the file's meshes of
+    # that name (a Mitsuba serialized file's shape k is "shape k").
+    normals: str = "file"
+    flip_normals: bool = False
+    flip_v: bool = False
+    part: Optional[str] = None
 
     def matrix(self) -> np.ndarray:
         """The 4x4 object-to-world matrix."""

@@ -26,14 +26,20 @@ class Features:
     # dielectric interfaces (glass, principled glass) and the principled coat's layering
     energy_compensation: bool = False
     has_media: bool = False  # participating media: free-flight sampling, phase functions, transmittance
+    has_grid_media: bool = False  # media on 3D grids (with has_media): delta and ratio tracking
     analytic_fog: bool = False  # the exponential-blend approximation on camera rays
     has_dispersion: bool = False  # dispersive dielectrics: spectral paths (one wavelength per path)
     has_alpha: bool = False  # glTF MASK / BLEND coverage (and OBJ dissolve), tested in traversal
     has_vertex_colors: bool = False  # per-vertex colours multiplying the base colour
     has_instances: bool = False  # meshes placed many times, one copy of their triangles
     has_thin: bool = False  # thin-walled transmission (glTF transmission without a volume)
+    has_microfacet_models: bool = False  # rows whose microfacet model is not GGX (Beckmann, separable masking)
+    has_sidedness: bool = False  # one-sided materials (a black back face)
     environment: str = "sky"  # "map" | "sky" | "constant"
     depth_of_field: bool = False
+    # Parallel camera rays (an orthographic camera): like the environment, a description of the
+    # scene's camera rather than an optional effect; with_everything() keeps it as it is.
+    orthographic: bool = False
     sdf_primitives: frozenset = frozenset()
     sdf_operators: frozenset = frozenset()
     mesh_primitives: frozenset = frozenset()
@@ -41,6 +47,7 @@ class Features:
     # compiles each kind's code only where the scene has one. Like `environment`, they describe the
     # scene rather than an optional effect: with_everything() keeps them as they are.
     light_kinds: frozenset = frozenset()
+    has_light_textures: bool = False  # a spot's projected texture or a projector's image
     pixel_filter: tuple = ("box",)  # renderer/film/pixel_filter.py filter_key: compiled in
 
     def has_kind(self, name: str) -> bool:
@@ -65,13 +72,15 @@ class Features:
                  ("emission", self.has_emission),
                  ("textures", self.has_textures), ("normal maps", self.has_normal_maps),
                  ("multiple scattering", self.energy_compensation),
-                 ("media", self.has_media), ("analytic fog", self.analytic_fog),
+                 ("media", self.has_media), ("grid media", self.has_grid_media), ("analytic fog", self.analytic_fog),
                  ("dispersion", self.has_dispersion), ("alpha", self.has_alpha),
                  ("vertex colours", self.has_vertex_colors), ("instances", self.has_instances),
-                 ("thin walls", self.has_thin),
+                 ("thin walls", self.has_thin), ("microfacet models", self.has_microfacet_models),
+                 ("one-sided", self.has_sidedness),
                  *((layer, True) for layer in LAYER_NAMES if layer in self.material_layers),
-                 ("depth of field", self.depth_of_field),
+                 ("depth of field", self.depth_of_field), ("orthographic", self.orthographic),
                  *((f"{k} lights", True) for k in LIGHT_KINDS if k in self.light_kinds),
+                 ("projected images", self.has_light_textures),
                  (f"{self.pixel_filter[0]} filter", self.pixel_filter[0] != "box"))
         names = [name for name, on in flags if on]
         names.append(f"env:{self.environment}")
@@ -89,8 +98,8 @@ class Features:
         sdf = self.geometry == "sdf"
         return replace(self, material_kinds=frozenset(KIND_NAMES), material_layers=frozenset(LAYER_NAMES),
                        has_emission=True, has_textures=not sdf, has_normal_maps=not sdf, depth_of_field=True,
-                       energy_compensation=True, has_media=True, analytic_fog=True,
-                       has_dispersion=True, has_thin=True,
+                       energy_compensation=True, has_media=True, has_grid_media=True, analytic_fog=True,
+                       has_dispersion=True, has_thin=True, has_microfacet_models=True, has_sidedness=True,
                        has_alpha=not sdf, has_vertex_colors=not sdf, has_instances=not sdf,
                        sdf_primitives=frozenset(SDF_PRIMITIVES) if sdf else frozenset(),
                        sdf_operators=frozenset(SDF_OPERATORS) if sdf else frozenset(),
@@ -117,15 +126,18 @@ class Features:
 def features_from(geometry: str, material_uses: dict, environment: str, aperture: float,
                   sdf_nodes=(), mesh_kinds=frozenset(), energy_compensation: bool = True,
                   fog: str = "none", vertex_colors: bool = False, instances: bool = False,
-                  light_kinds=frozenset(), pixel_filter: tuple = ("box",)) -> Features:
+                  light_kinds=frozenset(), pixel_filter: tuple = ("box",), orthographic: bool = False,
+                  light_textures: bool = False) -> Features:
     """material_uses: {"kinds", "layers": sets of registry names, "textures", "normal_maps", "emission",
-    "media": bool, "rough": whether a kind compensated where rough (conductor, dielectric) has
-    roughness > 0}.
+    "media": bool, "grid_media": whether one of them lies on a grid (`scene_grid_media`), "rough":
+    whether a kind compensated where rough (conductor, dielectric) has roughness > 0}.
     energy_compensation: the scene's wish; compiled in only where such a rough material occurs, or
     a kind always compensated (principled, whose coat layering it also provides).
     fog: the scene's fog model ("none", "medium" or "analytic").
     vertex_colors, instances: whether the mesh data carries vertex colours / instanced meshes.
-    light_kinds: the kinds of the scene's point, spot and directional lights (`scene_light_kinds`)."""
+    light_kinds: the kinds of the scene's point, spot and directional lights (`scene_light_kinds`).
+    light_textures: whether one of them projects an image (`scene_light_textures`).
+    orthographic: whether the camera's projection is orthographic."""
     kinds = material_uses["kinds"]
     layers = material_uses.get("layers", set())
     unknown = (set(kinds) - set(KIND_NAMES)) | (set(layers) - set(LAYER_NAMES))
@@ -141,18 +153,23 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         energy_compensation=energy_compensation and (any(always_compensated(k) for k in kinds)
                                                      or material_uses.get("rough", True)),
         has_media=fog == "medium" or bool(material_uses.get("media", False)),
+        has_grid_media=bool(material_uses.get("grid_media", False)),
         analytic_fog=fog == "analytic",
         has_dispersion=bool(material_uses.get("dispersion", False)),
         has_alpha=bool(material_uses.get("alpha", False)),
         has_vertex_colors=vertex_colors,
         has_instances=instances,
         has_thin=bool(material_uses.get("thin", False)),
+        has_microfacet_models=bool(material_uses.get("microfacet_models", False)),
+        has_sidedness=bool(material_uses.get("sidedness", False)),
         environment=environment,
         depth_of_field=aperture > 0.0,
+        orthographic=orthographic,
         sdf_primitives=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_PRIMITIVES),
         sdf_operators=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_OPERATORS),
         mesh_primitives=frozenset(mesh_kinds),
         light_kinds=frozenset(light_kinds),
+        has_light_textures=light_textures,
         pixel_filter=tuple(pixel_filter),
     )
 
@@ -170,6 +187,17 @@ def scene_light_kinds(scene: Scene) -> frozenset:
     return frozenset(light.kind for light in scene.lights)
 
 
+def scene_light_textures(scene: Scene) -> bool:
+    """Whether a spot or projector of the scene projects an image."""
+    return any(light.texture is not None and light.kind in ("spot", "projector") for light in scene.lights)
+
+
+def scene_grid_media(scene: Scene) -> bool:
+    """Whether a medium that the scene's materials or its fog name lies on a grid."""
+    named = {m.medium for m in scene.materials} | ({scene.fog.medium} if scene.fog.model == "medium" else set())
+    return any(m.kind == "grid" and m.name in named for m in scene.media)
+
+
 def scene_features(scene: Scene, aperture: float | None = None) -> Features:
     """Features of an SDF scene from its description alone (mesh scenes need their files loaded:
     the Renderer computes theirs from the assembled data)."""
@@ -178,9 +206,14 @@ def scene_features(scene: Scene, aperture: float | None = None) -> Features:
     nodes = [node for top in scene.sdf_objects for node in top.walk()]
     uses = {"kinds": {m.kind for m in used}, "textures": False, "normal_maps": False,
             "emission": any(m.is_emissive for m in used), "media": any(m.medium for m in used),
+            "grid_media": scene_grid_media(scene),
             "dispersion": any(m.is_dispersive for m in used),
+            "microfacet_models": any(m.microfacet != "ggx" for m in used),
+            "sidedness": any(m.sidedness == "back_black" for m in used),
             "rough": any(compensated_when_rough(m.kind) and m.roughness > 0.0 for m in used)}
     lens = scene.camera.aperture if aperture is None else aperture
     return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes,
                          energy_compensation=scene.render.energy_compensation, fog=scene.fog.model,
-                         light_kinds=scene_light_kinds(scene), pixel_filter=scene_pixel_filter(scene))
+                         light_kinds=scene_light_kinds(scene), pixel_filter=scene_pixel_filter(scene),
+                         orthographic=scene.camera.projection == "orthographic",
+                         light_textures=scene_light_textures(scene))

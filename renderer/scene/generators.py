@@ -37,6 +37,9 @@ water
     The waves are the `waves` tables or a random set from `seed`. Parameters that would alias
     (a wave shorter than two cells) or loop (steepness sum >= 1) raise ValueError; with them
     refused, the displaced grid has no folded or degenerate triangle and every normal has n.y > 0.
+cylinder, disc_fan, cube
+    Shapes with texture coordinates (renderer/scene/shape_meshes.py: what each is). `generated_mesh`
+    keeps their texture coordinates; `generate` returns the three arrays every generator has.
 """
 from __future__ import annotations
 
@@ -44,8 +47,10 @@ from typing import Mapping, Union
 
 import numpy as np
 
-from renderer.scene import schema, waves
+from renderer.scene import schema, shape_meshes, waves
+from renderer.scene.mesh_model import TriangleMesh
 
+SHAPES_WITH_UVS = ("cylinder", "disc_fan", "cube")
 TERRAIN_OCTAVES = 6
 TERRAIN_BASE_CELLS = 4  # lattice cells along each side at the first (coarsest) octave
 
@@ -74,6 +79,12 @@ def triangle_count(generator: str, params: Params = ()) -> int:
         return 2 * int(p["count_x"]) * int(p["count_z"])
     if generator == "water":
         return 2 * int(p["resolution"]) ** 2
+    if generator == "cylinder":
+        return 2 * int(p["sectors"])
+    if generator == "disc_fan":
+        return int(p["sectors"])
+    if generator == "cube":
+        return 12
     return 20 * 4 ** int(p["subdivisions"])
 
 
@@ -88,7 +99,26 @@ def generate(generator: str, params: Params = ()) -> tuple[np.ndarray, np.ndarra
     if generator == "water":
         wave_set, names = waves.from_params(p)
         return water(int(p["resolution"]), float(p["size"]), wave_set, names)
+    if generator in SHAPES_WITH_UVS:
+        return _shape_with_uvs(generator, p)[:3]
     return icosphere(int(p["subdivisions"]), float(p["radius"]))
+
+
+def generated_mesh(generator: str, params: Params = ()) -> TriangleMesh:
+    """The generator's mesh as a TriangleMesh, with texture coordinates where it has them."""
+    if generator in SHAPES_WITH_UVS:
+        positions, indices, normals, uvs = _shape_with_uvs(generator, _params(generator, params))
+        return TriangleMesh(positions, indices, normals=normals, uv0=uvs)
+    positions, indices, normals = generate(generator, params)
+    return TriangleMesh(positions, indices, normals=normals)
+
+
+def _shape_with_uvs(generator: str, p: dict):
+    if generator == "cylinder":
+        return shape_meshes.cylinder(float(p["radius"]), float(p["height"]), int(p["sectors"]))
+    if generator == "disc_fan":
+        return shape_meshes.disc_fan(float(p["radius"]), int(p["sectors"]))
+    return shape_meshes.cube(float(p["size"]))
 
 
 # --- terrain ---------------------------------------------------------------------------------

@@ -22,7 +22,9 @@ from renderer.geometry.bezier import bezier_fields, cubic_segments, profile_prob
 from renderer.geometry.mesh_data import MeshData
 from renderer.scene.description import MaterialSpec, MediumSpec, Scene
 from renderer.scene.errors import SceneError
-from renderer.scene.generators import generate
+from renderer.scene.generators import generated_mesh
+from renderer.scene.mesh_adjustments import adjusted, selected_meshes
+from renderer.scene.mesh_attributes import AttributeColoring
 from renderer.scene.mesh_model import PbrMaterial, TextureImage, TriangleMesh, place_mesh
 from renderer.scene.model_formats import MeshWarning
 from renderer.scene.orientation import rewind_to_normals
@@ -52,8 +54,8 @@ class MeshAssembly:
     """data: the primitives, their material ids indexing `materials`; materials: the scene
     file's materials (all of them, first), then each model object's materials; images: the scene
     file's materials' texture images, then every model object's images, in that order;
-    spec_images: which image each scene-file material with a base colour texture reads (material
-    index -> image index); volume_media: the model materials' media, numbered after the scene's own."""
+    spec_images: which image each texture of a scene-file material reads ((material index, its
+    role in MaterialSpec.textures) -> image index); volume_media: the model materials' media, numbered after the scene's own."""
 
     data: MeshData
     materials: tuple[Union[MaterialSpec, ModelMaterial], ...]
@@ -117,18 +119,20 @@ class _Assembler:
         self.materials: list = list(scene.materials)
         self.material_ids = {m.name: i for i, m in enumerate(scene.materials)}
         self.images: list[TextureImage] = []
-        self.parts: dict[str, list] = {"spheres": [], "sphere_mat": [], "quads": [], "quad_mat": [], "discs": [],
-                                       "disc_mat": []}
+        self.parts: dict[str, list] = {"spheres": [], "sphere_mat": [], "sphere_frames": [], "quads": [],
+                                       "quad_mat": [], "discs": [], "disc_mat": []}
         self.world = _Triangles()  # triangles placed in world space
         self.object = _Triangles()  # instanced meshes, each in its own frame
         self.instanced: list = []  # (first triangle in self.object, count) per instanced mesh
         self.instances: list = []  # (instanced mesh, (N, 3, 4) object-to-world matrices)
         self.beziers: list = []  # (cubic segments, matrix, material, spans, sectors) per object
-        self.spec_images: dict[int, int] = {}  # scene material index -> its base colour texture's image
+        # (scene material index, texture role) -> the image that texture reads
+        self.spec_images: dict[tuple[int, str], int] = {}
+        self.attribute_colors = AttributeColoring(scene.model_files.ledger)
         for index, material in enumerate(scene.materials):
-            if material.base_color_texture is not None:
-                self.images.append(texture_image(material.base_color_texture, scene.model_files.ledger))
-                self.spec_images[index] = len(self.images) - 1
+            for role, texture in material.textures.items():
+                self.images.append(texture_image(texture, scene.model_files.ledger))
+                self.spec_images[(index, role)] = len(self.images) - 1
 
     def material(self, name, where):
         if name not in self.material_ids:
@@ -148,9 +152,18 @@ class _Assembler:
                 mats.append(len(self.materials) - 1)
         matrix = obj.matrix()
         turned = 0
-        for mesh in asset.meshes:
+        meshes = selected_meshes(asset.meshes, obj)
+        if not meshes and obj.part is not None:
+            raise SceneError(self.scene.path, f"objects[{index}]: {os.fspath(obj.file)} has no mesh '{obj.part}' "
+                                              "with triangles")
+        attribute = self.materials[mats[0]].base_color_attribute if obj.material is not None else None
+        for mesh in meshes:
+            mesh = adjusted(mesh, obj)
+            if attribute is not None:  # the material's colour from the file's vertex or face attribute
+                mesh = self.attribute_colors.colored(mesh, obj.file, attribute)
             turned += self.add_mesh(self.world, mesh, matrix, mats[mesh.material])
-        for inst in asset.instanced:
+        for inst in asset.instanced if obj.part is None else ():
+            inst = replace(inst, mesh=adjusted(inst.mesh, obj))
             material = mats[inst.mesh.material]
             matrices = matrix @ inst.matrices  # the scene object's placement, then the file's
             flat = _singular(matrices)
@@ -180,13 +193,13 @@ class _Assembler:
         if obj.kind == "mesh":
             self.add_asset(obj, index)
         elif obj.kind == "generated":
-            positions, indices, normals = generate(obj.generator, dict(obj.params))
-            self.world.add(place_mesh(TriangleMesh(positions, indices, normals=normals), matrix),
+            self.world.add(place_mesh(adjusted(generated_mesh(obj.generator, dict(obj.params)), obj), matrix),
                            self.material(obj.material, where))
         elif obj.kind == "sphere":
             centre, scale = obj.centre_and_scale()
             self.parts["spheres"].append([*centre, obj.radius * scale])
             self.parts["sphere_mat"].append(self.material(obj.material, where))
+            self.parts["sphere_frames"].append((matrix[:3, :3] / np.linalg.norm(matrix[:3, :3], axis=0)).T)
         elif obj.kind == "disc":
             normal = matrix[:3, :3] @ np.array([0.0, 1.0, 0.0])
             normal /= np.linalg.norm(normal)
@@ -237,6 +250,7 @@ class _Assembler:
             tri_material=np.concatenate(materials) if materials else np.zeros(0, np.int32),
             spheres=np.array(p["spheres"], np.float32).reshape(-1, 4),
             sphere_material=np.array(p["sphere_mat"], np.int32),
+            sphere_frames=np.array(p["sphere_frames"], np.float32).reshape(-1, 3, 3),
             quads=np.array(p["quads"], np.float32).reshape(-1, 3, 3),
             quad_material=np.array(p["quad_mat"], np.int32),
             discs=np.array(p["discs"], np.float32).reshape(-1, 7),

@@ -210,7 +210,7 @@ class PbrMaterial:
     normal_scale: float = 1.0
     alpha_mode: str = "OPAQUE"
     alpha_cutoff: float = 0.5
-    double_sided: bool = False
+    double_sided: bool = True  # glTF's doubleSided (false: back faces culled); other formats shade both sides
     base_color_texture: Optional[TextureRef] = None
     metallic_roughness_texture: Optional[TextureRef] = None
     normal_texture: Optional[TextureRef] = None

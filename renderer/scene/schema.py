@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from renderer.materials.kinds import SHARED_ROUGHNESS, kinds_with_param, own_defaults
+from renderer.materials.kinds import MICROFACET_MODELS, SHARED_ROUGHNESS, SIDEDNESS, kinds_with_param, own_defaults
 from renderer.materials.metals import metal_names
 from renderer.film.filter_keys import PIXEL_FILTERS
 from renderer.sampling.names import SAMPLERS
@@ -19,16 +19,20 @@ from .description import (
     ENVIRONMENT_KINDS,
     GEOMETRY_KINDS,
     FOG_MODELS,
+    FOV_AXES,
     LIGHT_KINDS,
     MATERIAL_KINDS,
+    MEDIUM_KINDS,
     MESH_GENERATORS,
     MESH_OBJECT_KINDS,
+    PROJECTIONS,
 )
 from .schema_checks import (
     check_camera,
     check_conductor_fresnel,
     check_fixed_relaxation,
     check_keyframes,
+    check_light_up,
     check_spot_beam,
     check_profile,
     check_rounded_box,
@@ -92,7 +96,7 @@ KEYFRAME_FIELDS = (
 
 CAMERA = Section(
     "camera",
-    "A thin-lens perspective camera. Every field is optional. The fields above `keyframes` are the "
+    "A thin-lens perspective or orthographic camera. Every field is optional. The fields above `keyframes` are the "
     "camera of still renders and the viewer; `keyframes` adds a camera path for `render --frames` "
     "(README, Animations).",
     (
@@ -104,6 +108,11 @@ CAMERA = Section(
               NON_NEGATIVE),
         Field("focus_distance", "float", 5.0, "Distance to the plane in focus, metres, along the "
               "view direction.", POSITIVE),
+        Field("projection", "string", "perspective", "`perspective`: rays leave the eye through the "
+              "field of view. `orthographic`: parallel rays along the view direction, from a plane "
+              "through `position` `ortho_height` tall (its width follows the image's aspect); `fov` "
+              "is then unused.", choices=PROJECTIONS),
+        Field("ortho_height", "float", 2.0, "The height of an orthographic view, metres.", POSITIVE),
         Field("keyframes", "tables", (), "A camera path, one `[[camera.keyframes]]` table per keyframe "
               "(fields below). Between keyframes the position and look-at point follow a C1 Hermite "
               "spline in time (each inner keyframe's velocity from its neighbours, as non-uniform "
@@ -272,6 +281,19 @@ MATERIAL = Section(
               "diffuse base.", UNIT),
         Field("specular_color", "vec3", (1.0, 1.0, 1.0), "Colour of that specular reflection "
               "(`specularColorFactor`).", UNIT),
+        Field("microfacet", "string", "ggx", "The microfacet model of a rough conductor, dielectric or "
+              "plastic: `ggx` (Smith's height-correlated masking), `ggx_separable` or `beckmann` "
+              "(Smith's separable masking, as Mitsuba 3 has them). Energy compensation applies to "
+              "`ggx` only.", choices=tuple(MICROFACET_MODELS)),
+        Field("nonlinear", "bool", False, "A plastic whose base colour deepens under its coating "
+              "(Mitsuba's `nonlinear`: the light the coating reflects back to the base is tinted "
+              "by it again)."),
+        Field("sidedness", "string", "two_sided", "`two_sided`: both sides shade alike; "
+              "`back_black`: the back face reflects nothing (Mitsuba's one-sided BSDFs); "
+              "`back_culled`: rays pass through the back face (glTF `doubleSided: false`).",
+              choices=tuple(SIDEDNESS)),
+        Field("opacity", "float", 1.0, "The chance that a ray meets the surface (Mitsuba's `mask`); "
+              "below 1 the rest passes through.", UNIT),
         Field("emission", "vec3", (0.0, 0.0, 0.0), "Emitted radiance, linear RGB.", NON_NEGATIVE),
         Field("emission_strength", "float", 1.0, "Multiplier folded into `emission`.",
               NON_NEGATIVE, in_model=False),
@@ -292,16 +314,40 @@ MATERIAL = Section(
                 "`k` come together.", check_conductor_fresnel),),
 )
 
+_GRID = ("grid",)
+
 MEDIUM = Section(
     "media.<name>",
-    "Homogeneous participating media (fog, smoke, murky liquid), one table per medium; materials "
+    "Participating media (fog, smoke, murky liquid), one table per medium; materials "
     "(`medium`) and `[fog]` refer to them by name. Light is absorbed and scattered along the way "
-    "with the Henyey-Greenstein phase function. Scenes without media compile no medium code.",
+    "with the Henyey-Greenstein phase function. `homogeneous`: the same coefficients everywhere. "
+    "`grid`: a density on a 3D grid (Mitsuba's `.vol` format, as smoke simulations write it), "
+    "extinction `scale` times the density, read trilinearly between voxel centres; the medium "
+    "exists only inside the grid's box, within the surfaces whose material names it. Scenes "
+    "without media compile no medium code, and scenes without a grid medium no grid code.",
     (
-        Field("sigma_a", "vec3", (0.0, 0.0, 0.0), "Absorption coefficient per metre, RGB.", NON_NEGATIVE),
-        Field("sigma_s", "vec3", (0.1, 0.1, 0.1), "Scattering coefficient per metre, RGB.", NON_NEGATIVE),
+        Field("type", "string", "homogeneous", "Kind of medium.", choices=MEDIUM_KINDS, attr="kind"),
+        Field("sigma_a", "vec3", (0.0, 0.0, 0.0), "Absorption coefficient per metre, RGB.", NON_NEGATIVE,
+              only_for=("homogeneous",)),
+        Field("sigma_s", "vec3", (0.1, 0.1, 0.1), "Scattering coefficient per metre, RGB.", NON_NEGATIVE,
+              only_for=("homogeneous",)),
         Field("g", "float", 0.0, "Henyey-Greenstein asymmetry: 0 scatters evenly, towards 1 "
               "forwards, towards -1 backwards.", Range(-0.99, 0.99)),
+        Field("file", "string", REQUIRED, "The density grid: a Mitsuba `.vol` file (float32 voxels, 1 "
+              "or 3 channels, x fastest), relative to the scene file.", only_for=_GRID, in_model=False,
+              default_doc="required"),
+        Field("scale", "float", 1.0, "Extinction per metre of density 1: sigma_t = `scale` x density.",
+              NON_NEGATIVE, only_for=_GRID),
+        Field("albedo", "vec3", (0.75, 0.75, 0.75), "Single-scattering albedo sigma_s / sigma_t, RGB "
+              "(where no `albedo_file` is given).", UNIT, only_for=_GRID, in_model=False),
+        Field("albedo_file", "string", None, "A `.vol` grid of the albedo over the same box.",
+              only_for=_GRID, in_model=False, default_doc="none"),
+        Field("box_min", "vec3", None, "The grid box's lowest corner, metres (with `box_max`).",
+              only_for=_GRID, in_model=False, default_doc="the file's bounding box"),
+        Field("box_max", "vec3", None, "The grid box's highest corner, metres (with `box_min`).",
+              only_for=_GRID, in_model=False, default_doc="the file's bounding box"),
+        Field("filter", "string", "trilinear", "How the grids are read between voxel centres.",
+              choices=("trilinear", "nearest"), only_for=_GRID, in_model=False),
     ),
 )
 
@@ -324,13 +370,18 @@ FOG = Section(
     ),
 )
 
-_POSITIONED, _SPOT, _DIRECTIONAL = ("point", "spot"), ("spot",), ("directional",)
+_POSITIONED, _SPOT, _DIRECTIONAL = ("point", "spot", "projector"), ("spot",), ("directional",)
+_PROJECTOR = ("projector",)
+# Images a spot or projector may project: what the texture reader decodes (Pillow's formats, EXR).
+LIGHT_IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".tif", ".tiff", ".webp", ".exr")
 
 LIGHT = Section(
     "lights",
     "Lights without a surface, one `[[lights]]` table each, as Mitsuba 3 and pbrt-v4 define them: "
     "`point` (light from one point, equal in every direction), `spot` (a point light limited to a "
-    "cone) and `directional` (parallel light from outside the scene, like the sun). A field of "
+    "cone, optionally projecting an image over it), `directional` (parallel light from outside the "
+    "scene, like the sun) and `projector` (Mitsuba 3's: a pinhole projecting an image, like a slide "
+    "projector). A field of "
     "another `type` is an error. No ray can hit them, so only light sampling finds them: the "
     "`nee` and `mis` integrators render their light; `path` (BSDF sampling alone) never sees them, "
     "as in pbrt, and `sppm` refuses a scene with them (they emit no photons yet). Intensity is radiance times "
@@ -342,20 +393,35 @@ LIGHT = Section(
         Field("position", "vec3", REQUIRED, "Where the light is, metres.", only_for=_POSITIONED,
               default_doc="required"),
         Field("direction", "dir3", REQUIRED, "`spot`: the cone's axis, the way it shines; `directional`: "
-              "the way the light travels (from the light into the scene). Normalised on load.",
-              only_for=_SPOT + _DIRECTIONAL, default_doc="required"),
+              "the way the light travels (from the light into the scene); `projector`: the way it "
+              "looks. Normalised on load.", only_for=_SPOT + _DIRECTIONAL + _PROJECTOR, default_doc="required"),
+        Field("up", "vec3", (0.0, 1.0, 0.0), "The projected image's up direction (as a camera's `up`); "
+              "not parallel to `direction`.", only_for=_SPOT + _PROJECTOR),
         Field("intensity", "vec3", (1.0, 1.0, 1.0), "Radiant intensity, linear RGB, W/sr (a spot's, "
-              "along its axis).", NON_NEGATIVE, only_for=_POSITIONED),
-        Field("irradiance", "vec3", (1.0, 1.0, 1.0), "Irradiance on a surface facing the light, linear "
-              "RGB, W/m^2.", NON_NEGATIVE, only_for=_DIRECTIONAL),
+              "along its axis).", NON_NEGATIVE, only_for=("point", "spot")),
+        Field("irradiance", "vec3", (1.0, 1.0, 1.0), "`directional`: irradiance on a surface facing the "
+              "light, linear RGB, W/m^2. `projector`: multiplies its `texture` (Mitsuba's irradiance times "
+              "scale): a plane facing it at distance 1 receives pi times this, so a white diffuse plane "
+              "there shows it as its radiance.", NON_NEGATIVE, only_for=_DIRECTIONAL + _PROJECTOR),
         Field("cutoff_angle", "float", 20.0, "Angle from the axis beyond which the spot is dark, "
               "degrees.", Range(0.0, 180.0, lo_open=True, hi_open=True), only_for=_SPOT),
         Field("beam_width", "float", None, "Angle from the axis within which the spot has its full "
               "intensity, degrees; between it and `cutoff_angle` the intensity falls linearly in "
               "angle to 0 (Mitsuba 3's profile).", NON_NEGATIVE, only_for=_SPOT,
               default_doc="3/4 of `cutoff_angle` (Mitsuba's)"),
+        Field("texture", "string", None, "An image file, relative to the scene file (8-bit images are "
+              "sRGB, `.exr` linear). `spot`: projected over the cone, multiplying the intensity, the cutoff "
+              "circle inscribed in the image; `projector`: the image it projects (without one, a "
+              "constant `irradiance` over a square image).", only_for=_SPOT + _PROJECTOR,
+              default_doc="none", allowed_doc=", ".join(f"`{e}`" for e in LIGHT_IMAGE_EXTENSIONS)),
+        Field("fov", "float", 45.0, "The projector's field of view along `fov_axis`, degrees.",
+              Range(0.0, 180.0, lo_open=True, hi_open=True), only_for=_PROJECTOR),
+        Field("fov_axis", "string", "x", "The image axis `fov` spans: `x` (its width), `y`, `diagonal`, "
+              "`smaller` or `larger` (Mitsuba's).", choices=FOV_AXES, only_for=_PROJECTOR),
     ),
-    (Rule("A spot's `beam_width` is at most its `cutoff_angle`.", check_spot_beam),),
+    (Rule("A spot's `beam_width` is at most its `cutoff_angle`.", check_spot_beam),
+     Rule("Where a spot or projector has a `texture`, its `up` is not parallel to its `direction`.",
+          check_light_up)),
     heading="`[[lights]]`",
 )
 
@@ -444,7 +510,7 @@ NODE_KINDS = {k.name: k for k in PRIMITIVES + OPERATORS}
 # Model file formats `load_mesh_asset` reads (renderer.scene.model_formats.MESH_EXTENSIONS; a test
 # keeps the two equal). The scene loader checks the extension and that the file exists; the file
 # itself is read when the scene is prepared for rendering.
-MESH_FILE_EXTENSIONS = (".gltf", ".glb", ".obj", ".ply", ".stl")
+MESH_FILE_EXTENSIONS = (".gltf", ".glb", ".obj", ".ply", ".stl", ".serialized")
 
 MESH_OBJECT = Section(
     "objects",
@@ -471,8 +537,8 @@ MESH_KINDS = (
     MeshKind("mesh", "Triangle meshes from a model file, with the file's materials and textures "
              "unless `material` overrides them. The file is placed as its node hierarchy "
              "places it, then transformed by the object's transform.",
-             (Field("file", "string", REQUIRED, "Model file, `.gltf`, `.glb`, `.obj`, `.ply` or "
-                    "`.stl`. A relative path is relative to the scene file's folder.",
+             (Field("file", "string", REQUIRED, "Model file, `.gltf`, `.glb`, `.obj`, `.ply`, "
+                    "`.stl` or Mitsuba's `.serialized` (every shape it holds). A relative path is relative to the scene file's folder.",
                     default_doc="required", allowed_doc="an existing model file"),),
              needs_material=False),
     MeshKind("sphere", "An analytic sphere centred at the origin.",
@@ -589,6 +655,24 @@ GENERATORS = (
                Rule("Every wavelength spans at least two grid cells (2 * `size` / `resolution`), and "
                     "the sum over the waves of steepness * 2 pi * amplitude / wavelength stays below 1 "
                     "(else Gerstner crests loop and the surface intersects itself).", check_water_waves))),
+    Generator("cylinder", "An open tube (no caps) about the local y axis from y = 0 to y = `height`: "
+              "`sectors` quads around (2 triangles each) with the exact surface's normals at their "
+              "vertices, facing outwards, and texture coordinates u = the angle from +x towards -z "
+              "over 360 degrees, v = y / `height` (Mitsuba's cylinder's).",
+              (Field("radius", "float", 1.0, "Radius, metres.", POSITIVE),
+               Field("height", "float", 1.0, "Length along y, metres.", POSITIVE),
+               Field("sectors", "int", 256, "Quads around; the silhouette lies within about "
+                     "5 radius / sectors^2 of the true one.", Range(3, 65536)))),
+    Generator("disc_fan", "A disc in the local xz plane facing +y, centred at the origin, as `sectors` "
+              "thin triangles from the centre, with texture coordinates u = the distance from the "
+              "centre / `radius`, v = the angle from +x towards -z over 360 degrees (Mitsuba's disk's). "
+              "Unlike the analytic `disc` it takes any transform (an ellipse) and carries texture "
+              "coordinates.",
+              (Field("radius", "float", 1.0, "Radius, metres.", POSITIVE),
+               Field("sectors", "int", 1024, "Triangles around.", Range(3, 65536)))),
+    Generator("cube", "A cube centred at the origin, 2 triangles a face with face normals, each face's "
+              "texture coordinates spanning [0, 1] x [0, 1] as Mitsuba's cube lays them out.",
+              (Field("size", "float", 2.0, "Edge length, metres.", POSITIVE),)),
 )
 
 GENERATORS_BY_NAME = {g.name: g for g in GENERATORS}

@@ -53,6 +53,12 @@ def check_keyframes(v: dict) -> Optional[str]:
     return None
 
 
+def check_light_up(v: dict) -> Optional[str]:
+    if v["texture"] is not None and _norm(_cross(v["direction"], v["up"])) <= 1e-9 * _norm(v["up"]):
+        return "up is zero or parallel to direction, which leaves the projected image's orientation undefined"
+    return None
+
+
 def check_spot_beam(v: dict) -> Optional[str]:
     if v["type"] == "spot" and v["beam_width"] is not None and v["beam_width"] > v["cutoff_angle"]:
         return (f"beam_width {format_number(v['beam_width'])} is larger than cutoff_angle "

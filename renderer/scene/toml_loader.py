@@ -28,8 +28,10 @@ from .description import (
     RenderSettings,
     Scene,
     SdfNode,
+    TextureSpec,
     Transform,
 )
+from .grid_media import VOL_EXTENSIONS, GridFieldError, grid_volumes
 from .model_files import ModelFiles
 from .references import missing_file_problem
 from .schema_types import WRITTEN, Field, Generator, MeshKind, NodeKind, Section, format_number
@@ -395,12 +397,21 @@ def _read_materials(raw: object) -> tuple[MaterialSpec, ...]:
     return tuple(_read_material(name, body) for name, body in table.items())
 
 
-def _read_media(raw: object) -> tuple[MediumSpec, ...]:
+def _read_media(raw: object, scene_path: Path, model_files: ModelFiles) -> tuple[MediumSpec, ...]:
     table = {} if raw is None else _table(raw, "media")
     media = []
     for name, body in table.items():
-        values = _read_section(body, schema.MEDIUM, f"media.{name}")
-        media.append(MediumSpec(name=name, **_model_kwargs(schema.MEDIUM, values)))
+        where = f"media.{name}"
+        values = _read_section(body, schema.MEDIUM, where)
+        grids = {}
+        if values["type"] == "grid":
+            def resolve(field: str) -> Path:
+                return _resolve_file(values[field], scene_path, where, "volume grid", VOL_EXTENSIONS)
+            try:
+                grids = grid_volumes(values, resolve, model_files.ledger)
+            except GridFieldError as error:
+                raise _Invalid(f"{where}.{error.field}", error.message) from None
+        media.append(MediumSpec(name=name, **_model_kwargs(schema.MEDIUM, values), **grids))
     return tuple(media)
 
 
@@ -425,15 +436,26 @@ def _read_fog(raw: object, media: tuple[MediumSpec, ...]) -> FogSpec:
     return FogSpec(**_model_kwargs(schema.FOG, values))
 
 
-def _read_lights(raw: object) -> tuple[LightSpec, ...]:
+def _read_lights(raw: object, scene_path: Path) -> tuple[LightSpec, ...]:
     lights = []
     for i, body in enumerate([] if raw is None else _tables(raw, "lights")):
         values = _read_section(body, schema.LIGHT, f"lights[{i}]")
+        if values.get("texture") is not None:  # an image file, relative to the scene
+            values["texture"] = _light_image(values["texture"], scene_path, f"lights[{i}].texture")
         model = LightSpec(kind=values["type"])
         # A field of another kind keeps the model's default (the loader refused it in the table).
         lights.append(LightSpec(**{f.model_attr: getattr(model, f.model_attr) if values[f.name] is None
                                    else values[f.name] for f in schema.LIGHT.fields}))
     return tuple(lights)
+
+
+def _light_image(file: str, scene_path: Path, where: str) -> TextureSpec:
+    suffix = PurePath(file).suffix
+    if suffix.lower() not in schema.LIGHT_IMAGE_EXTENSIONS:
+        raise _Invalid(where, f"unsupported image {_extension_text(suffix)} "
+                              f"(expected {_or_list(schema.LIGHT_IMAGE_EXTENSIONS)})")
+    return TextureSpec("bitmap", file=_resolve_file(file, scene_path, where, "texture image",
+                                                    schema.LIGHT_IMAGE_EXTENSIONS))
 
 
 # --- SDF objects -----------------------------------------------------------------------------
@@ -625,9 +647,9 @@ def _build_scene(data: dict, path: Path, model_files: ModelFiles) -> Scene:
     camera = _read_section(data.get("camera"), schema.CAMERA, "camera")
     render = _read_render(data.get("render"), header["geometry"])
     environment = _read_environment(data.get("environment"), path)
-    lights = _read_lights(data.get("lights"))
+    lights = _read_lights(data.get("lights"), path)
     materials = _read_materials(data.get("materials"))
-    media = _read_media(data.get("media"))
+    media = _read_media(data.get("media"), path, model_files)
     for m in materials:
         _check_medium_name(m.medium, media, f"materials.{m.name}.medium")
     fog = _read_fog(data.get("fog"), media)

@@ -1,13 +1,19 @@
-"""One kernel calling every Taichi func of renderer/media and renderer/spectral, so that a test can
-run it on another back-end (Vulkan) and compare with the CPU. Run as a script:
+"""Kernels calling every Taichi func of renderer/media (grid media's lookups and tracking in a second
+one, over a small grid) and renderer/spectral, so that a test can run them on another back-end
+(Vulkan) and compare with the CPU. Run as a script:
 `python -m tests.media.library_kernel ARCH OUT.npy` (initialises Taichi on ARCH)."""
 import sys
 
 import numpy as np
 import taichi as ti
 
+from renderer.geometry.interface import Ray
+from renderer.media import grid
 from renderer.media import homogeneous as hm
 from renderer.media import phase
+from renderer.media.grid_table import GridMedia
+from renderer.sampling.rng import SampleState, sample_key
+from renderer.scene.description import MediumSpec, VolumeGridSpec
 from renderer.spectral import cie, ior, upsample
 from renderer.spectral import wavelengths as wl
 
@@ -35,10 +41,33 @@ def library_kernel(out: ti.types.ndarray(dtype=ti.f32, ndim=2)):
                      + wl.visible_wavelength_pdf(wl.sample_visible_wavelength(u)))
 
 
+@ti.kernel
+def grid_kernel(grids: ti.template(), out: ti.types.ndarray(dtype=ti.f32, ndim=2)):
+    for i in range(out.shape[0]):
+        u = (i + 0.5) / out.shape[0]
+        state = SampleState(pixel=ti.u32(i), index=ti.u32(1), seed=ti.u32(5), key=sample_key(i, 1, 5))
+        ray = Ray(o=vec3(-1.0, 0.1 + 0.5 * u, 0.2), d=ti.math.normalize(vec3(1.0, 0.2, 0.3 * u)), cone_width=0.0,
+                  cone_spread=0.0)
+        out[i, 0] = grid.lookup(grids.volumes, grids.voxels, 0, ray.o + 1.3 * u * ray.d).sum()
+        out[i, 1] = grids.transmittance(0, ray, 2.5, grid.tracking_key(state, 7, grid.point_salt(ray.o))).sum()
+        s = grids.free_flight(0, ray, 2.0, vec3(1.0, 0.5, 0.25), grid.tracking_key(state, 8, 0))
+        out[i, 2] = s.weight.sum() + s.t + s.scattered
+
+
+def grid_media() -> GridMedia:
+    values = np.random.default_rng(4).random((3, 4, 5, 3)).astype(np.float32)
+    density = VolumeGridSpec(values, to_world=((1.5, 0.0, 0.0, -0.5), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, -0.2),
+                                               (0.0, 0.0, 0.0, 1.0)))
+    albedo = VolumeGridSpec(values[..., ::-1].copy(), nearest=True)
+    return GridMedia([MediumSpec("smoke", kind="grid", density=density, albedo=albedo, scale=3.0)])
+
+
 def run() -> np.ndarray:
     out = np.zeros((256, 9), np.float32)
     library_kernel(out)
-    return out
+    grid_out = np.zeros((256, 3), np.float32)
+    grid_kernel(grid_media(), grid_out)
+    return np.concatenate([out, grid_out], axis=1)
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Camera rays: pinhole geometry and the thin lens's focus plane."""
+"""Camera rays: pinhole and orthographic geometry and the thin lens's focus plane."""
 import math
 
 import numpy as np
@@ -10,6 +10,7 @@ from renderer.sampling.sampler import IndependentSampler
 
 
 def trace_camera(frame: CameraFrame, width, height, pixels, samples, dof):
+    """(origins, directions), each (pixel, sample, 3), of the camera rays `frame` makes."""
     n = len(pixels) * samples
     origins = np.zeros((n, 3), np.float32)
     dirs = np.zeros((n, 3), np.float32)
@@ -20,13 +21,13 @@ def trace_camera(frame: CameraFrame, width, height, pixels, samples, dof):
     @ti.kernel
     def kernel(px: ti.types.ndarray(), o: ti.types.ndarray(), d: ti.types.ndarray(),
                origin: ti.math.vec3, forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3,
-               tan_half: ti.f32, aperture: ti.f32, focus: ti.f32):
+               half_height: ti.f32, aperture: ti.f32, focus: ti.f32):
         for i in range(n):
             p = i // samples
             state = sampler.start(p, i % samples, 3)
             jitter = sampler.get2d(state, dims.PIXEL)  # the box filter's jitter, as the renderer draws it
             ray = generate_ray(px[p, 0], px[p, 1], width, height, jitter, sampler, state, origin, forward, right,
-                               up, tan_half, aperture, focus, dof)
+                               up, half_height, aperture, focus, dof, ti.static(frame.orthographic))
             for c in ti.static(range(3)):
                 o[i, c] = ray.o[c]
                 d[i, c] = ray.d[c]
@@ -61,6 +62,30 @@ def test_thin_lens_rays_of_a_pixel_meet_on_the_focus_plane():
     footprint = 2 * focus * math.tan(math.radians(20.0)) / 32
     spread = np.ptp(hits[..., :2], axis=1).max()
     assert spread <= footprint * 1.01, (spread, footprint)
+
+
+def test_orthographic_rays_are_parallel_and_leave_the_view_plane():
+    frame = CameraFrame.look_at((1.0, 2.0, 3.0), (1.0, 2.0, 0.0), projection="orthographic", ortho_height=4.0)
+    o, d = trace_camera(frame, 64, 32, [(0, 0), (63, 31), (32, 16)], 64, False)
+    assert np.allclose(d, [0.0, 0.0, -1.0])
+    assert np.allclose(o[..., 2], 3.0)
+    # The view is 4 m tall and (64 / 32) * 4 m wide, centred on the eye; the bottom-left pixel covers
+    # the first 1/64 of its width and 1/32 of its height.
+    x, y = o[0, :, 0] - 1.0, o[0, :, 1] - 2.0
+    assert np.all((x >= -4.0 - 1e-5) & (x <= -4.0 + 8.0 / 64 + 1e-5))
+    assert np.all((y >= -2.0 - 1e-5) & (y <= -2.0 + 4.0 / 32 + 1e-5))
+    assert np.all(o[1, :, 0] - 1.0 >= 4.0 - 8.0 / 64 - 1e-5) and np.all(o[1, :, 1] - 2.0 >= 2.0 - 4.0 / 32 - 1e-5)
+    assert np.ptp(o[2, :, 0]) > 0.5 * 8.0 / 64  # jittered over the pixel, not a single point
+
+
+def test_orthographic_lens_focuses_each_pixel_on_the_focus_plane():
+    frame = CameraFrame.look_at((0.0, 0.0, 0.0), (0.0, 0.0, -1.0), aperture=0.2, focus_distance=3.0,
+                                projection="orthographic", ortho_height=2.0)
+    o, d = trace_camera(frame, 32, 32, [(16, 16), (3, 28)], 256, True)
+    t = (-3.0 - o[..., 2]) / d[..., 2]
+    hits = o + t[..., None] * d
+    assert np.ptp(hits[..., :2], axis=1).max() <= 2.0 / 32 * 1.01  # within the pixel's footprint
+    assert np.linalg.norm(o[..., :2] - hits[..., :2], axis=-1).max() > 0.15  # from all over the lens
 
 
 def test_kernel_args_are_made_once_and_left_out_of_pickles_and_equality():

@@ -1,6 +1,7 @@
-"""Point, spot and directional lights in scene files: the `[[lights]]` section of the TOML format
-(schema, loader, one-line errors) and the Mitsuba 3 reader's point, spot and directional emitters.
-(Their rendering is tests/lights/test_delta_lights.py.)"""
+"""Point, spot, directional and projector lights in scene files: the `[[lights]]` section of the TOML
+format (schema, loader, one-line errors) and the Mitsuba 3 reader's point, spot and directional
+emitters. (Their rendering is tests/lights/test_delta_lights.py and test_projected_lights.py; the
+reader's spot textures and projectors tests/scene/mitsuba/test_emitters.py.)"""
 from __future__ import annotations
 
 import dataclasses
@@ -37,6 +38,13 @@ cutoff_angle = 40
 type = "directional"
 direction = [3, -4, 0]
 irradiance = [0.5, 0.5, 0.5]
+[[lights]]
+type = "projector"
+position = [0, 2, 0]
+direction = [0, -1, 0]
+up = [0, 0, 1]
+fov = 30
+fov_axis = "diagonal"
 """
 
 
@@ -48,25 +56,27 @@ def write(tmp_path, body: str):
 
 def test_lights_load(tmp_path):
     scene = load_scene(write(tmp_path, LIGHTS))
-    point, spot, sun = scene.lights
+    point, spot, sun, projector = scene.lights
     assert point == LightSpec("point", position=(1.0, 2.0, 3.0), intensity=(4.0, 5.0, 6.0))
     assert (spot.kind, spot.position, spot.direction) == ("spot", (0.0, 3.0, 0.0), (0.0, -1.0, 0.0))
     assert spot.cutoff_angle == 40.0 and spot.beam_width is None and spot.beam == 30.0  # Mitsuba's 3/4
     assert sun.kind == "directional" and sun.irradiance == (0.5, 0.5, 0.5)
     assert sun.direction == pytest.approx((0.6, -0.8, 0.0))  # normalised
+    assert projector == LightSpec("projector", position=(0.0, 2.0, 0.0), direction=(0.0, -1.0, 0.0),
+                                  up=(0.0, 0.0, 1.0), fov=30.0, fov_axis="diagonal")
     assert scene_features(scene).light_kinds == frozenset(LIGHT_KINDS)
     assert load_scene(write(tmp_path, "")).lights == ()
     assert scene_features(load_scene(write(tmp_path, ""))).light_kinds == frozenset()
 
 
 @pytest.mark.parametrize("body, message", [
-    ('type = "lamp"', "lights[0].type: unknown value 'lamp' (allowed: point, spot, directional)"),
+    ('type = "lamp"', "lights[0].type: unknown value 'lamp' (allowed: point, spot, directional, projector)"),
     ('type = "point"', "lights[0]: missing required field 'position'"),
     ('type = "directional"', "lights[0]: missing required field 'direction'"),
     ('type = "point"\nposition = [0, 1, 0]\nirradiance = [1, 1, 1]',
-     "lights[0].irradiance: only allowed with type 'directional', not 'point'"),
+     "lights[0].irradiance: only allowed with type 'directional' or 'projector', not 'point'"),
     ('type = "directional"\ndirection = [0, -1, 0]\nposition = [0, 1, 0]',
-     "lights[0].position: only allowed with type 'point' or 'spot', not 'directional'"),
+     "lights[0].position: only allowed with type 'point' or 'spot' or 'projector', not 'directional'"),
     ('type = "directional"\ndirection = [0, 0, 0]', "lights[0].direction: must not be the zero vector"),
     ('type = "point"\nposition = [0, 1]', "lights[0].position: expected 3 numbers, got 2"),
     ('type = "point"\nposition = [0, 1, 0]\nintensity = [1, -1, 1]',
@@ -75,6 +85,13 @@ def test_lights_load(tmp_path):
      "lights[0].cutoff_angle: 180 is out of range (allowed: (0, 180))"),
     ('type = "spot"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\ncutoff_angle = 10\nbeam_width = 20',
      "lights[0]: beam_width 20 is larger than cutoff_angle 10 (the full beam lies within the cutoff)"),
+    ('type = "projector"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\nup = [0, 0, 1]\ntexture = "image.gif"',
+     "lights[0].texture: unsupported image extension '.gif' (expected .png, .jpg, .jpeg, .bmp, .tga, .tif, .tiff, "
+     ".webp or .exr)"),
+    ('type = "spot"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\nup = [0, 0, 1]\ntexture = "missing.png"',
+     "lights[0].texture: missing image file missing.png (looked for {folder}/missing.png)"),
+    ('type = "projector"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\nfov_axis = "z"',
+     "lights[0].fov_axis: unknown value 'z' (allowed: x, y, diagonal, smaller, larger)"),
     ('type = "point"\nposition = [0, 1, 0]\ncolour = [1, 1, 1]',
      "lights[0]: unknown field 'colour' (allowed: type, position, intensity)"),
 ])
@@ -82,8 +99,24 @@ def test_bad_light_fields_are_one_line_errors(tmp_path, body, message):
     path = write(tmp_path, "[[lights]]\n" + body + "\n")
     with pytest.raises(SceneError) as error:
         load_scene(path)
-    assert str(error.value) == f"{path}: {message}"
+    assert str(error.value) == f"{path}: {message.format(folder=tmp_path)}"
     assert "\n" not in str(error.value)
+
+
+def test_a_projected_image_needs_an_up_across_the_axis(tmp_path):
+    from PIL import Image
+
+    Image.new("RGB", (4, 2), (200, 100, 50)).save(tmp_path / "slide.png")
+    body = '[[lights]]\ntype = "projector"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\ntexture = "slide.png"\n'
+    path = write(tmp_path, body)
+    with pytest.raises(SceneError) as error:
+        load_scene(path)
+    assert str(error.value) == (f"{path}: lights[0]: up is zero or parallel to direction, which leaves the projected "
+                                "image's orientation undefined")
+    (light,) = load_scene(write(tmp_path, body + "up = [0, 0, -1]\n")).lights
+    assert light.texture.file == (tmp_path / "slide.png").resolve() and light.texture.srgb
+    assert scene_features(load_scene(write(tmp_path, body + "up = [0, 0, -1]\n"))).has_light_textures
+    assert not scene_features(load_scene(write(tmp_path, LIGHTS))).has_light_textures
 
 
 def test_lights_must_be_an_array_of_tables(tmp_path):
@@ -129,16 +162,20 @@ def test_mitsuba_point_light(tmp_path):
 
 
 def test_mitsuba_spot_light(tmp_path):
-    scene, messages = mitsuba(tmp_path, '''<emitter type="spot"><rgb name="intensity" value="5, 4, 3"/>
+    from PIL import Image
+
+    Image.new("RGB", (4, 4), (10, 20, 30)).save(tmp_path / "x.png")
+    scene, _ = mitsuba(tmp_path, '''<emitter type="spot"><rgb name="intensity" value="5, 4, 3"/>
         <float name="cutoff_angle" value="30"/>
         <texture name="texture" type="bitmap"><string name="filename" value="x.png"/></texture>
         <transform name="to_world"><lookat origin="1, 1, 1" target="1, 2, 1" up="0, 0, 1"/></transform>
-        </emitter>''', expect_warnings=1)
+        </emitter>''')
     (spot,) = scene.lights
     assert (spot.kind, spot.position, spot.intensity) == ("spot", (1.0, 1.0, 1.0), (5.0, 4.0, 3.0))
     assert spot.direction == pytest.approx((0.0, 1.0, 0.0))  # local +z: towards the lookat target
+    assert spot.up == pytest.approx((0.0, 0.0, 1.0))  # local +y: the lookat's up, which orients the image
     assert spot.cutoff_angle == 30.0 and spot.beam == 22.5  # Mitsuba's default beam: 3/4 of the cutoff
-    assert "a spot's projected texture is not supported yet: ignored" in messages[0]
+    assert spot.texture.file == tmp_path / "x.png" and spot.texture.srgb
     scene, _ = mitsuba(tmp_path, '<emitter type="spot"/>')
     assert scene.lights == (LightSpec("spot", direction=(0.0, 0.0, 1.0), cutoff_angle=20.0, beam_width=15.0),)
 
@@ -177,8 +214,8 @@ def test_mitsuba_bad_lights_are_one_line_errors(tmp_path, body, message):
     assert str(error.value).startswith(str(tmp_path / "s.xml"))
 
 
-def test_mitsuba_projector_is_still_left_out(tmp_path):
-    scene, messages = mitsuba(tmp_path, '<emitter type="projector"/>', expect_warnings=1)
+def test_mitsuba_unknown_emitters_are_left_out(tmp_path):
+    scene, messages = mitsuba(tmp_path, '<emitter type="sunsky"/>', expect_warnings=1)
     assert scene.lights == () and "this emitter type is not supported yet and is left out" in messages[0]
 
 

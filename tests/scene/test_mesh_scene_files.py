@@ -258,7 +258,8 @@ BAD_MESH_SCENES = {
     "mesh without file": (mesh_text(objects='[[objects]]\ntype = "mesh"\n'), "objects[0]: missing required field 'file'"),
     "file not a string": (mesh_text(objects='[[objects]]\ntype = "mesh"\nfile = 3\n'), "objects[0].file: expected a string, got integer 3"),
     "file fbx": (mesh_text(objects='[[objects]]\ntype = "mesh"\nfile = "car.fbx"\n'),
-                 "objects[0].file: unsupported model extension '.fbx' (expected .gltf, .glb, .obj, .ply or .stl)"),
+                 "objects[0].file: unsupported model extension '.fbx' (expected .gltf, .glb, .obj, .ply, .stl or "
+                 ".serialized)"),
     "file no extension": (mesh_text(objects='[[objects]]\ntype = "mesh"\nfile = "car"\n'),
                           "objects[0].file: unsupported model file without an extension"),
     "file missing": (mesh_text(objects=MESH_SPHERE + '[[objects]]\ntype = "mesh"\nfile = "../models/nope.glb"\n'),
@@ -298,7 +299,8 @@ BAD_MESH_SCENES = {
     # generators
     "no generator": (mesh_text(objects=GEN), "objects[0]: missing required field 'generator'"),
     "unknown generator": (mesh_text(objects=GEN + 'generator = "noise"\n'),
-                          "objects[0].generator: unknown value 'noise' (allowed: terrain, icosphere, light_panels, water)"),
+                          "objects[0].generator: unknown value 'noise' (allowed: terrain, icosphere, light_panels, water, "
+                          "cylinder, disc_fan, cube)"),
     "generator not a string": (mesh_text(objects=GEN + "generator = 1\n"), "objects[0].generator: expected a string, got integer 1"),
     "generator on sphere": (mesh_text(objects=MESH_SPHERE + 'generator = "terrain"\n'), "objects[0]: unknown field 'generator'"),
     "param of other generator": (mesh_text(objects=GEN + 'generator = "terrain"\nsubdivisions = 2\n'),

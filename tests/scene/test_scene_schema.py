@@ -42,7 +42,8 @@ SECTION_MODELS = [
     (schema.MARCH, MarchSettings, set()),
     (schema.ENVIRONMENT, EnvironmentSpec, set()),
     # the name is the table key; textures come from scene readers that have them (Mitsuba), not TOML
-    (schema.MATERIAL, MaterialSpec, {"name", "base_color_texture"}),
+    (schema.MATERIAL, MaterialSpec, {"name", "base_color_texture", "opacity_texture", "emission_texture",
+                                     "base_color_attribute"}),
 ]
 
 

@@ -172,3 +172,21 @@ def test_from_look_at_degenerate_has_no_nan(target):
     assert all(np.isfinite(v).all() for v in s.basis())
     assert abs(s.pitch) <= PITCH_LIMIT
     assert s.focus_distance > 0
+
+
+def test_an_orthographic_camera_flies_and_stays_orthographic():
+    from renderer.scene.description import CameraSpec
+    from viewer.session import camera_from_spec
+    from viewer.window import camera_frame
+
+    spec = CameraSpec(position=(0.0, 0.0, 5.0), look_at=(0.0, 0.0, 0.0), projection="orthographic", ortho_height=3.0)
+    state = camera_from_spec(spec)
+    ctl = FreeLookController(state, move_speed=2.0)
+    assert ctl.update(0.1, {"w", "d"}, None, False)
+    ctl.update(0.1, set(), (10.0, 0.0), True)
+    assert ctl.update(0.1, set(), (30.0, 0.0), True)  # a drag turns it
+    moved_state = ctl.state
+    assert (moved_state.projection, moved_state.ortho_height) == ("orthographic", 3.0)
+    frame = camera_frame(moved_state)
+    assert frame.orthographic and frame.half_height == 1.5
+    np.testing.assert_allclose(frame.forward, moved_state.basis()[0])

@@ -20,7 +20,7 @@ PIXELS = FULL[0] * FULL[1]
 
 def fake_scene(name="a", position=(0.0, 1.0, 5.0), max_depth=8):
     camera = SimpleNamespace(position=position, look_at=(0.0, 1.0, 0.0), up=(0.0, 1.0, 0.0), fov=40.0,
-                             aperture=0.0, focus_distance=5.0)
+                             aperture=0.0, focus_distance=5.0, projection="perspective", ortho_height=2.0)
     return SimpleNamespace(name=name, camera=camera, render=SimpleNamespace(max_depth=max_depth))
 
 

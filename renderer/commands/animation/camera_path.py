@@ -125,7 +125,8 @@ class CameraPath:
             up = hermite(k.times, self._unit_ups, self._velocities["up"], t)
             fov = hermite(k.times, k.fovs, self._fov_slopes, t)
         return CameraFrame.look_at(tuple(float(c) for c in position), tuple(float(c) for c in look_at),
-                                   tuple(float(c) for c in up), float(fov), spec.aperture, spec.focus_distance)
+                                   tuple(float(c) for c in up), float(fov), spec.aperture, spec.focus_distance,
+                                   spec.projection, spec.ortho_height)
 
     def _keyframe_at(self, t: float) -> int | None:
         """The keyframe the camera is at time t: one held (before the first, after the last), one

@@ -62,4 +62,5 @@ class Turntable:
         look_at = centre + turn_about_y(np.asarray(spec.look_at, np.float64) - centre, angle)
         up = turn_about_y(np.asarray(spec.up, np.float64), angle)
         return CameraFrame.look_at(tuple(float(c) for c in position), tuple(float(c) for c in look_at),
-                                   tuple(float(c) for c in up), spec.fov, spec.aperture, spec.focus_distance)
+                                   tuple(float(c) for c in up), spec.fov, spec.aperture, spec.focus_distance,
+                                   spec.projection, spec.ortho_height)

@@ -3,6 +3,10 @@
 xml_document.py       the XML with Mitsuba's file layer resolved: <include>, <path>, <default>, $name, -D
 plugins.py            objects, typed properties, <ref>s and transforms
 scene_builder.py      plugins -> Scene: camera, render settings, materials, shapes, environment
+shapes.py             shapes, shape groups and instances -> mesh objects
+emitters.py           emitters -> the environment, lights (point, spot, directional, projector), area emission
+mesh_attribute_textures.py   mesh_attribute textures (and diffuse blends) -> a material's MeshAttributeColor
+scene_warnings.py     MitsubaSceneWarning: one line for what is left out or approximated
 ior_names.py          the named indices of refraction (int_ior="bk7")
 """
 from __future__ import annotations
@@ -12,7 +16,8 @@ from pathlib import Path
 from renderer.scene.description import Scene
 from renderer.scene.load_options import LoadOptions
 from renderer.scene.mitsuba.plugins import read_plugins
-from renderer.scene.mitsuba.scene_builder import MitsubaSceneWarning, build_scene
+from renderer.scene.mitsuba.scene_builder import build_scene
+from renderer.scene.mitsuba.scene_warnings import MitsubaSceneWarning
 from renderer.scene.mitsuba.xml_document import Resolution, resolve_document
 from renderer.scene.model_files import ModelFiles
 

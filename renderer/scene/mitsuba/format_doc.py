@@ -22,6 +22,7 @@ mitsuba_rgb.py), reflectances under D65 and clamped to [0, 1], emission and indi
 | Mitsuba | Lantern |
 |---|---|
 | `perspective`, `thinlens` sensor (`fov` with `fov_axis` x, y, diagonal, smaller, larger; `focal_length`, by default 50 mm on 35 mm film) | the camera (vertical field of view; a thin lens with `aperture_radius`, `focus_distance`) |
+| `orthographic` sensor (the view spans 2 of `to_world`'s x-scales across the image and 2 y-scales / aspect up it) | an orthographic camera, `ortho_height` = 2 y-scale / aspect (x and y scaled unequally: a warning, the height is kept) |
 | `hdrfilm` `width`, `height`; `rfilter` `box`, `tent` (`radius`), `gaussian` (`stddev`; the default) | the image size and the pixel filter (other filters: the box, with a warning) |
 | `independent` sampler (`stratified`, `multijitter`, `orthogonal`, `ldsampler`: Lantern's `sobol`) | the sampler and `spp` |
 | `path`, `volpath`, `volpathmis`, `ptracer`, `direct` (inside `moment` too) | `mis`, with Mitsuba's `max_depth` (-1 unlimited; `direct` is 2) |
@@ -34,16 +35,22 @@ mitsuba_rgb.py), reflectances under D65 and clamped to [0, 1], emission and indi
 | `twosided` | its BSDF (Lantern's surfaces shade both sides) |
 | `null` | `null` (crossing it is no bounce) |
 | `bumpmap`, `normalmap`, `mask`, `blendbsdf` | the BSDF inside (a warning) |
+| `blendbsdf` of two `diffuse` BSDFs with plain colours, `weight` a number or a `mesh_attribute` | one `diffuse` BSDF coloured (1 - w) r0 + w r1, per vertex or face for an attribute |
+| `mesh_attribute` texture (`name` vertex_... or face_..., `scale`) on a diffuse reflectance, principled base colour or plastic's diffuse (inside `twosided`, `mask`, `bumpmap`, `normalmap` too) | per-corner colours read from the PLY mesh's attribute (properties `<prefix>_0`, `_1`, `_2` or one, as Mitsuba groups them; `red`, `green`, `blue` as fractions of 255: Mitsuba reads them raw), per face by giving each triangle its own vertices; a missing attribute is an error naming the file |
 | `bitmap` (`filter_type`, `wrap_mode`, `raw`, `to_uv`) and `checkerboard` textures on a diffuse reflectance, principled base colour or plastic's diffuse | a base colour texture (nearest or bilinear) |
-| `obj`, `ply`, `sphere` (`center`, `radius`), `rectangle`, `disk`, `cube` | meshes, spheres, quads and discs placed by `to_world` |
-| `area` emitter on a shape | the shape's material with that emission (one-sided) |
+| `obj`, `ply`, `serialized` (`shape_index`; versions 3 and 4), with `face_normals`, `flip_normals`, `flip_tex_coords` (OBJ on, PLY off by default) | meshes placed by `to_world`; a file without normals gets angle-weighted vertex normals, as in Mitsuba |
+| `sphere` (`center`, `radius`), `rectangle` | analytic spheres (texture coordinates in `to_world`'s frame) and quads |
+| `disk`, `cube`, `cylinder` (`p0`, `p1`, `radius`; open, no caps) with `flip_normals` | the `disc_fan`, `cube` and `cylinder` generators' meshes with Mitsuba's texture coordinates (the disk and the tube finely tessellated with exact normals: within 5e-6 of the radius; any `to_world`, so an elliptical disk) |
+| `shapegroup`, `instance` | each instance draws its group's shapes placed by its `to_world` (stored once per instance) |
+| `area` emitter on a shape (`radiance` a colour, or a `bitmap` or `checkerboard` texture) | the shape's material with that emission (one-sided), textured over the shape's texture coordinates |
 | `constant`, `envmap` (`scale`, `to_world` rotating about +y) | the environment |
-| `point` (`position` or `to_world`, `intensity`), `spot` (`to_world`, `intensity`, `cutoff_angle`, `beam_width`), `directional` (`direction` or `to_world`, `irradiance`) | `[[lights]]` of those types (a spot's projected `texture`: a warning, the spot is untextured) |
+| `point` (`position` or `to_world`, `intensity`), `spot` (`to_world`, `intensity`, `cutoff_angle`, `beam_width`, a projected `bitmap` or `checkerboard` `texture`), `directional` (`direction` or `to_world`, `irradiance`) | `[[lights]]` of those types, with `up` the to_world's +y (a texture on a spot with a cutoff of 90 degrees or more maps nowhere: a warning, the spot is untextured) |
+| `projector` (`irradiance` a texture or a colour, `scale`, `fov` with `fov_axis` or `focal_length`, `to_world`) | a `projector` light: irradiance = colour (or white under the image) times `scale`, times the to_world's uniform scale as in Mitsuba (uneven scale or shear: a warning) |
 | `homogeneous` medium as a shape's `interior` (`sigma_t`, `albedo`, `scale`, `isotropic` or `hg` phase) | a medium inside the shape's material |
+| `heterogeneous` medium (`sigma_t` and `albedo` as `gridvolume` from a `.vol` file with `to_world`, `use_grid_bbox`, `filter_type` trilinear or nearest; as `constvolume` or a value; `scale`) | a `grid` medium inside the shape's material, only within the `sigma_t` volume's box as in Mitsuba (delta tracking, ratio tracking for shadow rays; `wrap_mode` other than clamp: a warning) |
 
-Left out with one warning each, naming file, line and plugin, while the rest renders: `projector`
-emitters, other shapes (`cylinder`, `serialized`, `shapegroup` and `instance`, curves, hair,
-`sdfgrid`), heterogeneous media and grid volumes, textures on other parameters, exterior media, crop
+Left out with one warning each, naming file, line and plugin, while the rest renders: other
+emitters, other shapes (curves, hair, `sdfgrid`; `flip_normals` on a sphere or rectangle), media other than these two and volumes other than grids and constants, textures on other parameters, exterior media, crop
 windows, and any parameter no mapping reads. A scene with nothing left to render, malformed XML
 (line and column), a `$name` with no value, an include loop and a missing file are one-line errors.
 

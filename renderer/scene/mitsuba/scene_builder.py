@@ -10,67 +10,37 @@ docs/scene-format.md ("Mitsuba 3 scenes") lists the mapping.
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from renderer.materials.metals import metal_names
 from renderer.scene.description import (CameraSpec, EnvironmentSpec, LightSpec, MaterialSpec, MediumSpec,
                                         MeshObject, RenderSettings, Scene, TextureSpec)
 from renderer.scene.errors import SceneError
-from renderer.scene.mitsuba.ior_names import IOR_NAMES
+from renderer.scene.mitsuba.bsdfs import DEFAULT_REFLECTANCE, bsdf_spec
+from renderer.scene.mitsuba.emitters import EmitterReader
+from renderer.scene.mitsuba.mesh_attribute_textures import is_mesh_attribute, with_mesh_attribute
+from renderer.scene.mitsuba.media import medium_spec
 from renderer.scene.mitsuba.plugins import Plugin, Rgb, Spectrum
+from renderer.scene.mitsuba.scene_warnings import leave_out, warn
+from renderer.scene.mitsuba.shapes import ShapeReader
 from renderer.scene.mitsuba.xml_document import Resolution
 from renderer.scene.model_files import ModelFiles
 from renderer.scene.references import missing_file_problem
 from renderer.spectral.mitsuba_rgb import spectrum_to_rgb
 
-MESH_FILE_TYPES = ("obj", "ply")
 PATH_INTEGRATORS = ("path", "volpath", "volpathmis", "ptracer", "direct")  # all estimate the same image
 SAMPLERS = {"independent": "independent", "stratified": "sobol", "multijitter": "sobol", "orthogonal": "sobol",
             "ldsampler": "sobol"}
-# Parameters of Mitsuba's principled (Disney) BSDF that Lantern's glTF principled shapes otherwise.
-DISNEY_ONLY = ("anisotropic", "clearcoat", "clearcoat_gloss", "sheen", "sheen_tint", "specular_tint",
-               "spec_tint", "specular")
 FILM_DEFAULT_SIZE = (768, 576)  # Mitsuba's hdrfilm
 DEFAULT_SPP = 4  # Mitsuba's samplers
 DEFAULT_FOCAL_LENGTH = "50mm"  # Mitsuba's perspective sensor without fov or focal_length
 FILM_DIAGONAL_MM = math.hypot(36.0, 24.0)  # focal_length converts against 35 mm film's diagonal
-DEFAULT_REFLECTANCE = (0.5, 0.5, 0.5)  # Mitsuba's diffuse
-# Lantern's local frame for quads and discs lies in xz and faces +y; Mitsuba's rectangle and disk lie
-# in xy and face +z. This rotation takes local z to x, x to y and y (the normal) to z, so a quad's
-# edge parameters (along its local z, then x) are the rectangle's texture coordinates (u, v).
-XZ_TO_XY = np.array([[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
-# Mitsuba's cube is [-1, 1]^3: six unit-square faces, each a rectangle moved out along its normal.
-CUBE_FACES = tuple(
-    np.array(f, np.float64) for f in (
-        [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1]],  # +z
-        [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, -1], [0, 0, 0, 1]],  # -z
-        [[0, 0, 1, 1], [0, 1, 0, 0], [-1, 0, 0, 0], [0, 0, 0, 1]],  # +x
-        [[0, 0, -1, -1], [0, 1, 0, 0], [1, 0, 0, 0], [0, 0, 0, 1]],  # -x
-        [[1, 0, 0, 0], [0, 0, 1, 1], [0, -1, 0, 0], [0, 0, 0, 1]],  # +y
-        [[1, 0, 0, 0], [0, 0, -1, -1], [0, 1, 0, 0], [0, 0, 0, 1]],  # -y
-    ))
 # Parameters that change nothing Lantern computes (output formats, clipping planes far from any
 # geometry a test scene has): read without a warning.
 QUIET = {"film": ("pixel_format", "component_format", "rfilter", "banner", "file_format", "sample_border"),
          "sensor": ("near_clip", "far_clip"), "integrator": ("hide_emitters",)}
-
-
-class MitsubaSceneWarning(UserWarning):
-    """Something a Mitsuba scene asks for that Lantern leaves out or approximates."""
-
-
-def warn(plugin: Plugin, message: str) -> None:
-    warnings.warn(f"{plugin.where()}: {plugin.label()}: {message}", MitsubaSceneWarning, stacklevel=3)
-
-
-def leave_out(plugin: Plugin, message: str) -> None:
-    """One warning for a plugin left out whole (its parameters are not listed one by one)."""
-    plugin.used.update(plugin.properties)
-    warn(plugin, message)
 
 
 def build_scene(root: Plugin, path: Path, resolution: Resolution, model_files: ModelFiles,
@@ -99,9 +69,12 @@ class _Builder:
         for extra in sensors[1:]:
             warn(extra, "a second sensor is left out (Lantern renders the first)")
         render = self.integrator(render)
+        # Mitsuba's rough BSDFs scatter once: its scenes render without Lantern's energy compensation.
+        render = replace(render, energy_compensation=False)
         environment = self.environment()
+        shapes = ShapeReader(self)  # shapes.py
         for shape in self.root.objects("shape"):
-            self.shape(shape)
+            shapes.read(shape)
         for kind in ("bsdf", "texture", "medium"):  # declarations: used where a <ref> names them
             for plugin in self.root.objects(kind):
                 if id(plugin) not in self.material_of and plugin.id is None:
@@ -135,8 +108,9 @@ class _Builder:
 
     def sensor(self, sensor: Plugin) -> tuple[CameraSpec, RenderSettings]:
         self.visit(sensor)
-        if sensor.type not in ("perspective", "thinlens"):
-            warn(sensor, "rendered as a perspective camera (only perspective and thinlens are supported)")
+        if sensor.type not in ("perspective", "thinlens", "orthographic"):
+            warn(sensor, "rendered as a perspective camera (only perspective, thinlens and orthographic are "
+                         "supported)")
         films = sensor.objects("film")
         width, height = FILM_DEFAULT_SIZE
         pixel_filter, radius, stddev = "gaussian", 1.0, 0.5  # Mitsuba's film without an rfilter
@@ -183,10 +157,24 @@ class _Builder:
             aperture = sensor.number("aperture_radius", 0.03)
             focus = sensor.number("focus_distance", 0.0) or float(np.linalg.norm(forward))
         camera = CameraSpec(position=_vec(position), look_at=_vec(position + forward / np.linalg.norm(forward)),
-                            up=_vec(up / np.linalg.norm(up)), fov=self.vertical_fov(sensor, width, height),
-                            aperture=aperture, focus_distance=focus)
+                            up=_vec(up / np.linalg.norm(up)), aperture=aperture, focus_distance=focus)
+        if sensor.type == "orthographic":
+            camera = replace(camera, projection="orthographic", ortho_height=self.ortho_height(sensor, width, height))
+        else:
+            camera = replace(camera, fov=self.vertical_fov(sensor, width, height))
         return camera, RenderSettings(width=width, height=height, spp=spp, sampler=sampler, pixel_filter=pixel_filter,
                                       filter_radius=radius, filter_stddev=stddev)
+
+    @staticmethod
+    def ortho_height(sensor: Plugin, width: int, height: int) -> float:
+        """The height of an orthographic view: Mitsuba's spans [-1, 1] of its camera space across the
+        image's width and [-1, 1] / aspect up it, scaled by to_world."""
+        matrix = sensor.transform()
+        scale_x, scale_y = np.linalg.norm(matrix[:3, 0]), np.linalg.norm(matrix[:3, 1])
+        if not math.isclose(scale_x, scale_y, rel_tol=1e-5):
+            warn(sensor, "its to_world scales x and y differently (non-square pixels), which Lantern's camera "
+                         "does not: the view's height is kept, its width follows the image's")
+        return float(2.0 * scale_y * height / width)
 
     @staticmethod
     def vertical_fov(sensor: Plugin, width: int, height: int) -> float:
@@ -239,136 +227,22 @@ class _Builder:
     # --- emitters -------------------------------------------------------------------------------
 
     def environment(self) -> EnvironmentSpec:
-        chosen = None
-        for emitter in self.root.objects("emitter"):
-            self.visit(emitter)
-            if emitter.type in ("constant", "envmap"):
-                if chosen is not None:
-                    warn(emitter, "a second environment emitter is left out (Lantern has one environment)")
-                    continue
-                chosen = self.constant(emitter) if emitter.type == "constant" else self.envmap(emitter)
-            elif emitter.type in ("point", "spot", "directional"):
-                self.lights.append(self.light(emitter))
-            else:
-                leave_out(emitter, "this emitter type is not supported yet and is left out")
-        return chosen or EnvironmentSpec(kind="constant", color=(0.0, 0.0, 0.0))
-
-    def light(self, emitter: Plugin) -> LightSpec:
-        """A point, spot or directional emitter (Mitsuba's local frame: a spot shines along +z, a
-        directional light travels along +z)."""
-        t = emitter.type
-        if t == "directional":
-            irradiance = self.colour(emitter, "irradiance", (1.0, 1.0, 1.0), emitter=True)
-            return LightSpec("directional", direction=self.frame_vector(emitter, "direction"), irradiance=irradiance)
-        intensity = self.colour(emitter, "intensity", (1.0, 1.0, 1.0), emitter=True)
-        if t == "point":
-            return LightSpec("point", position=self.light_position(emitter), intensity=intensity)
-        if emitter.has("texture"):
-            warn(emitter, "a spot's projected texture is not supported yet: ignored (the spot is untextured)")
-            emitter.used.add("texture")
-        cutoff = emitter.number("cutoff_angle", 20.0)
-        beam = emitter.number("beam_width", 0.75 * cutoff)
-        if not 0.0 < cutoff < 180.0:
-            raise emitter.error(f"cutoff_angle {cutoff:g} is not between 0 and 180 degrees")
-        if not 0.0 <= beam <= cutoff:
-            raise emitter.error(f"beam_width {beam:g} is not between 0 and cutoff_angle {cutoff:g}")
-        matrix = emitter.transform()
-        columns = matrix[:3, :3] / np.linalg.norm(matrix[:3, :3], axis=0)
-        if not np.allclose(columns.T @ columns, np.eye(3), atol=1e-5):
-            warn(emitter, "its to_world scales unevenly or shears, which would make the cone elliptical: "
-                          "the cone is kept round about its axis")
-        return LightSpec("spot", position=_vec(matrix[:3, 3]), direction=self.frame_vector(emitter, None),
-                         intensity=intensity, cutoff_angle=cutoff, beam_width=beam)
-
-    @staticmethod
-    def light_position(emitter: Plugin) -> tuple:
-        """A light's `position`, else its to_world's origin (not both, as in Mitsuba)."""
-        if emitter.has("position"):
-            if emitter.has("to_world"):
-                raise emitter.error("give position or to_world, not both")
-            return _vec(_triple(emitter, "position"))
-        return _vec(emitter.transform()[:3, 3])
-
-    @staticmethod
-    def frame_vector(emitter: Plugin, name: str | None) -> tuple:
-        """The unit direction of the light's local +z: the vector parameter `name` where given
-        (not with to_world, as in Mitsuba), else its to_world's."""
-        if name is not None and emitter.has(name):
-            if emitter.has("to_world"):
-                raise emitter.error(f"give {name} or to_world, not both")
-            v = np.asarray(_triple(emitter, name), np.float64)
-        else:
-            v = emitter.transform()[:3, :3] @ np.array([0.0, 0.0, 1.0])
-        length = float(np.linalg.norm(v))
-        if not np.isfinite(length) or length == 0.0:
-            raise emitter.error(f"its {name or 'to_world'} gives no direction (a zero vector)")
-        return _vec(v / length)
-
-    def constant(self, emitter: Plugin) -> EnvironmentSpec:
-        return EnvironmentSpec(kind="constant", color=self.colour(emitter, "radiance", (1.0, 1.0, 1.0), emitter=True))
-
-    def envmap(self, emitter: Plugin) -> EnvironmentSpec:
-        name = emitter.text("filename")
-        if name is None:
-            raise emitter.error("needs a filename")
-        file = self.find(emitter, name)
-        rotation = emitter.transform()[:3, :3]
-        angle = math.degrees(math.atan2(rotation[0, 2], rotation[0, 0]))
-        c, s = math.cos(math.radians(angle)), math.sin(math.radians(angle))
-        about_y = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-        if not np.allclose(rotation, about_y, atol=1e-6):
-            warn(emitter, "its to_world is more than a rotation about +y, which Lantern's environment supports: "
-                          "only that part is kept")
-        return EnvironmentSpec(kind="map", file=file, intensity=emitter.number("scale", 1.0), rotation=angle)
+        """The environment; the scene's lights without a surface join self.lights (emitters.py)."""
+        return EmitterReader(self).environment(self.root.objects("emitter"))
 
     # --- shapes ---------------------------------------------------------------------------------
-
-    def shape(self, shape: Plugin) -> None:
-        self.visit(shape)
-        material = self.shape_material(shape)
-        matrix = shape.transform()
-        if shape.type in MESH_FILE_TYPES:
-            name = shape.text("filename")
-            if name is None:
-                raise shape.error("needs a filename")
-            shape.used.update(("face_normals", "flip_tex_coords", "flip_normals"))
-            if shape.get("face_normals", False):
-                warn(shape, "face_normals: the file's vertex normals are used")
-            self.add(MeshObject(kind="mesh", file=self.find(shape, name), material=material), matrix, shape)
-        elif shape.type == "sphere":
-            centre = np.array(shape.get("center", (0.0, 0.0, 0.0)), np.float64)
-            radius = shape.number("radius", 1.0)
-            scales = np.linalg.norm(matrix[:3, :3], axis=0)
-            if not np.allclose(scales, scales[0], rtol=1e-5):
-                raise shape.error("a sphere's to_world must scale uniformly")
-            placed = matrix @ _translation(centre)
-            self.add(MeshObject(kind="sphere", radius=radius, material=material), placed, shape)
-        elif shape.type == "rectangle":
-            self.add(MeshObject(kind="quad", size=(2.0, 2.0), material=material), matrix @ XZ_TO_XY, shape)
-        elif shape.type == "disk":
-            self.add(MeshObject(kind="disc", radius=1.0, material=material), matrix @ XZ_TO_XY, shape)
-        elif shape.type == "cube":
-            for face in CUBE_FACES:
-                self.add(MeshObject(kind="quad", size=(2.0, 2.0), material=material), matrix @ face @ XZ_TO_XY, shape)
-        else:
-            leave_out(shape, "this shape type is not supported yet and is left out")
-
-    def add(self, obj: MeshObject, matrix: np.ndarray, shape: Plugin) -> None:
-        if not np.all(np.isfinite(matrix)) or abs(np.linalg.det(matrix[:3, :3])) < 1e-30:
-            raise shape.error("its to_world is singular")
-        self.objects.append(replace(obj, to_world=tuple(tuple(float(x) for x in row) for row in matrix)))
 
     def shape_material(self, shape: Plugin) -> str:
         bsdfs = shape.objects("bsdf")
         bsdf = bsdfs[0] if bsdfs else None
         emitters = shape.objects("emitter")
-        emission = (0.0, 0.0, 0.0)
+        emission, emission_texture = (0.0, 0.0, 0.0), None
         if emitters:
             emitter = self.visit(emitters[0])
             if emitter.type != "area":
                 leave_out(emitter, "only area emitters can sit on a shape: left out")
             else:
-                emission = self.colour(emitter, "radiance", (1.0, 1.0, 1.0), emitter=True)
+                emission, emission_texture = EmitterReader(self).area(emitter)
         base = self.material(bsdf) if bsdf is not None else self.default_material()
         medium = self.interior(shape)
         if max(emission) <= 0.0 and not medium:
@@ -378,7 +252,8 @@ class _Builder:
         taken = {m.name for m in self.materials}
         if name in taken:
             name = next(f"{name}#{k}" for k in range(2, len(taken) + 2) if f"{name}#{k}" not in taken)
-        self.materials.append(replace(base, name=name, emission=emission, medium=medium))
+        self.materials.append(replace(base, name=name, emission=emission, emission_texture=emission_texture,
+                                      medium=medium))
         return name
 
     def interior(self, shape: Plugin) -> str:
@@ -396,30 +271,18 @@ class _Builder:
         return self.medium_of[id(medium)]
 
     def medium(self, medium: Plugin) -> str:
-        if medium.type != "homogeneous":
-            leave_out(medium, "only homogeneous media are supported yet: the shape is empty inside")
-            return ""
-        scale = medium.number("scale", 1.0)
-        sigma_t = np.array(self.colour(medium, "sigma_t", (1.0, 1.0, 1.0), bounded=False)) * scale
-        albedo = np.array(self.colour(medium, "albedo", (0.75, 0.75, 0.75)))
-        g = 0.0
-        phases = medium.objects("phase")
-        if phases:
-            phase = self.visit(phases[0])
-            if phase.type == "hg":
-                g = phase.number("g", 0.8)
-            elif phase.type != "isotropic":
-                warn(phase, "rendered as an isotropic phase function")
-        medium.used.add("sample_emitters")
         name = medium.id or f"medium{len(self.media)}"
-        self.media.append(MediumSpec(name, sigma_a=_vec(sigma_t * (1.0 - albedo)), sigma_s=_vec(sigma_t * albedo), g=g))
+        spec = medium_spec(self, medium, name)  # (media.py; None: left out with a warning)
+        if spec is None:
+            return ""
+        self.media.append(spec)
         return name
 
     def default_material(self) -> MaterialSpec:
         for m in self.materials:
             if m.name == "default":
                 return m
-        spec = MaterialSpec(name="default", kind="diffuse", base_color=DEFAULT_REFLECTANCE)
+        spec = MaterialSpec(name="default", kind="diffuse", base_color=DEFAULT_REFLECTANCE, sidedness="back_black")
         self.materials.append(spec)
         return spec
 
@@ -429,7 +292,7 @@ class _Builder:
         key = id(bsdf)
         if key in self.material_of:
             return next(m for m in self.materials if m.name == self.material_of[key])
-        spec = self.bsdf(self.visit(bsdf))
+        spec = with_mesh_attribute(self, self.bsdf(self.visit(bsdf)), bsdf)
         spec = replace(spec, name=bsdf.id or f"{bsdf.type}{len(self.materials)}")
         if any(m.name == spec.name for m in self.materials):
             spec = replace(spec, name=f"{spec.name}#{len(self.materials)}")
@@ -438,115 +301,7 @@ class _Builder:
         return spec
 
     def bsdf(self, bsdf: Plugin) -> MaterialSpec:
-        t = bsdf.type
-        if t == "twosided":  # Lantern's surfaces shade both sides alike
-            return self.inner(bsdf)
-        if t in ("bumpmap", "normalmap", "mask"):
-            warn(bsdf, f"{t} is not supported yet: the BSDF inside it is used as it is")
-            bsdf.used.update(("opacity",))
-            return self.inner(bsdf)
-        if t == "blendbsdf":
-            warn(bsdf, "blendbsdf is not supported yet: its first BSDF is used")
-            bsdf.used.add("weight")
-            return self.inner(bsdf)
-        if t == "diffuse":
-            colour, texture = self.base_colour(bsdf, "reflectance", DEFAULT_REFLECTANCE)
-            return MaterialSpec("", "diffuse", base_color=colour, base_color_texture=texture)
-        if t in ("conductor", "roughconductor"):
-            return self.conductor(bsdf)
-        if t in ("dielectric", "roughdielectric", "thindielectric"):
-            return MaterialSpec("", "dielectric", base_color=self.colour(bsdf, "specular_transmittance", (1.0,) * 3),
-                                roughness=self.roughness(bsdf) if t == "roughdielectric" else 0.0,
-                                ior=self.relative_ior(bsdf), thin=t == "thindielectric")
-        if t in ("plastic", "roughplastic"):
-            warn(bsdf, f"Mitsuba's {t} model is not supported yet: rendered as a principled dielectric "
-                       "with its diffuse colour, roughness and index")
-            bsdf.used.update(("nonlinear", "specular_reflectance"))
-            colour, texture = self.base_colour(bsdf, "diffuse_reflectance", DEFAULT_REFLECTANCE)
-            return MaterialSpec("", "principled", base_color=colour, base_color_texture=texture,
-                                roughness=self.roughness(bsdf) if t == "roughplastic" else 0.0,
-                                ior=self.relative_ior(bsdf, default_int=1.49))
-        if t in ("principled", "principledthin"):
-            return self.principled(bsdf)
-        if t == "null":
-            return MaterialSpec("", "null")
-        warn(bsdf, "this BSDF type is not supported yet: rendered as Mitsuba's default diffuse")
-        return MaterialSpec("", "diffuse", base_color=DEFAULT_REFLECTANCE)
-
-    def inner(self, bsdf: Plugin) -> MaterialSpec:
-        nested = bsdf.objects("bsdf")
-        if not nested:
-            raise bsdf.error("needs a nested <bsdf>")
-        return self.bsdf(self.visit(nested[0]))
-
-    def conductor(self, bsdf: Plugin) -> MaterialSpec:
-        roughness = self.roughness(bsdf) if bsdf.type == "roughconductor" else 0.0
-        tint = self.colour(bsdf, "specular_reflectance", (1.0, 1.0, 1.0))
-        if bsdf.has("eta") or bsdf.has("k"):
-            eta = self.colour(bsdf, "eta", (0.0, 0.0, 0.0), bounded=False)
-            k = self.colour(bsdf, "k", (1.0, 1.0, 1.0), bounded=False)
-            spec = MaterialSpec("", "conductor", roughness=roughness, eta=eta, k=k)
-        else:
-            name = bsdf.text("material", "none")
-            if name == "none":  # Mitsuba's perfect mirror
-                return MaterialSpec("", "conductor", base_color=tint, roughness=roughness, edge_tint=tint)
-            known = {m.lower(): m for m in metal_names()}
-            if name.lower() not in known:
-                raise bsdf.error(f"unknown conductor material '{name}' (known: {', '.join(sorted(known.values()))})")
-            spec = MaterialSpec("", "conductor", roughness=roughness, metal=known[name.lower()])
-        if tint != (1.0, 1.0, 1.0):
-            warn(bsdf, "specular_reflectance on a conductor with a complex index is not supported: ignored")
-        return spec
-
-    def roughness(self, bsdf: Plugin) -> float:
-        """Lantern's perceptual roughness (alpha = roughness^2) from Mitsuba's alpha."""
-        distribution = bsdf.text("distribution", "beckmann").lower()
-        if distribution != "ggx":
-            warn(bsdf, f"the {distribution} distribution is rendered as GGX with the same alpha")
-        bsdf.used.add("sample_visible")
-        if bsdf.has("alpha_u") or bsdf.has("alpha_v"):
-            alpha_u, alpha_v = self.scalar(bsdf, "alpha_u", 0.1), self.scalar(bsdf, "alpha_v", 0.1)
-            if alpha_u != alpha_v:
-                warn(bsdf, "anisotropic roughness is not supported yet: rendered with the mean of alpha_u and alpha_v")
-            alpha = 0.5 * (alpha_u + alpha_v)
-        else:
-            alpha = self.scalar(bsdf, "alpha", 0.1)
-        if alpha < 0:
-            raise bsdf.error(f"alpha {alpha:g} is negative")
-        return min(1.0, math.sqrt(alpha))
-
-    def relative_ior(self, bsdf: Plugin, default_int: float = 1.5046) -> float:
-        interior = self.ior_value(bsdf, "int_ior", default_int)
-        exterior = self.ior_value(bsdf, "ext_ior", IOR_NAMES["air"])
-        return interior / exterior
-
-    @staticmethod
-    def ior_value(bsdf: Plugin, name: str, default: float) -> float:
-        value = bsdf.get(name, default)
-        if isinstance(value, str):
-            if value.lower() not in IOR_NAMES:
-                raise bsdf.error(f"unknown {name} '{value}' (known: {', '.join(IOR_NAMES)})")
-            return IOR_NAMES[value.lower()]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or value <= 0:
-            raise bsdf.error(f"{name} must be a positive number or a known name")
-        return float(value)
-
-    def principled(self, bsdf: Plugin) -> MaterialSpec:
-        thin = bsdf.type == "principledthin"
-        if thin:
-            bsdf.used.update(("diff_trans", "flatness"))
-        # Mitsuba's principled is Disney's model; Lantern's is glTF's. Base colour, roughness, metallic,
-        # transmission and index mean the same in both; the other lobes are shaped differently.
-        different = [name for name in DISNEY_ONLY if bsdf.has(name)]
-        if different:
-            warn(bsdf, f"{', '.join(different)}: Disney's lobes are not Lantern's (glTF) principled model; "
-                       "left out")
-            bsdf.used.update(different)
-        colour, texture = self.base_colour(bsdf, "base_color", DEFAULT_REFLECTANCE)
-        return MaterialSpec(
-            "", "principled", base_color=colour, base_color_texture=texture,
-            roughness=self.scalar(bsdf, "roughness", 0.5), metallic=self.scalar(bsdf, "metallic", 0.0),
-            transmission=self.scalar(bsdf, "spec_trans", 0.0), ior=self.scalar(bsdf, "eta", 1.5), thin=thin)
+        return bsdf_spec(self, bsdf)
 
     # --- values -----------------------------------------------------------------------------------
 
@@ -557,6 +312,9 @@ class _Builder:
         if isinstance(value, Plugin) and value.kind == "texture" and value.type in ("bitmap", "checkerboard"):
             plugin.used.add(name)
             return (1.0, 1.0, 1.0), self.texture(self.visit(value))
+        if is_mesh_attribute(value):  # per vertex or face: material() gives the spec its attribute
+            plugin.used.add(name)
+            return (1.0, 1.0, 1.0), None
         return self.colour(plugin, name, default), None
 
     def texture(self, texture: Plugin) -> TextureSpec:
@@ -622,19 +380,6 @@ class _Builder:
 
 def _vec(v) -> tuple[float, float, float]:
     return (float(v[0]), float(v[1]), float(v[2]))
-
-
-def _triple(plugin: Plugin, name: str) -> tuple:
-    value = plugin.get(name)
-    if not (isinstance(value, tuple) and len(value) == 3):
-        raise plugin.error(f"'{name}' must be a <point> or <vector>")
-    return value
-
-
-def _translation(offset) -> np.ndarray:
-    m = np.eye(4)
-    m[:3, 3] = offset
-    return m
 
 
 def _rgb_text(rgb) -> str:

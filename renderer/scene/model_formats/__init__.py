@@ -1,11 +1,12 @@
-"""Model files (glTF 2.0 / GLB, OBJ + MTL, PLY, STL) read into a `MeshAsset`, one module per format.
+"""Model files (glTF 2.0 / GLB, OBJ + MTL, PLY, STL, Mitsuba's serialized) read into a `MeshAsset`, one module per format.
 
 `load_mesh_asset(path)` (load.py) is the one entry point. It returns triangle meshes (world-space
 ones and instanced ones), PBR materials and images at their own precision (conventions in
 `renderer.scene.mesh_model`), or raises a one-line `SceneError` naming the file and the problem.
 
 - load.py: the entry point, choosing a reader by the file's extension
-- gltf.py, obj_mtl.py, ply_stl.py: how each format is read (each module's notes say what is kept)
+- gltf.py, obj_mtl.py, ply_stl.py, serialized.py: how each format is read (each module's notes say
+  what is kept)
 - builder.py: what every format shares: materials, images, validation, placement and bounds
 - image_decoding.py: texture images decoded at their own precision, their sizes from headers
 - normals.py, tangents.py: vertex normals and tangents generated where a file lacks them

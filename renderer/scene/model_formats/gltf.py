@@ -441,7 +441,7 @@ class GltfReader:
 
     def _default_material(self) -> int:
         if not hasattr(self, "_default_index"):
-            self.b.materials.append(PbrMaterial(name="default"))  # the glTF spec's default
+            self.b.materials.append(PbrMaterial(name="default", double_sided=False))  # the glTF spec's default
             self._default_index = len(self.b.materials) - 1
         return self._default_index
 

@@ -13,14 +13,16 @@ from renderer.scene.model_formats.builder import AssetBuilder
 from renderer.scene.model_formats.gltf import GltfReader
 from renderer.scene.model_formats.obj_mtl import read_obj
 from renderer.scene.model_formats.ply_stl import read_ply, read_stl
+from renderer.scene.model_formats.serialized import read_serialized
 from renderer.scene.references import missing_file_problem
 
-MESH_EXTENSIONS = (".gltf", ".glb", ".obj", ".ply", ".stl")
+MESH_EXTENSIONS = (".gltf", ".glb", ".obj", ".ply", ".stl", ".serialized")
 
 
 def load_mesh_asset(path: PathLike, options: Optional[LoadOptions] = None,
                     ledger: Optional[MemoryLedger] = None) -> MeshAsset:
-    """Load a .gltf, .glb, .obj, .ply or .stl model (what is read: each format's module; checks: the package).
+    """Load a .gltf, .glb, .obj, .ply, .stl or (Mitsuba's) .serialized model (what is read: each
+    format's module; checks: the package).
 
     `options`: the memory budget and whether references may leave the model's folder (default:
     `LoadOptions()`); `ledger`: where the scene adds up what its files were charged (default: a
@@ -47,6 +49,8 @@ def load_mesh_asset(path: PathLike, options: Optional[LoadOptions] = None,
             read_obj(builder)
         elif extension == ".ply":
             read_ply(builder)
+        elif extension == ".serialized":
+            read_serialized(builder)
         else:
             read_stl(builder)
         return builder.finish()

@@ -33,15 +33,20 @@ def load(tmp_path, body: str, expect_warnings: int | None = 0):
 
 
 def quad_set(scene):
-    """Each quad as (its corners, its facing, its material's colour and emission), rounded."""
+    """Each flat face (a quad, or one of a cube mesh's faces: two triangles in a row) as (its corners,
+    its facing, its material's colour and emission), rounded."""
     assembly = assemble(scene)
+    faces = [((corner, corner + u, corner + v, corner + u + v), np.cross(u, v), index)
+             for (corner, u, v), index in zip(assembly.data.quads, assembly.data.quad_material)]
+    tris = assembly.data.tri_vertices.reshape(-1, 2, 3, 3)
+    faces += [(pair.reshape(-1, 3), np.cross(pair[0, 1] - pair[0, 0], pair[0, 2] - pair[0, 0]), index)
+              for pair, index in zip(tris, assembly.data.tri_material[::2])]
     out = []
-    for (corner, u, v), index in zip(assembly.data.quads, assembly.data.quad_material):
+    for points, normal, index in faces:
         material = assembly.materials[index]
-        corners = tuple(sorted(tuple(np.round(p, 5)) for p in (corner, corner + u, corner + v, corner + u + v)))
-        normal = np.cross(u, v) / np.linalg.norm(np.cross(u, v))
-        out.append((corners, tuple(np.round(normal, 5)), tuple(np.round(material.base_color, 6)),
-                    tuple(np.round(material.emission, 5))))
+        corners = tuple(sorted({tuple(np.round(p, 5)) for p in points}))
+        out.append((corners, tuple(np.round(normal / np.linalg.norm(normal), 5)),
+                    tuple(np.round(material.base_color, 6)), tuple(np.round(material.emission, 5))))
     return sorted(out)
 
 
@@ -95,15 +100,19 @@ def test_rectangle_disk_and_cube_face_as_mitsubas(tmp_path):
     np.testing.assert_allclose(np.cross(u, v) / np.linalg.norm(np.cross(u, v)), (0, 0, 1), atol=1e-7)
     np.testing.assert_allclose(sorted(map(tuple, (corner, corner + u, corner + v, corner + u + v))),
                                [(-1, -1, 0), (-1, 1, 0), (1, -1, 0), (1, 1, 0)], atol=1e-7)
-    np.testing.assert_allclose(data.discs[0], (0, 0, 0, 0, 0, 1, 1), atol=1e-7)
-    faces = data.quads[1:]
-    assert len(faces) == 6
-    for corner, u, v in faces:
-        centre = corner + (u + v) / 2
-        normal = np.cross(u, v) / np.linalg.norm(np.cross(u, v))
-        outward = (centre - (3, 0, 0)) / np.linalg.norm(centre - (3, 0, 0))
-        np.testing.assert_allclose(normal, outward, atol=1e-6)  # every face looks out of the cube
-        np.testing.assert_allclose(np.abs(centre - (3, 0, 0)).max(), 0.5, atol=1e-6)
+    # The disk and the cube are triangle meshes (tests/scene/mitsuba/test_shapes.py has their texture
+    # coordinates): the disk's in z = 0 facing +z out to radius 1, the cube's looking out of it.
+    tris = data.tri_vertices.astype(np.float64)
+    normals = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    disk = np.abs(tris[:, :, 0] - 3).max(axis=1) > 1.0
+    assert len(tris) - disk.sum() == 12
+    np.testing.assert_allclose(tris[disk][..., 2], 0.0, atol=1e-7)
+    np.testing.assert_allclose(normals[disk], np.tile((0, 0, 1), (disk.sum(), 1)), atol=1e-6)
+    assert np.linalg.norm(tris[disk][..., :2], axis=-1).max() == pytest.approx(1.0, abs=1e-6)
+    centres = tris[~disk].mean(axis=1) - (3, 0, 0)
+    assert (np.einsum("ij,ij->i", normals[~disk], centres) > 0).all()  # every face looks out of the cube
+    np.testing.assert_allclose(np.abs(tris[~disk] - (3, 0, 0)).max(), 0.5, atol=1e-6)
 
 
 def test_sphere_centre_radius_and_a_non_uniform_scale(tmp_path):
@@ -126,10 +135,36 @@ def test_conductors(tmp_path):
     assert (gold.kind, gold.metal, gold.roughness) == ("conductor", "Au", pytest.approx(0.3))
     mirror, _ = materials(tmp_path, '<bsdf type="conductor"/>')
     assert (mirror.kind, mirror.roughness, mirror.base_color, mirror.eta) == ("conductor", 0.0, (1, 1, 1), None)
-    beckmann, messages = materials(tmp_path, '<bsdf type="roughconductor"/>', expect_warnings=1)
-    assert beckmann.roughness == pytest.approx(math.sqrt(0.1)) and "beckmann distribution" in messages[0]
+    beckmann, _ = materials(tmp_path, '<bsdf type="roughconductor"/>')  # Mitsuba's defaults: Beckmann, 0.1
+    assert beckmann.roughness == pytest.approx(math.sqrt(0.1)) and beckmann.microfacet == "beckmann"
+    assert gold.microfacet == "ggx_separable" and mirror.sidedness == gold.sidedness == "back_black"
+    with pytest.raises(SceneError, match="distribution 'phong'"):
+        materials(tmp_path, '<bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf>')
     with pytest.raises(SceneError, match="unknown conductor material 'Unobtainium'"):
         materials(tmp_path, '<bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf>')
+
+
+def test_plastics_masks_and_sides(tmp_path):
+    smooth, _ = materials(tmp_path, '<bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.1, 0.2, 0.3"/>'
+                                    '<boolean name="nonlinear" value="true"/></bsdf>')
+    assert (smooth.kind, smooth.roughness, smooth.nonlinear, smooth.base_color) == ("plastic", 0.0, True, (0.1, 0.2, 0.3))
+    assert smooth.ior == pytest.approx(1.49 / 1.00028) and smooth.sidedness == "back_black"  # polypropylene in air
+    rough, _ = materials(tmp_path, '<bsdf type="roughplastic"><string name="distribution" value="ggx"/>'
+                                   '<float name="alpha" value="0.04"/><float name="int_ior" value="1.9"/>'
+                                   '<rgb name="specular_reflectance" value="0.5"/></bsdf>')
+    assert (rough.roughness, rough.microfacet, rough.specular_color) == (pytest.approx(0.2), "ggx_separable",
+                                                                         (0.5, 0.5, 0.5))
+    assert (rough.base_color, rough.nonlinear) == ((0.5, 0.5, 0.5), False)  # Mitsuba's defaults
+    with pytest.raises(SceneError, match="int_ior and ext_ior are equal"):
+        materials(tmp_path, '<bsdf type="plastic"><float name="int_ior" value="1"/><float name="ext_ior" value="1"/></bsdf>')
+    both, _ = materials(tmp_path, '<bsdf type="twosided"><bsdf type="diffuse"/></bsdf>')
+    assert both.sidedness == "two_sided"
+    glass, _ = materials(tmp_path, '<bsdf type="dielectric"/>')
+    assert glass.sidedness == "two_sided"  # transmitters shade both sides in Mitsuba too
+    masked, _ = materials(tmp_path, '<bsdf type="mask"><float name="opacity" value="0.3"/><bsdf type="diffuse"/></bsdf>')
+    assert (masked.kind, masked.opacity, masked.sidedness) == ("diffuse", 0.3, "back_black")
+    with pytest.raises(SceneError, match="opacity 2 is not between 0 and 1"):
+        materials(tmp_path, '<bsdf type="mask"><float name="opacity" value="2"/><bsdf type="diffuse"/></bsdf>')
 
 
 def test_dielectrics_and_named_indices(tmp_path):
@@ -170,10 +205,10 @@ def test_homogeneous_medium_inside_a_shape(tmp_path):
 
 
 def test_unsupported_plugins_are_one_warning_each(tmp_path):
-    scene, messages = load(tmp_path, '''<emitter type="projector"><float name="fov" value="30"/>
-        <rgb name="irradiance" value="3"/></emitter>
+    scene, messages = load(tmp_path, '''<emitter type="sunsky"><float name="turbidity" value="3"/>
+        <float name="albedo" value="0.2"/></emitter>
         <shape type="hair"><string name="filename" value="x.hair"/></shape>''' + SHAPE, expect_warnings=2)
-    assert "line 2: <emitter type=\"projector\">: this emitter type is not supported yet and is left out" in messages[0]
+    assert "line 2: <emitter type=\"sunsky\">: this emitter type is not supported yet and is left out" in messages[0]
     assert "line 4: <shape type=\"hair\">: this shape type is not supported yet" in messages[1]
     assert len(scene.mesh_objects) == 1
 

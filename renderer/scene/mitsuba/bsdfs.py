@@ -1,0 +1,179 @@
+"""Mitsuba 3 BSDF plugins made into Lantern material specs.
+
+Mitsuba's BSDFs are one-sided unless they transmit: diffuse, conductors, plastics and a principled
+without transmission are black from behind (sidedness "back_black"); `twosided` makes the BSDF it
+wraps shade both sides alike; dielectrics, thin dielectrics, principledthin and null are two-sided
+by nature. Rough BSDFs keep Mitsuba's microfacet model: GGX or Beckmann with Smith's separable
+masking (renderer/materials/microfacet.py). `mask` becomes stochastic coverage (opacity, or its
+texture). The builder (scene_builder.py) supplies the value readers (colours, textures, scalars)
+and the warnings.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from renderer.materials.metals import metal_names
+from renderer.scene.description import MaterialSpec
+from renderer.scene.mitsuba.ior_names import IOR_NAMES
+from renderer.scene.mitsuba.mesh_attribute_textures import blended_diffuse
+from renderer.scene.mitsuba.plugins import Plugin
+from renderer.scene.mitsuba.scene_warnings import warn
+
+DEFAULT_REFLECTANCE = (0.5, 0.5, 0.5)  # Mitsuba's diffuse and plastics
+DEFAULT_GLASS_IOR = 1.5046  # Mitsuba's dielectrics: bk7
+DEFAULT_PLASTIC_IOR = IOR_NAMES["polypropylene"]  # Mitsuba's plastics
+# Parameters of Mitsuba's principled (Disney) BSDF that Lantern's glTF principled shapes otherwise.
+DISNEY_ONLY = ("anisotropic", "clearcoat", "clearcoat_gloss", "sheen", "sheen_tint", "specular_tint",
+               "spec_tint", "specular")
+# Mitsuba's masking is Smith's separable form for both distributions.
+MICROFACET = {"ggx": "ggx_separable", "beckmann": "beckmann"}
+
+
+def bsdf_spec(builder, bsdf: Plugin) -> MaterialSpec:
+    """The material spec of a BSDF plugin (its name is the builder's to give)."""
+    t = bsdf.type
+    if t == "twosided":
+        nested = bsdf.objects("bsdf")
+        if len(nested) > 1:
+            warn(nested[1], "twosided with a second BSDF for the back face: the first shades both sides")
+        return replace(_inner(builder, bsdf), sidedness="two_sided")
+    if t == "mask":
+        return _mask(builder, bsdf)
+    if t in ("bumpmap", "normalmap"):
+        warn(bsdf, f"{t} is not supported yet: the BSDF inside it is used as it is")
+        return _inner(builder, bsdf)
+    if t == "blendbsdf":
+        blended = blended_diffuse(builder, bsdf)  # two diffuse colours: exactly one diffuse BSDF
+        if blended is not None:
+            return blended
+        warn(bsdf, "blendbsdf is not supported yet: its first BSDF is used")
+        bsdf.used.add("weight")
+        return _inner(builder, bsdf)
+    if t == "diffuse":
+        colour, texture = builder.base_colour(bsdf, "reflectance", DEFAULT_REFLECTANCE)
+        return MaterialSpec("", "diffuse", base_color=colour, base_color_texture=texture, sidedness="back_black")
+    if t in ("conductor", "roughconductor"):
+        return _conductor(builder, bsdf)
+    if t in ("dielectric", "roughdielectric", "thindielectric"):
+        roughness, model = _roughness(builder, bsdf) if t == "roughdielectric" else (0.0, "ggx")
+        return MaterialSpec("", "dielectric", base_color=builder.colour(bsdf, "specular_transmittance", (1.0,) * 3),
+                            roughness=roughness, microfacet=model, ior=_relative_ior(bsdf, DEFAULT_GLASS_IOR),
+                            thin=t == "thindielectric")
+    if t in ("plastic", "roughplastic"):
+        return _plastic(builder, bsdf)
+    if t in ("principled", "principledthin"):
+        return _principled(builder, bsdf)
+    if t == "null":
+        return MaterialSpec("", "null")
+    warn(bsdf, "this BSDF type is not supported yet: rendered as Mitsuba's default diffuse")
+    return MaterialSpec("", "diffuse", base_color=DEFAULT_REFLECTANCE, sidedness="back_black")
+
+
+def _inner(builder, bsdf: Plugin) -> MaterialSpec:
+    nested = bsdf.objects("bsdf")
+    if not nested:
+        raise bsdf.error("needs a nested <bsdf>")
+    return bsdf_spec(builder, builder.visit(nested[0]))
+
+
+def _mask(builder, bsdf: Plugin) -> MaterialSpec:
+    """Mitsuba's mask: the nested BSDF where the surface is, with probability `opacity`."""
+    inner = _inner(builder, bsdf)
+    value = bsdf.properties.get("opacity")
+    if isinstance(value, Plugin) and value.kind == "texture" and value.type in ("bitmap", "checkerboard"):
+        bsdf.used.add("opacity")
+        return replace(inner, opacity=1.0, opacity_texture=builder.texture(builder.visit(value)))
+    opacity = builder.scalar(bsdf, "opacity", 0.5)
+    if not 0.0 <= opacity <= 1.0:
+        raise bsdf.error(f"opacity {opacity:g} is not between 0 and 1")
+    return replace(inner, opacity=opacity)
+
+
+def _conductor(builder, bsdf: Plugin) -> MaterialSpec:
+    roughness, model = _roughness(builder, bsdf) if bsdf.type == "roughconductor" else (0.0, "ggx")
+    tint = builder.colour(bsdf, "specular_reflectance", (1.0, 1.0, 1.0))
+    common = {"roughness": roughness, "microfacet": model, "sidedness": "back_black"}
+    if bsdf.has("eta") or bsdf.has("k"):
+        eta = builder.colour(bsdf, "eta", (0.0, 0.0, 0.0), bounded=False)
+        k = builder.colour(bsdf, "k", (1.0, 1.0, 1.0), bounded=False)
+        spec = MaterialSpec("", "conductor", eta=eta, k=k, **common)
+    else:
+        name = bsdf.text("material", "none")
+        if name == "none":  # Mitsuba's perfect mirror
+            return MaterialSpec("", "conductor", base_color=tint, edge_tint=tint, **common)
+        known = {m.lower(): m for m in metal_names()}
+        if name.lower() not in known:
+            raise bsdf.error(f"unknown conductor material '{name}' (known: {', '.join(sorted(known.values()))})")
+        spec = MaterialSpec("", "conductor", metal=known[name.lower()], **common)
+    if tint != (1.0, 1.0, 1.0):
+        warn(bsdf, "specular_reflectance on a conductor with a complex index is not supported: ignored")
+    return spec
+
+
+def _plastic(builder, bsdf: Plugin) -> MaterialSpec:
+    """Mitsuba's plastic and roughplastic: Lantern's `plastic` kind is their model."""
+    roughness, model = _roughness(builder, bsdf) if bsdf.type == "roughplastic" else (0.0, "ggx")
+    eta = _relative_ior(bsdf, DEFAULT_PLASTIC_IOR)
+    if eta == 1.0:
+        raise bsdf.error("int_ior and ext_ior are equal: the coating would not be there")
+    colour, texture = builder.base_colour(bsdf, "diffuse_reflectance", DEFAULT_REFLECTANCE)
+    return MaterialSpec("", "plastic", base_color=colour, base_color_texture=texture, roughness=roughness,
+                        microfacet=model, ior=eta, nonlinear=bool(bsdf.get("nonlinear", False)),
+                        specular_color=builder.colour(bsdf, "specular_reflectance", (1.0, 1.0, 1.0)),
+                        sidedness="back_black")
+
+
+def _roughness(builder, bsdf: Plugin) -> tuple[float, str]:
+    """(Lantern's perceptual roughness, alpha = roughness^2, from Mitsuba's alpha; the microfacet model)."""
+    distribution = bsdf.text("distribution", "beckmann").lower()
+    if distribution not in MICROFACET:
+        raise bsdf.error(f"distribution '{distribution}' (beckmann or ggx)")
+    if not bsdf.get("sample_visible", True):
+        warn(bsdf, "sample_visible = false: Lantern draws normals its own way (the image is the same)")
+    if bsdf.has("alpha_u") or bsdf.has("alpha_v"):
+        alpha_u, alpha_v = builder.scalar(bsdf, "alpha_u", 0.1), builder.scalar(bsdf, "alpha_v", 0.1)
+        if alpha_u != alpha_v:
+            warn(bsdf, "anisotropic roughness is not supported yet: rendered with the mean of alpha_u "
+                               "and alpha_v")
+        alpha = 0.5 * (alpha_u + alpha_v)
+    else:
+        alpha = builder.scalar(bsdf, "alpha", 0.1)
+    if alpha < 0:
+        raise bsdf.error(f"alpha {alpha:g} is negative")
+    return min(1.0, math.sqrt(alpha)), MICROFACET[distribution]
+
+
+def _relative_ior(bsdf: Plugin, default_int: float) -> float:
+    return _ior_value(bsdf, "int_ior", default_int) / _ior_value(bsdf, "ext_ior", IOR_NAMES["air"])
+
+
+def _ior_value(bsdf: Plugin, name: str, default: float) -> float:
+    value = bsdf.get(name, default)
+    if isinstance(value, str):
+        if value.lower() not in IOR_NAMES:
+            raise bsdf.error(f"unknown {name} '{value}' (known: {', '.join(IOR_NAMES)})")
+        return IOR_NAMES[value.lower()]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value <= 0:
+        raise bsdf.error(f"{name} must be a positive number or a known name")
+    return float(value)
+
+
+def _principled(builder, bsdf: Plugin) -> MaterialSpec:
+    thin = bsdf.type == "principledthin"
+    if thin:
+        bsdf.used.update(("diff_trans", "flatness"))
+    # Mitsuba's principled is Disney's model; Lantern's is glTF's. Base colour, roughness, metallic,
+    # transmission and index mean the same in both; the other lobes are shaped differently.
+    different = [name for name in DISNEY_ONLY if bsdf.has(name)]
+    if different:
+        warn(bsdf, f"{', '.join(different)}: Disney's lobes are not Lantern's (glTF) principled model; "
+                           "left out")
+        bsdf.used.update(different)
+    colour, texture = builder.base_colour(bsdf, "base_color", DEFAULT_REFLECTANCE)
+    transmission = builder.scalar(bsdf, "spec_trans", 0.0)
+    return MaterialSpec(
+        "", "principled", base_color=colour, base_color_texture=texture,
+        roughness=builder.scalar(bsdf, "roughness", 0.5), metallic=builder.scalar(bsdf, "metallic", 0.0),
+        transmission=transmission, ior=builder.scalar(bsdf, "eta", 1.5), thin=thin,
+        sidedness="two_sided" if thin or transmission > 0.0 else "back_black")
