@@ -163,6 +163,8 @@ def _bsdf(spec: MaterialSpec, media: dict, notes: list[str]) -> dict:
     alpha = float(spec.roughness) ** 2  # Lantern's perceptual roughness, Mitsuba's GGX alpha
     if spec.base_color_texture is not None:
         notes.append(f"material '{spec.name}': its texture is left out")
+    if spec.normal_map is not None or spec.bump_map is not None:
+        notes.append(f"material '{spec.name}': its normal or bump map is left out")
     if spec.kind == "diffuse":
         return {"type": "diffuse", "reflectance": _rgb(spec.base_color)}
     if spec.kind == "conductor":

@@ -10,11 +10,17 @@ Filter importance sampling: the offset from the pixel's centre is drawn with a d
 sample weighted by f / (p * integral of f), so each pixel's mean estimates the filtered image
 integral(f L) / integral(f) exactly, the per-pixel running mean and variance of the film stay what
 they are, and pixels stay independent (Mitsuba splats each sample over its neighbours, a ratio
-estimator with the same limit). The tent is sampled exactly (weight 1); the Gaussian from an
-untruncated normal of deviation s (Box-Muller), weighted by (1 - bias / g(x)) * s sqrt(2 pi) / F per
-axis inside R and 0 outside (F the integral of the windowed filter).
+estimator with the same limit). Both filters are sampled exactly, so every sample weighs 1 (away
+from the image's edges): a flat image stays exactly flat, as under Mitsuba's splatting. The tent by
+its inverse CDF; the Gaussian by rejection: normals of deviation s (Box-Muller), each axis accepted
+with probability (g(x) - bias) / g(x) inside R (over 0.997 within 2 s; a pair is rejected about
+once in 440), a redraw taking its uniforms from a hash of the sample's own.
 """
 import taichi as ti
+
+from renderer.sampling.rng import pcg_hash, uniform
+
+GAUSSIAN_TRIES = 16  # redraws of a rejected Gaussian offset (all rejected: about once in 10^45)
 
 
 @ti.func
@@ -29,14 +35,37 @@ def _tent_offset(u, radius):
 
 
 @ti.func
-def _gaussian_weight(x, key: ti.template()):
-    """f(x) / (p(x) * F) for one axis: p the untruncated normal, f the windowed Gaussian."""
-    s, r, bias, norm = ti.static(key[1], key[2], key[3], key[4])
-    w = 0.0
+def _gaussian_acceptance(x, key: ti.template()):
+    """f(x) / g(x) for one axis: the windowed Gaussian over the untruncated one (0 beyond R)."""
+    s, r, bias = ti.static(key[1], key[2], key[3])
+    a = 0.0
     if ti.abs(x) < r:
-        g = ti.exp(-x * x / (2.0 * s * s))
-        w = (1.0 - bias / g) * norm
-    return w
+        a = 1.0 - bias / ti.exp(-x * x / (2.0 * s * s))
+    return a
+
+
+@ti.func
+def _normal_pair(u, s):
+    """Two independent normals of deviation s from one 2D sample (Box-Muller)."""
+    radius = s * ti.sqrt(-2.0 * ti.log(ti.max(1.0 - u.x, 1e-12)))
+    angle = 2.0 * 3.141592653589793 * u.y
+    return ti.math.vec2(radius * ti.cos(angle), radius * ti.sin(angle))
+
+
+@ti.func
+def _gaussian_offset(u, key: ti.template()):
+    """(an offset distributed as the windowed Gaussian on both axes, 1; or 0, 0 if every redraw was
+    rejected)."""
+    offset = _normal_pair(u, ti.static(key[1]))
+    h = pcg_hash(ti.bit_cast(u.x, ti.u32) ^ pcg_hash(ti.bit_cast(u.y, ti.u32)))
+    found = 0.0
+    for attempt in range(GAUSSIAN_TRIES + 1):
+        if uniform(h, 3 * attempt) < _gaussian_acceptance(offset.x, key) * _gaussian_acceptance(offset.y, key):
+            found = 1.0
+            break
+        offset = _normal_pair(ti.math.vec2(uniform(h, 3 * attempt + 1), uniform(h, 3 * attempt + 2)),
+                              ti.static(key[1]))
+    return offset, found
 
 
 @ti.func
@@ -68,11 +97,7 @@ def pixel_sample(u, x, y, width, height, key: ti.template()):
         position = 0.5 + offset
         weight = _edge_factor(offset.x, x, width, key[2]) * _edge_factor(offset.y, y, height, key[2])
     elif ti.static(key[0] == "gaussian"):
-        # Box-Muller: two independent normals of deviation s from one 2D sample.
-        radius = ti.static(key[1]) * ti.sqrt(-2.0 * ti.log(ti.max(1.0 - u.x, 1e-12)))
-        angle = 2.0 * 3.141592653589793 * u.y
-        offset = ti.math.vec2(radius * ti.cos(angle), radius * ti.sin(angle))
+        offset, found = _gaussian_offset(u, key)
         position = 0.5 + offset
-        weight = (_gaussian_weight(offset.x, key) * _gaussian_weight(offset.y, key)
-                  * _edge_factor(offset.x, x, width, key[5]) * _edge_factor(offset.y, y, height, key[5]))
+        weight = found * _edge_factor(offset.x, x, width, key[5]) * _edge_factor(offset.y, y, height, key[5])
     return position, weight

@@ -1,5 +1,5 @@
-"""Coverage (glTF alpha, Mitsuba's mask, back-face culling), tested where rays meet primitives, so that every ray (camera, continuation,
-shadow, photon) sees the same holes.
+"""Coverage (glTF alpha, Mitsuba's mask, back-face culling), tested where rays meet primitives, so
+that every ray (camera, continuation, shadow, photon) sees the same holes.
 
 alpha = the material's base alpha x the base-colour texture's alpha at the hit's texture
 coordinates x the vertex colour's alpha. MASK: the hit stands where alpha >= the cutoff. BLEND:

@@ -41,9 +41,12 @@ Hit = ti.types.struct(hit=ti.i32, t=ti.f32, work=ti.i32, tests=ti.i32, inside=ti
 # prim: what was hit (global primitive id on meshes, node id on SDF scenes): the key of emitters.
 # color: the vertex colour at the point, linear RGBA (glTF COLOR_0, PLY colours), read only by
 # kernels compiled with Features.has_vertex_colors; geometry without colours sets (1, 1, 1, 1).
+# dp_du, dp_dv: the partial derivatives of the point along texture coordinates set 0 (Mitsuba's
+# frame for its normal and bump maps), set only by geometry whose material rows need them
+# (renderer/geometry/uv_partials.py); zero elsewhere (a struct's unnamed members start at zero).
 Surface = ti.types.struct(p=vec3, n_geo=vec3, n_shading=vec3, uv=ti.math.vec2, uv1=ti.math.vec2,
                           tangent=ti.math.vec4, material=ti.i32, prim=ti.i32, front_face=ti.i32, eps=ti.f32,
-                          cone_width=ti.f32, cone_spread=ti.f32, color=ti.math.vec4)
+                          cone_width=ti.f32, cone_spread=ti.f32, color=ti.math.vec4, dp_du=vec3, dp_dv=vec3)
 
 # A point chosen on an emitter for direct lighting: position, outward normal, texture coordinates,
 # and the solid-angle density of choosing it as seen from the reference point (0 if impossible).

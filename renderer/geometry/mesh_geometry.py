@@ -30,9 +30,11 @@ from renderer.geometry.interface import INF, EmitterPoint, Hit, Ray, Surface
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.shading import consistent_shading_normal
 from renderer.geometry.triangle_packets import TrianglePackets, build_packets, nearest_lane, permuted_origin
+from renderer.geometry.uv_partials import barycentric_partials, sphere_uv_partials, triangle_uv_partials
 from renderer.geometry.wide_bvh import collapse, empty_wide_bvh
 from renderer.geometry.wide_traversal import WideNodes, stack_size
 from renderer.materials.kinds import BACK_CULLED
+from renderer.materials.mapped_frame_rows import needs_uv_partials
 from renderer.materials.table import ALPHA_OPAQUE
 from renderer.runtime.upload import upload_fields
 
@@ -73,6 +75,8 @@ class MeshGeometry:
         # Coverage is tested in traversal for alpha (glTF MASK / BLEND, Mitsuba's mask) and back-face culling.
         self.has_alpha = materials is not None and bool(np.any(materials.arrays["alpha_mode"] != ALPHA_OPAQUE)
                                                         or np.any(materials.arrays["sidedness"] == BACK_CULLED))
+        # Hits carry dp/du and dp/dv only where a material shades in their frame (Mitsuba's maps).
+        self.has_uv_partials = materials is not None and needs_uv_partials(materials.arrays)
         self.has_instances = data.has_instances
         self.stack_size = STACK_SIZE
         if self.has_instances:
@@ -449,6 +453,7 @@ class MeshGeometry:
         uv1 = ti.math.vec2(0.0)
         tangent = ti.math.vec4(0.0)
         color = ti.math.vec4(1.0)
+        dp_du, dp_dv = vec3(0.0), vec3(0.0)
         if ti.static("triangle" in self.kinds):
             if g < self.range_end[0]:
                 bary = hit.bary
@@ -474,6 +479,12 @@ class MeshGeometry:
                     if interp.dot(interp) > 1e-12:  # zero-length normals fall back to the geometric one
                         ns = ti.math.normalize(interp)
                 uv, uv1 = self.texture_coordinates(g, bary)
+                if ti.static(self.has_uv_partials):
+                    if ti.static(self.has_uvs):
+                        dp_du, dp_dv = triangle_uv_partials(v0, v1, v2, self.tri_uv[g, 0], self.tri_uv[g, 1],
+                                                            self.tri_uv[g, 2], n)
+                    else:
+                        dp_du, dp_dv = barycentric_partials(v0, v1, v2)
                 if ti.static(self.has_tangents):
                     t0, t1, t2 = self.tri_tangent[g, 0], self.tri_tangent[g, 1], self.tri_tangent[g, 2]
                     if ti.static(self.has_instances):
@@ -501,6 +512,9 @@ class MeshGeometry:
                 eps = isect.spawn_clearance(isect.max_abs(sp.xyz) + sp.w)
                 uv = isect.sphere_uv(self.sphere_frames[i, 0].dot(n), self.sphere_frames[i, 1].dot(n),
                                self.sphere_frames[i, 2].dot(n))
+                if ti.static(self.has_uv_partials):
+                    dp_du, dp_dv = sphere_uv_partials(self.sphere_frames[i, 0], self.sphere_frames[i, 1],
+                                                      self.sphere_frames[i, 2], sp.w, n)
         if ti.static("quad" in self.kinds):
             if g >= self.range_end[1] and g < self.range_end[2]:
                 i = g - self.range_end[1]
@@ -510,6 +524,7 @@ class MeshGeometry:
                 n = ti.math.normalize(self.quads[i, 1].cross(self.quads[i, 2]))
                 ns = n
                 uv = hit.bary
+                dp_du, dp_dv = self.quads[i, 1], self.quads[i, 2]  # uv runs along the edges
         if ti.static("disc" in self.kinds):
             if g >= self.range_end[2] and g < self.range_end[3]:
                 i = g - self.range_end[2]
@@ -528,7 +543,7 @@ class MeshGeometry:
         ns = consistent_shading_normal(ns, n, -ray.d)
         return Surface(p=p, n_geo=n, n_shading=ns, uv=uv, uv1=uv1, tangent=tangent, material=self.prim_material[g],
                        prim=g, front_face=front, eps=eps, cone_width=ray.cone_width + ray.cone_spread * hit.t,
-                       cone_spread=ray.cone_spread, color=color)
+                       cone_spread=ray.cone_spread, color=color, dp_du=dp_du, dp_dv=dp_dv)
 
     @ti.func
     def corners(self, f: ti.template(), g, bary):

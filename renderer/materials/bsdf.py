@@ -32,7 +32,8 @@ from renderer.geometry.shading import consistent_shading_normal
 from renderer.materials import lobes
 from renderer.materials import microfacet as mf
 from renderer.materials.lobes import BsdfSample
-from renderer.materials.kinds import BACK_BLACK, KIND_IDS, KINDS, TWO_SIDED
+from renderer.materials.kinds import BACK_BLACK, KIND_IDS, KINDS, TANGENT_SPACE_MAP, TWO_SIDED
+from renderer.materials.mapped_frames import mapped_frame, material_weight
 from renderer.materials.principled import principled_has_smooth_part
 from renderer.materials.table import NO_TEXTURE, Material, alpha_of
 from renderer.sampling.warps import cosine_hemisphere, orthonormal_basis, to_local, to_world
@@ -116,8 +117,13 @@ class Bsdf:
                     mat.specular *= tex.sample(rec.layer_textures2[0], surface.uv, surface.uv1).w
                 if rec.layer_textures2[1] != NO_TEXTURE:
                     mat.specular_color *= tex.sample(rec.layer_textures2[1], surface.uv, surface.uv1).xyz
+            if ti.static(self.features.has_mapped_frames):
+                if rec.textures[2] != NO_TEXTURE and rec.normal_map_model != TANGENT_SPACE_MAP:
+                    mapped, tangent, unmapped = mapped_frame(tex, rec.textures[2], rec.normal_map_model,
+                                                             rec.normal_scale, surface, wo, self.features.has_bump_maps)
+                    n, mat.tangent, mat.unmapped_normal, mat.coat_normal = mapped, tangent, unmapped, mapped
             if ti.static(self.features.has_normal_maps):
-                if rec.textures[2] != NO_TEXTURE:
+                if rec.textures[2] != NO_TEXTURE and rec.normal_map_model == TANGENT_SPACE_MAP:
                     n = _normal_mapped(tex, rec.textures[2], rec.normal_scale, surface, n, wo)
                 mat.coat_normal = n
                 if ti.static(self.features.has_layer("clearcoat")):
@@ -167,6 +173,7 @@ class Bsdf:
     @ti.func
     def glass_sample(self, mat, entering, wo, u1, u2):
         """The dielectric (or the principled glass lobe) with tint mat.base_color."""
+        model = mf.row_model(self, mat)
         s = lobes.invalid_sample()
         thin = False
         if ti.static(self.features.has_thin):
@@ -175,16 +182,17 @@ class Bsdf:
             if ti.static(self.features.has_thin):
                 s = self._thin_sample(mat, wo, u1, u2)
         elif ti.static(self.compensate_glass):
-            if mat.alpha > 0.0 and mat.microfacet == mf.GGX:
+            if mat.alpha > 0.0 and model == mf.GGX:
                 s = self.dielectric_tables.sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
             else:
-                s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2, mat.microfacet)
+                s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2, model)
         else:
-            s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2, mat.microfacet)
+            s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2, model)
         return s
 
     @ti.func
     def glass_eval(self, mat, entering, wo, wi):
+        model = mf.row_model(self, mat)
         value = vec3(0.0)
         pdf = 0.0
         thin = False
@@ -194,12 +202,12 @@ class Bsdf:
             if ti.static(self.features.has_thin):
                 value, pdf = self._thin_eval(mat, wo, wi)
         elif ti.static(self.compensate_glass):
-            if mat.alpha > 0.0 and mat.microfacet == mf.GGX:
+            if mat.alpha > 0.0 and model == mf.GGX:
                 value, pdf = self.dielectric_tables.eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
             else:
-                value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi, mat.microfacet)
+                value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi, model)
         else:
-            value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi, mat.microfacet)
+            value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi, model)
         return value, pdf
 
     @ti.func
@@ -210,9 +218,10 @@ class Bsdf:
 
     @ti.func
     def _thin_sample(self, mat, wo, u1, u2):
+        model = mf.row_model(self, mat)
         s = lobes.invalid_sample()
         if ti.static(self.compensate):
-            if mat.alpha > 0.0 and mat.microfacet == mf.GGX:
+            if mat.alpha > 0.0 and model == mf.GGX:
                 # u1 picks the multiple-scattering lobe with its energy share, then (its
                 # remainder) reflection or transmission within the chosen lobe.
                 wi = vec3(0.0)
@@ -232,9 +241,9 @@ class Bsdf:
                     if pdf > 0.0:
                         s = BsdfSample(wi=wi, weight=value / pdf, pdf=pdf, delta=0, valid=1)
             else:
-                s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2, mat.microfacet)
+                s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2, model)
         else:
-            s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2, mat.microfacet)
+            s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2, model)
         return s
 
     @ti.func
@@ -243,9 +252,10 @@ class Bsdf:
         per microfacet R + T = 1, so what the wall loses is a white GGX mirror's loss, 1 - E(mu_o),
         returned by the symmetric lobe of energy.py split into reflection and transmission in the
         slab's mean proportion."""
-        value, pdf = lobes.thin_dielectric_eval(mat.base_color, mat.alpha, mat.ior, wo, wi, mat.microfacet)
+        model = mf.row_model(self, mat)
+        value, pdf = lobes.thin_dielectric_eval(mat.base_color, mat.alpha, mat.ior, wo, wi, model)
         if ti.static(self.compensate):
-            if mat.alpha > 0.0 and mat.microfacet == mf.GGX:
+            if mat.alpha > 0.0 and model == mf.GGX:
                 r_share = self._thin_reflect_share(mat)
                 wr = vec3(wi.x, wi.y, ti.abs(wi.z))
                 v_ms, pdf_ms, share = self.energy.multiple_scattering(vec3(1.0), mat.alpha, wo, wr)
@@ -306,6 +316,11 @@ class Bsdf:
         s = self.sample(mat, n, wo, u1, u2)
         if s.valid == 1 and not _sides_agree(n, ng, wo, s.wi):
             s.valid = 0
+        if ti.static(self.features.has_mapped_frames):
+            weight = material_weight(mat, n, wo, s.wi, self.features.has_sidedness)
+            s.weight *= weight
+            if weight <= 0.0:
+                s.valid = 0
         if ti.static(self.features.has_sidedness):
             if mat.sidedness == BACK_BLACK and wo.dot(ng) < 0.0:
                 s.valid = 0  # a one-sided BSDF seen from behind scatters nothing
@@ -317,6 +332,8 @@ class Bsdf:
         value, pdf = self.eval(mat, n, wo, wi)
         if not _sides_agree(n, ng, wo, wi):
             value = vec3(0.0)
+        if ti.static(self.features.has_mapped_frames):
+            value *= material_weight(mat, n, wo, wi, self.features.has_sidedness)
         if ti.static(self.features.has_sidedness):
             if mat.sidedness == BACK_BLACK and wo.dot(ng) < 0.0:
                 value = vec3(0.0)
@@ -421,3 +438,4 @@ def _compensated_reflection_direction(energy, alpha, wo, u_choice, u2):
     else:
         wi = lobes.ggx_reflection_direction(alpha, wo, u2)
     return wi
+

@@ -5,6 +5,7 @@ Lobe module of renderer/materials/kinds.py (see diffuse.py)."""
 import taichi as ti
 
 from renderer.materials import lobes
+from renderer.materials import microfacet as mf
 from renderer.materials.kinds import LobeFlags
 from renderer.materials.lobes import BsdfSample
 from renderer.materials.microfacet import GGX
@@ -14,9 +15,9 @@ from renderer.materials.microfacet import GGX
 def sample(bsdf, mat, n_f, t, b, entering, wo, u1, u2):
     s = lobes.invalid_sample()
     if ti.static(not bsdf.compensate):
-        s = lobes.conductor_sample(mat, wo, u2)
-    elif mat.alpha == 0.0 or mat.microfacet != GGX:  # a smooth mirror scatters once; the tables are GGX's
-        s = lobes.conductor_sample(mat, wo, u2)
+        s = lobes.conductor_sample(mat, wo, u2, mf.row_model(bsdf, mat))
+    elif mat.alpha == 0.0 or mf.row_model(bsdf, mat) != GGX:  # a smooth mirror scatters once; the tables are GGX's
+        s = lobes.conductor_sample(mat, wo, u2, mf.row_model(bsdf, mat))
     else:
         wi = bsdf.metal_direction(mat.alpha, wo, u1, u2)
         if wi.z > 0.0:
@@ -30,7 +31,7 @@ def sample(bsdf, mat, n_f, t, b, entering, wo, u1, u2):
 def evaluate(bsdf, mat, n_f, t, b, entering, wo, wi):
     h = ti.math.normalize(wo + wi)
     fresnel = lobes.conductor_reflectance(mat, wo.dot(h))
-    return bsdf.metal_eval(fresnel, lobes.conductor_reflectance_average(mat), mat.alpha, wo, wi, mat.microfacet)
+    return bsdf.metal_eval(fresnel, lobes.conductor_reflectance_average(mat), mat.alpha, wo, wi, mf.row_model(bsdf, mat))
 
 
 @ti.func

@@ -50,6 +50,12 @@ SIDEDNESS = {"two_sided": 0, "back_black": 1, "back_culled": 2}
 TWO_SIDED, BACK_BLACK, BACK_CULLED = 0, 1, 2
 # Microfacet models (renderer/materials/microfacet.py): the distribution and the masking form.
 MICROFACET_MODELS = {"ggx": 0, "ggx_separable": 1, "beckmann": 2}
+# How the texture in a row's normal slot (textures[2]) tilts the shading normal: a glTF
+# tangent-space normal map (scaled by normal_scale), Mitsuba's normalmap (a normal in the shading
+# frame) or Mitsuba's bumpmap (a height field, its gradient times normal_scale); the last two with
+# Mitsuba's flipping and shadow-terminator term (renderer/materials/mapped_frames.py).
+NORMAL_MAP_MODELS = {"tangent_space": 0, "shading_frame": 1, "height": 2}
+TANGENT_SPACE_MAP, SHADING_FRAME_MAP, HEIGHT_MAP = 0, 1, 2
 
 
 @dataclass(frozen=True)
@@ -117,8 +123,9 @@ SHARED_COLUMNS = (
     Column("base_color", "vec3", (0.8, 0.8, 0.8), from_spec=True),
     Column("roughness", "f32", SHARED_ROUGHNESS, from_spec=True),
     Column("emission", "vec3", (0.0, 0.0, 0.0), from_spec=True),
-    Column("normal_scale", "f32", 1.0),
+    Column("normal_scale", "f32", 1.0),  # a height map's: its scale
     Column("textures", "ivec4", (NO_TEXTURE,) * 4),  # base colour, metallic-roughness, normal, emissive
+    Column("normal_map_model", "i32", TANGENT_SPACE_MAP),  # NORMAL_MAP_MODELS: what the normal slot holds
     Column("medium", "i32", NO_MEDIUM),
     Column("alpha_mode", "i32", 0),
     Column("alpha_cutoff", "f32", 0.5),

@@ -121,25 +121,24 @@ def ggx_reflection_direction(alpha, wo, u2, model=mf.GGX):
 
 
 @ti.func
-def conductor_eval(mat, wo, wi):
-    """mat: a conductor Material (its alpha and Fresnel description)."""
+def conductor_eval(mat, wo, wi, model=mf.GGX):
+    """mat: a conductor Material (its alpha and Fresnel description); model: its microfacet model."""
     h = ti.math.normalize(wo + wi)
-    return ggx_reflection_eval(conductor_reflectance(mat, wo.dot(h)), mat.alpha, wo, wi, mat.microfacet)
+    return ggx_reflection_eval(conductor_reflectance(mat, wo.dot(h)), mat.alpha, wo, wi, model)
 
 
 @ti.func
-def conductor_sample(mat, wo, u2):
+def conductor_sample(mat, wo, u2, model=mf.GGX):
     s = invalid_sample()
     alpha = mat.alpha
     if alpha == 0.0:
         s = BsdfSample(wi=vec3(-wo.x, -wo.y, wo.z), weight=conductor_reflectance(mat, wo.z), pdf=1.0, delta=1,
                        valid=1)
     else:
-        model = mat.microfacet
         h = mf.sample_normal(wo, alpha, u2, model)
         wi = mf.reflect(wo, h)
         cos_oh = wo.dot(h)
-        if wi.z > 0.0 and cos_oh > 0.0:
+        if wi.z > 0.0 and cos_oh > 0.0:  # (Beckmann's normals, drawn from D cos, can face away from wo)
             # f cos / pdf: D and the Jacobian cancel (microfacet.sampled_weight).
             s = BsdfSample(wi=wi, weight=conductor_reflectance(mat, cos_oh) * mf.sampled_weight(wo, wi, h, alpha, model),
                            pdf=mf.normal_pdf(wo, h, alpha, model) / (4.0 * cos_oh), delta=0, valid=1)
@@ -188,14 +187,16 @@ def dielectric_sample(tint, alpha, eta, wo, u1, u2, model=mf.GGX):
         h = mf.sample_normal(wo, alpha, u2, model)
         s.delta = 0
     cos_oh = wo.dot(h)
-    f, cos_t = mf.fresnel_dielectric(ti.max(cos_oh, 0.0), eta)
+    facing_away = cos_oh <= 0.0  # (Beckmann's normals, drawn from D cos, can face away from wo)
+    cos_oh = ti.max(cos_oh, 0.0)
+    f, cos_t = mf.fresnel_dielectric(cos_oh, eta)
     reflect = u1 < f
     if reflect:
         s.wi = mf.reflect(wo, h)
     else:
         s.wi = mf.refract(wo, h, eta, cos_t)
     # A rough microfacet can send wi to the wrong side of the macro surface: no contribution.
-    if (reflect and s.wi.z <= 0.0) or ((not reflect) and s.wi.z >= 0.0) or cos_oh <= 0.0:
+    if (reflect and s.wi.z <= 0.0) or ((not reflect) and s.wi.z >= 0.0) or facing_away:
         s.valid = 0
     else:
         if alpha > 0.0:
@@ -264,9 +265,10 @@ def thin_dielectric_sample(tint, alpha, ior, wo, u1, u2, model=mf.GGX):
         h = mf.sample_normal(wo, alpha, u2, model)
         s.delta = 0
     cos_oh = wo.dot(h)
+    facing_away = cos_oh <= 0.0  # (Beckmann's normals, drawn from D cos, can face away from wo)
     r = thin_reflectance(cos_oh, ior)
     wr = mf.reflect(wo, h)
-    if wr.z <= 0.0 or cos_oh <= 0.0:
+    if wr.z <= 0.0 or facing_away:
         s.valid = 0
     else:
         g_ratio = 1.0

@@ -103,6 +103,13 @@ def beckmann_sample_normal(alpha, u):
 
 # --- A material's model: the distribution and masking a row names -----------------------------------
 @ti.func
+def row_model(bsdf: ti.template(), mat):
+    """A material's microfacet model: its row's, or GGX (a constant the compiler folds) in scenes
+    whose rows name no other."""
+    return mat.microfacet if ti.static(bsdf.features.has_microfacet_models) else GGX
+
+
+@ti.func
 def d(h, alpha, model=GGX):
     value = 0.0
     if model == BECKMANN:

@@ -55,10 +55,10 @@ def _diffuse(mat, t_o, t_i, cos_i):
 
 
 @ti.func
-def _rough_specular(mat, wo, wi):
+def _rough_specular(bsdf, mat, wo, wi):
     h = ti.math.normalize(wo + wi)
     f, _ = mf.fresnel_dielectric(ti.math.clamp(wo.dot(h), 0.0, 1.0), mat.ior)
-    return lobes.ggx_reflection_eval(mat.specular_color * f, mat.alpha, wo, wi, mat.microfacet)
+    return lobes.ggx_reflection_eval(mat.specular_color * f, mat.alpha, wo, wi, mf.row_model(bsdf, mat))
 
 
 @ti.func
@@ -73,7 +73,7 @@ def evaluate(bsdf, mat, n_f, t, b, entering, wo, wi):
         value = _diffuse(mat, t_o, t_i, wi.z)
         pdf = (1.0 - p_spec) * wi.z * INV_PI
         if mat.alpha > 0.0:
-            spec, spec_pdf = _rough_specular(mat, wo, wi)
+            spec, spec_pdf = _rough_specular(bsdf, mat, wo, wi)
             value += spec
             pdf += p_spec * spec_pdf
     return value, pdf
@@ -92,7 +92,7 @@ def sample(bsdf, mat, n_f, t, b, entering, wo, u1, u2):
     else:
         wi = vec3(0.0)
         if u1 < p_spec:
-            wi = lobes.ggx_reflection_direction(mat.alpha, wo, u2, mat.microfacet)
+            wi = lobes.ggx_reflection_direction(mat.alpha, wo, u2, mf.row_model(bsdf, mat))
         else:
             wi = cosine_hemisphere(u2)
         if wi.z > 0.0:

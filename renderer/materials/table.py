@@ -9,8 +9,10 @@ import taichi as ti
 from renderer.materials.conductor_ior import conductor_ior_row
 from renderer.materials.dispersion import dispersion_row
 from renderer.materials.kinds import (COLUMNS, KIND_IDS, KIND_NAMES, LAYER_COLUMNS, LAYERS, NO_MEDIUM, NO_TEXTURE,
-                                      BACK_BLACK, BACK_CULLED, MIN_ALPHA, SIDEDNESS, TWO_SIDED, alpha_from_roughness,
-                                      compensated_when_rough)  # noqa: F401 (MIN_ALPHA, alpha_from_roughness: re-exported)
+                                      BACK_BLACK, BACK_CULLED, MIN_ALPHA, SIDEDNESS, TANGENT_SPACE_MAP, TWO_SIDED,
+                                      alpha_from_roughness,
+                                      compensated_when_rough)  # noqa: F401 (re-exported)
+from renderer.materials.mapped_frame_rows import mapped_frame_uses, normal_map_row
 from renderer.materials.microfacet import GGX, MODELS
 from renderer.materials.plastic_tables import plastic_row
 from renderer.materials.texture_sampler import TextureTable
@@ -33,13 +35,18 @@ MIN_IOR = 1.0001
 _TYPES = {"i32": ti.i32, "f32": ti.f32, "vec3": vec3, "vec4": ti.math.vec4, "ivec4": ti.math.ivec4}
 MaterialRecord = ti.types.struct(**{c.name: _TYPES[c.type] for c in COLUMNS})
 # As shaded: a record with its textures applied at one surface point. coat_normal: the clearcoat's
-# shading normal (its own normal map, else the base's normal).
+# shading normal (its own normal map, else the base's normal). unmapped_normal: where a Mitsuba
+# normal or bump map tilted the shading normal, the normal before it (on the viewer's side), whose
+# frame `Bsdf.eval_at` / `sample_at` weigh scattering in (renderer/materials/mapped_frames.py);
+# zero elsewhere. tangent: the mapped frame's tangent (Mitsuba's, for anisotropic lobes); zero
+# where no map set it.
 Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=ti.f32, transmission=ti.f32,
                            ior=ti.f32, emission=vec3, edge_tint=vec3, complex_ior=ti.i32, eta=vec3, k=vec3,
                            fresnel_avg=vec3, thin=ti.i32, clearcoat=ti.f32, clearcoat_alpha=ti.f32,
                            sheen_color=vec3, sheen_roughness=ti.f32, specular=ti.f32, specular_color=vec3,
                            coat_normal=vec3, microfacet=ti.i32, nonlinear=ti.i32, plastic_table=ti.i32,
-                           internal_reflectance=ti.f32, specular_weight=ti.f32, sidedness=ti.i32)
+                           internal_reflectance=ti.f32, specular_weight=ti.f32, sidedness=ti.i32,
+                           unmapped_normal=vec3, tangent=vec3)
 
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = 0, 1, 2
 ALPHA_MODE_IDS = {"OPAQUE": ALPHA_OPAQUE, "MASK": ALPHA_MASK, "BLEND": ALPHA_BLEND}
@@ -65,7 +72,9 @@ class MaterialRows:
         slots = texture_slots or {}
         row = _default_row()
         row.update({c.name: getattr(spec, c.name) for c in COLUMNS if c.from_spec})
-        row["textures"] = (slots.get("base_color", NO_TEXTURE), *row["textures"][1:3], slots.get("emission", NO_TEXTURE))
+        row["textures"] = (slots.get("base_color", NO_TEXTURE), row["textures"][1],
+                           slots.get("normal", slots.get("bump", NO_TEXTURE)), slots.get("emission", NO_TEXTURE))
+        row.update(normal_map_row(spec, slots))
         row.update(kind=KIND_IDS[spec.kind], medium=self.medium_ids[spec.medium] if spec.medium else NO_MEDIUM,
                    thin=int(spec.thin), microfacet=MODELS[spec.microfacet], sidedness=SIDEDNESS[spec.sidedness],
                    **dispersion_row(spec), **conductor_ior_row(spec))
@@ -104,7 +113,10 @@ class MaterialRows:
                                     tex(pbr.clearcoat_normal_texture), NO_TEXTURE),
                    alpha_mode=ALPHA_MODE_IDS.get(pbr.alpha_mode, ALPHA_OPAQUE), alpha_cutoff=pbr.alpha_cutoff,
                    base_alpha=pbr.base_color_factor[3],
-                   sidedness=TWO_SIDED if pbr.double_sided else BACK_CULLED,
+                   # glTF culls the back faces of single-sided materials; a transmitting one keeps
+                   # them (light inside a glass or a volume leaves through them).
+                   sidedness=TWO_SIDED if pbr.double_sided or pbr.transmission_factor > 0.0 or medium != NO_MEDIUM
+                   else BACK_CULLED,
                    thin=int(pbr.transmission_factor > 0.0 and pbr.thin_walled))
         self.rows.append(row)
         return len(self.rows) - 1
@@ -129,7 +141,9 @@ class MaterialRows:
                 "layers": {layer.name for layer in LAYERS if any(layer.in_use(r) for r in rows)},
                 "textures": (any(slots) or layer_textures
                              or any(r["transmission_texture"] != NO_TEXTURE for r in rows)),
-                "normal_maps": slots[2], "emission": any(max(r["emission"]) > 0 for r in rows),
+                "normal_maps": any(r["textures"][2] != NO_TEXTURE and r["normal_map_model"] == TANGENT_SPACE_MAP
+                                   for r in rows),
+                **mapped_frame_uses(rows), "emission": any(max(r["emission"]) > 0 for r in rows),
                 "media": any(r["medium"] != NO_MEDIUM for r in rows),
                 "dispersion": any(r["dispersion"] != 0 for r in rows),
                 "rough": any(compensated_when_rough(KIND_NAMES[r["kind"]]) and r["roughness"] > 0.0 for r in rows),

@@ -130,7 +130,9 @@ class TextureTable:
         return out
 
     @ti.func
-    def sample(self, slot_id, uv0, uv1):
+    def _footprint(self, slot_id, uv0, uv1):
+        """Where a lookup falls: the slot, its wrapped tap columns ia, ib and rows ja, jb (page
+        coordinates) and the bilinear fractions fx, fy."""
         slot = self.slots[slot_id]
         uv = uv0 if slot.modes.z == 0 else uv1
         h3 = ti.math.vec3(uv.x, uv.y, 1.0)
@@ -149,21 +151,49 @@ class TextureTable:
                 t = ti.floor(v * h)
         s0 = ti.floor(s)
         t0 = ti.floor(t)
-        fx = s - s0
-        fy = t - t0
         i0 = ti.cast(s0, ti.i32)
         j0 = ti.cast(t0, ti.i32)
         ia = _wrap(i0, w, slot.modes.x) + slot.rect.x
         ib = _wrap(i0 + 1, w, slot.modes.x) + slot.rect.x
         ja = _wrap(j0, h, slot.modes.y) + slot.rect.y
         jb = _wrap(j0 + 1, h, slot.modes.y) + slot.rect.y
+        return slot, ti.math.ivec4(ia, ib, ja, jb), s - s0, t - t0
+
+    @ti.func
+    def sample(self, slot_id, uv0, uv1):
+        slot, taps, fx, fy = self._footprint(slot_id, uv0, uv1)
         # The four taps in one runtime loop: the texel decoder is compiled once, not four times.
         result = ti.math.vec4(0.0)
         for k in range(4):
             right = k & 1
             below = k >> 1
             weight = (fx if right != 0 else 1.0 - fx) * (fy if below != 0 else 1.0 - fy)
-            texel = self._texel(slot.format.x, slot.format.y, jb if below != 0 else ja,
-                                ib if right != 0 else ia)
+            texel = self._texel(slot.format.x, slot.format.y, taps[3] if below != 0 else taps[2],
+                                taps[1] if right != 0 else taps[0])
             result += weight * texel
         return result
+
+    @ti.func
+    def gradient(self, slot_id, uv0, uv1):
+        """(d/du, d/dv) of `sample` (texture coordinates before the slot's uv transform): the
+        derivative of the bilinear interpolation inside the texel cell (Mitsuba's eval_1_grad),
+        zero for nearest filtering. Compiled only into kernels that call it (bump maps)."""
+        slot, taps, fx, fy = self._footprint(slot_id, uv0, uv1)
+        d_ds = ti.math.vec4(0.0)  # along the page's texel columns and rows
+        d_dt = ti.math.vec4(0.0)
+        for k in range(4):
+            right = k & 1
+            below = k >> 1
+            texel = self._texel(slot.format.x, slot.format.y, taps[3] if below != 0 else taps[2],
+                                taps[1] if right != 0 else taps[0])
+            d_ds += ((1.0 if right != 0 else -1.0) * (fy if below != 0 else 1.0 - fy)) * texel
+            d_dt += ((1.0 if below != 0 else -1.0) * (fx if right != 0 else 1.0 - fx)) * texel
+        if ti.static(self.nearest):
+            if slot.modes.w != 0:
+                d_ds, d_dt = ti.math.vec4(0.0), ti.math.vec4(0.0)
+        # s = w (m0 . (u, v, 1)) - 1/2 and t = h (m1 . (u, v, 1)) - 1/2: the chain rule.
+        w = ti.cast(slot.rect.z, ti.f32)
+        h = ti.cast(slot.rect.w, ti.f32)
+        d_du = d_ds * (w * slot.m0.x) + d_dt * (h * slot.m1.x)
+        d_dv = d_ds * (w * slot.m0.y) + d_dt * (h * slot.m1.y)
+        return d_du, d_dv

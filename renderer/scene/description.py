@@ -162,6 +162,12 @@ class MaterialSpec:
     # Multiplies base_color per vertex or face of each mesh drawn with this material (which must
     # carry the attribute); the mesh's own vertex colours are replaced.
     base_color_attribute: Optional[MeshAttributeColor] = None
+    # Mitsuba's normalmap: a raw RGB normal, 2 rgb - 1, in the surface's shading frame (its tangent
+    # along dp/du); bumpmap: a height field whose texture-space gradient, times bump_scale, tilts
+    # the shading normal (renderer/materials/mapped_frames.py). At most one of the two.
+    normal_map: Optional[TextureSpec] = None
+    bump_map: Optional[TextureSpec] = None
+    bump_scale: float = 1.0
 
     def __post_init__(self):
         if self.roughness is None:
@@ -169,9 +175,10 @@ class MaterialSpec:
 
     @property
     def textures(self) -> dict[str, "TextureSpec"]:
-        """The material's textures by role ("base_color", "opacity", "emission"), those it has."""
+        """The material's textures by role ("base_color", "opacity", "emission", "normal", "bump"),
+        those it has."""
         roles = {"base_color": self.base_color_texture, "opacity": self.opacity_texture,
-                 "emission": self.emission_texture}
+                 "emission": self.emission_texture, "normal": self.normal_map, "bump": self.bump_map}
         return {role: texture for role, texture in roles.items() if texture is not None}
 
     @property
@@ -358,11 +365,13 @@ class MeshObject:
     # normals it has, flat where it has none; "flat": face normals; "smooth": the file's, else
     # vertex normals weighted by the faces' angles); `flip_normals` turns its front side over
     # (winding and normals); `flip_v` takes v to 1 - v; `part` draws only the file's meshes of
-    # that name (a Mitsuba serialized file's shape k is "shape k").
+    # that name (a Mitsuba serialized file's shape k is "shape k"); `vertex_colors` False drops the
+    # file's vertex colours (Mitsuba's meshes shade with them only through a mesh_attribute texture).
     normals: str = "file"
     flip_normals: bool = False
     flip_v: bool = False
     part: Optional[str] = None
+    vertex_colors: bool = True
 
     def matrix(self) -> np.ndarray:
         """The 4x4 object-to-world matrix."""

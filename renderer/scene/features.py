@@ -21,7 +21,11 @@ class Features:
     material_layers: frozenset = frozenset()  # the principled layers used: clearcoat, sheen, specular
     has_emission: bool = False
     has_textures: bool = False
-    has_normal_maps: bool = False
+    has_normal_maps: bool = False  # glTF tangent-space normal maps
+    # Mitsuba's normalmap and bumpmap: shading frames perturbed in the frame of the surface's texture
+    # parametrisation, with the shadow-terminator term; bump maps add the height texture's gradient.
+    has_mapped_frames: bool = False
+    has_bump_maps: bool = False
     # Kulla-Conty multiple scattering: rough GGX reflection (conductors, principled metal), rough
     # dielectric interfaces (glass, principled glass) and the principled coat's layering
     energy_compensation: bool = False
@@ -71,6 +75,7 @@ class Features:
         flags = (*((kind(k).label, True) for k in KIND_NAMES if k in self.material_kinds),
                  ("emission", self.has_emission),
                  ("textures", self.has_textures), ("normal maps", self.has_normal_maps),
+                 ("mapped frames", self.has_mapped_frames), ("bump maps", self.has_bump_maps),
                  ("multiple scattering", self.energy_compensation),
                  ("media", self.has_media), ("grid media", self.has_grid_media), ("analytic fog", self.analytic_fog),
                  ("dispersion", self.has_dispersion), ("alpha", self.has_alpha),
@@ -97,7 +102,8 @@ class Features:
         """Every optional effect of this geometry kind switched on (for the cost benchmark)."""
         sdf = self.geometry == "sdf"
         return replace(self, material_kinds=frozenset(KIND_NAMES), material_layers=frozenset(LAYER_NAMES),
-                       has_emission=True, has_textures=not sdf, has_normal_maps=not sdf, depth_of_field=True,
+                       has_emission=True, has_textures=not sdf, has_normal_maps=not sdf,
+                       has_mapped_frames=not sdf, has_bump_maps=not sdf, depth_of_field=True,
                        energy_compensation=True, has_media=True, has_grid_media=True, analytic_fog=True,
                        has_dispersion=True, has_thin=True, has_microfacet_models=True, has_sidedness=True,
                        has_alpha=not sdf, has_vertex_colors=not sdf, has_instances=not sdf,
@@ -128,7 +134,8 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
                   fog: str = "none", vertex_colors: bool = False, instances: bool = False,
                   light_kinds=frozenset(), pixel_filter: tuple = ("box",), orthographic: bool = False,
                   light_textures: bool = False) -> Features:
-    """material_uses: {"kinds", "layers": sets of registry names, "textures", "normal_maps", "emission",
+    """material_uses: {"kinds", "layers": sets of registry names, "textures", "normal_maps",
+    "mapped_frames", "bump_maps" (renderer/materials/mapped_frame_rows.py), "emission",
     "media": bool, "grid_media": whether one of them lies on a grid (`scene_grid_media`), "rough":
     whether a kind compensated where rough (conductor, dielectric) has roughness > 0}.
     energy_compensation: the scene's wish; compiled in only where such a rough material occurs, or
@@ -150,6 +157,8 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         has_emission=material_uses["emission"],
         has_textures=material_uses["textures"],
         has_normal_maps=material_uses["normal_maps"],
+        has_mapped_frames=bool(material_uses.get("mapped_frames", False)),
+        has_bump_maps=bool(material_uses.get("bump_maps", False)),
         energy_compensation=energy_compensation and (any(always_compensated(k) for k in kinds)
                                                      or material_uses.get("rough", True)),
         has_media=fog == "medium" or bool(material_uses.get("media", False)),

@@ -1,5 +1,5 @@
 """A triangle mesh as one scene object asks for it (`MeshObject.normals`, `flip_normals`, `flip_v`,
-`part`): formats whose shapes take a model file with options (Mitsuba's face_normals, flip_normals,
+`part`, `vertex_colors`): formats whose shapes take a model file with options (Mitsuba's face_normals, flip_normals,
 flip_tex_coords, shape_index) set them; TOML objects keep the defaults, which change nothing.
 
 Numpy only. The meshes are in their source's frame, before the object's placement; what is
@@ -35,6 +35,8 @@ def adjusted(mesh: TriangleMesh, obj: MeshObject) -> TriangleMesh:
                        normals=None if mesh.normals is None else -mesh.normals)
     if obj.flip_v:
         mesh = replace(mesh, uv0=_flipped(mesh.uv0), uv1=_flipped(mesh.uv1))
+    if not obj.vertex_colors:
+        mesh = replace(mesh, colors=None)
     return mesh
 
 

@@ -30,6 +30,7 @@ from .description import (
 from .schema_checks import (
     check_camera,
     check_conductor_fresnel,
+    check_one_surface_map,
     check_fixed_relaxation,
     check_keyframes,
     check_light_up,
@@ -224,6 +225,8 @@ def _kind_fields(fields: tuple[Field, ...]) -> tuple[Field, ...]:
 
 
 GLASSES_CHOICES = ("bk7", "fused_silica", "sf11", "water")  # renderer/spectral/ior.py SELLMEIER_PRESETS
+# Images a material's normal or bump map may be (what the texture reader decodes).
+MAP_IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".tif", ".tiff", ".webp", ".exr")
 
 MATERIAL = Section(
     "materials.<name>",
@@ -267,7 +270,8 @@ MATERIAL = Section(
         Field("thin", "bool", False, "A thin-walled transmitter: a shell with no inside (a soap "
               "bubble, a window pane modelled as one surface, glTF transmission without "
               "`KHR_materials_volume`). Light reflects off it or passes straight through; it is not "
-              "bent and does not travel inside."),
+              "bent and does not travel inside. Passing a smooth one is no bounce (`max_depth` does "
+              "not count it) and shadow rays pass it; with `medium` it bounds that medium."),
         Field("clearcoat", "float", 0.0, "Weight of a clear coat over the material (glTF "
               "`KHR_materials_clearcoat`): a dielectric layer of index 1.5 whose reflection is added "
               "on top, and what it does not reflect reaches the layers below.", UNIT),
@@ -308,10 +312,24 @@ MATERIAL = Section(
               "made of this material: paths that cross the surface inwards (by refraction, or "
               "through a `null` surface) travel in it. Media do not nest.",
               default_doc="none", allowed_doc="a defined medium"),
+        Field("normal_map", "string", None, "An image file, relative to the scene file, read as data "
+              "(not sRGB): each texel's RGB is a normal 2 rgb - 1 in the surface's frame, x along "
+              "increasing texture coordinate u, y along normal x that, z along the normal (Mitsuba's "
+              "`normalmap`, shadow-terminator term included). Objects without texture coordinates "
+              "read texel (0, 0)'s neighbourhood.", geometries=("mesh",), default_doc="none",
+              allowed_doc=", ".join(f"`{e}`" for e in MAP_IMAGE_EXTENSIONS)),
+        Field("bump_map", "string", None, "An image file of heights (read as data; a colour image "
+              "by its luminance): the surface's normal tilts as if displaced by `bump_scale` times the "
+              "height along the normal, per unit of texture coordinate (Mitsuba's `bumpmap`).",
+              geometries=("mesh",), default_doc="none",
+              allowed_doc=", ".join(f"`{e}`" for e in MAP_IMAGE_EXTENSIONS)),
+        Field("bump_scale", "float", 1.0, "The height of a `bump_map` texel of value 1 (negative: "
+              "the map's heights are depths).", geometries=("mesh",)),
     )),
     rules=(Rule("A conductor's Fresnel comes from one description: `base_color` with `edge_tint`, or "
                 "`eta` with `k`, or `metal`; fields of two of them together are an error, and `eta` and "
-                "`k` come together.", check_conductor_fresnel),),
+                "`k` come together.", check_conductor_fresnel),
+           Rule("A material has at most one of `normal_map` and `bump_map`.", check_one_surface_map)),
 )
 
 _GRID = ("grid",)

@@ -95,6 +95,12 @@ def check_conductor_fresnel(v: dict) -> Optional[str]:
     return None
 
 
+def check_one_surface_map(v: dict) -> Optional[str]:
+    if v["normal_map"] is not None and v["bump_map"] is not None:
+        return "`normal_map` and `bump_map` cannot be combined: each tilts the shading normal (keep one)"
+    return None
+
+
 def check_torus(v: dict) -> Optional[str]:
     if v["minor_radius"] >= v["major_radius"]:
         minor, major = format_number(v["minor_radius"]), format_number(v["major_radius"])

@@ -381,9 +381,13 @@ def _read_environment(raw: object, scene_path: Path) -> EnvironmentSpec:
     return EnvironmentSpec(**_model_kwargs(schema.ENVIRONMENT, values))
 
 
-def _read_material(name: str, raw: object) -> MaterialSpec:
+def _read_material(name: str, raw: object, scene_path: Path, geometry: str) -> MaterialSpec:
     where = f"materials.{name}"
     values = _read_section(raw, schema.MATERIAL, where)
+    _check_geometry(raw, schema.MATERIAL, where, geometry)
+    for field in ("normal_map", "bump_map"):
+        if values[field] is not None:
+            values[field] = _map_image(values[field], scene_path, f"{where}.{field}")
     emission = tuple(c * values["emission_strength"] for c in values["emission"])
     if not all(math.isfinite(c) and c <= schema.F32_MAX for c in emission):
         raise _Invalid(where, f"emission * emission_strength = {format_number(max(emission))} is beyond "
@@ -392,9 +396,19 @@ def _read_material(name: str, raw: object) -> MaterialSpec:
     return MaterialSpec(name=name, **_model_kwargs(schema.MATERIAL, values))
 
 
-def _read_materials(raw: object) -> tuple[MaterialSpec, ...]:
+def _map_image(file: str, scene_path: Path, where: str) -> TextureSpec:
+    """A material's normal or bump map: an image file relative to the scene, read as data."""
+    suffix = PurePath(file).suffix
+    if suffix.lower() not in schema.MAP_IMAGE_EXTENSIONS:
+        raise _Invalid(where, f"unsupported image {_extension_text(suffix)} "
+                              f"(expected {_or_list(schema.MAP_IMAGE_EXTENSIONS)})")
+    return TextureSpec("bitmap", srgb=False, file=_resolve_file(file, scene_path, where, "texture image",
+                                                                schema.MAP_IMAGE_EXTENSIONS))
+
+
+def _read_materials(raw: object, scene_path: Path, geometry: str) -> tuple[MaterialSpec, ...]:
     table = {} if raw is None else _table(raw, "materials")
-    return tuple(_read_material(name, body) for name, body in table.items())
+    return tuple(_read_material(name, body, scene_path, geometry) for name, body in table.items())
 
 
 def _read_media(raw: object, scene_path: Path, model_files: ModelFiles) -> tuple[MediumSpec, ...]:
@@ -648,7 +662,7 @@ def _build_scene(data: dict, path: Path, model_files: ModelFiles) -> Scene:
     render = _read_render(data.get("render"), header["geometry"])
     environment = _read_environment(data.get("environment"), path)
     lights = _read_lights(data.get("lights"), path)
-    materials = _read_materials(data.get("materials"))
+    materials = _read_materials(data.get("materials"), path, header["geometry"])
     media = _read_media(data.get("media"), path, model_files)
     for m in materials:
         _check_medium_name(m.medium, media, f"materials.{m.name}.medium")

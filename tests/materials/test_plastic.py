@@ -137,7 +137,8 @@ def model_albedo(spec, mu_o):
     k = rho * _internal(spec) if spec.nonlinear else _internal(spec)
     x, w = np.polynomial.legendre.leggauss(200)
     mu, wmu = 0.5 * (x + 1.0), 0.5 * w
-    diffuse = rho / (1.0 - k) * _transmittance(spec, mu_o) / spec.ior ** 2 * 2.0 * np.sum(wmu * mu * _transmittance(spec, mu))
+    through = 2.0 * np.sum(wmu * mu * _transmittance(spec, mu))  # the coating's cosine-weighted mean T
+    diffuse = rho / (1.0 - k) * _transmittance(spec, mu_o) / spec.ior ** 2 * through
     return spec.specular_color[0] * _specular_albedo(spec, mu_o) + float(diffuse)
 
 

@@ -65,3 +65,10 @@ def test_flip_v_and_parts():
     meshes = [mesh(name="shape 0"), mesh(name="shape 1")]
     assert selected_meshes(meshes, obj(part="shape 1")) == [meshes[1]]
     assert selected_meshes(meshes, obj()) == meshes and selected_meshes(meshes, obj(part="shape 2")) == []
+
+
+def test_vertex_colours_can_be_dropped():
+    """Mitsuba's meshes shade with their vertex colours only through a mesh_attribute texture."""
+    coloured = mesh(colors=np.tile(np.float32([1, 0, 0, 1]), (5, 1)))
+    assert adjusted(coloured, obj()).colors is coloured.colors
+    assert adjusted(coloured, obj(vertex_colors=False)).colors is None

@@ -345,7 +345,7 @@ BAD_SCENES = {
     "camera up parallel": (scene_text(extra="[camera]\nposition = [0, 5, 0]\nlook_at = [0, 0, 0]\n"),
                            "camera: up is zero or parallel to the view direction"),
     "camera unknown field": (scene_text(extra="[camera]\nfovy = 30\n"),
-                             "camera: unknown field 'fovy' (allowed: position, look_at, up, fov, aperture, focus_distance, keyframes)"),
+                             "camera: unknown field 'fovy' (allowed: position, look_at, up, fov, aperture, focus_distance, projection, ortho_height, keyframes)"),
     "date instead of number": (scene_text(extra="[camera]\nfov = 1979-05-27\n"), "camera.fov: expected a number, got date/time"),
     # render
     "width zero": (scene_text(extra="[render]\nwidth = 0\n"), "render.width: 0 is out of range (allowed: [1, 16384])"),
@@ -386,13 +386,14 @@ BAD_SCENES = {
                           "environment: unknown field 'strength' (allowed: type, intensity, rotation, zenith, horizon, ground)"),
     # materials
     "material unknown field": (scene_text(materials="[materials.glass]\ntype = \"dielectric\"\niorr = 1.5\n"),
-                               "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, thin, emission, emission_strength, abbe, glass, medium)"),
+                               "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, thin, microfacet, sidedness, "
+                               "opacity, emission, emission_strength, abbe, glass, medium, normal_map, bump_map, bump_scale)"),
     "material unknown type": (scene_text(materials='[materials.m]\ntype = "metal"\n'),
-                              "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null)"),
+                              "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null, plastic)"),
     "ior on conductor": (scene_text(materials='[materials.m]\ntype = "conductor"\nior = 1.5\n'),
-                         "materials.m.ior: only allowed with type 'dielectric' or 'principled', not 'conductor'"),
+                         "materials.m.ior: only allowed with type 'dielectric' or 'principled' or 'plastic', not 'conductor'"),
     "ior on default diffuse": (scene_text(materials="[materials.m]\nior = 1.5\n"),
-                               "materials.m.ior: only allowed with type 'dielectric' or 'principled', not 'diffuse'"),
+                               "materials.m.ior: only allowed with type 'dielectric' or 'principled' or 'plastic', not 'diffuse'"),
     "metallic on diffuse": (scene_text(materials="[materials.m]\nmetallic = 1\n"),
                             "materials.m.metallic: only allowed with type 'principled', not 'diffuse'"),
     "transmission on dielectric": (scene_text(materials='[materials.m]\ntype = "dielectric"\ntransmission = 1\n'),

@@ -5,8 +5,9 @@ without transmission are black from behind (sidedness "back_black"); `twosided` 
 wraps shade both sides alike; dielectrics, thin dielectrics, principledthin and null are two-sided
 by nature. Rough BSDFs keep Mitsuba's microfacet model: GGX or Beckmann with Smith's separable
 masking (renderer/materials/microfacet.py). `mask` becomes stochastic coverage (opacity, or its
-texture). The builder (scene_builder.py) supplies the value readers (colours, textures, scalars)
-and the warnings.
+texture); `normalmap` and `bumpmap` tilt the shading normal of the BSDF inside (surface_maps.py).
+The builder (scene_builder.py) supplies the value readers (colours, textures, scalars) and the
+warnings.
 """
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from renderer.scene.mitsuba.ior_names import IOR_NAMES
 from renderer.scene.mitsuba.mesh_attribute_textures import blended_diffuse
 from renderer.scene.mitsuba.plugins import Plugin
 from renderer.scene.mitsuba.scene_warnings import warn
+from renderer.scene.mitsuba.surface_maps import mapped_spec
 
 DEFAULT_REFLECTANCE = (0.5, 0.5, 0.5)  # Mitsuba's diffuse and plastics
 DEFAULT_GLASS_IOR = 1.5046  # Mitsuba's dielectrics: bk7
@@ -41,8 +43,7 @@ def bsdf_spec(builder, bsdf: Plugin) -> MaterialSpec:
     if t == "mask":
         return _mask(builder, bsdf)
     if t in ("bumpmap", "normalmap"):
-        warn(bsdf, f"{t} is not supported yet: the BSDF inside it is used as it is")
-        return _inner(builder, bsdf)
+        return mapped_spec(builder, bsdf, _inner(builder, bsdf))
     if t == "blendbsdf":
         blended = blended_diffuse(builder, bsdf)  # two diffuse colours: exactly one diffuse BSDF
         if blended is not None:

@@ -28,13 +28,16 @@ mitsuba_rgb.py), reflectances under D65 and clamped to [0, 1], emission and indi
 | `path`, `volpath`, `volpathmis`, `ptracer`, `direct` (inside `moment` too) | `mis`, with Mitsuba's `max_depth` (-1 unlimited; `direct` is 2) |
 | `depth`, `aov` | the `depth` view |
 | `diffuse` | `diffuse` |
-| `conductor`, `roughconductor` (`material` by name, `eta` and `k`, none = a mirror; GGX `alpha`) | `conductor` (roughness = sqrt(alpha); Beckmann is rendered as GGX, anisotropic alpha as its mean: warnings) |
-| `dielectric`, `roughdielectric`, `thindielectric` (`int_ior` / `ext_ior` as numbers or names) | `dielectric` (relative index), `thin` for `thindielectric` |
-| `principled`, `principledthin` | `principled` (base colour, roughness, metallic, `spec_trans`, `eta`; Disney's clearcoat, sheen, anisotropy and specular tint: warnings) |
-| `plastic`, `roughplastic` | approximated by `principled` with the diffuse colour, roughness and index (a warning) |
-| `twosided` | its BSDF (Lantern's surfaces shade both sides) |
+| `conductor`, `roughconductor` (`material` by name, `eta` and `k`, none = a mirror; `alpha`, `distribution` `beckmann` (the default) or `ggx`) | `conductor`, one-sided (roughness = sqrt(alpha); `microfacet` `beckmann` or `ggx_separable`: Mitsuba's distributions with Smith's separable masking; anisotropic alpha as its mean and textured alpha as its default: warnings) |
+| `dielectric`, `roughdielectric`, `thindielectric` (`int_ior` / `ext_ior` as numbers or names) | `dielectric` (relative index), `thin` for `thindielectric` (as in Mitsuba, passing straight through it is no bounce, shadow rays pass it with its transmittance, and with an `interior` it bounds that medium) |
+| `principled`, `principledthin` | `principled` (base colour, roughness, metallic, `spec_trans`, `eta`; Disney's clearcoat, sheen, anisotropy and specular tint: warnings; one-sided unless it transmits) |
+| `plastic`, `roughplastic` (`diffuse_reflectance`, `specular_reflectance`, `int_ior` / `ext_ior`, `nonlinear`, `alpha`, `distribution`) | `plastic`, one-sided: Mitsuba's model, a diffuse base under a smooth or rough dielectric coating with its internal reflections (renderer/materials/plastic_tables.py computes Mitsuba's tables; they agree with Mitsuba's to 0.1%) |
+| `twosided` | its BSDF with `sidedness = "two_sided"` (a Mitsuba BSDF is one-sided: `back_black`; dielectrics, thin dielectrics, `principledthin` and `null` shade both sides; a second BSDF for the back face: a warning) |
 | `null` | `null` (crossing it is no bounce) |
-| `bumpmap`, `normalmap`, `mask`, `blendbsdf` | the BSDF inside (a warning) |
+| `mask` (`opacity` a number, `bitmap` or `checkerboard`) | the BSDF inside with stochastic coverage: a ray meets the surface with probability `opacity` (the texture's first channel) |
+| `normalmap` (`normalmap` a `bitmap`, read raw where `raw` is set, a `checkerboard` or a `rawconstant`) | the BSDF inside with its shading normal 2 rgb - 1 in Mitsuba's shading frame (tangent along dp/du, per triangle as Mitsuba 3.9 has it), mirrored where the viewer is behind it, and Mitsuba's shadow-terminator term (Estevez et al. 2019); `flip_invalid_normals` and `use_shadowing_function` false: warnings, drawn as true |
+| `bumpmap` (one height texture as for `normalmap`, `scale`) | the BSDF inside with its normal from dp/du and dp/dv lifted by `scale` times the height's gradient (the derivative of the bilinear lookup; luminance of a colour image), as `normalmap` otherwise; a map inside another map: a warning, the outer one is used |
+| `blendbsdf` | the first BSDF inside (a warning) |
 | `blendbsdf` of two `diffuse` BSDFs with plain colours, `weight` a number or a `mesh_attribute` | one `diffuse` BSDF coloured (1 - w) r0 + w r1, per vertex or face for an attribute |
 | `mesh_attribute` texture (`name` vertex_... or face_..., `scale`) on a diffuse reflectance, principled base colour or plastic's diffuse (inside `twosided`, `mask`, `bumpmap`, `normalmap` too) | per-corner colours read from the PLY mesh's attribute (properties `<prefix>_0`, `_1`, `_2` or one, as Mitsuba groups them; `red`, `green`, `blue` as fractions of 255: Mitsuba reads them raw), per face by giving each triangle its own vertices; a missing attribute is an error naming the file |
 | `bitmap` (`filter_type`, `wrap_mode`, `raw`, `to_uv`) and `checkerboard` textures on a diffuse reflectance, principled base colour or plastic's diffuse | a base colour texture (nearest or bilinear) |

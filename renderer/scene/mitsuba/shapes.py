@@ -120,7 +120,8 @@ class ShapeReader:
                                   f"shape{'s' if count > 1 else ''} (0 to {count - 1})")
             part = shape_name(index)
         flip_v = shape.type in FLIP_TEX_COORDS and not _flag(shape, "flip_tex_coords", FLIP_TEX_COORDS[shape.type])
-        return MeshObject(kind="mesh", file=file, material=material, part=part, flip_v=flip_v,
+        # Mitsuba shades with a mesh's vertex colours only through a mesh_attribute texture.
+        return MeshObject(kind="mesh", file=file, material=material, part=part, flip_v=flip_v, vertex_colors=False,
                           normals="flat" if _flag(shape, "face_normals", False) else "smooth",
                           flip_normals=_flag(shape, "flip_normals", False))
 

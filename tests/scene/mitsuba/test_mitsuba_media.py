@@ -42,7 +42,7 @@ def test_gridvolumes_map_onto_a_grid_medium(tmp_path):
 
 def test_use_grid_bbox_places_the_file_box_first(tmp_path):
     write_vol(tmp_path / "d.vol", np.ones((1, 1, 1)), bounds=((1, 2, 3), (2, 4, 7)))
-    _, medium, _ = smoke(tmp_path, f'''<volume name="sigma_t" type="gridvolume">
+    _, medium, _ = smoke(tmp_path, '''<volume name="sigma_t" type="gridvolume">
         <string name="filename" value="d.vol"/><boolean name="use_grid_bbox" value="true"/>
         <transform name="to_world"><translate x="10"/></transform></volume>''')
     np.testing.assert_allclose(medium.density.to_world, [[1, 0, 0, 11], [0, 2, 0, 2], [0, 0, 4, 3], [0, 0, 0, 1]])
