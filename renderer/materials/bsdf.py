@@ -33,9 +33,9 @@ from renderer.materials import lobes
 from renderer.materials import microfacet as mf
 from renderer.materials.lobes import BsdfSample
 from renderer.materials.kinds import BACK_BLACK, KIND_IDS, KINDS, TANGENT_SPACE_MAP, TWO_SIDED
-from renderer.materials.mapped_frames import mapped_frame, material_weight
+from renderer.materials.mapped_frames import frame_tangent, mapped_frame, material_weight
 from renderer.materials.principled import principled_has_smooth_part
-from renderer.materials.table import NO_TEXTURE, Material, alpha_of
+from renderer.materials.table import MIN_ALPHA, NO_TEXTURE, Material, alpha_of
 from renderer.sampling.warps import cosine_hemisphere, orthonormal_basis, to_local, to_world
 
 vec3 = ti.math.vec3
@@ -82,6 +82,10 @@ class Bsdf:
             mat.sidedness = rec.sidedness
         if ti.static(self.features.has_microfacet_models):
             mat.microfacet = rec.microfacet
+        if ti.static(self.features.has_anisotropy):
+            # Mitsuba's frame: the lobe's x axis along dp/du (a mapped frame replaces it below).
+            mat.alpha_v = mat.alpha if rec.roughness_v < 0.0 else alpha_of(rec.roughness_v)
+            mat.tangent = frame_tangent(n, surface.dp_du)
         if ti.static(self.features.has_kind("plastic")):
             mat.nonlinear = rec.nonlinear
             mat.plastic_table = rec.plastic_table
@@ -99,6 +103,14 @@ class Bsdf:
                 mat.metallic = rec.metallic * mr.z
             if rec.textures[3] != NO_TEXTURE:
                 mat.emission *= tex.sample(rec.textures[3], surface.uv, surface.uv1).xyz
+            if rec.alpha_textures[0] != NO_TEXTURE:  # a textured width, alpha itself (rough: at least MIN_ALPHA)
+                mat.alpha = ti.max(tex.sample(rec.alpha_textures[0], surface.uv, surface.uv1).x, MIN_ALPHA)
+                if ti.static(self.features.has_anisotropy):
+                    if rec.roughness_v < 0.0 and rec.alpha_textures[1] == NO_TEXTURE:
+                        mat.alpha_v = mat.alpha
+            if ti.static(self.features.has_anisotropy):
+                if rec.alpha_textures[1] != NO_TEXTURE:
+                    mat.alpha_v = ti.max(tex.sample(rec.alpha_textures[1], surface.uv, surface.uv1).x, MIN_ALPHA)
             if rec.transmission_texture != NO_TEXTURE:
                 mat.transmission *= tex.sample(rec.transmission_texture, surface.uv, surface.uv1).x
             if ti.static(self.features.has_layer("clearcoat")):
@@ -133,15 +145,22 @@ class Bsdf:
         return mat, n
 
     @ti.func
-    def _frame(self, n, wo_world):
+    def _frame(self, mat, n, wo_world):
+        """The local frame on wo's side: the normal, and tangents along the material's oriented
+        tangent in scenes with anisotropic lobes (else any)."""
         n_f = n if n.dot(wo_world) >= 0.0 else -n  # the side wo is on
         t, b = orthonormal_basis(n_f)
+        if ti.static(self.features.has_anisotropy):
+            along = mat.tangent - n_f * n_f.dot(mat.tangent)
+            if along.dot(along) > 1e-12:
+                t = ti.math.normalize(along)
+                b = n_f.cross(t)
         return n_f, t, b
 
     @ti.func
     def sample(self, mat, n, wo_world, u1, u2):
         """Sample wi given wo; u1 picks a lobe, u2 the direction within it."""
-        n_f, t, b = self._frame(n, wo_world)
+        n_f, t, b = self._frame(mat, n, wo_world)
         wo = to_local(wo_world, t, b, n_f)
         entering = n.dot(wo_world) >= 0.0
         s = lobes.invalid_sample()
@@ -157,7 +176,7 @@ class Bsdf:
     @ti.func
     def eval(self, mat, n, wo_world, wi_world):
         """f * |cos(wi)| and the pdf with which `sample` picks wi (non-delta lobes only)."""
-        n_f, t, b = self._frame(n, wo_world)
+        n_f, t, b = self._frame(mat, n, wo_world)
         wo = to_local(wo_world, t, b, n_f)
         wi = to_local(wi_world, t, b, n_f)
         entering = n.dot(wo_world) >= 0.0
@@ -173,7 +192,7 @@ class Bsdf:
     @ti.func
     def glass_sample(self, mat, entering, wo, u1, u2):
         """The dielectric (or the principled glass lobe) with tint mat.base_color."""
-        model = mf.row_model(self, mat)
+        model, alpha_v = mf.row_model(self, mat), mf.row_alpha_v(self, mat)
         s = lobes.invalid_sample()
         thin = False
         if ti.static(self.features.has_thin):
@@ -182,17 +201,17 @@ class Bsdf:
             if ti.static(self.features.has_thin):
                 s = self._thin_sample(mat, wo, u1, u2)
         elif ti.static(self.compensate_glass):
-            if mat.alpha > 0.0 and model == mf.GGX:
+            if mat.alpha > 0.0 and model == mf.GGX and alpha_v < 0.0:
                 s = self.dielectric_tables.sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2)
             else:
-                s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2, model)
+                s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2, model, alpha_v)
         else:
-            s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2, model)
+            s = lobes.dielectric_sample(mat.base_color, mat.alpha, _eta(mat, entering), wo, u1, u2, model, alpha_v)
         return s
 
     @ti.func
     def glass_eval(self, mat, entering, wo, wi):
-        model = mf.row_model(self, mat)
+        model, alpha_v = mf.row_model(self, mat), mf.row_alpha_v(self, mat)
         value = vec3(0.0)
         pdf = 0.0
         thin = False
@@ -202,12 +221,12 @@ class Bsdf:
             if ti.static(self.features.has_thin):
                 value, pdf = self._thin_eval(mat, wo, wi)
         elif ti.static(self.compensate_glass):
-            if mat.alpha > 0.0 and model == mf.GGX:
+            if mat.alpha > 0.0 and model == mf.GGX and alpha_v < 0.0:
                 value, pdf = self.dielectric_tables.eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi)
             else:
-                value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi, model)
+                value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi, model, alpha_v)
         else:
-            value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi, model)
+            value, pdf = lobes.dielectric_eval(mat.base_color, mat.alpha, _eta(mat, entering), wo, wi, model, alpha_v)
         return value, pdf
 
     @ti.func
@@ -218,10 +237,10 @@ class Bsdf:
 
     @ti.func
     def _thin_sample(self, mat, wo, u1, u2):
-        model = mf.row_model(self, mat)
+        model, alpha_v = mf.row_model(self, mat), mf.row_alpha_v(self, mat)
         s = lobes.invalid_sample()
         if ti.static(self.compensate):
-            if mat.alpha > 0.0 and model == mf.GGX:
+            if mat.alpha > 0.0 and model == mf.GGX and alpha_v < 0.0:
                 # u1 picks the multiple-scattering lobe with its energy share, then (its
                 # remainder) reflection or transmission within the chosen lobe.
                 wi = vec3(0.0)
@@ -233,7 +252,7 @@ class Bsdf:
                         wi.z = -wi.z
                 else:
                     single = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo,
-                                                          (u1 - share) / (1.0 - share), u2)
+                                                          (u1 - share) / (1.0 - share), u2, model, alpha_v)
                     wi = single.wi
                     valid = single.valid
                 if valid == 1:
@@ -241,9 +260,9 @@ class Bsdf:
                     if pdf > 0.0:
                         s = BsdfSample(wi=wi, weight=value / pdf, pdf=pdf, delta=0, valid=1)
             else:
-                s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2, model)
+                s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2, model, alpha_v)
         else:
-            s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2, model)
+            s = lobes.thin_dielectric_sample(mat.base_color, mat.alpha, mat.ior, wo, u1, u2, model, alpha_v)
         return s
 
     @ti.func
@@ -252,10 +271,10 @@ class Bsdf:
         per microfacet R + T = 1, so what the wall loses is a white GGX mirror's loss, 1 - E(mu_o),
         returned by the symmetric lobe of energy.py split into reflection and transmission in the
         slab's mean proportion."""
-        model = mf.row_model(self, mat)
-        value, pdf = lobes.thin_dielectric_eval(mat.base_color, mat.alpha, mat.ior, wo, wi, model)
+        model, alpha_v = mf.row_model(self, mat), mf.row_alpha_v(self, mat)
+        value, pdf = lobes.thin_dielectric_eval(mat.base_color, mat.alpha, mat.ior, wo, wi, model, alpha_v)
         if ti.static(self.compensate):
-            if mat.alpha > 0.0 and model == mf.GGX:
+            if mat.alpha > 0.0 and model == mf.GGX and alpha_v < 0.0:
                 r_share = self._thin_reflect_share(mat)
                 wr = vec3(wi.x, wi.y, ti.abs(wi.z))
                 v_ms, pdf_ms, share = self.energy.multiple_scattering(vec3(1.0), mat.alpha, wo, wr)
@@ -275,15 +294,16 @@ class Bsdf:
 
     # --- the principled model's helpers (renderer/materials/principled.py calls them) --------------
     @ti.func
-    def metal_eval(self, fresnel, f_avg, alpha, wo, wi, model=mf.GGX):
+    def metal_eval(self, fresnel, f_avg, alpha, wo, wi, model=mf.GGX, alpha_v=mf.ISOTROPIC):
         """A metal lobe with Fresnel `fresnel` at the half vector (and its mean f_avg); the
-        compensation's tables are GGX's, so other microfacet models go uncompensated."""
+        compensation's tables are isotropic GGX's, so other microfacet models and anisotropic
+        widths go uncompensated."""
         value = vec3(0.0)
         pdf = 0.0
         if ti.static(not self.compensate):
-            value, pdf = lobes.ggx_reflection_eval(fresnel, alpha, wo, wi, model)
-        elif model != mf.GGX:
-            value, pdf = lobes.ggx_reflection_eval(fresnel, alpha, wo, wi, model)
+            value, pdf = lobes.ggx_reflection_eval(fresnel, alpha, wo, wi, model, alpha_v)
+        elif model != mf.GGX or alpha_v >= 0.0:
+            value, pdf = lobes.ggx_reflection_eval(fresnel, alpha, wo, wi, model, alpha_v)
         else:
             value, pdf = _compensated_reflection_eval(self.energy, fresnel, f_avg, alpha, wo, wi)
         return value, pdf

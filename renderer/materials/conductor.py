@@ -14,10 +14,11 @@ from renderer.materials.microfacet import GGX
 @ti.func
 def sample(bsdf, mat, n_f, t, b, entering, wo, u1, u2):
     s = lobes.invalid_sample()
+    model, alpha_v = mf.row_model(bsdf, mat), mf.row_alpha_v(bsdf, mat)
     if ti.static(not bsdf.compensate):
-        s = lobes.conductor_sample(mat, wo, u2, mf.row_model(bsdf, mat))
-    elif mat.alpha == 0.0 or mf.row_model(bsdf, mat) != GGX:  # a smooth mirror scatters once; the tables are GGX's
-        s = lobes.conductor_sample(mat, wo, u2, mf.row_model(bsdf, mat))
+        s = lobes.conductor_sample(mat, wo, u2, model, alpha_v)
+    elif mat.alpha == 0.0 or model != GGX or alpha_v >= 0.0:  # one scattering; the tables are isotropic GGX's
+        s = lobes.conductor_sample(mat, wo, u2, model, alpha_v)
     else:
         wi = bsdf.metal_direction(mat.alpha, wo, u1, u2)
         if wi.z > 0.0:
@@ -31,7 +32,8 @@ def sample(bsdf, mat, n_f, t, b, entering, wo, u1, u2):
 def evaluate(bsdf, mat, n_f, t, b, entering, wo, wi):
     h = ti.math.normalize(wo + wi)
     fresnel = lobes.conductor_reflectance(mat, wo.dot(h))
-    return bsdf.metal_eval(fresnel, lobes.conductor_reflectance_average(mat), mat.alpha, wo, wi, mf.row_model(bsdf, mat))
+    return bsdf.metal_eval(fresnel, lobes.conductor_reflectance_average(mat), mat.alpha, wo, wi,
+                           mf.row_model(bsdf, mat), mf.row_alpha_v(bsdf, mat))
 
 
 @ti.func

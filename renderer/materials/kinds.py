@@ -138,18 +138,22 @@ SHARED_COLUMNS = (
     # and the sidedness (SIDEDNESS); set by the table's code from the spec's names.
     Column("microfacet", "i32", 0),
     Column("sidedness", "i32", TWO_SIDED),
+    # Anisotropic roughness: the width along the surface's dp/dv (roughness is along dp/du); below
+    # 0 the material is isotropic.
+    Column("roughness_v", "f32", -1.0),
+    Column("alpha_textures", "ivec4", (NO_TEXTURE,) * 4),  # alpha (along u), alpha_v, unused, unused
     Column("opacity_texture", "i32", NO_TEXTURE),  # coverage from a texture's first channel (Mitsuba's mask)
 )
 
 KINDS = (
     MaterialKind("diffuse", "diffuse", (), (), _F.REFLECTION | _F.DIFFUSE, "renderer.materials.diffuse"),
-    MaterialKind("conductor", "conductor", ("edge_tint", "eta", "k", "metal", "microfacet"),
+    MaterialKind("conductor", "conductor", ("edge_tint", "eta", "k", "metal", "microfacet", "roughness_v"),
                  (Column("edge_tint", "vec3", (1.0, 1.0, 1.0), from_spec=True), Column("complex_ior", "i32", 0),
                   Column("eta", "vec3", (0.0, 0.0, 0.0)), Column("k", "vec3", (0.0, 0.0, 0.0)),
                   Column("fresnel_avg", "vec3", (0.0, 0.0, 0.0))),
                  _F.REFLECTION | _F.GLOSSY | _F.SPECULAR, "renderer.materials.conductor", compensation="rough",
                  defaults=_SMOOTH),
-    MaterialKind("dielectric", "glass", ("ior", "thin", "abbe", "glass", "microfacet"),
+    MaterialKind("dielectric", "glass", ("ior", "thin", "abbe", "glass", "microfacet", "roughness_v"),
                  (_IOR, _THIN, Column("dispersion", "i32", 0), Column("dispersion_b", "vec4", (0.0,) * 4),
                   Column("dispersion_c", "vec4", (0.0,) * 4)),
                  _F.REFLECTION | _F.TRANSMISSION | _F.GLOSSY | _F.SPECULAR, "renderer.materials.dielectric",

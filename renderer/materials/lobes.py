@@ -101,7 +101,7 @@ def conductor_reflectance_average(mat):
 
 # --- GGX reflection (conductor, metal, dielectric coat) ------------------------------------------------
 @ti.func
-def ggx_reflection_eval(fresnel, alpha, wo, wi, model=mf.GGX):
+def ggx_reflection_eval(fresnel, alpha, wo, wi, model=mf.GGX, alpha_v=mf.ISOTROPIC):
     """fresnel: the Fresnel factor at wo.h (vec3); the caller computes it for h = normalize(wo + wi).
     model: the microfacet model (microfacet.py; GGX unless a row names another)."""
     value = vec3(0.0)
@@ -110,44 +110,45 @@ def ggx_reflection_eval(fresnel, alpha, wo, wi, model=mf.GGX):
         h = ti.math.normalize(wo + wi)
         cos_oh = wo.dot(h)
         if cos_oh > 0.0:
-            value = fresnel * (mf.d(h, alpha, model) * mf.g2(wo, wi, alpha, model) / (4.0 * wo.z))
-            pdf = mf.normal_pdf(wo, h, alpha, model) / (4.0 * cos_oh)
+            value = fresnel * (mf.d(h, alpha, model, alpha_v) * mf.g2(wo, wi, alpha, model, alpha_v) / (4.0 * wo.z))
+            pdf = mf.normal_pdf(wo, h, alpha, model, alpha_v) / (4.0 * cos_oh)
     return value, pdf
 
 
 @ti.func
-def ggx_reflection_direction(alpha, wo, u2, model=mf.GGX):
-    return mf.reflect(wo, mf.sample_normal(wo, alpha, u2, model))
+def ggx_reflection_direction(alpha, wo, u2, model=mf.GGX, alpha_v=mf.ISOTROPIC):
+    return mf.reflect(wo, mf.sample_normal(wo, alpha, u2, model, alpha_v))
 
 
 @ti.func
-def conductor_eval(mat, wo, wi, model=mf.GGX):
+def conductor_eval(mat, wo, wi, model=mf.GGX, alpha_v=mf.ISOTROPIC):
     """mat: a conductor Material (its alpha and Fresnel description); model: its microfacet model."""
     h = ti.math.normalize(wo + wi)
-    return ggx_reflection_eval(conductor_reflectance(mat, wo.dot(h)), mat.alpha, wo, wi, model)
+    return ggx_reflection_eval(conductor_reflectance(mat, wo.dot(h)), mat.alpha, wo, wi, model, alpha_v)
 
 
 @ti.func
-def conductor_sample(mat, wo, u2, model=mf.GGX):
+def conductor_sample(mat, wo, u2, model=mf.GGX, alpha_v=mf.ISOTROPIC):
     s = invalid_sample()
     alpha = mat.alpha
     if alpha == 0.0:
         s = BsdfSample(wi=vec3(-wo.x, -wo.y, wo.z), weight=conductor_reflectance(mat, wo.z), pdf=1.0, delta=1,
                        valid=1)
     else:
-        h = mf.sample_normal(wo, alpha, u2, model)
+        h = mf.sample_normal(wo, alpha, u2, model, alpha_v)
         wi = mf.reflect(wo, h)
         cos_oh = wo.dot(h)
         if wi.z > 0.0 and cos_oh > 0.0:  # (Beckmann's normals, drawn from D cos, can face away from wo)
             # f cos / pdf: D and the Jacobian cancel (microfacet.sampled_weight).
-            s = BsdfSample(wi=wi, weight=conductor_reflectance(mat, cos_oh) * mf.sampled_weight(wo, wi, h, alpha, model),
-                           pdf=mf.normal_pdf(wo, h, alpha, model) / (4.0 * cos_oh), delta=0, valid=1)
+            weight = conductor_reflectance(mat, cos_oh) * mf.sampled_weight(wo, wi, h, alpha, model, alpha_v)
+            s = BsdfSample(wi=wi, weight=weight, pdf=mf.normal_pdf(wo, h, alpha, model, alpha_v) / (4.0 * cos_oh),
+                           delta=0, valid=1)
     return s
 
 
 # --- Dielectric interface (rough: Walter et al. 2007; smooth: delta) -------------------------------------
 @ti.func
-def dielectric_eval(tint, alpha, eta, wo, wi, model=mf.GGX):
+def dielectric_eval(tint, alpha, eta, wo, wi, model=mf.GGX, alpha_v=mf.ISOTROPIC):
     value = vec3(0.0)
     pdf = 0.0
     if alpha > 0.0 and wi.z != 0.0:
@@ -156,8 +157,8 @@ def dielectric_eval(tint, alpha, eta, wo, wi, model=mf.GGX):
             cos_oh = wo.dot(h)
             if cos_oh > 0.0:
                 f, _ = mf.fresnel_dielectric(cos_oh, eta)
-                value = vec3(f * mf.d(h, alpha, model) * mf.g2(wo, wi, alpha, model) / (4.0 * wo.z))
-                pdf = f * mf.normal_pdf(wo, h, alpha, model) / (4.0 * cos_oh)
+                value = vec3(f * mf.d(h, alpha, model, alpha_v) * mf.g2(wo, wi, alpha, model, alpha_v) / (4.0 * wo.z))
+                pdf = f * mf.normal_pdf(wo, h, alpha, model, alpha_v) / (4.0 * cos_oh)
         else:
             # Generalised half vector of a refraction, on wo's side.
             h = ti.math.normalize(wo + eta * wi)
@@ -169,22 +170,22 @@ def dielectric_eval(tint, alpha, eta, wo, wi, model=mf.GGX):
                 f, _ = mf.fresnel_dielectric(cos_oh, eta)
                 denom = cos_oh + eta * cos_ih
                 denom2 = denom * denom
-                d = mf.d(h, alpha, model)
-                value = tint * ((1.0 - f) * d * mf.g2(wo, wi, alpha, model) * cos_oh * ti.abs(cos_ih)
+                d = mf.d(h, alpha, model, alpha_v)
+                value = tint * ((1.0 - f) * d * mf.g2(wo, wi, alpha, model, alpha_v) * cos_oh * ti.abs(cos_ih)
                                 / (wo.z * denom2))
                 # Walter et al. 2007, eq. 17: d(h)/d(wi) = eta^2 |wi.h| / (wo.h + eta wi.h)^2
-                pdf = (1.0 - f) * mf.normal_pdf(wo, h, alpha, model) * eta * eta * ti.abs(cos_ih) / denom2
+                pdf = (1.0 - f) * mf.normal_pdf(wo, h, alpha, model, alpha_v) * eta * eta * ti.abs(cos_ih) / denom2
     return value, pdf
 
 
 @ti.func
-def dielectric_sample(tint, alpha, eta, wo, u1, u2, model=mf.GGX):
+def dielectric_sample(tint, alpha, eta, wo, u1, u2, model=mf.GGX, alpha_v=mf.ISOTROPIC):
     """Lobe choice by Fresnel, so F cancels in the weight."""
     s = BsdfSample(wi=vec3(0.0, 0.0, 1.0), weight=vec3(0.0), pdf=0.0, delta=1, valid=1)
     h = vec3(0.0, 0.0, 1.0)
     g_ratio = 1.0
     if alpha > 0.0:
-        h = mf.sample_normal(wo, alpha, u2, model)
+        h = mf.sample_normal(wo, alpha, u2, model, alpha_v)
         s.delta = 0
     cos_oh = wo.dot(h)
     facing_away = cos_oh <= 0.0  # (Beckmann's normals, drawn from D cos, can face away from wo)
@@ -200,8 +201,8 @@ def dielectric_sample(tint, alpha, eta, wo, u1, u2, model=mf.GGX):
         s.valid = 0
     else:
         if alpha > 0.0:
-            g_ratio = mf.sampled_weight(wo, s.wi, h, alpha, model)
-            d_vis = mf.normal_pdf(wo, h, alpha, model)
+            g_ratio = mf.sampled_weight(wo, s.wi, h, alpha, model, alpha_v)
+            d_vis = mf.normal_pdf(wo, h, alpha, model, alpha_v)
             if reflect:
                 s.pdf = f * d_vis / (4.0 * cos_oh)
             else:
@@ -232,7 +233,7 @@ def _mirrored(w):
 
 
 @ti.func
-def thin_dielectric_eval(tint, alpha, ior, wo, wi, model=mf.GGX):
+def thin_dielectric_eval(tint, alpha, ior, wo, wi, model=mf.GGX, alpha_v=mf.ISOTROPIC):
     """Rough thin wall: a GGX reflection lobe whose microfacets reflect with the slab's reflectance
     R(wo.h) and pass the rest straight through, i.e. into the reflected direction mirrored to the
     far side (no bending, no 1 / eta^2: the light leaves into the medium it came from).
@@ -245,8 +246,8 @@ def thin_dielectric_eval(tint, alpha, ior, wo, wi, model=mf.GGX):
         cos_oh = wo.dot(h)
         if cos_oh > 0.0:
             r = thin_reflectance(cos_oh, ior)
-            f_cos = mf.d(h, alpha, model) * mf.g2(wo, wr, alpha, model) / (4.0 * wo.z)
-            lobe_pdf = mf.normal_pdf(wo, h, alpha, model) / (4.0 * cos_oh)
+            f_cos = mf.d(h, alpha, model, alpha_v) * mf.g2(wo, wr, alpha, model, alpha_v) / (4.0 * wo.z)
+            lobe_pdf = mf.normal_pdf(wo, h, alpha, model, alpha_v) / (4.0 * cos_oh)
             if wi.z > 0.0:
                 value = vec3(r * f_cos)
                 pdf = r * lobe_pdf
@@ -257,12 +258,12 @@ def thin_dielectric_eval(tint, alpha, ior, wo, wi, model=mf.GGX):
 
 
 @ti.func
-def thin_dielectric_sample(tint, alpha, ior, wo, u1, u2, model=mf.GGX):
+def thin_dielectric_sample(tint, alpha, ior, wo, u1, u2, model=mf.GGX, alpha_v=mf.ISOTROPIC):
     """Reflect with the slab's reflectance, else pass straight through (smooth: along -wo)."""
     s = BsdfSample(wi=vec3(0.0, 0.0, 1.0), weight=vec3(0.0), pdf=0.0, delta=1, valid=1)
     h = vec3(0.0, 0.0, 1.0)
     if alpha > 0.0:
-        h = mf.sample_normal(wo, alpha, u2, model)
+        h = mf.sample_normal(wo, alpha, u2, model, alpha_v)
         s.delta = 0
     cos_oh = wo.dot(h)
     facing_away = cos_oh <= 0.0  # (Beckmann's normals, drawn from D cos, can face away from wo)
@@ -274,8 +275,8 @@ def thin_dielectric_sample(tint, alpha, ior, wo, u1, u2, model=mf.GGX):
         g_ratio = 1.0
         lobe_pdf = 1.0
         if alpha > 0.0:
-            g_ratio = mf.sampled_weight(wo, wr, h, alpha, model)
-            lobe_pdf = mf.normal_pdf(wo, h, alpha, model) / (4.0 * cos_oh)
+            g_ratio = mf.sampled_weight(wo, wr, h, alpha, model, alpha_v)
+            lobe_pdf = mf.normal_pdf(wo, h, alpha, model, alpha_v) / (4.0 * cos_oh)
         if u1 < r:
             s.wi = wr
             s.weight = vec3(g_ratio)

@@ -38,4 +38,6 @@ def needs_uv_partials(arrays: dict) -> bool:
     """Whether any row of the table's arrays (MaterialRows.arrays) shades in the frame of the
     surface's texture parametrisation, so hits must carry dp/du and dp/dv."""
     textures, models = arrays["textures"], arrays["normal_map_model"]
-    return bool(np.any((textures[:, 2] != NO_TEXTURE) & (models != TANGENT_SPACE_MAP)))
+    # lobes oriented along dp/du
+    anisotropic = (np.asarray(arrays["roughness_v"]) >= 0.0) | (np.asarray(arrays["alpha_textures"])[:, 1] != NO_TEXTURE)
+    return bool(np.any((textures[:, 2] != NO_TEXTURE) & (models != TANGENT_SPACE_MAP)) or np.any(anisotropic))

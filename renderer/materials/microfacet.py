@@ -16,37 +16,59 @@ from renderer.materials.kinds import MICROFACET_MODELS as MODELS
 from renderer.sampling.warps import PI
 
 GGX, GGX_SEPARABLE, BECKMANN = MODELS["ggx"], MODELS["ggx_separable"], MODELS["beckmann"]
+# An `alpha_v` argument below 0: the distribution is isotropic, alpha wide in every direction;
+# otherwise alpha is its width along the frame's x axis (the surface's dp/du) and alpha_v along y.
+ISOTROPIC = -1.0
 
 
 @ti.func
-def ggx_d(h, alpha):
-    a2 = alpha * alpha
-    t = (h.x * h.x + h.y * h.y) / a2 + h.z * h.z
-    return 1.0 / (PI * a2 * t * t)
+def ggx_d(h, alpha, alpha_v=ISOTROPIC):
+    value = 0.0
+    if alpha_v < 0.0:
+        a2 = alpha * alpha
+        t = (h.x * h.x + h.y * h.y) / a2 + h.z * h.z
+        value = 1.0 / (PI * a2 * t * t)
+    else:
+        t = h.x * h.x / (alpha * alpha) + h.y * h.y / (alpha_v * alpha_v) + h.z * h.z
+        value = 1.0 / (PI * alpha * alpha_v * t * t)
+    return value
 
 
 @ti.func
-def smith_lambda(w, alpha):
+def _projected_alpha2_xy(w, alpha, alpha_v):
+    """alpha^2 (w.x^2 + w.y^2), the width along w's azimuth squared times sin^2 (anisotropic:
+    alpha_u^2 w.x^2 + alpha_v^2 w.y^2)."""
+    value = 0.0
+    if alpha_v < 0.0:
+        value = alpha * alpha * (w.x * w.x + w.y * w.y)
+    else:
+        value = alpha * alpha * w.x * w.x + alpha_v * alpha_v * w.y * w.y
+    return value
+
+
+@ti.func
+def smith_lambda(w, alpha, alpha_v=ISOTROPIC):
     # Lambda = (sqrt(1 + alpha^2 tan^2) - 1) / 2, written without tan so that z -> 0 gives a large
     # finite value; callers reject z <= 0 before this is reached.
     z2 = ti.max(w.z * w.z, 1e-20)
-    return 0.5 * (ti.sqrt(1.0 + alpha * alpha * (w.x * w.x + w.y * w.y) / z2) - 1.0)
+    return 0.5 * (ti.sqrt(1.0 + _projected_alpha2_xy(w, alpha, alpha_v) / z2) - 1.0)
 
 
 @ti.func
-def smith_g1(w, alpha):
-    return 1.0 / (1.0 + smith_lambda(w, alpha))
+def smith_g1(w, alpha, alpha_v=ISOTROPIC):
+    return 1.0 / (1.0 + smith_lambda(w, alpha, alpha_v))
 
 
 @ti.func
-def smith_g2(wo, wi, alpha):
-    return 1.0 / (1.0 + smith_lambda(wo, alpha) + smith_lambda(wi, alpha))
+def smith_g2(wo, wi, alpha, alpha_v=ISOTROPIC):
+    return 1.0 / (1.0 + smith_lambda(wo, alpha, alpha_v) + smith_lambda(wi, alpha, alpha_v))
 
 
 @ti.func
-def sample_visible_normal(wo, alpha, u):
+def sample_visible_normal(wo, alpha, u, alpha_v=ISOTROPIC):
     """Heitz 2018, 'Sampling the GGX distribution of visible normals'. wo.z must be > 0."""
-    vh = ti.math.normalize(ti.math.vec3(alpha * wo.x, alpha * wo.y, wo.z))
+    ay = alpha if alpha_v < 0.0 else alpha_v
+    vh = ti.math.normalize(ti.math.vec3(alpha * wo.x, ay * wo.y, wo.z))
     lensq = vh.x * vh.x + vh.y * vh.y
     t1 = ti.math.vec3(1.0, 0.0, 0.0)
     if lensq > 0.0:
@@ -59,46 +81,59 @@ def sample_visible_normal(wo, alpha, u):
     s = 0.5 * (1.0 + vh.z)
     p2 = (1.0 - s) * ti.sqrt(ti.max(0.0, 1.0 - p1 * p1)) + s * p2
     nh = p1 * t1 + p2 * t2 + ti.sqrt(ti.max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh
-    return ti.math.normalize(ti.math.vec3(alpha * nh.x, alpha * nh.y, ti.max(1e-6, nh.z)))
+    return ti.math.normalize(ti.math.vec3(alpha * nh.x, ay * nh.y, ti.max(1e-6, nh.z)))
 
 
 @ti.func
-def visible_normal_pdf(wo, h, alpha):
+def visible_normal_pdf(wo, h, alpha, alpha_v=ISOTROPIC):
     """Density of h under sample_visible_normal: G1(wo) max(0, wo.h) D(h) / wo.z."""
-    return smith_g1(wo, alpha) * ti.max(0.0, wo.dot(h)) * ggx_d(h, alpha) / wo.z
+    return smith_g1(wo, alpha, alpha_v) * ti.max(0.0, wo.dot(h)) * ggx_d(h, alpha, alpha_v) / wo.z
 
 
 # --- Beckmann ----------------------------------------------------------------------------------------
 @ti.func
-def beckmann_d(h, alpha):
+def beckmann_d(h, alpha, alpha_v=ISOTROPIC):
     cos2 = h.z * h.z
     d = 0.0
     if cos2 > 0.0:
-        tan2 = (h.x * h.x + h.y * h.y) / cos2
-        d = ti.exp(-tan2 / (alpha * alpha)) / (PI * alpha * alpha * cos2 * cos2)
+        if alpha_v < 0.0:
+            tan2 = (h.x * h.x + h.y * h.y) / cos2
+            d = ti.exp(-tan2 / (alpha * alpha)) / (PI * alpha * alpha * cos2 * cos2)
+        else:
+            e = (h.x * h.x / (alpha * alpha) + h.y * h.y / (alpha_v * alpha_v)) / cos2
+            d = ti.exp(-e) / (PI * alpha * alpha_v * cos2 * cos2)
     return d
 
 
 @ti.func
-def beckmann_g1(w, alpha):
-    """Walter et al. 2007's rational fit of Beckmann's Smith G1, a = 1 / (alpha tan(theta))."""
+def beckmann_g1(w, alpha, alpha_v=ISOTROPIC):
+    """Walter et al. 2007's rational fit of Beckmann's Smith G1, a = 1 / (alpha tan(theta)) with
+    alpha the width along w's azimuth."""
     g = 1.0
-    xy = w.x * w.x + w.y * w.y
+    xy = _projected_alpha2_xy(w, alpha, alpha_v)
     if xy > 0.0:
-        a = ti.abs(w.z) / (alpha * ti.sqrt(xy))
+        a = ti.abs(w.z) / ti.sqrt(xy)
         if a < 1.6:
             g = (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
     return g
 
 
 @ti.func
-def beckmann_sample_normal(alpha, u):
-    """A normal drawn from D(h) cos(theta_h): tan^2 = -alpha^2 log(1 - u.x), uniform azimuth."""
-    tan2 = -alpha * alpha * ti.log(ti.max(1.0 - u.x, 1e-12))
-    cos_t = 1.0 / ti.sqrt(1.0 + tan2)
-    sin_t = ti.sqrt(ti.max(0.0, 1.0 - cos_t * cos_t))
+def beckmann_sample_normal(alpha, u, alpha_v=ISOTROPIC):
+    """A normal drawn from D(h) cos(theta_h): Beckmann's slopes are Gaussian, so slopes
+    (alpha_u cos(phi), alpha_v sin(phi)) r with r^2 = -log(1 - u.x) exponential and phi uniform
+    (isotropic: tan^2 = -alpha^2 log(1 - u.x))."""
+    h = ti.math.vec3(0.0, 0.0, 1.0)
     phi = 2.0 * PI * u.y
-    return ti.math.vec3(sin_t * ti.cos(phi), sin_t * ti.sin(phi), cos_t)
+    if alpha_v < 0.0:
+        tan2 = -alpha * alpha * ti.log(ti.max(1.0 - u.x, 1e-12))
+        cos_t = 1.0 / ti.sqrt(1.0 + tan2)
+        sin_t = ti.sqrt(ti.max(0.0, 1.0 - cos_t * cos_t))
+        h = ti.math.vec3(sin_t * ti.cos(phi), sin_t * ti.sin(phi), cos_t)
+    else:
+        r = ti.sqrt(-ti.log(ti.max(1.0 - u.x, 1e-12)))
+        h = ti.math.normalize(ti.math.vec3(alpha * r * ti.cos(phi), alpha_v * r * ti.sin(phi), 1.0))
+    return h
 
 
 # --- A material's model: the distribution and masking a row names -----------------------------------
@@ -110,68 +145,75 @@ def row_model(bsdf: ti.template(), mat):
 
 
 @ti.func
-def d(h, alpha, model=GGX):
+def d(h, alpha, model=GGX, alpha_v=ISOTROPIC):
     value = 0.0
     if model == BECKMANN:
-        value = beckmann_d(h, alpha)
+        value = beckmann_d(h, alpha, alpha_v)
     else:
-        value = ggx_d(h, alpha)
+        value = ggx_d(h, alpha, alpha_v)
     return value
 
 
 @ti.func
-def g1(w, alpha, model=GGX):
+def g1(w, alpha, model=GGX, alpha_v=ISOTROPIC):
     value = 0.0
     if model == BECKMANN:
-        value = beckmann_g1(w, alpha)
+        value = beckmann_g1(w, alpha, alpha_v)
     else:
-        value = smith_g1(w, alpha)
+        value = smith_g1(w, alpha, alpha_v)
     return value
 
 
 @ti.func
-def g2(wo, wi, alpha, model=GGX):
+def g2(wo, wi, alpha, model=GGX, alpha_v=ISOTROPIC):
     value = 0.0
     if model == GGX:
-        value = smith_g2(wo, wi, alpha)
+        value = smith_g2(wo, wi, alpha, alpha_v)
     else:
-        value = g1(wo, alpha, model) * g1(wi, alpha, model)
+        value = g1(wo, alpha, model, alpha_v) * g1(wi, alpha, model, alpha_v)
     return value
 
 
 @ti.func
-def sample_normal(wo, alpha, u, model=GGX):
+def sample_normal(wo, alpha, u, model=GGX, alpha_v=ISOTROPIC):
     """A microfacet normal as the model draws them (see normal_pdf)."""
     h = ti.math.vec3(0.0, 0.0, 1.0)
     if model == BECKMANN:
-        h = beckmann_sample_normal(alpha, u)
+        h = beckmann_sample_normal(alpha, u, alpha_v)
     else:
-        h = sample_visible_normal(wo, alpha, u)
+        h = sample_visible_normal(wo, alpha, u, alpha_v)
     return h
 
 
 @ti.func
-def normal_pdf(wo, h, alpha, model=GGX):
+def normal_pdf(wo, h, alpha, model=GGX, alpha_v=ISOTROPIC):
     """The density of sample_normal's h: GGX's visible normals, Beckmann's D(h) cos(theta_h)."""
     pdf = 0.0
     if model == BECKMANN:
-        pdf = beckmann_d(h, alpha) * ti.max(h.z, 0.0)
+        pdf = beckmann_d(h, alpha, alpha_v) * ti.max(h.z, 0.0)
     else:
-        pdf = visible_normal_pdf(wo, h, alpha)
+        pdf = visible_normal_pdf(wo, h, alpha, alpha_v)
     return pdf
 
 
 @ti.func
-def sampled_weight(wo, wi, h, alpha, model=GGX):
+def sampled_weight(wo, wi, h, alpha, model=GGX, alpha_v=ISOTROPIC):
     """D G2 |wo.h| / (wo.z pdf(h)): the weight of a direction sampled through h, Fresnel and
     tint aside. GGX's visible normals leave G2 / G1(wo); Beckmann's D cancels against its pdf."""
     w = 0.0
     if model == BECKMANN:
         if h.z > 0.0:
-            w = g2(wo, wi, alpha, model) * ti.abs(wo.dot(h)) / (wo.z * h.z)
+            w = g2(wo, wi, alpha, model, alpha_v) * ti.abs(wo.dot(h)) / (wo.z * h.z)
     else:
-        w = g2(wo, wi, alpha, model) / smith_g1(wo, alpha)
+        w = g2(wo, wi, alpha, model, alpha_v) / smith_g1(wo, alpha, alpha_v)
     return w
+
+
+@ti.func
+def row_alpha_v(bsdf: ti.template(), mat):
+    """A material's width along its frame's y axis, or ISOTROPIC (a constant the compiler folds)
+    in scenes whose rows are all isotropic."""
+    return mat.alpha_v if ti.static(bsdf.features.has_anisotropy) else ISOTROPIC
 
 
 @ti.func

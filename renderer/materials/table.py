@@ -46,7 +46,7 @@ Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=
                            sheen_color=vec3, sheen_roughness=ti.f32, specular=ti.f32, specular_color=vec3,
                            coat_normal=vec3, microfacet=ti.i32, nonlinear=ti.i32, plastic_table=ti.i32,
                            internal_reflectance=ti.f32, specular_weight=ti.f32, sidedness=ti.i32,
-                           unmapped_normal=vec3, tangent=vec3)
+                           unmapped_normal=vec3, tangent=vec3, alpha_v=ti.f32)
 
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = 0, 1, 2
 ALPHA_MODE_IDS = {"OPAQUE": ALPHA_OPAQUE, "MASK": ALPHA_MASK, "BLEND": ALPHA_BLEND}
@@ -77,6 +77,9 @@ class MaterialRows:
         row.update(normal_map_row(spec, slots))
         row.update(kind=KIND_IDS[spec.kind], medium=self.medium_ids[spec.medium] if spec.medium else NO_MEDIUM,
                    thin=int(spec.thin), microfacet=MODELS[spec.microfacet], sidedness=SIDEDNESS[spec.sidedness],
+                   roughness_v=-1.0 if spec.roughness_v is None else float(spec.roughness_v),
+                   alpha_textures=(slots.get("alpha", NO_TEXTURE), slots.get("alpha_v", NO_TEXTURE), NO_TEXTURE,
+                                   NO_TEXTURE),
                    **dispersion_row(spec), **conductor_ior_row(spec))
         if spec.opacity < 1.0 or "opacity" in slots:
             row.update(alpha_mode=ALPHA_BLEND, base_alpha=spec.opacity,
@@ -140,7 +143,8 @@ class MaterialRows:
         return {"kinds": {KIND_NAMES[r["kind"]] for r in rows},
                 "layers": {layer.name for layer in LAYERS if any(layer.in_use(r) for r in rows)},
                 "textures": (any(slots) or layer_textures
-                             or any(r["transmission_texture"] != NO_TEXTURE for r in rows)),
+                             or any(r["transmission_texture"] != NO_TEXTURE for r in rows)
+                             or any(t != NO_TEXTURE for r in rows for t in r["alpha_textures"])),
                 "normal_maps": any(r["textures"][2] != NO_TEXTURE and r["normal_map_model"] == TANGENT_SPACE_MAP
                                    for r in rows),
                 **mapped_frame_uses(rows), "emission": any(max(r["emission"]) > 0 for r in rows),
@@ -150,7 +154,8 @@ class MaterialRows:
                 "alpha": any(r["alpha_mode"] != ALPHA_OPAQUE for r in rows),
                 "thin": any(r["thin"] == 1 for r in rows),
                 "microfacet_models": any(r["microfacet"] != GGX for r in rows),
-                "sidedness": any(r["sidedness"] == BACK_BLACK for r in rows)}
+                "sidedness": any(r["sidedness"] == BACK_BLACK for r in rows),
+                "anisotropy": any(r["roughness_v"] >= 0.0 or r["alpha_textures"][1] != NO_TEXTURE for r in rows)}
 
 
 def _default_row() -> dict:

@@ -152,6 +152,13 @@ class MaterialSpec:
     # masking), "ggx_separable" or "beckmann" (separable masking, Mitsuba 3's); see
     # renderer/materials/microfacet.py.
     microfacet: str = "ggx"
+    # Anisotropic roughness: the perceptual roughness along the surface's dp/dv, `roughness` being
+    # along dp/du (Mitsuba's alpha_u and alpha_v as square roots); None: isotropic.
+    roughness_v: Optional[float] = None
+    # Microfacet widths alpha (= roughness^2) from textures' first channel, in place of roughness
+    # and roughness_v (Mitsuba's textured alpha, alpha_u, alpha_v).
+    alpha_texture: Optional[TextureSpec] = None
+    alpha_v_texture: Optional[TextureSpec] = None
     nonlinear: bool = False  # plastic: Mitsuba's `nonlinear` (the base's colour deepens under the coat)
     sidedness: str = "two_sided"  # "two_sided", "back_black" (Mitsuba's one-sided BSDFs) or "back_culled"
     # Coverage (Mitsuba's mask BSDF): the surface is there with probability opacity (times the
@@ -175,10 +182,11 @@ class MaterialSpec:
 
     @property
     def textures(self) -> dict[str, "TextureSpec"]:
-        """The material's textures by role ("base_color", "opacity", "emission", "normal", "bump"),
-        those it has."""
+        """The material's textures by role ("base_color", "opacity", "emission", "normal", "bump",
+        "alpha", "alpha_v"), those it has."""
         roles = {"base_color": self.base_color_texture, "opacity": self.opacity_texture,
-                 "emission": self.emission_texture, "normal": self.normal_map, "bump": self.bump_map}
+                 "emission": self.emission_texture, "normal": self.normal_map, "bump": self.bump_map,
+                 "alpha": self.alpha_texture, "alpha_v": self.alpha_v_texture}
         return {role: texture for role, texture in roles.items() if texture is not None}
 
     @property

@@ -26,6 +26,7 @@ class Features:
     # parametrisation, with the shadow-terminator term; bump maps add the height texture's gradient.
     has_mapped_frames: bool = False
     has_bump_maps: bool = False
+    has_anisotropy: bool = False  # anisotropic microfacet widths, oriented along the surface's dp/du
     # Kulla-Conty multiple scattering: rough GGX reflection (conductors, principled metal), rough
     # dielectric interfaces (glass, principled glass) and the principled coat's layering
     energy_compensation: bool = False
@@ -76,6 +77,7 @@ class Features:
                  ("emission", self.has_emission),
                  ("textures", self.has_textures), ("normal maps", self.has_normal_maps),
                  ("mapped frames", self.has_mapped_frames), ("bump maps", self.has_bump_maps),
+                 ("anisotropy", self.has_anisotropy),
                  ("multiple scattering", self.energy_compensation),
                  ("media", self.has_media), ("grid media", self.has_grid_media), ("analytic fog", self.analytic_fog),
                  ("dispersion", self.has_dispersion), ("alpha", self.has_alpha),
@@ -103,7 +105,7 @@ class Features:
         sdf = self.geometry == "sdf"
         return replace(self, material_kinds=frozenset(KIND_NAMES), material_layers=frozenset(LAYER_NAMES),
                        has_emission=True, has_textures=not sdf, has_normal_maps=not sdf,
-                       has_mapped_frames=not sdf, has_bump_maps=not sdf, depth_of_field=True,
+                       has_mapped_frames=not sdf, has_bump_maps=not sdf, has_anisotropy=not sdf, depth_of_field=True,
                        energy_compensation=True, has_media=True, has_grid_media=True, analytic_fog=True,
                        has_dispersion=True, has_thin=True, has_microfacet_models=True, has_sidedness=True,
                        has_alpha=not sdf, has_vertex_colors=not sdf, has_instances=not sdf,
@@ -159,6 +161,7 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         has_normal_maps=material_uses["normal_maps"],
         has_mapped_frames=bool(material_uses.get("mapped_frames", False)),
         has_bump_maps=bool(material_uses.get("bump_maps", False)),
+        has_anisotropy=bool(material_uses.get("anisotropy", False)),
         energy_compensation=energy_compensation and (any(always_compensated(k) for k in kinds)
                                                      or material_uses.get("rough", True)),
         has_media=fog == "medium" or bool(material_uses.get("media", False)),

@@ -289,6 +289,10 @@ MATERIAL = Section(
               "plastic: `ggx` (Smith's height-correlated masking), `ggx_separable` or `beckmann` "
               "(Smith's separable masking, as Mitsuba 3 has them). Energy compensation applies to "
               "`ggx` only.", choices=tuple(MICROFACET_MODELS)),
+        Field("roughness_v", "float", None, "Anisotropic roughness: the perceptual roughness along the "
+              "surface's texture direction v (dp/dv), `roughness` being the one along u (Mitsuba's "
+              "`alpha_u` and `alpha_v` are their squares). Mesh scenes with texture coordinates.",
+              UNIT, geometries=("mesh",), default_doc="none (isotropic)"),
         Field("nonlinear", "bool", False, "A plastic whose base colour deepens under its coating "
               "(Mitsuba's `nonlinear`: the light the coating reflects back to the base is tinted "
               "by it again)."),

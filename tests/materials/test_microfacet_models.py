@@ -1,5 +1,6 @@
 """Microfacet models other than Lantern's default (renderer/materials/microfacet.py): Beckmann and
-GGX with Smith's separable masking, as Mitsuba 3 has them, on conductors and dielectrics. Their
+GGX with Smith's separable masking, as Mitsuba 3 has them, and anisotropic widths, on conductors
+and dielectrics. Their
 sampling against their pdf (chi-square), their values against Mitsuba's own BSDFs (where Mitsuba
 is installed), and the default model compiling to what it always did.
 
@@ -17,23 +18,32 @@ from tests.materials.bsdf_kernels import BsdfBench, chi2_adaptive, direction, fr
 
 ALPHA = 0.01
 N = 1_000_000
-FEATURES = Features(material_kinds=frozenset({"conductor", "dielectric"}), has_microfacet_models=True)
+FEATURES = Features(material_kinds=frozenset({"conductor", "dielectric"}), has_microfacet_models=True,
+                    has_anisotropy=True)
 COPPER = dict(eta=(0.27, 0.68, 1.22), k=(3.61, 2.63, 2.29))
 
 
-def conductor(model, alpha):
-    return MaterialSpec(f"c-{model}-{alpha}", kind="conductor", roughness=math.sqrt(alpha), microfacet=model, **COPPER)
+def _v(alpha_v):
+    return None if alpha_v is None else math.sqrt(alpha_v)
 
 
-def dielectric(model, alpha, ior=1.5):
-    return MaterialSpec(f"g-{model}-{alpha}", kind="dielectric", base_color=(1.0, 1.0, 1.0), roughness=math.sqrt(alpha),
-                        microfacet=model, ior=ior)
+def conductor(model, alpha, alpha_v=None):
+    return MaterialSpec(f"c-{model}-{alpha}-{alpha_v}", kind="conductor", roughness=math.sqrt(alpha),
+                        roughness_v=_v(alpha_v), microfacet=model, **COPPER)
+
+
+def dielectric(model, alpha, ior=1.5, alpha_v=None):
+    return MaterialSpec(f"g-{model}-{alpha}-{alpha_v}", kind="dielectric", base_color=(1.0, 1.0, 1.0),
+                        roughness=math.sqrt(alpha), roughness_v=_v(alpha_v), microfacet=model, ior=ior)
 
 
 CHI2_CASES = [  # (spec, cos, leaving)
     *((conductor(m, a), c, False) for m in ("beckmann", "ggx_separable") for a in (0.1, 0.5) for c in (0.9, 0.2)),
     *((dielectric("beckmann", a), c, leaving) for a in (0.1, 0.5) for c in (0.9, 0.3) for leaving in (False, True)),
     (dielectric("ggx_separable", 0.3), 0.6, False),
+    # Anisotropic widths (alpha along the frame's x, alpha_v along y), the lobe stretched across wo's plane.
+    *((conductor(m, 0.05, alpha_v=0.4), c, False) for m in ("beckmann", "ggx_separable", "ggx") for c in (0.9, 0.3)),
+    (dielectric("beckmann", 0.3, alpha_v=0.05), 0.7, False), (dielectric("ggx", 0.05, alpha_v=0.3), 0.5, True),
 ]
 NUM_TESTS = len(CHI2_CASES)
 
@@ -61,14 +71,15 @@ def test_chi2(bench, spec, cos, leaving, tmp_path):
     assert result.passed, f"{spec.name}\n{result.report}"
 
 
-def _lobe_pairs(count, seed, alpha, transmit_share=0.0, eta=1.5):
+def _lobe_pairs(count, seed, alpha, transmit_share=0.0, eta=1.5, alpha_v=None):
     """wo above the surface and wi around its lobe: reflected (or, for a share, refracted) about
     microfacet normals of slopes spread over a few alpha, so that narrow lobes are exercised."""
     rng = np.random.default_rng(seed)
     wo = rng.normal(size=(count, 3))
     wo[:, 2] = np.abs(wo[:, 2]) + 0.1
     wo /= np.linalg.norm(wo, axis=1, keepdims=True)
-    h = np.column_stack([2.0 * alpha * rng.normal(size=(count, 2)), np.ones(count)])
+    widths = np.array([alpha, alpha if alpha_v is None else alpha_v])
+    h = np.column_stack([2.0 * widths * rng.normal(size=(count, 2)), np.ones(count)])
     h /= np.linalg.norm(h, axis=1, keepdims=True)
     cos_oh = np.sum(wo * h, axis=1)
     reflected = 2.0 * cos_oh[:, None] * h - wo
@@ -91,25 +102,30 @@ def _mitsuba_eval(mi, props, wo, wi):
     return np.array(out)
 
 
-MITSUBA_CASES = [("conductor", "beckmann", 0.05), ("conductor", "beckmann", 0.4), ("conductor", "ggx", 0.3),
-                 ("dielectric", "beckmann", 0.3), ("dielectric", "ggx", 0.2)]
+MITSUBA_CASES = [("conductor", "beckmann", 0.05, None), ("conductor", "beckmann", 0.4, None),
+                 ("conductor", "ggx", 0.3, None), ("dielectric", "beckmann", 0.3, None),
+                 ("dielectric", "ggx", 0.2, None), ("conductor", "beckmann", 0.05, 0.3),
+                 ("conductor", "ggx", 0.3, 0.05), ("dielectric", "beckmann", 0.2, 0.04)]
 
 
-@pytest.mark.parametrize("kind, distribution, alpha", MITSUBA_CASES)
-def test_values_match_mitsubas(bench, kind, distribution, alpha):
+@pytest.mark.parametrize("kind, distribution, alpha, alpha_v", MITSUBA_CASES)
+def test_values_match_mitsubas(bench, kind, distribution, alpha, alpha_v):
     """f |cos| at 400 direction pairs about the lobe equals Mitsuba 3's roughconductor (copper's eta, k)
-    or roughdielectric (index 1.5; half the pairs transmit, with the radiance scale 1 / eta^2)."""
+    or roughdielectric (index 1.5; half the pairs transmit, with the radiance scale 1 / eta^2), also
+    with anisotropic widths (Mitsuba's alpha_u along the shading frame's x, here the frame the
+    bench's normal gives, whose x is +x for the normal +z)."""
     mi = pytest.importorskip("mitsuba", reason="Mitsuba is the project's optional `reference` extra")
     mi.set_variant("scalar_rgb")
     model = "beckmann" if distribution == "beckmann" else "ggx_separable"
-    wo, wi = _lobe_pairs(400, 5 + len(kind) + int(alpha * 100), alpha, 0.5 if kind == "dielectric" else 0.0)
+    wo, wi = _lobe_pairs(400, 5 + len(kind) + int(alpha * 100), alpha, 0.5 if kind == "dielectric" else 0.0,
+                         alpha_v=alpha_v)
+    widths = {"alpha": alpha} if alpha_v is None else {"alpha_u": alpha, "alpha_v": alpha_v}
     if kind == "dielectric":
-        spec = dielectric(model, alpha)
-        props = {"type": "roughdielectric", "distribution": distribution, "alpha": alpha, "int_ior": 1.5,
-                 "ext_ior": 1.0}
+        spec = dielectric(model, alpha, alpha_v=alpha_v)
+        props = {"type": "roughdielectric", "distribution": distribution, "int_ior": 1.5, "ext_ior": 1.0, **widths}
     else:
-        spec = conductor(model, alpha)
-        props = {"type": "roughconductor", "distribution": distribution, "alpha": alpha,
+        spec = conductor(model, alpha, alpha_v=alpha_v)
+        props = {"type": "roughconductor", "distribution": distribution, **widths,
                  "eta": {"type": "rgb", "value": list(COPPER["eta"])}, "k": {"type": "rgb", "value": list(COPPER["k"])}}
     ours, _ = bench.eval(bench.material(spec), (0.0, 0.0, 1.0), wo, wi)
     theirs = _mitsuba_eval(mi, props, wo, wi)

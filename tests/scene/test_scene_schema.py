@@ -43,7 +43,7 @@ SECTION_MODELS = [
     (schema.ENVIRONMENT, EnvironmentSpec, set()),
     # the name is the table key; textures come from scene readers that have them (Mitsuba), not TOML
     (schema.MATERIAL, MaterialSpec, {"name", "base_color_texture", "opacity_texture", "emission_texture",
-                                     "base_color_attribute"}),
+                                     "base_color_attribute", "alpha_texture", "alpha_v_texture"}),
 ]
 
 

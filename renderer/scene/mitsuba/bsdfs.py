@@ -15,7 +15,7 @@ import math
 from dataclasses import replace
 
 from renderer.materials.metals import metal_names
-from renderer.scene.description import MaterialSpec
+from renderer.scene.description import MaterialSpec, TextureSpec
 from renderer.scene.mitsuba.ior_names import IOR_NAMES
 from renderer.scene.mitsuba.mesh_attribute_textures import blended_diffuse
 from renderer.scene.mitsuba.plugins import Plugin
@@ -57,9 +57,10 @@ def bsdf_spec(builder, bsdf: Plugin) -> MaterialSpec:
     if t in ("conductor", "roughconductor"):
         return _conductor(builder, bsdf)
     if t in ("dielectric", "roughdielectric", "thindielectric"):
-        roughness, model = _roughness(builder, bsdf) if t == "roughdielectric" else (0.0, "ggx")
+        roughness, model, roughness_v = _roughness(builder, bsdf) if t == "roughdielectric" else (0.0, "ggx", None)
+        textured = _alpha_textures(builder, bsdf) if t == "roughdielectric" else {}
         return MaterialSpec("", "dielectric", base_color=builder.colour(bsdf, "specular_transmittance", (1.0,) * 3),
-                            roughness=roughness, microfacet=model, ior=_relative_ior(bsdf, DEFAULT_GLASS_IOR),
+                            roughness=roughness, microfacet=model, roughness_v=roughness_v, **textured, ior=_relative_ior(bsdf, DEFAULT_GLASS_IOR),
                             thin=t == "thindielectric")
     if t in ("plastic", "roughplastic"):
         return _plastic(builder, bsdf)
@@ -84,7 +85,7 @@ def _mask(builder, bsdf: Plugin) -> MaterialSpec:
     value = bsdf.properties.get("opacity")
     if isinstance(value, Plugin) and value.kind == "texture" and value.type in ("bitmap", "checkerboard"):
         bsdf.used.add("opacity")
-        return replace(inner, opacity=1.0, opacity_texture=builder.texture(builder.visit(value)))
+        return replace(inner, opacity=1.0, opacity_texture=float_texture(builder, value))
     opacity = builder.scalar(bsdf, "opacity", 0.5)
     if not 0.0 <= opacity <= 1.0:
         raise bsdf.error(f"opacity {opacity:g} is not between 0 and 1")
@@ -92,9 +93,11 @@ def _mask(builder, bsdf: Plugin) -> MaterialSpec:
 
 
 def _conductor(builder, bsdf: Plugin) -> MaterialSpec:
-    roughness, model = _roughness(builder, bsdf) if bsdf.type == "roughconductor" else (0.0, "ggx")
+    roughness, model, roughness_v = _roughness(builder, bsdf) if bsdf.type == "roughconductor" else (0.0, "ggx", None)
     tint = builder.colour(bsdf, "specular_reflectance", (1.0, 1.0, 1.0))
-    common = {"roughness": roughness, "microfacet": model, "sidedness": "back_black"}
+    common = {"roughness": roughness, "roughness_v": roughness_v, "microfacet": model, "sidedness": "back_black"}
+    if bsdf.type == "roughconductor":
+        common.update(_alpha_textures(builder, bsdf))
     if bsdf.has("eta") or bsdf.has("k"):
         eta = builder.colour(bsdf, "eta", (0.0, 0.0, 0.0), bounded=False)
         k = builder.colour(bsdf, "k", (1.0, 1.0, 1.0), bounded=False)
@@ -114,7 +117,11 @@ def _conductor(builder, bsdf: Plugin) -> MaterialSpec:
 
 def _plastic(builder, bsdf: Plugin) -> MaterialSpec:
     """Mitsuba's plastic and roughplastic: Lantern's `plastic` kind is their model."""
-    roughness, model = _roughness(builder, bsdf) if bsdf.type == "roughplastic" else (0.0, "ggx")
+    roughness, model, roughness_v = _roughness(builder, bsdf) if bsdf.type == "roughplastic" else (0.0, "ggx", None)
+    if roughness_v is not None:  # as Mitsuba, whose roughplastic refuses anisotropic roughness
+        raise bsdf.error("roughplastic takes one alpha, not alpha_u and alpha_v that differ")
+    if bsdf.type == "roughplastic" and _alpha_textures(builder, bsdf):
+        raise bsdf.error("a textured alpha on roughplastic is not supported (its coating's tables need one alpha)")
     eta = _relative_ior(bsdf, DEFAULT_PLASTIC_IOR)
     if eta == 1.0:
         raise bsdf.error("int_ior and ext_ior are equal: the coating would not be there")
@@ -125,24 +132,58 @@ def _plastic(builder, bsdf: Plugin) -> MaterialSpec:
                         sidedness="back_black")
 
 
-def _roughness(builder, bsdf: Plugin) -> tuple[float, str]:
-    """(Lantern's perceptual roughness, alpha = roughness^2, from Mitsuba's alpha; the microfacet model)."""
+def _roughness(builder, bsdf: Plugin) -> tuple[float, str, float | None]:
+    """(Lantern's perceptual roughness, alpha = roughness^2, from Mitsuba's alpha (alpha_u); the
+    microfacet model; the roughness along v where alpha_v differs, else None)."""
     distribution = bsdf.text("distribution", "beckmann").lower()
     if distribution not in MICROFACET:
         raise bsdf.error(f"distribution '{distribution}' (beckmann or ggx)")
     if not bsdf.get("sample_visible", True):
         warn(bsdf, "sample_visible = false: Lantern draws normals its own way (the image is the same)")
-    if bsdf.has("alpha_u") or bsdf.has("alpha_v"):
-        alpha_u, alpha_v = builder.scalar(bsdf, "alpha_u", 0.1), builder.scalar(bsdf, "alpha_v", 0.1)
-        if alpha_u != alpha_v:
-            warn(bsdf, "anisotropic roughness is not supported yet: rendered with the mean of alpha_u "
-                               "and alpha_v")
-        alpha = 0.5 * (alpha_u + alpha_v)
-    else:
-        alpha = builder.scalar(bsdf, "alpha", 0.1)
+    names = ("alpha_u", "alpha_v") if bsdf.has("alpha_u") or bsdf.has("alpha_v") else ("alpha", "alpha")
+    alpha, alpha_v = (_width(builder, bsdf, name) for name in names)
+    if isinstance(alpha, float) and isinstance(alpha_v, float):
+        roughness_v = None if alpha_v == alpha else min(1.0, math.sqrt(alpha_v))
+        return min(1.0, math.sqrt(alpha)), MICROFACET[distribution], roughness_v
+    # Textured widths: the material's `alpha_texture` and `alpha_v_texture` (set by the caller from
+    # _alpha_textures); the constant roughness stands for a rough lobe.
+    return 0.5, MICROFACET[distribution], None
+
+
+def _width(builder, bsdf: Plugin, name: str):
+    """Mitsuba's alpha parameter `name`: a number, or a texture (its TextureSpec)."""
+    value = bsdf.properties.get(name)
+    if isinstance(value, Plugin) and value.kind == "texture" and value.type in ("bitmap", "checkerboard"):
+        bsdf.used.add(name)
+        return float_texture(builder, value)
+    alpha = builder.scalar(bsdf, name, 0.1)
     if alpha < 0:
-        raise bsdf.error(f"alpha {alpha:g} is negative")
-    return min(1.0, math.sqrt(alpha)), MICROFACET[distribution]
+        raise bsdf.error(f"{name} {alpha:g} is negative")
+    return alpha
+
+
+def _alpha_textures(builder, bsdf: Plugin) -> dict:
+    """The MaterialSpec fields of textured widths (none where the widths are numbers)."""
+    names = ("alpha_u", "alpha_v") if bsdf.has("alpha_u") or bsdf.has("alpha_v") else ("alpha", "alpha")
+    widths = [_width(builder, bsdf, name) for name in names]
+    if all(isinstance(w, float) for w in widths):
+        return {}
+    as_texture = [w if not isinstance(w, float) else _constant_texture(w) for w in widths]
+    return {"alpha_texture": as_texture[0], "alpha_v_texture": as_texture[1] if names[0] != "alpha" else None}
+
+
+def float_texture(builder, texture: Plugin) -> TextureSpec:
+    """A texture read as a number (its first channel), as Mitsuba evaluates it for a scalar
+    parameter: Mitsuba 3's checkerboard then puts color0 where its colour evaluation puts color1
+    (its eval_1 tests the other parity), which its scenes' images show, so the colours swap here."""
+    spec = builder.texture(builder.visit(texture))
+    if spec.kind == "checkerboard":
+        spec = replace(spec, color0=spec.color1, color1=spec.color0)
+    return spec
+
+
+def _constant_texture(value: float) -> TextureSpec:
+    return TextureSpec("checkerboard", color0=(value,) * 3, color1=(value,) * 3, nearest=True)
 
 
 def _relative_ior(bsdf: Plugin, default_int: float) -> float:

@@ -167,6 +167,24 @@ def test_plastics_masks_and_sides(tmp_path):
         materials(tmp_path, '<bsdf type="mask"><float name="opacity" value="2"/><bsdf type="diffuse"/></bsdf>')
 
 
+def test_anisotropic_and_textured_widths(tmp_path):
+    aniso, _ = materials(tmp_path, '<bsdf type="roughconductor"><float name="alpha_u" value="0.04"/>'
+                                   '<float name="alpha_v" value="0.25"/></bsdf>')
+    assert (aniso.roughness, aniso.roughness_v) == (pytest.approx(0.2), pytest.approx(0.5))
+    same, _ = materials(tmp_path, '<bsdf type="roughconductor"><float name="alpha_u" value="0.09"/>'
+                                  '<float name="alpha_v" value="0.09"/></bsdf>')
+    assert same.roughness_v is None  # equal widths: isotropic
+    textured, _ = materials(tmp_path, '<bsdf type="roughconductor"><texture name="alpha" type="checkerboard">'
+                                      '<float name="color0" value="0.05"/><float name="color1" value="0.3"/>'
+                                      '</texture></bsdf>')
+    # Read as a number, Mitsuba's checkerboard puts color0 in the other squares: swapped here.
+    assert (textured.alpha_texture.color0, textured.alpha_texture.color1) == ((0.3,) * 3, (0.05,) * 3)
+    assert textured.alpha_v_texture is None
+    with pytest.raises(SceneError, match="roughplastic takes one alpha"):
+        materials(tmp_path, '<bsdf type="roughplastic"><float name="alpha_u" value="0.1"/>'
+                            '<float name="alpha_v" value="0.2"/></bsdf>')
+
+
 def test_dielectrics_and_named_indices(tmp_path):
     glass, _ = materials(tmp_path, '''<bsdf type="dielectric"><string name="int_ior" value="diamond"/>
         <string name="ext_ior" value="water"/></bsdf>''')
