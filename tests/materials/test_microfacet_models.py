@@ -1,20 +1,24 @@
 """Microfacet models other than Lantern's default (renderer/materials/microfacet.py): Beckmann and
 GGX with Smith's separable masking, as Mitsuba 3 has them, and anisotropic widths, on conductors
-and dielectrics. Their
-sampling against their pdf (chi-square), their values against Mitsuba's own BSDFs (where Mitsuba
-is installed), and the default model compiling to what it always did.
+and dielectrics. Their sampling against their pdf (chi-square), their sample weights against the
+integral of eval, reciprocity, and their values against Mitsuba's own BSDFs (where Mitsuba is
+installed).
 
-Statistics: fixed seeds; ALPHA = 0.01 family-wise over the chi-square tests of this file with
-Sidak's correction. The comparison with Mitsuba is deterministic (float32: 2e-4 relative).
+Statistics: fixed seeds; ALPHA = 0.01 family-wise over the chi-square and z-tests of this file
+(NUM_TESTS) with Sidak's correction. The comparisons with Mitsuba and the reciprocity are
+deterministic (float32: 2e-4 and 1e-4 relative).
 """
 import math
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from renderer.scene.description import MaterialSpec
 from renderer.scene.features import Features
-from tests.materials.bsdf_kernels import BsdfBench, chi2_adaptive, direction, frame_about, uniforms
+from tests.materials.bsdf_kernels import (BsdfBench, cell_probabilities, chi2_adaptive, direction, frame_about,
+                                          uniforms)
+from tests.stats.chi2 import sidak_alpha
 
 ALPHA = 0.01
 N = 1_000_000
@@ -45,7 +49,6 @@ CHI2_CASES = [  # (spec, cos, leaving)
     *((conductor(m, 0.05, alpha_v=0.4), c, False) for m in ("beckmann", "ggx_separable", "ggx") for c in (0.9, 0.3)),
     (dielectric("beckmann", 0.3, alpha_v=0.05), 0.7, False), (dielectric("ggx", 0.05, alpha_v=0.3), 0.5, True),
 ]
-NUM_TESTS = len(CHI2_CASES)
 
 
 @pytest.fixture(scope="module")
@@ -131,3 +134,42 @@ def test_values_match_mitsubas(bench, kind, distribution, alpha, alpha_v):
     theirs = _mitsuba_eval(mi, props, wo, wi)
     assert len(wo) > 200 and (theirs[:, 0] > 1e-3).mean() > 0.5  # the pairs exercise the lobe
     np.testing.assert_allclose(ours, theirs, rtol=2e-4, atol=1e-6)
+
+
+UNBIASED = [  # (spec, cos, leaving): E[weight] = integral of eval over the sphere
+    (conductor("beckmann", 0.3), 0.6, False), (conductor("beckmann", 0.05, alpha_v=0.4), 0.4, False),
+    (conductor("ggx_separable", 0.5, alpha_v=0.1), 0.8, False), (dielectric("beckmann", 0.4), 0.5, False),
+    (dielectric("beckmann", 0.2, alpha_v=0.5), 0.7, True)]
+NUM_TESTS = len(CHI2_CASES) + len(UNBIASED)  # the statistical tests of this file
+RECIPROCAL = [conductor("beckmann", 0.3), conductor("beckmann", 0.05, alpha_v=0.4), conductor("ggx", 0.2, alpha_v=0.5),
+              dielectric("beckmann", 0.3, alpha_v=0.1)]
+
+
+@pytest.mark.parametrize("spec, cos, leaving", UNBIASED, ids=[f"{s.name}-cos{c}" for s, c, _ in UNBIASED])
+def test_sample_weights_average_to_the_integral_of_eval(bench, spec, cos, leaving):
+    """Whatever a sample's lobe and normal, E[weight] = the integral of eval (f |cos|) over the
+    sphere: the adaptive quadrature of bsdf_kernels.cell_probabilities against the mean weight of
+    10^6 samples, a two-sided z-test at the file's Sidak level."""
+    frame = frame_about([0.1, -0.3, 0.9])
+    wo = direction(cos) @ frame
+    normal = -frame[2] if leaving else frame[2]
+    mat = bench.material(spec)
+    s = bench.sample(mat, normal, wo, uniforms(N, 900 + len(spec.name) + int(cos * 10)))
+    weights = np.where(s.valid, s.weight.mean(axis=1), 0.0).astype(np.float64)
+    integral = cell_probabilities(lambda d: bench.eval(mat, normal, wo, d)[0].astype(np.float64).mean(axis=1),
+                                  frame=frame, abs_tol=1e-9).sum()
+    z = (weights.mean() - integral) / (weights.std(ddof=1) / math.sqrt(N))
+    assert 2.0 * stats.norm.sf(abs(z)) > sidak_alpha(ALPHA, NUM_TESTS), (weights.mean(), integral, z)
+
+
+@pytest.mark.parametrize("spec", RECIPROCAL, ids=[s.name for s in RECIPROCAL])
+def test_reflection_is_reciprocal(bench, spec):
+    """f(wo, wi) = f(wi, wo) for reflection, pairs about the lobe (float32: 1e-4 relative)."""
+    alpha_v = None if spec.roughness_v is None else spec.roughness_v ** 2
+    wo, wi = _lobe_pairs(2000, 77, spec.roughness ** 2, alpha_v=alpha_v)
+    wo, wi = wo[wi[:, 2] > 0.0], wi[wi[:, 2] > 0.0]  # reflections
+    mat = bench.material(spec)
+    forward, _ = bench.eval(mat, (0.0, 0.0, 1.0), wo, wi)
+    backward, _ = bench.eval(mat, (0.0, 0.0, 1.0), wi, wo)
+    np.testing.assert_allclose(forward / wi[:, 2:3], backward / wo[:, 2:3], rtol=1e-4, atol=1e-7)
+    assert (forward > 0).mean() > 0.5

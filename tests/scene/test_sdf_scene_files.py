@@ -386,7 +386,8 @@ BAD_SCENES = {
                           "environment: unknown field 'strength' (allowed: type, intensity, rotation, zenith, horizon, ground)"),
     # materials
     "material unknown field": (scene_text(materials="[materials.glass]\ntype = \"dielectric\"\niorr = 1.5\n"),
-                               "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, thin, microfacet, sidedness, "
+                               "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, thin, microfacet, roughness_v, "
+                               "sidedness, "
                                "opacity, emission, emission_strength, abbe, glass, medium, normal_map, bump_map, bump_scale)"),
     "material unknown type": (scene_text(materials='[materials.m]\ntype = "metal"\n'),
                               "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null, plastic)"),
