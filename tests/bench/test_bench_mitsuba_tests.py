@@ -75,3 +75,19 @@ def test_without_data_it_says_so(tmp_path):
         run(out_dir=tmp_path)
     with pytest.raises(ValueError, match="no scene with an RGB reference"):
         run(out_dir=tmp_path, data=tmp_path)
+
+
+def test_the_page_section_counts_passes_and_says_why_a_scene_fails():
+    from renderer.bench.report_mitsuba_section import mitsuba_tests_section
+
+    report = {"rule": {"significance": 0.01, "pass_fraction": 0.9975}, "sample_budget": 2_000_000,
+              "results": [{"scene": "a/test_one_path", "verdict": "PASS", "failing_percent": 0.0},
+                          {"scene": "a/test_two_path", "verdict": "FAIL", "failing_percent": 3.0,
+                           "left_out": ["<bsdf type=\"hair\">: left out"]},
+                          {"scene": "b/test_three_path", "verdict": "FAIL", "failing_percent": 0.4, "left_out": []},
+                          {"scene": "b/test_four_path", "verdict": "not loaded", "note": "x.xml: line 3: bad"}]}
+    section = mitsuba_tests_section(report)
+    assert section.findings[0].startswith("1 of 4 of Mitsuba 3's render tests pass")
+    why = section.blocks[0]
+    assert "&lt;bsdf type=\"hair\"&gt;: left out" in why and "the image differs" in why and "x.xml: line 3: bad" in why
+    assert "test_one_path" not in why and "test_one_path" in section.blocks[1]
