@@ -222,6 +222,7 @@ def scene_features(scene: Scene, aperture: float | None = None) -> Features:
             "dispersion": any(m.is_dispersive for m in used),
             "microfacet_models": any(m.microfacet != "ggx" for m in used),
             "sidedness": any(m.sidedness == "back_black" for m in used),
+            "thin": any(m.thin and m.kind in ("dielectric", "principled") for m in used),
             "rough": any(compensated_when_rough(m.kind) and m.roughness > 0.0 for m in used)}
     lens = scene.camera.aperture if aperture is None else aperture
     return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes,
