@@ -69,6 +69,9 @@ class ShapeReader:
                 leave_out(shape, "this shape type is not supported yet and is left out")
             return
         material = self.material(shape)
+        if t not in MESH_FILE_TYPES and self.attribute_coloured(material):
+            raise shape.error("a mesh_attribute texture needs a mesh file's vertex or face attributes "
+                              f"(obj, ply, serialized), not a {t}")
         if t in MESH_FILE_TYPES:
             self.add(self.mesh_file(shape, material), placement, shape)
         elif t == "sphere":
@@ -105,6 +108,10 @@ class ShapeReader:
         if id(shape) not in self.material_of:
             self.material_of[id(shape)] = self.builder.shape_material(shape)
         return self.material_of[id(shape)]
+
+    def attribute_coloured(self, material: str) -> bool:
+        """Whether the named material takes its colour from a mesh attribute."""
+        return any(m.name == material and m.base_color_attribute is not None for m in self.builder.materials)
 
     def mesh_file(self, shape: Plugin, material: str) -> MeshObject:
         name = shape.text("filename")

@@ -186,3 +186,13 @@ def test_vertex_colours_render_interpolated(tmp_path):
 
     expected = plane_image(scene, radiance_at)
     assert_analytic(render(scene, "mis", 64, seed=32), expected, "vertex colours")
+
+
+def test_an_analytic_shape_has_no_attributes_to_read(tmp_path):
+    """A sphere or rectangle has no file to take a mesh attribute from: one line naming the shape
+    (it rendered white before)."""
+    path = tmp_path / "s.xml"
+    bsdf = f'<bsdf type="diffuse">{attribute("vertex_color").format("reflectance")}</bsdf>'
+    path.write_text(f'<scene version="3.0.0"><shape type="sphere">{bsdf}</shape></scene>')
+    with pytest.raises(SceneError, match=r"line 1: <shape type=\"sphere\">: a mesh_attribute texture needs a mesh"):
+        load_mitsuba_scene(path)
