@@ -10,7 +10,7 @@ GAUSSIAN_RADIUS_STDDEVS = 4.0  # Mitsuba cuts its Gaussian off at four standard 
 
 def filter_key(kind: str, stddev: float = 0.5, radius: float = 1.0) -> tuple:
     """The filter as a kernel compiles it in (part of Features): ("box",), ("tent", radius, tails) or
-    ("gaussian", stddev, cut-off radius, bias, normalisation per axis, tails). `tails[d]`: the share
+    ("gaussian", stddev, cut-off radius, bias, tails). `tails[d]`: the share
     of the filter's integral beyond d + 1/2 pixels on one side, for the pixels d from an image edge
     (the filter is cut at the edges and renormalised there, as Mitsuba's film does)."""
     if kind == "box":
@@ -30,7 +30,7 @@ def filter_key(kind: str, stddev: float = 0.5, radius: float = 1.0) -> tuple:
 
         whole = 2.0 * integral(0.0, r)
         tails = tuple(integral(a, r) / whole if a < r else 0.0 for a in _edge_distances(r))
-        return ("gaussian", s, r, bias, s * math.sqrt(2.0 * math.pi) / whole, tails)
+        return ("gaussian", s, r, bias, tails)
     raise ValueError(f"unknown pixel filter '{kind}' (choose from {', '.join(PIXEL_FILTERS)})")
 
 

@@ -99,5 +99,5 @@ def pixel_sample(u, x, y, width, height, key: ti.template()):
     elif ti.static(key[0] == "gaussian"):
         offset, found = _gaussian_offset(u, key)
         position = 0.5 + offset
-        weight = found * _edge_factor(offset.x, x, width, key[5]) * _edge_factor(offset.y, y, height, key[5])
+        weight = found * _edge_factor(offset.x, x, width, key[4]) * _edge_factor(offset.y, y, height, key[4])
     return position, weight

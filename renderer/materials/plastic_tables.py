@@ -114,10 +114,12 @@ def _interface_albedo(mu: np.ndarray, alpha: float, eta: float, model: int, tran
     reflects, each direction weighted by Smith's G1 of the outgoing direction (Mitsuba's
     eval_transmittance / eval_reflectance, integrated over the visible normals)."""
     out = np.zeros_like(mu)
+    if model == BECKMANN:  # the same nodes for every incident cosine
+        m_beckmann, w_beckmann = _normals(alpha, model)
     for i, c in enumerate(mu):
         wi = np.array([math.sqrt(max(0.0, 1.0 - c * c)), 0.0, c])
         if model == BECKMANN:
-            m, weights = _normals(alpha, model)
+            m, weights = m_beckmann, w_beckmann
             cos_im = m @ wi
             # D_wi(m) / (D(m) cos(theta_m)): the visible normals' density over the quadrature's
             visible = _exact_g1(np.array([c]), alpha, model)[0] * np.maximum(cos_im, 0.0) / (c * m[:, 2])

@@ -30,6 +30,7 @@ DISNEY_ONLY = ("anisotropic", "clearcoat", "clearcoat_gloss", "sheen", "sheen_ti
                "spec_tint", "specular")
 # Mitsuba's masking is Smith's separable form for both distributions.
 MICROFACET = {"ggx": "ggx_separable", "beckmann": "beckmann"}
+SMOOTH = {"roughness": 0.0, "microfacet": "ggx"}  # the lobe fields of a smooth BSDF
 
 
 def bsdf_spec(builder, bsdf: Plugin) -> MaterialSpec:
@@ -57,10 +58,9 @@ def bsdf_spec(builder, bsdf: Plugin) -> MaterialSpec:
     if t in ("conductor", "roughconductor"):
         return _conductor(builder, bsdf)
     if t in ("dielectric", "roughdielectric", "thindielectric"):
-        roughness, model, roughness_v = _roughness(builder, bsdf) if t == "roughdielectric" else (0.0, "ggx", None)
-        textured = _alpha_textures(builder, bsdf) if t == "roughdielectric" else {}
+        lobe = _roughness(builder, bsdf) if t == "roughdielectric" else SMOOTH
         return MaterialSpec("", "dielectric", base_color=builder.colour(bsdf, "specular_transmittance", (1.0,) * 3),
-                            roughness=roughness, microfacet=model, roughness_v=roughness_v, **textured, ior=_relative_ior(bsdf, DEFAULT_GLASS_IOR),
+                            ior=_relative_ior(bsdf, DEFAULT_GLASS_IOR), **lobe,
                             thin=t == "thindielectric")
     if t in ("plastic", "roughplastic"):
         return _plastic(builder, bsdf)
@@ -93,11 +93,8 @@ def _mask(builder, bsdf: Plugin) -> MaterialSpec:
 
 
 def _conductor(builder, bsdf: Plugin) -> MaterialSpec:
-    roughness, model, roughness_v = _roughness(builder, bsdf) if bsdf.type == "roughconductor" else (0.0, "ggx", None)
     tint = builder.colour(bsdf, "specular_reflectance", (1.0, 1.0, 1.0))
-    common = {"roughness": roughness, "roughness_v": roughness_v, "microfacet": model, "sidedness": "back_black"}
-    if bsdf.type == "roughconductor":
-        common.update(_alpha_textures(builder, bsdf))
+    common = {**(_roughness(builder, bsdf) if bsdf.type == "roughconductor" else SMOOTH), "sidedness": "back_black"}
     if bsdf.has("eta") or bsdf.has("k"):
         eta = builder.colour(bsdf, "eta", (0.0, 0.0, 0.0), bounded=False)
         k = builder.colour(bsdf, "k", (1.0, 1.0, 1.0), bounded=False)
@@ -117,37 +114,41 @@ def _conductor(builder, bsdf: Plugin) -> MaterialSpec:
 
 def _plastic(builder, bsdf: Plugin) -> MaterialSpec:
     """Mitsuba's plastic and roughplastic: Lantern's `plastic` kind is their model."""
-    roughness, model, roughness_v = _roughness(builder, bsdf) if bsdf.type == "roughplastic" else (0.0, "ggx", None)
-    if roughness_v is not None:  # as Mitsuba, whose roughplastic refuses anisotropic roughness
+    lobe = _roughness(builder, bsdf) if bsdf.type == "roughplastic" else SMOOTH
+    if lobe.get("roughness_v") is not None:  # as Mitsuba, whose roughplastic refuses anisotropic roughness
         raise bsdf.error("roughplastic takes one alpha, not alpha_u and alpha_v that differ")
-    if bsdf.type == "roughplastic" and _alpha_textures(builder, bsdf):
+    if "alpha_texture" in lobe:
         raise bsdf.error("a textured alpha on roughplastic is not supported (its coating's tables need one alpha)")
     eta = _relative_ior(bsdf, DEFAULT_PLASTIC_IOR)
     if eta == 1.0:
         raise bsdf.error("int_ior and ext_ior are equal: the coating would not be there")
     colour, texture = builder.base_colour(bsdf, "diffuse_reflectance", DEFAULT_REFLECTANCE)
-    return MaterialSpec("", "plastic", base_color=colour, base_color_texture=texture, roughness=roughness,
-                        microfacet=model, ior=eta, nonlinear=bool(bsdf.get("nonlinear", False)),
+    return MaterialSpec("", "plastic", base_color=colour, base_color_texture=texture, roughness=lobe["roughness"],
+                        microfacet=lobe["microfacet"], ior=eta, nonlinear=bool(bsdf.get("nonlinear", False)),
                         specular_color=builder.colour(bsdf, "specular_reflectance", (1.0, 1.0, 1.0)),
                         sidedness="back_black")
 
 
-def _roughness(builder, bsdf: Plugin) -> tuple[float, str, float | None]:
-    """(Lantern's perceptual roughness, alpha = roughness^2, from Mitsuba's alpha (alpha_u); the
-    microfacet model; the roughness along v where alpha_v differs, else None)."""
+def _roughness(builder, bsdf: Plugin) -> dict:
+    """The MaterialSpec fields of a rough BSDF's microfacet lobe: Lantern's perceptual roughness
+    (alpha = roughness^2) from Mitsuba's alpha (alpha_u), the microfacet model, the roughness along
+    v where alpha_v differs, and for textured widths the textures (the constant roughness then only
+    marks the lobe rough)."""
     distribution = bsdf.text("distribution", "beckmann").lower()
     if distribution not in MICROFACET:
         raise bsdf.error(f"distribution '{distribution}' (beckmann or ggx)")
     if not bsdf.get("sample_visible", True):
         warn(bsdf, "sample_visible = false: Lantern draws normals its own way (the image is the same)")
-    names = ("alpha_u", "alpha_v") if bsdf.has("alpha_u") or bsdf.has("alpha_v") else ("alpha", "alpha")
-    alpha, alpha_v = (_width(builder, bsdf, name) for name in names)
+    anisotropic = bsdf.has("alpha_u") or bsdf.has("alpha_v")
+    alpha = _width(builder, bsdf, "alpha_u" if anisotropic else "alpha")
+    alpha_v = _width(builder, bsdf, "alpha_v") if anisotropic else alpha
+    fields = {"microfacet": MICROFACET[distribution]}
     if isinstance(alpha, float) and isinstance(alpha_v, float):
-        roughness_v = None if alpha_v == alpha else min(1.0, math.sqrt(alpha_v))
-        return min(1.0, math.sqrt(alpha)), MICROFACET[distribution], roughness_v
-    # Textured widths: the material's `alpha_texture` and `alpha_v_texture` (set by the caller from
-    # _alpha_textures); the constant roughness stands for a rough lobe.
-    return 0.5, MICROFACET[distribution], None
+        return {**fields, "roughness": min(1.0, math.sqrt(alpha)),
+                "roughness_v": None if alpha_v == alpha else min(1.0, math.sqrt(alpha_v))}
+    as_texture = [w if not isinstance(w, float) else _constant_texture(w) for w in (alpha, alpha_v)]
+    return {**fields, "roughness": 0.5, "alpha_texture": as_texture[0],
+            "alpha_v_texture": as_texture[1] if anisotropic else None}
 
 
 def _width(builder, bsdf: Plugin, name: str):
@@ -160,16 +161,6 @@ def _width(builder, bsdf: Plugin, name: str):
     if alpha < 0:
         raise bsdf.error(f"{name} {alpha:g} is negative")
     return alpha
-
-
-def _alpha_textures(builder, bsdf: Plugin) -> dict:
-    """The MaterialSpec fields of textured widths (none where the widths are numbers)."""
-    names = ("alpha_u", "alpha_v") if bsdf.has("alpha_u") or bsdf.has("alpha_v") else ("alpha", "alpha")
-    widths = [_width(builder, bsdf, name) for name in names]
-    if all(isinstance(w, float) for w in widths):
-        return {}
-    as_texture = [w if not isinstance(w, float) else _constant_texture(w) for w in widths]
-    return {"alpha_texture": as_texture[0], "alpha_v_texture": as_texture[1] if names[0] != "alpha" else None}
 
 
 def float_texture(builder, texture: Plugin) -> TextureSpec:
