@@ -289,7 +289,9 @@ def cmd_info(args) -> int:
     print(f"materials:   {own or '-'}" + ("" if scene.geometry == "sdf" else "  (plus those of the model files)"))
     env = scene.environment
     print(f"environment: {env.kind}" + (f" {env.file.name}" if env.file else "") + f", intensity {env.intensity}")
-    print(f"render:      {r.width}x{r.height}, {r.spp} spp, max depth {r.max_depth}, {r.integrator}")
+    crop = "" if r.crop is None else (f", cropped to {r.crop[2]}x{r.crop[3]} at ({r.crop[0]}, {r.crop[1]}) from the "
+                                      "top left (only the window is rendered)")
+    print(f"render:      {r.width}x{r.height}{crop}, {r.spp} spp, max depth {r.max_depth}, {r.integrator}")
     print("features:")
     for key, value in features.describe().items():
         print(f"  {key:<20} {value}")

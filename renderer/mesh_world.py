@@ -42,7 +42,9 @@ class MeshScene:
                              instances=self.data.has_instances, light_kinds=scene_light_kinds(scene),
                              pixel_filter=scene_pixel_filter(scene),
                              orthographic=scene.camera.projection == "orthographic",
-                             light_textures=scene_light_textures(scene))
+                             light_textures=scene_light_textures(scene),
+                             environment_rotated=scene.environment.needs_matrix,
+                             flipped_normals=self.data.has_flipped)
 
 
 def prepare_mesh_scene(scene: Scene, instancing: bool = True) -> MeshScene:

@@ -45,23 +45,26 @@ class RenderProgram:
     sliced = True
 
     def render(self, width: int, height: int, spp: int, slice_first: int, slice_count: int, order: int,
-               *rest, feature_boost: int = 0) -> None:
+               *rest, feature_boost: int = 0, window=None) -> None:
         """`spp` samples for each pixel of slices [slice_first, slice_first + slice_count) of a round
         cut in `order` (pixel_slices: INTERLEAVED or BANDS); `rest`: seed, max depth and the
         camera's kernel arguments. `feature_boost`: the AOV-only samples each of a pixel's first
         colour samples brings where AOVs are kept (renderer/film/aovs.py). A partial band pass first
         fills the band table for `height` (nothing to do when it already is: a still view's
-        passes; moving frames, which change the height, are interleaved)."""
+        passes; moving frames, which change the height, are interleaved). `window`: where the film
+        lies on the camera's image (renderer/film/crop_window.py; None: the film is the image)."""
         if feature_boost > 0 and not self.feature_samples:
             raise ValueError("feature samples asked of a program compiled without them (Renderer.program)")
         if order == BANDS and slice_count < ROUND_SLICES:
             self.bands.set_height(height)
-        self._render(width, height, spp, slice_first, slice_count, order, feature_boost, *rest)
+        window_args = window.kernel_args if window is not None else (width, height, 0, 0)
+        self._render(width, height, spp, slice_first, slice_count, order, feature_boost, *rest, *window_args)
 
     @ti.kernel
     def _render(self, width: ti.i32, height: ti.i32, spp: ti.i32, slice_first: ti.i32, slice_count: ti.i32,
                 order: ti.i32, feature_boost: ti.i32, seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3,
-                right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32, aperture: ti.f32, focus: ti.f32):
+                right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32, aperture: ti.f32, focus: ti.f32,
+                full_width: ti.i32, full_height: ti.i32, window_x: ti.i32, window_y: ti.i32):
         # A partial pass over bands visits its rows from the band table: the same pixels as
         # slice_pixel's, without its divisions and skipped indices (renderer/film/band_table.py).
         banded = order == BANDS and slice_count < ROUND_SLICES
@@ -81,7 +84,9 @@ class RenderProgram:
                 # A pixel adaptive sampling has stopped (renderer/film/adaptive.py) takes no more samples;
                 # a nested test: Taichi's `and` evaluates both sides, and (x, y) may lie outside the film.
                 if self.film.adaptive[x, y] != STOPPED:
-                    pixel = y * width + x
+                    # The image's pixel (a crop window's film starts inside the image): its number
+                    # seeds the pixel's random numbers, so a crop renders the whole image's pixels.
+                    pixel = (y + window_y) * full_width + x + window_x
                     # The pixel's own sample count is its next sample index (see pixel_slices).
                     first_sample = self.film.count[x, y] + self.film.rejected[x, y]
                     work = ti.math.vec3(0.0)
@@ -95,26 +100,30 @@ class RenderProgram:
                                 stream_index, stream_seed = index, seed
                                 if k > 0:
                                     stream_index, stream_seed = self.aovs.count[x, y], seed ^ FEATURE_SEED_SALT
-                                work += self._camera_sample(x, y, width, height, pixel, stream_index, stream_seed,
-                                                            k > 0, max_depth, origin, forward, right, up, half_height,
-                                                            aperture, focus)
+                                work += self._camera_sample(x, y, window_x, window_y, full_width, full_height, pixel,
+                                                            stream_index, stream_seed, k > 0, max_depth, origin,
+                                                            forward, right, up, half_height, aperture, focus)
                         else:
-                            work += self._camera_sample(x, y, width, height, pixel, index, seed, False, max_depth,
-                                                        origin, forward, right, up, half_height, aperture, focus)
+                            work += self._camera_sample(x, y, window_x, window_y, full_width, full_height, pixel, index,
+                                                        seed, False, max_depth, origin, forward, right, up,
+                                                        half_height, aperture, focus)
                     # One plain store per pixel: += on a global field would be an atomic add per sample.
                     self.work[x, y] = self.work[x, y] + work
 
     @ti.func
-    def _camera_sample(self, x, y, width, height, pixel, index, stream_seed, features_only, max_depth, origin, forward,
-                       right, up, half_height, aperture, focus):
-        """One camera sample of pixel (x, y) at sampler `index` under `stream_seed`: added to the
-        film unless `features_only`, and to the AOVs where they are kept; returns its work stats.
-        The kernel's only call of the integrator: another call site would compile its tracing in
-        again."""
+    def _camera_sample(self, x, y, window_x, window_y, full_width, full_height, pixel, index, stream_seed,
+                       features_only, max_depth, origin, forward, right, up, half_height, aperture, focus):
+        """One camera sample of the film's pixel (x, y), the image's (x + window_x, y + window_y),
+        at sampler `index` under `stream_seed`: added to the film unless `features_only`, and to the
+        AOVs where they are kept; returns its work stats. The kernel's only call of the integrator:
+        another call site would compile its tracing in again."""
         state = self.sampler.start(pixel, index, stream_seed)
-        jitter, weight = pixel_sample(self.sampler.get2d(state, dims.PIXEL), x, y, width, height,
+        # The ray and the filter's image edges are the whole image's, so a crop window's pixels
+        # are the same as in the whole render.
+        ix, iy = x + window_x, y + window_y
+        jitter, weight = pixel_sample(self.sampler.get2d(state, dims.PIXEL), ix, iy, full_width, full_height,
                                       self.features.pixel_filter)
-        ray = generate_ray(x, y, width, height, jitter, self.sampler, state, origin, forward, right, up,
+        ray = generate_ray(ix, iy, full_width, full_height, jitter, self.sampler, state, origin, forward, right, up,
                            half_height, aperture, focus, self.features.depth_of_field,
                            self.features.orthographic)
         value, stats, albedo, normal = self._trace(ray, state, max_depth, features_only)

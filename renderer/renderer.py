@@ -15,6 +15,7 @@ from renderer.film.adaptive import DEFAULT_MIN_SPP, AdaptiveSampling, is_check_p
 from renderer.film.aovs import AovFilm, scene_feature_boost
 from renderer.runtime.allocation import allocation_size
 from renderer.film.band_table import BandTable
+from renderer.film.crop_window import FilmWindow, film_window
 from renderer.camera import CameraFrame
 from renderer.film.accumulation import Film, FilmState
 from renderer.output.image_io import read_environment
@@ -142,7 +143,7 @@ class Renderer:
         """`aovs`: also accumulate the denoising AOVs (renderer/film/aovs.py) of integrators that write
         them; 28 bytes a pixel more."""
         self.scene = scene
-        width, height = max_size or (scene.render.width, scene.render.height)
+        width, height = max_size or scene.render.image_size
         image = (read_environment(scene.environment.file, scene.model_files.options.budget)
                  if scene.environment.kind == "map" else None)
         self.environment = Environment(scene.environment, image)
@@ -175,6 +176,8 @@ class Renderer:
         # partial rounds (checkpoints, distributed groups) keep the interleaved order throughout.
         self.bands_after_first_round = False
         self.samples_per_launch = samples_per_launch_limit()
+        self._window: FilmWindow | None = None  # film_window(), for the film size _window_for
+        self._window_for: tuple[int, int] | None = None
         self.reset(width, height)
 
     # --- programs ------------------------------------------------------------------------------
@@ -253,6 +256,16 @@ class Renderer:
         self.slices_done = 0
         self.pixels_active = self.film.width * self.film.height
 
+    def film_window(self) -> FilmWindow:
+        """Where the film's active region lies on the camera's image: the scene's crop window
+        (renderer/film/crop_window.py), or the whole image."""
+        size = (self.film.width, self.film.height)
+        if self._window_for != size:  # cached: a still view launches every frame
+            settings = self.scene.render
+            self._window = film_window(settings.crop, (settings.width, settings.height), size)
+            self._window_for = size
+        return self._window
+
     def set_adaptive(self, settings: AdaptiveSettings | None) -> None:
         """Turn adaptive sampling on (or off: None) for the samples rendered from now on; pixels
         stopped so far stay stopped until the next reset."""
@@ -304,7 +317,7 @@ class Renderer:
             if whole_iterations:
                 slices = max(1, slices // ROUND_SLICES) * ROUND_SLICES
             self.slices_done += program.advance(width, height, slices, self.slices_done, seed, max_depth,
-                                                *camera.kernel_args())
+                                                *camera.kernel_args(), window=self.film_window())
             return
         left = slices
         while left > 0 and self.pixels_active > 0:
@@ -316,7 +329,7 @@ class Renderer:
             else:
                 spp, first, count = 1, cursor, min(left, ROUND_SLICES - cursor)
             program.render(width, height, spp, first, count, self.round_order(), seed, max_depth,
-                           *camera.kernel_args(), feature_boost=self.feature_boost)
+                           *camera.kernel_args(), feature_boost=self.feature_boost, window=self.film_window())
             self.slices_done += spp * count
             left -= spp * count
             if (self.adaptive is not None and self.slices_done % ROUND_SLICES == 0
@@ -336,7 +349,7 @@ class Renderer:
         for taken in range(0, spp, self.samples_per_launch):  # each pixel goes on from its own count
             program.render(self.film.width, self.film.height, min(self.samples_per_launch, spp - taken), slice_first,
                            slice_count, INTERLEAVED, seed, max_depth, *camera.kernel_args(),
-                           feature_boost=self.feature_boost)
+                           feature_boost=self.feature_boost, window=self.film_window())
 
     def round_order(self, slices_done: int | None = None) -> int:
         """How the round holding slice `slices_done` since the last reset (default: the next one)
@@ -387,7 +400,9 @@ class Renderer:
         """Distance along the view direction to the surface under (u, v) in [0,1]^2 (y up)."""
         program = self.program(integrator or self.scene.render.integrator, self.features(camera))
         args = camera.kernel_args()
-        program.probe(u, v, self.film.width, self.film.height, *args[:5], self._probe_out)
+        window = self.film_window()  # (u, v) of the film, probed where it lies on the camera's image
+        u, v = window.image_uv(u, v, self.film.width, self.film.height)
+        program.probe(u, v, window.full_width, window.full_height, *args[:5], self._probe_out)
         distance = float(self._probe_out[None])
         return distance if distance > 0 else None
 

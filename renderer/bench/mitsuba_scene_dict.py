@@ -37,7 +37,13 @@ def scene_dict(scene: Scene, mesh_dir: Path, size: tuple[int, int] | None = None
     if any(m.is_dispersive for m in scene.materials):
         raise ValueError(f"{scene.name}: dispersive glass needs Mitsuba's spectral variants; compared in RGB")
     notes: list[str] = []
-    width, height = size or (scene.render.width, scene.render.height)
+    width, height = size or scene.render.image_size
+    crop = scene.render.crop if (width, height) == scene.render.image_size else None
+    film = {"type": "hdrfilm", "width": int(width), "height": int(height), "rfilter": _rfilter(scene.render)}
+    if crop is not None:  # the whole image's film, rendered in the crop window (as Lantern's)
+        film.update(width=scene.render.width, height=scene.render.height, crop_offset_x=crop[0],
+                    crop_offset_y=crop[1], crop_width=crop[2], crop_height=crop[3])
+        width, height = scene.render.width, scene.render.height  # the projection's aspect
     T = mi.ScalarTransform4f
     cam = scene.camera
     result = {
@@ -45,8 +51,7 @@ def scene_dict(scene: Scene, mesh_dir: Path, size: tuple[int, int] | None = None
         "integrator": {"type": "path", "max_depth": int(scene.render.max_depth if max_depth is None else max_depth)},
         "sensor": {"type": "perspective", "fov": float(cam.fov), "fov_axis": "y",
                    "to_world": T().look_at(origin=list(cam.position), target=list(cam.look_at), up=list(cam.up)),
-                   "film": {"type": "hdrfilm", "width": int(width), "height": int(height),
-                            "rfilter": _rfilter(scene.render)},
+                   "film": film,
                    "sampler": {"type": "independent", "sample_count": int(spp)}},
     }
     if cam.projection == "orthographic":
@@ -107,8 +112,13 @@ def _environment(scene: Scene, T) -> dict | None:
             return None
         return {"type": "constant", "radiance": {"type": "rgb", "value": [c * env.intensity for c in env.color]}}
     if env.kind == "map":
-        return {"type": "envmap", "filename": str(env.file), "scale": float(env.intensity),
-                "to_world": T().rotate(axis=[0, 1, 0], angle=float(env.rotation))}
+        angle = env.y_rotation()
+        if angle is not None:
+            return {"type": "envmap", "filename": str(env.file), "scale": float(env.intensity),
+                    "to_world": T().rotate(axis=[0, 1, 0], angle=float(angle))}
+        m = np.eye(4)
+        m[:3, :3] = env.rotation_matrix()  # the environment's frame to the world's, as Mitsuba's to_world
+        return {"type": "envmap", "filename": str(env.file), "scale": float(env.intensity), "to_world": T(m.tolist())}
     raise ValueError(f"{scene.name}: the procedural sky environment has no Mitsuba counterpart")
 
 

@@ -101,8 +101,8 @@ def render_scene(test: TestScene, spp_override: int | None = None) -> dict:
     row["load_s"] = time.perf_counter() - t0
     row["left_out"] = [str(w.message).split(": ", 2)[-1] for w in caught]
     row["warnings"] = len(row["left_out"])
-    if (scene.render.width, scene.render.height) != (width, height):
-        return {**row, "verdict": "size differs", "note": f"the scene is {scene.render.width}x{scene.render.height}"}
+    if scene.render.image_size != (width, height):
+        return {**row, "verdict": "size differs", "note": "the scene is {}x{}".format(*scene.render.image_size)}
     renderer = Renderer(scene, (width, height))
     camera = CameraFrame.from_spec(scene.camera)
     t0 = time.perf_counter()

@@ -50,11 +50,13 @@ def run_compare(args) -> int:
         mi, variant, note = _import_mitsuba()
     except MitsubaUnavailable as error:
         raise ValueError(f"compare needs Mitsuba 3: {error}") from None
-    size = tuple(args.size) if args.size else (scene.render.width, scene.render.height)
+    size = tuple(args.size) if args.size else scene.render.image_size
     is_xml = Path(path).suffix.lower() == ".xml"
-    if is_xml and args.size and size != (scene.render.width, scene.render.height):
+    if is_xml and args.size and size != scene.render.image_size:
         raise ValueError("--size: a Mitsuba scene file renders at its own film size (give it with -D where the "
                          "file has a $parameter for it)")
+    if scene.render.crop is not None and size != scene.render.image_size:
+        raise ValueError("--size: the scene renders its crop window, {}x{}".format(*scene.render.image_size))
     out_dir = Path(args.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     init_taichi("cpu")

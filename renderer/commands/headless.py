@@ -69,7 +69,7 @@ class RenderJob:
     def resolved(self, scene: Scene) -> "RenderJob":
         """The job with the scene's settings where it names none (except a budget: spp or time)."""
         settings = scene.render
-        return replace(self, size=self.size or (settings.width, settings.height),
+        return replace(self, size=self.size or settings.image_size,
                        integrator=self.integrator or settings.integrator,
                        max_depth=settings.max_depth if self.max_depth is None else self.max_depth,
                        seed=settings.seed if self.seed is None else self.seed,

@@ -6,4 +6,5 @@ pixel_slices.py       a sample per pixel split into interleaved slices (frame bu
 band_table.py         the rows of a round cut into bands, on the device
 adaptive.py           adaptive sampling: precise pixels stop taking samples
 aovs.py               albedo and normal beside the colour, for the denoiser and the AOV views
+crop_window.py        where a film lies on the camera's image (a crop window; plain Python)
 """

@@ -71,9 +71,12 @@ def _gaussian_offset(u, key: ti.template()):
 @ti.func
 def _edge_factor(offset, i, n, tails: ti.template()):
     """For pixel i of n along an axis: 0 where the sample lands outside the image, else the factor
-    that renormalises the filter cut at the image's edges (1 away from them)."""
+    that renormalises the filter cut at the image's edges (1 away from them, and for a pixel outside
+    the image, which only a viewer showing a crop window beyond the image has: it has no edge)."""
     factor = 1.0
-    if offset < -(i + 0.5) or offset > (n - i) - 0.5:
+    if i < 0 or i >= n:
+        factor = 1.0
+    elif offset < -(i + 0.5) or offset > (n - i) - 0.5:
         factor = 0.0
     else:
         cut = 0.0

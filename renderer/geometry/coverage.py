@@ -92,4 +92,7 @@ def _facing_away(geometry: ti.template(), g, d_local):
         if g >= geometry.range_end[1] and g < geometry.range_end[2]:
             i = g - geometry.range_end[1]
             away = geometry.quads[i, 1].cross(geometry.quads[i, 2]).dot(d_local) > 0.0
+            if ti.static(geometry.has_flipped):
+                if geometry.is_flipped(g):  # turned over (flip_normals): its front is the other side
+                    away = not away
     return away

@@ -40,6 +40,11 @@ class MeshData:
     sphere_frames: np.ndarray = field(default_factory=lambda: _f32((0, 3, 3)))
     quads: np.ndarray = field(default_factory=lambda: _f32((0, 3, 3)))  # corner, edge u, edge v
     quad_material: np.ndarray = field(default_factory=_i32)
+    # Per sphere and per quad: whether its normal is turned over (Mitsuba's flip_normals): a sphere's
+    # then points inwards, a quad's against edge u x edge v, keeping its texture coordinates, as
+    # Mitsuba's do. Empty: none is. (A disc's normal is data: turning it over needs no flag.)
+    sphere_flipped: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    quad_flipped: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
     discs: np.ndarray = field(default_factory=lambda: _f32((0, 7)))  # centre xyz, normal xyz, radius
     disc_material: np.ndarray = field(default_factory=_i32)
     # Surfaces of revolution (renderer/geometry/bezier.py): curves are cubic profile segments in
@@ -70,6 +75,18 @@ class MeshData:
         if len(self.sphere_frames) == len(self.spheres):
             return self.sphere_frames.astype(np.float32)
         return np.tile(np.eye(3, dtype=np.float32), (len(self.spheres), 1, 1))
+
+    @property
+    def has_flipped(self) -> bool:
+        """Whether a sphere or quad has its normal turned over."""
+        return bool(np.any(self.sphere_flipped) or np.any(self.quad_flipped))
+
+    def analytic_flipped(self) -> np.ndarray:
+        """(spheres + quads,) int32: 1 where the normal is turned over, spheres then quads (their
+        global ids in order, from the first sphere's)."""
+        flags = [np.asarray(f, bool) if len(f) == n else np.zeros(n, bool)
+                 for f, n in ((self.sphere_flipped, len(self.spheres)), (self.quad_flipped, len(self.quads)))]
+        return np.concatenate(flags).astype(np.int32)
 
     @property
     def primitive_count(self) -> int:

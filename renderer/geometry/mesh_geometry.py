@@ -78,6 +78,9 @@ class MeshGeometry:
         # Hits carry dp/du and dp/dv only where a material shades in their frame (Mitsuba's maps).
         self.has_uv_partials = materials is not None and needs_uv_partials(materials.arrays)
         self.has_instances = data.has_instances
+        # Spheres or quads with their normals turned over (Mitsuba's flip_normals): a sign per
+        # analytic primitive, compiled in only where one is.
+        self.has_flipped = data.has_flipped
         self.stack_size = STACK_SIZE
         if self.has_instances:
             if not isinstance(bvh, InstancedBVH):
@@ -166,6 +169,10 @@ class MeshGeometry:
             uploads.append((self.prim_material, materials))
         self.range_end = ti.field(ti.i32, shape=5)
         uploads.append((self.range_end, data.range_ends()))
+        if self.has_flipped:  # 1 where a sphere's or quad's normal is turned over, from the first sphere
+            flipped = data.analytic_flipped()
+            self.flipped = ti.field(ti.i32, shape=len(flipped))
+            uploads.append((self.flipped, flipped))
         if "bezier" in self.kinds:  # only then: other scenes never see (or compile) Bezier code
             from renderer.geometry.bezier_device import BezierPatches
 
@@ -525,6 +532,12 @@ class MeshGeometry:
                 ns = n
                 uv = hit.bary
                 dp_du, dp_dv = self.quads[i, 1], self.quads[i, 2]  # uv runs along the edges
+        if ti.static(self.has_flipped):
+            # Turned over as Mitsuba's flip_normals: the normal only (texture coordinates and dp/du,
+            # dp/dv stay), so the front face (emission, one-sided BSDFs) and inside (media) swap.
+            if self.is_flipped(g):
+                n = -n
+                ns = -ns
         if ti.static("disc" in self.kinds):
             if g >= self.range_end[2] and g < self.range_end[3]:
                 i = g - self.range_end[2]
@@ -544,6 +557,14 @@ class MeshGeometry:
         return Surface(p=p, n_geo=n, n_shading=ns, uv=uv, uv1=uv1, tangent=tangent, material=self.prim_material[g],
                        prim=g, front_face=front, eps=eps, cone_width=ray.cone_width + ray.cone_spread * hit.t,
                        cone_spread=ray.cone_spread, color=color, dp_du=dp_du, dp_dv=dp_dv)
+
+    @ti.func
+    def is_flipped(self, g):
+        """Whether primitive g is a sphere or quad with its normal turned over (has_flipped only)."""
+        flipped = False
+        if g >= self.range_end[0] and g < self.range_end[2]:
+            flipped = self.flipped[g - self.range_end[0]] != 0
+        return flipped
 
     @ti.func
     def corners(self, f: ti.template(), g, bary):
@@ -606,6 +627,10 @@ class MeshGeometry:
                                np.linalg.norm(quad_cross, axis=1), np.pi * d.discs[:, 6] ** 2])
         length = np.linalg.norm(cross, axis=1, keepdims=True)
         axis = np.where(length > 0, cross / np.maximum(length, 1e-30), [0.0, 1.0, 0.0])
+        if len(d.quads):  # a quad turned over emits against edge u x edge v
+            quads = slice(d.counts["triangle"] + d.counts["sphere"], d.counts["triangle"] + d.counts["sphere"]
+                          + d.counts["quad"])
+            axis[quads] *= np.where(d.analytic_flipped()[d.counts["sphere"]:, None] != 0, -1.0, 1.0)
         theta_o = np.zeros(len(area))
         theta_o[d.counts["triangle"]:d.counts["triangle"] + d.counts["sphere"]] = np.pi
         # Instanced meshes are not sampled: they are stored in their own frames, and assembly
@@ -641,6 +666,11 @@ class MeshGeometry:
             if g >= self.range_end[2] and g < self.range_end[3]:
                 i = g - self.range_end[2]
                 result = shapes.disc_sample(self.discs_a[i].xyz, self.discs_n[i], self.discs_a[i].w, ref, u)
+        if ti.static(self.has_flipped):
+            # The sampled point's normal as its hits have it: the emitting side is where it points
+            # (a sphere turned over emits inwards; its densities do not depend on the normal's sign).
+            if self.is_flipped(g):
+                result.n = -result.n
         return result
 
     @ti.func

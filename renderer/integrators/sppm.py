@@ -320,10 +320,12 @@ class SppmProgram(RenderProgram):
         return self.state.steps_within(seconds, first_step, height)
 
     def advance(self, width, height, steps, first_step, seed, max_depth, origin, forward, right, up, half_height,
-                aperture, focus):
+                aperture, focus, window=None):
         """Steps [first_step, first_step + steps) of the iterations (step k is step k % ITERATION_STEPS
         of iteration k // ITERATION_STEPS); the state must have ended at first_step, or first_step
-        starts an iteration (anything else is refused: the steps in between are lost)."""
+        starts an iteration (anything else is refused: the steps in between are lost). `window`:
+        where the film lies on the camera's image (renderer/film/crop_window.py; None: the film is
+        the image)."""
         state = self.state
         options = self.current_options()
         if options.photon_sampler != self.photon_sampler.name:
@@ -335,7 +337,8 @@ class SppmProgram(RenderProgram):
             state.reset()
         photons = options.photons or width * height
         table = table_size_for(width * height)
-        camera = (origin, forward, right, up, half_height, aperture, focus)
+        camera = (origin, forward, right, up, half_height, aperture, focus,
+                  *(window.kernel_args if window is not None else (width, height, 0, 0)))
         step, end = first_step, first_step + steps
         while step < end:  # consecutive steps of one phase in one launch
             index, part = divmod(step, ITERATION_STEPS)
@@ -391,14 +394,17 @@ class SppmProgram(RenderProgram):
     def camera_rows(self, width: ti.i32, height: ti.i32, row_first: ti.i32, row_end: ti.i32, index: ti.i32,
                     seed: ti.u32, max_depth: ti.i32, radius_pixels: ti.f32, origin: ti.math.vec3,
                     forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32,
-                    aperture: ti.f32, focus: ti.f32):
-        """The camera pass's paths for rows [row_first, row_end) (a whole pass: 0, height)."""
+                    aperture: ti.f32, focus: ti.f32, full_width: ti.i32, full_height: ti.i32, window_x: ti.i32,
+                    window_y: ti.i32):
+        """The camera pass's paths for rows [row_first, row_end) (a whole pass: 0, height); the
+        film's pixel (x, y) is the image's (x + window_x, y + window_y) (a crop window)."""
         st = self.state
         for x, y in ti.ndrange(width, (row_first, row_end)):
-            pixel = y * width + x
+            pixel = (y + window_y) * full_width + x + window_x
             sample = self.sampler.start(pixel, index, seed)
             # (The box filter: SPPM's visible points gather per pixel; Renderer warns of another filter.)
-            ray = generate_ray(x, y, width, height, self.sampler.get2d(sample, dims.PIXEL), self.sampler, sample,
+            ray = generate_ray(x + window_x, y + window_y, full_width, full_height,
+                               self.sampler.get2d(sample, dims.PIXEL), self.sampler, sample,
                                origin, forward, right, up, half_height, aperture, focus,
                                self.features.depth_of_field, self.features.orthographic)
             value, stats = self._trace_camera(x, y, ray, sample, max_depth, radius_pixels)

@@ -92,6 +92,18 @@ def light_power(spec, scene_radius: float, image=None) -> float:
     return intensity * 4.0 * math.pi
 
 
+def peak_intensity(spec, power: float) -> float:
+    """The most a light sends a point at distance 1 (luminance W/sr, or the same measure for a
+    directional light's power crossing the scene): a point or a spot its intensity, others their
+    power over pi, as a Lambertian emitter of that power would (what the choice between these lights
+    and emissive surfaces weighs, renderer/lights/lights.py)."""
+    if spec.kind == "point":
+        return power / (4.0 * math.pi)
+    if spec.kind == "spot":
+        return power / spot_solid_angle(spec.cutoff_angle, spec.beam)
+    return power / math.pi
+
+
 def emits(spec) -> bool:
     return max(spec.irradiance if spec.kind in ("directional", "projector") else spec.intensity) > 0.0
 
@@ -138,6 +150,7 @@ class DeltaLights:
         images, slots, slot_of = light_images(specs, ledger or MemoryLedger(MemoryBudget.from_settings()))
         image_of = [images[slots[k][0]] if k != NO_IMAGE else None for k in slot_of]
         self.power = np.array([light_power(s, scene_radius, im) for s, im in zip(specs, image_of)], np.float64)
+        self.intensity = np.array([peak_intensity(s, p) for s, p in zip(specs, self.power)], np.float64)
         n = max(1, self.count)
         self.kind = ti.field(ti.i32, shape=n)
         self.position = ti.Vector.field(3, ti.f32, shape=n)

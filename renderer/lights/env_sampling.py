@@ -18,8 +18,9 @@ poles, nothing to clamp), weighs each texel by its exact solid angle, and makes 
 constant on a constant map, so a white-furnace render under an environment has zero variance from
 the light sample.
 
-Texel weights (the distribution is built once, from the image; intensity and rotation are read from
-`environment.scalars` at run time and change nothing here):
+Texel weights (the distribution is built once, from the image, in the map's own frame; intensity and
+rotation are read from `environment.scalars` (and, where compiled in, its full rotation from
+`environment.frame`) at run time and change nothing here):
 
 * *Conservative*: the bilinear lookup makes the radiance inside a texel a blend of its 3x3
   neighbourhood, so a texel next to the sun is bright near its shared edge. The weight of a texel is
@@ -201,16 +202,19 @@ class EnvironmentSampler:
             z = s - 1.0
             sin_theta = ti.sqrt(ti.max(0.0, s * (2.0 - s)))
         phi = 2.0 * PI * ((ti.cast(j, ti.f32) + fu) / self.width) - self.environment.scalars[1]
-        direction = ti.math.vec3(sin_theta * ti.sin(phi), z, -sin_theta * ti.cos(phi))
+        local = ti.math.vec3(sin_theta * ti.sin(phi), z, -sin_theta * ti.cos(phi))
+        # a rotation has a unit Jacobian: the pdf in the world is the map frame's
+        direction = self.environment.from_map(local)
         return direction, self.texel_pdf[i, j], self.environment.radiance(direction)
 
     @ti.func
     def pdf(self, direction):
         """Solid-angle pdf of `sample` producing `direction` (unit vector); finite everywhere."""
-        u = (ti.atan2(direction.x, -direction.z) + self.environment.scalars[1]) / (2.0 * PI)
+        d = self.environment.to_map(direction)
+        u = (ti.atan2(d.x, -d.z) + self.environment.scalars[1]) / (2.0 * PI)
         u -= ti.floor(u)
         # theta by atan2: accurate near the poles, where acos(y) loses digits
-        theta = ti.atan2(ti.sqrt(direction.x * direction.x + direction.z * direction.z), direction.y)
+        theta = ti.atan2(ti.sqrt(d.x * d.x + d.z * d.z), d.y)
         j = ti.math.clamp(ti.cast(u * self.width, ti.i32), 0, self.width - 1)
         # the row whose centre, pi i / (H - 1), is nearest
         i = ti.math.clamp(ti.cast(theta * (1.0 / PI) * (self.height - 1) + 0.5, ti.i32), 0, self.height - 1)
@@ -265,7 +269,8 @@ class EnvironmentSampler:
 
     def texel_edges(self, rotation: float | None = None):
         """Discontinuities of the pdf: (phi edges, theta edges) in radians, phi as
-        atan2(d.x, -d.z) in [0, 2 pi) for the given (default: current) rotation."""
+        atan2(d.x, -d.z) in [0, 2 pi) for the given (default: current) rotation about the map's
+        pole; in the map's frame where a full rotation is compiled in."""
         if rotation is None:
             rotation = float(self.environment.scalars[1])
         phi = np.mod(2.0 * math.pi * np.arange(self.width) / self.width - rotation, 2.0 * math.pi)

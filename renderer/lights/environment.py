@@ -8,6 +8,13 @@ u = (j + 1/2) / W, and u wraps. Row i's centre is at v = i / (H - 1): row 0 is t
 the last row the nadir ("align corners" in v; v clamps). `rotation` turns the map about +y by the
 right-hand rule (counter-clockwise seen from above), as Mitsuba's `to_world` rotate([0, 1, 0],
 rotation): the texel at map azimuth phi is seen at phi - rotation.
+
+Any other orientation (EnvironmentSpec.needs_matrix: a tilted axis, a Mitsuba `to_world` that
+moves the poles) is a 3x3 orthogonal matrix R from the map's frame to the world's, compiled in only
+for such scenes (Features.environment_rotated): a direction d is looked up at R^T d, as Mitsuba's
+`envmap` looks it up at to_world^-1 d, and samples drawn in the map's frame leave as R d. R has a
+unit Jacobian, so the sampler's solid-angle pdf is unchanged. Scenes without it compile exactly the
+azimuth offset above.
 """
 import math
 
@@ -40,20 +47,50 @@ class Environment:
         # intensity, rotation (radians), and the three sky / constant colours
         self.scalars = ti.field(ti.f32, shape=2)
         self.colors = ti.Vector.field(3, ti.f32, shape=3)
+        # Static: the full rotation is compiled in only where the scene's orientation needs it.
+        self.rotated = spec.needs_matrix
+        if self.rotated:
+            self.frame = ti.Matrix.field(3, 3, ti.f32, shape=())  # map frame -> world
         self.set_spec(spec)
 
     def set_spec(self, spec):
+        """Intensity, orientation and colours (data: no recompile). A spec that needs the full
+        rotation needs an environment built with one."""
+        if spec.needs_matrix and not self.rotated:
+            raise ValueError("this environment was compiled for turns about +y only; its orientation "
+                             "needs a new Environment")
         colours = [spec.color, spec.zenith, spec.horizon] if spec.kind == "constant" else [spec.zenith, spec.horizon, spec.ground]
-        upload_fields([(self.scalars, np.array([spec.intensity, math.radians(spec.rotation)], np.float32)),
-                       (self.colors, np.array(colours, np.float32))])
+        # with the matrix compiled in, the matrix carries all of the orientation (azimuth offset 0)
+        angle = 0.0 if self.rotated else math.radians(spec.y_rotation() or 0.0)
+        uploads = [(self.scalars, np.array([spec.intensity, angle], np.float32)),
+                   (self.colors, np.array(colours, np.float32))]
+        if self.rotated:
+            uploads.append((self.frame, spec.rotation_matrix().astype(np.float32)))
+        upload_fields(uploads)
+
+    @ti.func
+    def to_map(self, d):
+        """A world direction in the environment's own frame (where the map convention holds)."""
+        local = d
+        if ti.static(self.rotated):
+            local = self.frame[None].transpose() @ d  # orthogonal: the transpose is the inverse
+        return local
+
+    @ti.func
+    def from_map(self, local):
+        """A direction of the environment's own frame in the world."""
+        d = local
+        if ti.static(self.rotated):
+            d = self.frame[None] @ local
+        return d
 
     @ti.func
     def radiance(self, d):
         value = ti.math.vec3(0.0)
         if ti.static(self.kind == "map"):
-            value = self._lookup(d)
+            value = self._lookup(self.to_map(d))
         elif ti.static(self.kind == "sky"):
-            value = self._sky(d)
+            value = self._sky(self.to_map(d))
         else:
             value = self.colors[0]
         return value * self.scalars[0]
@@ -69,7 +106,8 @@ class Environment:
 
     @ti.func
     def _lookup(self, d):
-        """Bilinear lookup; wraps in u, clamps in v (texel centres as in the module doc)."""
+        """Bilinear lookup of a direction in the map's frame; wraps in u, clamps in v (texel centres
+        as in the module doc)."""
         phi = ti.atan2(d.x, -d.z) + self.scalars[1]
         u = phi / (2.0 * PI)
         u -= ti.floor(u)

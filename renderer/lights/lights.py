@@ -14,7 +14,7 @@ A sample of a light without a surface has `delta` = 1: its `pdf` is only the pro
 choosing that light, its `radiance` the value that multiplies f / pdf (I falloff / r^2 or E), and
 it takes no MIS weight (no BSDF sample can find it). Where a scene has such lights, the samples
 not given to the environment are split between them and the emissive primitives in proportion to
-their powers (`delta_share`).
+their peak intensities (`delta_share`).
 """
 import math
 
@@ -128,11 +128,16 @@ class Lights:
         self.env_share = ti.field(ti.f32, shape=())
         self.env_share[None] = share
         if self.has_delta:
-            # The rest between the lights without a surface and the emissive primitives, by power.
-            delta_power = float(delta.power.sum())
-            area_power = float(np.sum(emitters["power"])) if self.has_area else 0.0
+            # The rest between the lights without a surface and the emissive primitives, by the most
+            # each sends a point at a given distance: a point light of power P sends P / (4 pi) per
+            # sr, a Lambertian emitter of power P at most P / pi. Weighing powers instead would give
+            # a point light four times its share of what reaches a point, and starve the surfaces
+            # (their rare samples then come with large weights: fireflies).
+            delta_intensity = float(delta.intensity.sum())
+            area_intensity = float(np.sum(emitters["power"])) / math.pi if self.has_area else 0.0
             self.delta_share = ti.field(ti.f32, shape=())
-            self.delta_share[None] = delta_power / (delta_power + area_power) if area_power > 0.0 else 1.0
+            self.delta_share[None] = (delta_intensity / (delta_intensity + area_intensity) if area_intensity > 0.0
+                                      else 1.0)
         prim_total = max(1, geometry.primitive_count())
         self.prim_emitter = ti.field(ti.i32, shape=prim_total)
         self.emitter_prim = ti.field(ti.i32, shape=max(1, self.count))

@@ -32,15 +32,17 @@ from renderer.geometry.shading import consistent_shading_normal
 from renderer.materials import lobes
 from renderer.materials import microfacet as mf
 from renderer.materials.lobes import BsdfSample
-from renderer.materials.kinds import BACK_BLACK, KIND_IDS, KINDS, TANGENT_SPACE_MAP, TWO_SIDED
+from renderer.materials.kinds import BACK_BLACK, KIND_IDS, KINDS, MAX_MIX_DEPTH, TANGENT_SPACE_MAP, TWO_SIDED
 from renderer.materials.mapped_frames import frame_tangent, mapped_frame, material_weight
 from renderer.materials.principled import principled_has_smooth_part
 from renderer.materials.table import MIN_ALPHA, NO_TEXTURE, Material, alpha_of
+from renderer.sampling.rng import pcg_hash
 from renderer.sampling.warps import cosine_hemisphere, orthonormal_basis, to_local, to_world
 
 vec3 = ti.math.vec3
 # The kinds whose smooth part has_smooth_part cannot tell from the roughness alone.
-_DIFFUSE, _NULL, _PRINCIPLED, _PLASTIC = (KIND_IDS[name] for name in ("diffuse", "null", "principled", "plastic"))
+_DIFFUSE, _NULL, _PRINCIPLED, _PLASTIC, _DISNEY = (KIND_IDS[name] for name in
+                                                    ("diffuse", "null", "principled", "plastic", "disney"))
 
 
 @ti.data_oriented
@@ -70,6 +72,8 @@ class Bsdf:
         """The material at a surface point (textures and vertex colours applied) and the shading
         normal to use."""
         rec = self.materials.table[surface.material]
+        if ti.static(self.features.has_mixes):
+            rec = self._mixed(rec, surface, wo)
         n = surface.n_shading
         mat = Material(kind=rec.kind, base_color=rec.base_color, alpha=alpha_of(rec.roughness), metallic=rec.metallic,
                        transmission=rec.transmission, ior=rec.ior, emission=rec.emission, edge_tint=rec.edge_tint,
@@ -91,6 +95,12 @@ class Bsdf:
             mat.plastic_table = rec.plastic_table
             mat.internal_reflectance = rec.internal_reflectance
             mat.specular_weight = rec.specular_weight
+        if ti.static(self.features.has_kind("disney")):
+            mat.roughness, mat.anisotropic, mat.sheen, mat.sheen_tint = (rec.roughness, rec.anisotropic, rec.sheen,
+                                                                         rec.sheen_tint)
+            mat.spec_tint, mat.clearcoat_gloss, mat.flatness, mat.diff_trans = (rec.spec_tint, rec.clearcoat_gloss,
+                                                                                rec.flatness, rec.diff_trans)
+            mat.front_both_sides = rec.front_both_sides
         if ti.static(self.features.has_vertex_colors):
             mat.base_color *= surface.color.xyz
         if ti.static(self.features.has_textures):
@@ -113,6 +123,9 @@ class Bsdf:
                     mat.alpha_v = ti.max(tex.sample(rec.alpha_textures[1], surface.uv, surface.uv1).x, MIN_ALPHA)
             if rec.transmission_texture != NO_TEXTURE:
                 mat.transmission *= tex.sample(rec.transmission_texture, surface.uv, surface.uv1).x
+            if ti.static(self.features.has_kind("disney")):
+                if mat.kind == _DISNEY:
+                    mat = _disney_textures(tex, rec, surface, mat)
             if ti.static(self.features.has_layer("clearcoat")):
                 if rec.layer_textures[0] != NO_TEXTURE:
                     mat.clearcoat *= tex.sample(rec.layer_textures[0], surface.uv, surface.uv1).x
@@ -143,6 +156,37 @@ class Bsdf:
                         mat.coat_normal = _normal_mapped(tex, rec.layer_textures2[2], rec.clearcoat_normal_scale,
                                                          surface, surface.n_shading, wo)
         return mat, n
+
+    @ti.func
+    def _mixed(self, rec, surface, wo):
+        """The row a mix shades with at this point: its second material with probability its
+        weight, else its first, down nested mixes, drawn from a hash of the point and wo (pbrt-v4's
+        MixMaterial: one material per point, so light and BSDF sampling there see the same one; the
+        image is the mix's in expectation). The mix keeps its own emission, medium and normal or
+        bump map."""
+        own = rec
+        u = _point_uniform(surface.p, wo)
+        for _ in ti.static(range(MAX_MIX_DEPTH)):
+            if rec.mix[0] >= 0:
+                w = rec.mix_weight
+                if ti.static(self.features.has_textures):
+                    if rec.mix[2] != NO_TEXTURE:
+                        w *= self.materials.textures.sample(rec.mix[2], surface.uv, surface.uv1).x
+                w = ti.math.clamp(w, 0.0, 1.0)
+                if u < w:
+                    u = u / w
+                    rec = self.materials.table[rec.mix[1]]
+                else:
+                    u = (u - w) / (1.0 - w)
+                    rec = self.materials.table[rec.mix[0]]
+        rec.emission = own.emission
+        rec.textures[3] = own.textures[3]
+        rec.medium = own.medium
+        if own.textures[2] != NO_TEXTURE:
+            rec.textures[2] = own.textures[2]
+            rec.normal_map_model = own.normal_map_model
+            rec.normal_scale = own.normal_scale
+        return rec
 
     @ti.func
     def _frame(self, mat, n, wo_world):
@@ -374,7 +418,7 @@ class Bsdf:
         same as `flags(mat) & NON_DELTA`, written as a switch on the kinds whose answer is not their
         roughness's (LLVM's fast-math code for the flags test rounds some images differently)."""
         smooth = mat.alpha > 0.0
-        if mat.kind == _DIFFUSE or mat.kind == _PLASTIC:  # a plastic's base is diffuse
+        if mat.kind == _DIFFUSE or mat.kind == _PLASTIC or mat.kind == _DISNEY:  # diffuse bases; Disney has no delta
             smooth = True
         elif mat.kind == _NULL:
             smooth = False
@@ -415,6 +459,43 @@ def _normal_mapped(tex, slot, scale, surface, n, wo):
         if mapped.dot(mapped) > 1e-12:
             result = consistent_shading_normal(ti.math.normalize(mapped), surface.n_geo, wo)
     return result
+
+
+@ti.func
+def _point_uniform(p, wo):
+    """A uniform number in [0, 1) from the bits of a point and a direction."""
+    k = ti.u32(0x9E3779B9)
+    for i in ti.static(range(3)):
+        k = pcg_hash(k ^ ti.bit_cast(p[i], ti.u32))
+        k = pcg_hash(k ^ ti.bit_cast(wo[i], ti.u32))
+    return ti.cast(k >> ti.u32(8), ti.f32) * (1.0 / 16777216.0)
+
+
+@ti.func
+def _times_texture(tex, slot, value, surface):
+    """value times the first channel of the texture in `slot` (value where the slot is empty)."""
+    result = value
+    if slot != NO_TEXTURE:
+        result = value * tex.sample(slot, surface.uv, surface.uv1).x
+    return result
+
+
+@ti.func
+def _disney_textures(tex, rec, surface, mat):
+    """mat with the Disney kind's textured parameters (renderer/materials/kinds.py DISNEY_TEXTURED
+    order) applied."""
+    t1, t2, t3 = rec.disney_textures, rec.disney_textures2, rec.disney_textures3
+    mat.roughness = _times_texture(tex, t1[0], mat.roughness, surface)
+    mat.anisotropic = _times_texture(tex, t1[1], mat.anisotropic, surface)
+    mat.metallic = _times_texture(tex, t1[2], mat.metallic, surface)
+    mat.sheen = _times_texture(tex, t1[3], mat.sheen, surface)
+    mat.sheen_tint = _times_texture(tex, t2[0], mat.sheen_tint, surface)
+    mat.spec_tint = _times_texture(tex, t2[1], mat.spec_tint, surface)
+    mat.clearcoat = _times_texture(tex, t2[2], mat.clearcoat, surface)
+    mat.clearcoat_gloss = _times_texture(tex, t2[3], mat.clearcoat_gloss, surface)
+    mat.flatness = _times_texture(tex, t3[0], mat.flatness, surface)
+    mat.diff_trans = _times_texture(tex, t3[1], mat.diff_trans, surface)
+    return mat
 
 
 @ti.func

@@ -41,6 +41,7 @@ def alpha_from_roughness(roughness: float) -> float:
 
 
 NO_TEXTURE = -1
+MAX_MIX_DEPTH = 4  # mixes within mixes: how deep shading follows them (MaterialSpec.mix)
 NO_MEDIUM = -1
 NO_TABLE = -1
 # Sidedness, one property for every reader: a surface shades alike from both sides (Lantern's and
@@ -110,6 +111,7 @@ class MaterialLayer:
 _F = LobeFlags
 _IOR = Column("ior", "f32", 1.5, from_spec=True)
 _THIN = Column("thin", "i32", 0)
+_CLEARCOAT = Column("clearcoat", "f32", 0.0, from_spec=True, gltf="clearcoat_factor")  # principled's layer, disney's lobe
 # The roughness of a material that names none, unless its kind has its own: what `principled`
 # starts from in Blender and Mitsuba 3 (diffuse and null surfaces ignore it).
 SHARED_ROUGHNESS = 0.5
@@ -143,7 +145,20 @@ SHARED_COLUMNS = (
     Column("roughness_v", "f32", -1.0),
     Column("alpha_textures", "ivec4", (NO_TEXTURE,) * 4),  # alpha (along u), alpha_v, unused, unused
     Column("opacity_texture", "i32", NO_TEXTURE),  # coverage from a texture's first channel (Mitsuba's mask)
+    # A mix row (MaterialSpec.mix): the rows of its two materials, its weight's texture slot, unused;
+    # -1 in the first: not a mix.
+    Column("mix", "ivec4", (-1, -1, NO_TEXTURE, NO_TEXTURE)),
+    Column("mix_weight", "f32", 0.5, from_spec=True),
 )
+
+# Disney's principled BSDF as Mitsuba 3 has it (renderer/materials/disney.py): its parameters
+# of its own (metallic, transmission = spec_trans, clearcoat, ior and thin are shared columns), and
+# the texture slots of its scalar parameters, in the order of the columns disney_textures,
+# disney_textures2 and disney_textures3 (MaterialSpec.parameter_textures gives them by name).
+DISNEY_PARAMS = ("anisotropic", "sheen", "sheen_tint", "spec_tint", "clearcoat_gloss", "flatness", "diff_trans",
+                 "front_both_sides")
+DISNEY_TEXTURED = ("roughness", "anisotropic", "metallic", "sheen", "sheen_tint", "spec_tint", "clearcoat",
+                   "clearcoat_gloss", "flatness", "diff_trans", "transmission")
 
 KINDS = (
     MaterialKind("diffuse", "diffuse", (), (), _F.REFLECTION | _F.DIFFUSE, "renderer.materials.diffuse"),
@@ -172,14 +187,31 @@ KINDS = (
                   Column("specular_weight", "f32", 0.5)),
                  _F.REFLECTION | _F.DIFFUSE | _F.GLOSSY | _F.SPECULAR, "renderer.materials.plastic",
                  defaults=_SMOOTH),
+    # Disney's principled BSDF (Burley 2012, 2015) exactly as Mitsuba 3's `principled` and, thin,
+    # its `principledthin` define it: diffuse with retro-reflection, fake subsurface (flatness) and
+    # sheen, an anisotropic GGX specular with tint, a GTR1 clear coat, a rough specular
+    # transmission (spec_trans) and, thin, a diffuse transmission. No lobe is a delta.
+    MaterialKind("disney", "Disney principled",
+                 ("metallic", "transmission", "ior", "thin", "clearcoat", *DISNEY_PARAMS),
+                 (Column("metallic", "f32", 0.0, from_spec=True), Column("transmission", "f32", 0.0, from_spec=True),
+                  _IOR, _THIN, Column("transmission_texture", "i32", NO_TEXTURE),
+                  _CLEARCOAT,
+                  *(Column(name, "f32", 0.0, from_spec=True) for name in DISNEY_PARAMS[:-1]),
+                  Column("disney_textures", "ivec4", (NO_TEXTURE,) * 4),
+                  Column("disney_textures2", "ivec4", (NO_TEXTURE,) * 4),
+                  Column("disney_textures3", "ivec4", (NO_TEXTURE,) * 4),
+                  Column("front_both_sides", "i32", 0, from_spec=True)),
+                 _F.REFLECTION | _F.TRANSMISSION | _F.DIFFUSE | _F.GLOSSY, "renderer.materials.disney",
+                 refracts=True),
 )
 
 LAYERS = (
     MaterialLayer("clearcoat", "principled", ("clearcoat", "clearcoat_roughness"),
-                  (Column("clearcoat", "f32", 0.0, from_spec=True, gltf="clearcoat_factor"),
+                  (_CLEARCOAT,
                    Column("clearcoat_roughness", "f32", 0.0, from_spec=True, gltf="clearcoat_roughness_factor"),
                    Column("clearcoat_normal_scale", "f32", 1.0, gltf="clearcoat_normal_scale")),
-                  _F.REFLECTION | _F.GLOSSY | _F.SPECULAR, lambda r: r["clearcoat"] > 0.0),
+                  _F.REFLECTION | _F.GLOSSY | _F.SPECULAR,
+                  lambda r: r["kind"] == KIND_IDS["principled"] and r["clearcoat"] > 0.0),
     MaterialLayer("sheen", "principled", ("sheen_color", "sheen_roughness"),
                   (Column("sheen_color", "vec3", (0.0, 0.0, 0.0), from_spec=True, gltf="sheen_color_factor"),
                    Column("sheen_roughness", "f32", 0.0, from_spec=True, gltf="sheen_roughness_factor")),

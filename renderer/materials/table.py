@@ -8,7 +8,7 @@ import taichi as ti
 
 from renderer.materials.conductor_ior import conductor_ior_row
 from renderer.materials.dispersion import dispersion_row
-from renderer.materials.kinds import (COLUMNS, KIND_IDS, KIND_NAMES, LAYER_COLUMNS, LAYERS, NO_MEDIUM, NO_TEXTURE,
+from renderer.materials.kinds import (COLUMNS, DISNEY_TEXTURED, KIND_IDS, KIND_NAMES, LAYER_COLUMNS, LAYERS, NO_MEDIUM, NO_TEXTURE,
                                       BACK_BLACK, BACK_CULLED, MIN_ALPHA, SIDEDNESS, TANGENT_SPACE_MAP, TWO_SIDED,
                                       alpha_from_roughness,
                                       compensated_when_rough)  # noqa: F401 (re-exported)
@@ -46,7 +46,12 @@ Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=
                            sheen_color=vec3, sheen_roughness=ti.f32, specular=ti.f32, specular_color=vec3,
                            coat_normal=vec3, microfacet=ti.i32, nonlinear=ti.i32, plastic_table=ti.i32,
                            internal_reflectance=ti.f32, specular_weight=ti.f32, sidedness=ti.i32,
-                           unmapped_normal=vec3, tangent=vec3, alpha_v=ti.f32)
+                           unmapped_normal=vec3, tangent=vec3, alpha_v=ti.f32,
+                           # Disney's (renderer/materials/disney.py): the perceptual roughness
+                           # itself, and the weights of its lobes and tints.
+                           roughness=ti.f32, anisotropic=ti.f32, sheen=ti.f32, sheen_tint=ti.f32,
+                           spec_tint=ti.f32, clearcoat_gloss=ti.f32, flatness=ti.f32, diff_trans=ti.f32,
+                           front_both_sides=ti.i32)
 
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = 0, 1, 2
 ALPHA_MODE_IDS = {"OPAQUE": ALPHA_OPAQUE, "MASK": ALPHA_MASK, "BLEND": ALPHA_BLEND}
@@ -86,8 +91,16 @@ class MaterialRows:
                        opacity_texture=slots.get("opacity", NO_TEXTURE))
         if spec.kind == "plastic":
             row.update(plastic_row(spec, self.plastic_tables))
+        if spec.kind == "disney":
+            row.update(_disney_texture_row(slots))
         self.rows.append(row)
-        return len(self.rows) - 1
+        index = len(self.rows) - 1
+        if spec.mix is not None:
+            parts = [self.add_spec(part, {role.split(".", 1)[1]: slot for role, slot in slots.items()
+                                          if role.startswith(f"mix{i}.")}) for i, part in enumerate(spec.mix)]
+            row["mix"] = (parts[0], parts[1], slots.get("mix_weight", NO_TEXTURE), NO_TEXTURE)
+            row["kind"] = self.rows[parts[0]]["kind"]  # a mix row is never shaded as itself
+        return index
 
     def add_medium(self, name: str) -> int:
         """Registers a medium that the scene's own list does not name (a model file's volume)."""
@@ -144,6 +157,8 @@ class MaterialRows:
                 "layers": {layer.name for layer in LAYERS if any(layer.in_use(r) for r in rows)},
                 "textures": (any(slots) or layer_textures
                              or any(r["transmission_texture"] != NO_TEXTURE for r in rows)
+                             or any(t != NO_TEXTURE for r in rows for c in _DISNEY_TEXTURE_COLUMNS for t in r[c])
+                             or any(r["mix"][2] != NO_TEXTURE for r in rows)
                              or any(t != NO_TEXTURE for r in rows for t in r["alpha_textures"])),
                 "normal_maps": any(r["textures"][2] != NO_TEXTURE and r["normal_map_model"] == TANGENT_SPACE_MAP
                                    for r in rows),
@@ -154,8 +169,24 @@ class MaterialRows:
                 "alpha": any(r["alpha_mode"] != ALPHA_OPAQUE for r in rows),
                 "thin": any(r["thin"] == 1 for r in rows),
                 "microfacet_models": any(r["microfacet"] != GGX for r in rows),
+                "mixes": any(r["mix"][0] >= 0 for r in rows),
                 "sidedness": any(r["sidedness"] == BACK_BLACK for r in rows),
-                "anisotropy": any(r["roughness_v"] >= 0.0 or r["alpha_textures"][1] != NO_TEXTURE for r in rows)}
+                "anisotropy": any(r["roughness_v"] >= 0.0 or r["alpha_textures"][1] != NO_TEXTURE
+                                  or (r["kind"] == KIND_IDS["disney"]
+                                      and (r["anisotropic"] != 0.0 or r["disney_textures"][1] != NO_TEXTURE))
+                                  for r in rows)}
+
+
+# The Disney kind's texture slots: DISNEY_TEXTURED's parameters four to a column, in order (the
+# last, transmission, has the shared transmission_texture column).
+_DISNEY_TEXTURE_COLUMNS = ("disney_textures", "disney_textures2", "disney_textures3")
+
+
+def _disney_texture_row(slots: dict) -> dict:
+    ids = [slots.get(name, NO_TEXTURE) for name in DISNEY_TEXTURED]
+    row = {column: tuple((ids[4 * i:4 * i + 4] + [NO_TEXTURE] * 4)[:4]) for i, column in enumerate(_DISNEY_TEXTURE_COLUMNS)}
+    row["transmission_texture"] = slots.get("transmission", NO_TEXTURE)
+    return row
 
 
 def _default_row() -> dict:

@@ -75,6 +75,15 @@ class RenderSettings:
     pixel_filter: str = "box"  # "box" | "tent" | "gaussian" (renderer/film/pixel_filter.py)
     filter_radius: float = 1.0  # tent, pixels
     filter_stddev: float = 0.5  # gaussian, pixels (cut off at four deviations)
+    # The window of the width x height image that is rendered and written, (x, y, width, height) in
+    # pixels from its top-left corner (Mitsuba's hdrfilm crop): the projection stays the whole
+    # image's (renderer/film/crop_window.py). None: the whole image.
+    crop: Optional[tuple[int, int, int, int]] = None
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        """The size of the image rendered and written: the crop window's, else width x height."""
+        return (self.crop[2], self.crop[3]) if self.crop is not None else (self.width, self.height)
 
 
 @dataclass(frozen=True)
@@ -82,11 +91,46 @@ class EnvironmentSpec:
     kind: str = "sky"  # "map" | "sky" | "constant"
     file: Optional[Path] = None  # resolved absolute path, for kind == "map"
     intensity: float = 1.0
-    rotation: float = 0.0  # degrees about +y, right-handed (Mitsuba's to_world rotate([0, 1, 0], angle))
+    rotation: float = 0.0  # degrees about rotation_axis, right-handed (Mitsuba's to_world rotate(axis, angle))
+    rotation_axis: Vec3 = (0.0, 1.0, 0.0)  # +y: a turn in azimuth, the kernels' cheap case
     color: Vec3 = (1.0, 1.0, 1.0)  # kind == "constant"
     zenith: Vec3 = (0.25, 0.45, 0.9)  # kind == "sky"
     horizon: Vec3 = (0.9, 0.9, 1.0)
     ground: Vec3 = (0.3, 0.28, 0.25)
+    # Any orientation, from a format that gives one as a matrix (a Mitsuba `to_world`): 3 rows of 3,
+    # orthogonal (a rotation, or one with a mirror), from the environment's own frame (where the map
+    # convention holds) to the world's. When given it replaces rotation and rotation_axis.
+    to_world: Optional[tuple[tuple[float, float, float], ...]] = None
+
+    def rotation_matrix(self) -> np.ndarray:
+        """The 3x3 matrix (float64) from the environment's own frame to the world's."""
+        if self.to_world is not None:
+            return np.array(self.to_world, np.float64)
+        axis = np.asarray(self.rotation_axis, np.float64)
+        x, y, z = axis / np.linalg.norm(axis)
+        k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+        angle = np.radians(self.rotation)
+        return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)  # Rodrigues, right-handed
+
+    def y_rotation(self) -> Optional[float]:
+        """The orientation as degrees about +y where it is a turn about +y (or none), which the
+        kernels apply as an azimuth offset; None where it takes a full 3x3 matrix."""
+        if self.to_world is None:
+            x, y, z = self.rotation_axis
+            if x == 0.0 and z == 0.0:
+                return self.rotation if y > 0.0 else -self.rotation
+            return 0.0 if self.rotation % 360.0 == 0.0 else None
+        m = self.rotation_matrix()
+        angle = np.arctan2(m[0, 2], m[0, 0])
+        c, s = np.cos(angle), np.sin(angle)
+        about_y = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+        return float(np.degrees(angle)) if np.allclose(m, about_y, rtol=0.0, atol=1e-6) else None
+
+    @property
+    def needs_matrix(self) -> bool:
+        """Whether its kernels turn directions by the full matrix (Features.environment_rotated): a
+        map or sky oriented otherwise than about +y; a constant colour looks the same every way."""
+        return self.kind != "constant" and self.y_rotation() is None
 
 
 IDENTITY_UV = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
@@ -175,6 +219,28 @@ class MaterialSpec:
     normal_map: Optional[TextureSpec] = None
     bump_map: Optional[TextureSpec] = None
     bump_scale: float = 1.0
+    # Disney's principled BSDF as Mitsuba 3 defines it (kind "disney", renderer/materials/disney.py):
+    # the weights of its lobes and tints, each in [0, 1] (diff_trans in [0, 2]); metallic,
+    # transmission (Disney's spec_trans), clearcoat, ior and thin are the fields above.
+    anisotropic: float = 0.0
+    sheen: float = 0.0
+    sheen_tint: float = 0.0
+    spec_tint: float = 0.0
+    clearcoat_gloss: float = 0.0
+    flatness: float = 0.0
+    diff_trans: float = 0.0
+    # Disney: the back face shades as the front (Mitsuba's twosided around a principled); else
+    # the back is the inside of the model, black unless it transmits.
+    front_both_sides: bool = False
+    # Textures on scalar parameters, (parameter, texture) pairs: the texture's first channel
+    # multiplies the parameter (DISNEY_TEXTURED names those that take one).
+    parameter_textures: tuple = ()
+    # A mix (Mitsuba's blendbsdf, pbrt's mix): at each shading point the second of the two
+    # materials with probability mix_weight (times the "mix_weight" texture's first channel, as a
+    # parameter texture), else the first; the mix keeps its own emission, medium, coverage and
+    # normal or bump map. kind then only names the first's.
+    mix: Optional[tuple] = None
+    mix_weight: float = 0.5
 
     def __post_init__(self):
         if self.roughness is None:
@@ -183,10 +249,13 @@ class MaterialSpec:
     @property
     def textures(self) -> dict[str, "TextureSpec"]:
         """The material's textures by role ("base_color", "opacity", "emission", "normal", "bump",
-        "alpha", "alpha_v"), those it has."""
+        "alpha", "alpha_v", the parameters of parameter_textures, and a mix's materials' roles
+        prefixed "mix0." and "mix1."), those it has."""
         roles = {"base_color": self.base_color_texture, "opacity": self.opacity_texture,
                  "emission": self.emission_texture, "normal": self.normal_map, "bump": self.bump_map,
-                 "alpha": self.alpha_texture, "alpha_v": self.alpha_v_texture}
+                 "alpha": self.alpha_texture, "alpha_v": self.alpha_v_texture, **dict(self.parameter_textures)}
+        for i, part in enumerate(self.mix or ()):  # the mixed materials' own, by a prefixed role
+            roles.update({f"mix{i}.{role}": texture for role, texture in part.textures.items()})
         return {role: texture for role, texture in roles.items() if texture is not None}
 
     @property
@@ -372,7 +441,8 @@ class MeshObject:
     # so (renderer/scene/mesh_adjustments.py): `normals` one of MESH_NORMALS ("file": the vertex
     # normals it has, flat where it has none; "flat": face normals; "smooth": the file's, else
     # vertex normals weighted by the faces' angles); `flip_normals` turns its front side over
-    # (winding and normals); `flip_v` takes v to 1 - v; `part` draws only the file's meshes of
+    # (winding and normals; on a sphere, quad or disc its normal: a sphere's points inwards);
+    # `flip_v` takes v to 1 - v; `part` draws only the file's meshes of
     # that name (a Mitsuba serialized file's shape k is "shape k"); `vertex_colors` False drops the
     # file's vertex colours (Mitsuba's meshes shade with them only through a mesh_attribute texture).
     normals: str = "file"

@@ -27,6 +27,7 @@ class Features:
     has_mapped_frames: bool = False
     has_bump_maps: bool = False
     has_anisotropy: bool = False  # anisotropic microfacet widths, oriented along the surface's dp/du
+    has_mixes: bool = False  # mixes of two materials, one chosen per shading point (Mitsuba's blendbsdf)
     # Kulla-Conty multiple scattering: rough GGX reflection (conductors, principled metal), rough
     # dielectric interfaces (glass, principled glass) and the principled coat's layering
     energy_compensation: bool = False
@@ -37,10 +38,17 @@ class Features:
     has_alpha: bool = False  # glTF MASK / BLEND coverage (and OBJ dissolve), tested in traversal
     has_vertex_colors: bool = False  # per-vertex colours multiplying the base colour
     has_instances: bool = False  # meshes placed many times, one copy of their triangles
+    # Spheres or quads whose normals are turned over (Mitsuba's flip_normals): the mesh geometry
+    # compiles in a sign per analytic primitive (MeshGeometry.has_flipped, from its data). Like
+    # mesh_primitives, a description of the scene's geometry: with_everything() keeps it as it is.
+    has_flipped_normals: bool = False
     has_thin: bool = False  # thin-walled transmission (glTF transmission without a volume)
     has_microfacet_models: bool = False  # rows whose microfacet model is not GGX (Beckmann, separable masking)
     has_sidedness: bool = False  # one-sided materials (a black back face)
     environment: str = "sky"  # "map" | "sky" | "constant"
+    # The map or sky turned otherwise than about +y: lookups and sampling go through a 3x3 matrix (a
+    # turn about +y is an azimuth offset, data). Like `environment`, a description of the scene.
+    environment_rotated: bool = False
     depth_of_field: bool = False
     # Parallel camera rays (an orthographic camera): like the environment, a description of the
     # scene's camera rather than an optional effect; with_everything() keeps it as it is.
@@ -77,11 +85,12 @@ class Features:
                  ("emission", self.has_emission),
                  ("textures", self.has_textures), ("normal maps", self.has_normal_maps),
                  ("mapped frames", self.has_mapped_frames), ("bump maps", self.has_bump_maps),
-                 ("anisotropy", self.has_anisotropy),
+                 ("anisotropy", self.has_anisotropy), ("mixes", self.has_mixes),
                  ("multiple scattering", self.energy_compensation),
                  ("media", self.has_media), ("grid media", self.has_grid_media), ("analytic fog", self.analytic_fog),
                  ("dispersion", self.has_dispersion), ("alpha", self.has_alpha),
                  ("vertex colours", self.has_vertex_colors), ("instances", self.has_instances),
+                 ("flipped normals", self.has_flipped_normals),
                  ("thin walls", self.has_thin), ("microfacet models", self.has_microfacet_models),
                  ("one-sided", self.has_sidedness),
                  *((layer, True) for layer in LAYER_NAMES if layer in self.material_layers),
@@ -90,7 +99,7 @@ class Features:
                  ("projected images", self.has_light_textures),
                  (f"{self.pixel_filter[0]} filter", self.pixel_filter[0] != "box"))
         names = [name for name, on in flags if on]
-        names.append(f"env:{self.environment}")
+        names.append(f"env:{self.environment}" + (" rotated" if self.environment_rotated else ""))
         return names
 
     def describe(self) -> dict:
@@ -105,7 +114,8 @@ class Features:
         sdf = self.geometry == "sdf"
         return replace(self, material_kinds=frozenset(KIND_NAMES), material_layers=frozenset(LAYER_NAMES),
                        has_emission=True, has_textures=not sdf, has_normal_maps=not sdf,
-                       has_mapped_frames=not sdf, has_bump_maps=not sdf, has_anisotropy=not sdf, depth_of_field=True,
+                       has_mapped_frames=not sdf, has_bump_maps=not sdf, has_anisotropy=not sdf, has_mixes=not sdf,
+                       depth_of_field=True,
                        energy_compensation=True, has_media=True, has_grid_media=True, analytic_fog=True,
                        has_dispersion=True, has_thin=True, has_microfacet_models=True, has_sidedness=True,
                        has_alpha=not sdf, has_vertex_colors=not sdf, has_instances=not sdf,
@@ -135,7 +145,8 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
                   sdf_nodes=(), mesh_kinds=frozenset(), energy_compensation: bool = True,
                   fog: str = "none", vertex_colors: bool = False, instances: bool = False,
                   light_kinds=frozenset(), pixel_filter: tuple = ("box",), orthographic: bool = False,
-                  light_textures: bool = False) -> Features:
+                  light_textures: bool = False, environment_rotated: bool = False,
+                  flipped_normals: bool = False) -> Features:
     """material_uses: {"kinds", "layers": sets of registry names, "textures", "normal_maps",
     "mapped_frames", "bump_maps" (renderer/materials/mapped_frame_rows.py), "emission",
     "media": bool, "grid_media": whether one of them lies on a grid (`scene_grid_media`), "rough":
@@ -146,6 +157,8 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
     vertex_colors, instances: whether the mesh data carries vertex colours / instanced meshes.
     light_kinds: the kinds of the scene's point, spot and directional lights (`scene_light_kinds`).
     light_textures: whether one of them projects an image (`scene_light_textures`).
+    environment_rotated: whether the environment needs its full rotation (EnvironmentSpec.needs_matrix).
+    flipped_normals: whether a sphere or quad of the mesh data has its normal turned over.
     orthographic: whether the camera's projection is orthographic."""
     kinds = material_uses["kinds"]
     layers = material_uses.get("layers", set())
@@ -162,6 +175,7 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         has_mapped_frames=bool(material_uses.get("mapped_frames", False)),
         has_bump_maps=bool(material_uses.get("bump_maps", False)),
         has_anisotropy=bool(material_uses.get("anisotropy", False)),
+        has_mixes=bool(material_uses.get("mixes", False)),
         energy_compensation=energy_compensation and (any(always_compensated(k) for k in kinds)
                                                      or material_uses.get("rough", True)),
         has_media=fog == "medium" or bool(material_uses.get("media", False)),
@@ -171,10 +185,12 @@ def features_from(geometry: str, material_uses: dict, environment: str, aperture
         has_alpha=bool(material_uses.get("alpha", False)),
         has_vertex_colors=vertex_colors,
         has_instances=instances,
+        has_flipped_normals=flipped_normals,
         has_thin=bool(material_uses.get("thin", False)),
         has_microfacet_models=bool(material_uses.get("microfacet_models", False)),
         has_sidedness=bool(material_uses.get("sidedness", False)),
         environment=environment,
+        environment_rotated=environment_rotated,
         depth_of_field=aperture > 0.0,
         orthographic=orthographic,
         sdf_primitives=frozenset(n.kind for n in sdf_nodes if n.kind in SDF_PRIMITIVES),
@@ -222,11 +238,12 @@ def scene_features(scene: Scene, aperture: float | None = None) -> Features:
             "dispersion": any(m.is_dispersive for m in used),
             "microfacet_models": any(m.microfacet != "ggx" for m in used),
             "sidedness": any(m.sidedness == "back_black" for m in used),
-            "thin": any(m.thin and m.kind in ("dielectric", "principled") for m in used),
+            "thin": any(m.thin and m.kind in ("dielectric", "principled", "disney") for m in used),
             "rough": any(compensated_when_rough(m.kind) and m.roughness > 0.0 for m in used)}
     lens = scene.camera.aperture if aperture is None else aperture
     return features_from(scene.geometry, uses, scene.environment.kind, lens, sdf_nodes=nodes,
                          energy_compensation=scene.render.energy_compensation, fog=scene.fog.model,
                          light_kinds=scene_light_kinds(scene), pixel_filter=scene_pixel_filter(scene),
                          orthographic=scene.camera.projection == "orthographic",
-                         light_textures=scene_light_textures(scene))
+                         light_textures=scene_light_textures(scene),
+                         environment_rotated=scene.environment.needs_matrix)

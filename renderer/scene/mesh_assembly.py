@@ -119,8 +119,8 @@ class _Assembler:
         self.materials: list = list(scene.materials)
         self.material_ids = {m.name: i for i, m in enumerate(scene.materials)}
         self.images: list[TextureImage] = []
-        self.parts: dict[str, list] = {"spheres": [], "sphere_mat": [], "sphere_frames": [], "quads": [],
-                                       "quad_mat": [], "discs": [], "disc_mat": []}
+        self.parts: dict[str, list] = {"spheres": [], "sphere_mat": [], "sphere_frames": [], "sphere_flip": [],
+                                       "quads": [], "quad_mat": [], "quad_flip": [], "discs": [], "disc_mat": []}
         self.world = _Triangles()  # triangles placed in world space
         self.object = _Triangles()  # instanced meshes, each in its own frame
         self.instanced: list = []  # (first triangle in self.object, count) per instanced mesh
@@ -200,9 +200,12 @@ class _Assembler:
             self.parts["spheres"].append([*centre, obj.radius * scale])
             self.parts["sphere_mat"].append(self.material(obj.material, where))
             self.parts["sphere_frames"].append((matrix[:3, :3] / np.linalg.norm(matrix[:3, :3], axis=0)).T)
+            self.parts["sphere_flip"].append(obj.flip_normals)
         elif obj.kind == "disc":
             normal = matrix[:3, :3] @ np.array([0.0, 1.0, 0.0])
             normal /= np.linalg.norm(normal)
+            if obj.flip_normals:  # a disc's normal is data: turned over here, no flag on the device
+                normal = -normal
             centre, scale = obj.centre_and_scale()
             self.parts["discs"].append([*centre, *normal, obj.radius * scale])
             self.parts["disc_mat"].append(self.material(obj.material, where))
@@ -214,6 +217,7 @@ class _Assembler:
             edge_v = matrix[:3, :3] @ np.array([sx, 0.0, 0.0])
             self.parts["quads"].append([corner[:3], edge_u, edge_v])
             self.parts["quad_mat"].append(self.material(obj.material, where))
+            self.parts["quad_flip"].append(obj.flip_normals)
         elif obj.kind == "bezier":
             # The loader has checked scene files; scenes built in code are checked here.
             problem = profile_problem(obj.profile, obj.degree)
@@ -253,6 +257,7 @@ class _Assembler:
             sphere_frames=np.array(p["sphere_frames"], np.float32).reshape(-1, 3, 3),
             quads=np.array(p["quads"], np.float32).reshape(-1, 3, 3),
             quad_material=np.array(p["quad_mat"], np.int32),
+            sphere_flipped=np.array(p["sphere_flip"], bool), quad_flipped=np.array(p["quad_flip"], bool),
             discs=np.array(p["discs"], np.float32).reshape(-1, 7),
             disc_material=np.array(p["disc_mat"], np.int32),
             instanced_meshes=np.array([(world + first, n) for first, n in self.instanced], np.int32).reshape(-1, 2),

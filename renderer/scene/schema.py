@@ -30,6 +30,7 @@ from .description import (
 from .schema_checks import (
     check_camera,
     check_conductor_fresnel,
+    check_crop,
     check_one_surface_map,
     check_fixed_relaxation,
     check_keyframes,
@@ -152,6 +153,13 @@ RENDER = Section(
               "unbiased mean.", choices=PIXEL_FILTERS),
         Field("filter_radius", "float", 1.0, "The tent filter's radius, pixels.", POSITIVE),
         Field("filter_stddev", "float", 0.5, "The Gaussian filter's standard deviation, pixels.", POSITIVE),
+        Field("crop", "int4", None, "`[x, y, width, height]`: render and write only this window of the "
+              "`width` x `height` image, in pixels from its top-left corner (Mitsuba's hdrfilm crop). The "
+              "projection stays the whole image's, and each pixel of the window is the same pixel of the "
+              "whole render (its rays, its pixel filter at the image's edges and its random numbers), so "
+              "crops of one image tile it (`sppm`'s photon passes, shared by the window's pixels, depend on "
+              "its size). The viewer shows the window scaled to fit, centred.",
+              NON_NEGATIVE, default_doc="none (the whole image)"),
         Field("energy_compensation", "bool", True, "Give rough metals and rough glass back the light "
               "that single-scattering microfacet models lose between microfacets (Kulla and Conty 2017): "
               "without it a white metal of roughness 1 reflects 31% head-on, and a white glass ball of "
@@ -163,6 +171,7 @@ RENDER = Section(
               in_model=False, default_doc="see below", allowed_doc="see below",
               geometries=("sdf",)),
     ),
+    (Rule("A `crop` window has at least one pixel and lies within the `width` x `height` image.", check_crop),),
 )
 
 MARCH = Section(
@@ -202,9 +211,13 @@ ENVIRONMENT = Section(
               "relative path is relative to the scene file's folder.", only_for=_MAP,
               default_doc="required", allowed_doc="an existing `.exr` or `.hdr` file"),
         Field("intensity", "float", 1.0, "Multiplier on the emitted radiance.", NON_NEGATIVE),
-        Field("rotation", "float", 0.0, "Rotation of the map about +y, degrees, by the right-hand rule "
-              "(counter-clockwise seen from above): Mitsuba's `to_world` rotate([0, 1, 0], rotation). "
-              "The map itself is oriented as Mitsuba's `envmap` (see conventions.md)."),
+        Field("rotation", "float", 0.0, "Rotation of the map (or the sky) about `rotation_axis`, degrees, "
+              "by the right-hand rule (about +y: counter-clockwise seen from above): Mitsuba's `to_world` "
+              "rotate(rotation_axis, rotation). The map itself is oriented as Mitsuba's `envmap` (see "
+              "conventions.md)."),
+        Field("rotation_axis", "dir3", (0.0, 1.0, 0.0), "The axis `rotation` turns about; normalised "
+              "on load. Any axis but +y or -y tilts the map's poles, which compiles a 3x3 rotation into "
+              "the environment's lookups and sampling (a turn about +y is an offset in azimuth)."),
         Field("color", "vec3", (1.0, 1.0, 1.0), "Uniform radiance, linear RGB.", NON_NEGATIVE,
               only_for=_CONSTANT),
         Field("zenith", "vec3", (0.25, 0.45, 0.9), "Sky radiance straight up, linear RGB.",
@@ -234,7 +247,10 @@ MATERIAL = Section(
     "that no object uses are allowed. `principled` follows glTF's metallic-roughness model: a "
     "dielectric base (diffuse plus a specular layer with the given `ior`) blended with a metal of "
     "colour `base_color` by `metallic`, and a `transmission` fraction of the dielectric base that "
-    "refracts instead of scattering diffusely. `null` is an invisible boundary: light passes "
+    "refracts instead of scattering diffusely. `disney` is Disney's principled BSDF as Mitsuba 3's "
+    "`principled` (with `thin`, its `principledthin`) defines it: `metallic`, `transmission` (Disney's "
+    "`spec_trans`), `clearcoat`, `ior` and `thin` with its own fields below; the index comes from `ior` "
+    "(Disney's `specular` s is the index 2 / (1 - sqrt(0.08 s)) - 1). `null` is an invisible boundary: light passes "
     "straight through it (crossing it is no bounce: `max_depth` does not count it, as in Mitsuba and "
     "pbrt); with `medium` it bounds a participating medium such as smoke in a box.",
     _kind_fields((
@@ -285,6 +301,22 @@ MATERIAL = Section(
               "diffuse base.", UNIT),
         Field("specular_color", "vec3", (1.0, 1.0, 1.0), "Colour of that specular reflection "
               "(`specularColorFactor`).", UNIT),
+        Field("anisotropic", "float", 0.0, "`disney`: stretches the specular lobe along the surface's "
+              "texture direction u (widths roughness^2 / a and roughness^2 a along u and v, a = sqrt(1 - 0.9 "
+              "anisotropic)). Mesh scenes with texture coordinates.", UNIT),
+        Field("sheen", "float", 0.0, "`disney`: weight of the sheen, a soft grazing reflection for cloth.", UNIT),
+        Field("sheen_tint", "float", 0.0, "`disney`: how far the sheen takes the base colour's hue.", UNIT),
+        Field("spec_tint", "float", 0.0, "`disney`: how far the dielectric specular takes the base colour's "
+              "hue.", UNIT),
+        Field("clearcoat_gloss", "float", 0.0, "`disney`: gloss of the clear coat (GTR1 width 0.1 at 0, 0.001 "
+              "at 1).", UNIT),
+        Field("flatness", "float", 0.0, "`disney`: blends the diffuse towards a flatter, subsurface-like "
+              "response (Hanrahan-Krueger).", UNIT),
+        Field("diff_trans", "float", 0.0, "`disney` with `thin`: diffuse transmission, 0 to 2 (1: half the "
+              "diffuse light passes through the sheet).", Range(0.0, 2.0)),
+        Field("front_both_sides", "bool", False, "`disney`: the back face shades as the front (Mitsuba's "
+              "`twosided` around a `principled`); otherwise the back is the model's inside, dark unless it "
+              "transmits."),
         Field("microfacet", "string", "ggx", "The microfacet model of a rough conductor, dielectric or "
               "plastic: `ggx` (Smith's height-correlated masking), `ggx_separable` or `beckmann` "
               "(Smith's separable masking, as Mitsuba 3 has them). Energy compensation applies to "

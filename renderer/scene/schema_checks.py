@@ -36,6 +36,18 @@ def check_camera(v: dict) -> Optional[str]:
     return None
 
 
+def check_crop(v: dict) -> Optional[str]:
+    if v["crop"] is None:
+        return None
+    x, y, w, h = v["crop"]
+    if w < 1 or h < 1:
+        return f"crop [{x}, {y}, {w}, {h}] has no pixels (its width and height must be at least 1)"
+    if x + w > v["width"] or y + h > v["height"]:
+        return (f"crop [{x}, {y}, {w}, {h}] reaches outside the {v['width']}x{v['height']} image "
+                f"(x + width <= {v['width']}, y + height <= {v['height']})")
+    return None
+
+
 def check_keyframes(v: dict) -> Optional[str]:
     keyframes = [dict(k) for k in v["keyframes"]]
     if not keyframes:

@@ -31,6 +31,7 @@ VALUE_KINDS = {
     "vec3": "array of 3 floats",
     "dir3": "array of 3 floats",  # a direction: non-zero, normalised by the loader
     "int3": "array of 3 integers",
+    "int4": "array of 4 integers",
     "vec2": "array of 2 floats",
     "points2": "array of [float, float] pairs",
     "scale": "float, or array of 3 equal floats",

@@ -223,6 +223,7 @@ _CONVERTERS = {
     "points2": _pairs,
     "dir3": _direction,
     "int3": lambda raw, where: _triple(raw, where, _integer),
+    "int4": lambda raw, where: _vector(raw, where, _integer, 4),
     "scale": _scale,
     "scale3": _scale3,
     "table": _table,

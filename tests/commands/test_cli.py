@@ -81,6 +81,16 @@ def test_list_and_info(capsys):
     assert code == 0 and "'dielectric'" in out and "material_kinds" in out and "sdf_primitives" in out
 
 
+def test_info_and_the_render_job_take_a_crop_window(tmp_path, capsys):
+    from renderer.commands.headless import RenderJob
+
+    body = furnace_toml().replace("width = 24\nheight = 16\n", "width = 24\nheight = 16\ncrop = [4, 2, 10, 8]\n")
+    path = scene_file(tmp_path, body)
+    code, out, _ = run_main(["info", path], capsys)
+    assert code == 0 and "render:      24x16, cropped to 10x8 at (4, 2) from the top left" in out
+    assert RenderJob().resolved(load_scene(path)).size == (10, 8)  # the image written is the window's
+
+
 def test_render_command_writes_png_and_exr(tmp_path):
     """A real subprocess, as a user runs it (its own Taichi runtime), and what its files hold.
 

@@ -71,3 +71,59 @@ def test_textured_anisotropic_roughness_agrees_with_mitsuba(tmp_path):
     proc = compare(tmp_path, str(scene))
     assert proc.returncode == 0, proc.stderr
     assert "Lantern vs Mitsuba's reference: agree" in proc.stdout, proc.stdout
+
+
+POINT_LIGHT = '<emitter type="point"><point name="position" x="2" y="3" z="2"/><rgb name="intensity" value="10"/></emitter>'
+
+
+@pytest.mark.parametrize("bsdf", [
+    '''<bsdf type="principled"><rgb name="base_color" value="0.3, 0.6, 0.8"/><float name="roughness" value="0.3"/>
+        {anisotropic}{spec_trans}<float name="clearcoat" value="0.7"/><float name="sheen" value="0.8"/>
+        <float name="sheen_tint" value="0.5"/><float name="spec_tint" value="0.4"/><float name="specular" value="0.6"/></bsdf>''',
+    '''<bsdf type="principledthin"><rgb name="base_color" value="0.7, 0.2, 0.1"/><float name="eta" value="1.33"/>
+        {anisotropic}{spec_trans}<float name="diff_trans" value="0.9"/><float name="flatness" value="0.5"/></bsdf>''',
+], ids=["principled", "principledthin"])
+def test_textured_principled_agrees_with_mitsuba(tmp_path, bsdf):
+    """Mitsuba's Disney BSDFs with textured anisotropy and transmission, on a sphere under a sky (and,
+    thick, a point light), Lantern's `disney` kind, agree with Mitsuba's render by the per-pixel
+    rule. The thin sphere is lit by the sky alone: a point light seen through two rough sheets gives
+    both renderers rare bright paths, whose heavy tails fail 3 or 4 of the 1,200 channels in about
+    one short run in three (a 4,096-spp run agrees everywhere)."""
+    checker = ('<texture name="{0}" type="checkerboard"><transform name="to_uv"><scale x="4" y="3"/></transform>'
+               '<float name="color0" value="{1}"/><float name="color1" value="{2}"/></texture>')
+    body = bsdf.format(anisotropic=checker.format("anisotropic", 0.1, 0.8), spec_trans=checker.format("spec_trans", 0.7, 0.1))
+    scene = tmp_path / "disney.xml"
+    scene.write_text(f'''<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="4"/></integrator>
+        <sensor type="perspective"><float name="fov" value="30"/>
+            <transform name="to_world"><lookat origin="0,1.5,4" target="0,0,0" up="0,1,0"/></transform>
+            <film type="hdrfilm"><rfilter type="box"/><integer name="width" value="20"/>
+            <integer name="height" value="20"/></film></sensor>
+        <emitter type="envmap"><string name="filename" value="{ROOT / 'assets' / 'envmaps' / 'sky.exr'}"/></emitter>
+        {"" if "thin" in bsdf else POINT_LIGHT}
+        <shape type="sphere">{body}</shape></scene>''')
+    proc = compare(tmp_path, str(scene))
+    assert proc.returncode == 0, proc.stderr
+    assert "Lantern vs Mitsuba's reference: agree" in proc.stdout, proc.stdout
+
+
+def test_a_textured_blend_of_a_metal_and_a_plastic_agrees_with_mitsuba(tmp_path):
+    """Mitsuba's blendbsdf of a rough gold and a rough plastic, its weight a checkerboard, on a
+    sphere under a sky: Lantern's mix (one of the two per shading point, the second with the
+    weight's probability) agrees with Mitsuba's weighted sum by the per-pixel rule."""
+    scene = tmp_path / "blend.xml"
+    scene.write_text(f'''<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="3"/></integrator>
+        <sensor type="perspective"><float name="fov" value="30"/>
+            <transform name="to_world"><lookat origin="0,1.5,4" target="0,0,0" up="0,1,0"/></transform>
+            <film type="hdrfilm"><rfilter type="box"/><integer name="width" value="20"/>
+            <integer name="height" value="20"/></film></sensor>
+        <emitter type="envmap"><string name="filename" value="{ROOT / 'assets' / 'envmaps' / 'sky.exr'}"/></emitter>
+        <shape type="sphere"><bsdf type="blendbsdf">
+            <texture name="weight" type="checkerboard"><transform name="to_uv"><scale x="4" y="3"/></transform>
+                <float name="color0" value="0.2"/><float name="color1" value="0.9"/></texture>
+            <bsdf type="roughconductor"><string name="material" value="Au"/><string name="distribution" value="ggx"/>
+                <float name="alpha" value="0.15"/></bsdf>
+            <bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.1, 0.3, 0.7"/>
+                <float name="alpha" value="0.2"/></bsdf></bsdf></shape></scene>''')
+    proc = compare(tmp_path, str(scene))
+    assert proc.returncode == 0, proc.stderr
+    assert "Lantern vs Mitsuba's reference: agree" in proc.stdout, proc.stdout

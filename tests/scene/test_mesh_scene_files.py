@@ -351,3 +351,23 @@ def test_model_file_is_not_read_by_the_scene_loader(tmp_path):
     (tmp_path / "broken.glb").write_bytes(b"not a glb at all")
     text = mesh_text(objects='[[objects]]\ntype = "mesh"\nfile = "broken.glb"\n')
     assert load_scene(write(tmp_path, text)).mesh_objects[0].file == (tmp_path / "broken.glb").resolve()
+
+
+def test_a_crop_window_is_read_and_sets_the_image_size(tmp_path):
+    render = "[render]\nwidth = 40\nheight = 30\ncrop = [5, 4, 10, 6]\n"
+    settings = load_scene(write(tmp_path, mesh_text(extra=render))).render
+    assert (settings.crop, settings.image_size, settings.width, settings.height) == ((5, 4, 10, 6), (10, 6), 40, 30)
+    assert load_scene(write(tmp_path, mesh_text())).render.image_size == (640, 360)  # no crop: the image
+
+
+@pytest.mark.parametrize("crop, expected", [
+    ("[5, 4, 36, 6]", "render: crop [5, 4, 36, 6] reaches outside the 40x30 image"),
+    ("[0, 25, 10, 6]", "render: crop [0, 25, 10, 6] reaches outside the 40x30 image"),
+    ("[5, 4, 0, 6]", "render: crop [5, 4, 0, 6] has no pixels"),
+    ("[-1, 4, 10, 6]", "render.crop[0]: -1 is out of range (allowed: >= 0)"),
+    ("[5, 4, 10]", "render.crop: expected 4 numbers, got 3"),
+    ("[5, 4, 10, 6.5]", "render.crop[3]: expected an integer, got float 6.5"),
+])
+def test_a_bad_crop_window_is_one_line_naming_it(tmp_path, crop, expected):
+    render = f"[render]\nwidth = 40\nheight = 30\ncrop = {crop}\n"
+    assert expected in load_error(write(tmp_path, mesh_text(extra=render)))

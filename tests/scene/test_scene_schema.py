@@ -40,10 +40,12 @@ SECTION_MODELS = [
     (schema.CAMERA, CameraSpec, set()),
     (schema.RENDER, RenderSettings, {"march"}),
     (schema.MARCH, MarchSettings, set()),
-    (schema.ENVIRONMENT, EnvironmentSpec, set()),
+    # a full rotation matrix comes from scene readers that have one (Mitsuba); TOML gives an axis and angle
+    (schema.ENVIRONMENT, EnvironmentSpec, {"to_world"}),
     # the name is the table key; textures come from scene readers that have them (Mitsuba), not TOML
     (schema.MATERIAL, MaterialSpec, {"name", "base_color_texture", "opacity_texture", "emission_texture",
-                                     "base_color_attribute", "alpha_texture", "alpha_v_texture"}),
+                                     "base_color_attribute", "alpha_texture", "alpha_v_texture",
+                                     "parameter_textures", "mix", "mix_weight"}),
 ]
 
 

@@ -20,6 +20,7 @@ from renderer.scene import (
     load_scene,
 )
 from renderer.scene import schema_docs
+from renderer.scene.features import scene_features
 from tests.scene.scene_file_helpers import HEADER, MATERIAL, SPHERE, load_error, node, scene_text, write
 
 
@@ -237,6 +238,26 @@ def test_constant_and_sky_environments(tmp_path):
         "sky", (0.0, 0.0, 1.0), (0.1, 0.1, 0.1), EnvironmentSpec().horizon)
 
 
+def test_environment_rotation_axis(tmp_path):
+    """`rotation` alone turns about +y (no matrix compiled); `rotation_axis` (normalised) makes it
+    any rotation, Mitsuba's rotate(axis, angle); -y is a turn about +y the other way."""
+    def env(text, name):
+        return load_scene(write(tmp_path, scene_text(f"[environment]\n{text}\n"), name)).environment
+
+    about_y = env("rotation = 30", "a.toml")
+    assert about_y.rotation_axis == (0.0, 1.0, 0.0) and about_y.y_rotation() == 30.0 and not about_y.needs_matrix
+    assert not scene_features(load_scene(tmp_path / "a.toml")).environment_rotated
+    assert env("rotation = 30\nrotation_axis = [0, -2, 0]", "b.toml").y_rotation() == -30.0
+    tilted = env("rotation = 90\nrotation_axis = [2, 0, 0]", "c.toml")
+    assert tilted.rotation_axis == (1.0, 0.0, 0.0) and tilted.y_rotation() is None and tilted.needs_matrix
+    assert scene_features(load_scene(tmp_path / "c.toml")).environment_rotated  # the sky turns too
+    # a quarter turn about +x (right-handed) takes +y to +z: the map's zenith is seen along +z
+    assert tuple(tilted.rotation_matrix() @ (0.0, 1.0, 0.0)) == pytest.approx((0.0, 0.0, 1.0), abs=1e-15)
+    assert not env('type = "constant"\nrotation = 90\nrotation_axis = [1, 0, 0]', "d.toml").needs_matrix
+    assert "must not be the zero vector" in load_error(write(tmp_path, scene_text(
+        "[environment]\nrotation_axis = [0, 0, 0]\n"), "e.toml"))
+
+
 def test_plane_normal_is_normalised(tmp_path):
     objects = '[[objects]]\ntype = "plane"\nmaterial = "m"\nnormal = [1, 1, 0]\n'
     normal = load_scene(write(tmp_path, scene_text(objects=objects))).sdf_objects[0].param("normal")
@@ -355,7 +376,7 @@ BAD_SCENES = {
     "max_depth -2": (scene_text(extra="[render]\nmax_depth = -2\n"), "render.max_depth: -2 is out of range"),
     "seed negative": (scene_text(extra="[render]\nseed = -1\n"), "render.seed: -1 is out of range"),
     "integrator number": (scene_text(extra="[render]\nintegrator = 3\n"), "render.integrator: expected a string, got integer 3"),
-    "render unknown field": (scene_text(extra="[render]\nsamples = 3\n"), "render: unknown field 'samples' (allowed: width, height, spp, max_depth, integrator, seed, sampler, pixel_filter, filter_radius, filter_stddev, energy_compensation, march)"),
+    "render unknown field": (scene_text(extra="[render]\nsamples = 3\n"), "render: unknown field 'samples' (allowed: width, height, spp, max_depth, integrator, seed, sampler, pixel_filter, filter_radius, filter_stddev, crop, energy_compensation, march)"),
     "march not table": (scene_text(extra="[render]\nmarch = 3\n"), "render.march: expected a table, got integer 3"),
     "over_relaxation 4": (scene_text(extra="[render.march]\nover_relaxation = 4.0\n"), "render.march.over_relaxation: 4 is out of range (allowed: [1, 4))"),
     "fixed over_relaxation 2": (scene_text(extra="[render.march]\nover_relaxation = 2.0\nadaptive = false\n"),
@@ -383,22 +404,23 @@ BAD_SCENES = {
     "env intensity negative": (scene_text(extra="[environment]\nintensity = -1\n"), "environment.intensity: -1 is out of range (allowed: >= 0)"),
     "env colour negative": (scene_text(extra="[environment]\nhorizon = [1, -0.5, 1]\n"), "environment.horizon[1]: -0.5 is out of range (allowed: >= 0)"),
     "env unknown field": (scene_text(extra="[environment]\nstrength = 1\n"),
-                          "environment: unknown field 'strength' (allowed: type, intensity, rotation, zenith, horizon, ground)"),
+                          "environment: unknown field 'strength' (allowed: type, intensity, rotation, rotation_axis, zenith, horizon, "
+                          "ground)"),
     # materials
     "material unknown field": (scene_text(materials="[materials.glass]\ntype = \"dielectric\"\niorr = 1.5\n"),
                                "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, thin, microfacet, roughness_v, "
                                "sidedness, "
                                "opacity, emission, emission_strength, abbe, glass, medium, normal_map, bump_map, bump_scale)"),
     "material unknown type": (scene_text(materials='[materials.m]\ntype = "metal"\n'),
-                              "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null, plastic)"),
+                              "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null, plastic, disney)"),
     "ior on conductor": (scene_text(materials='[materials.m]\ntype = "conductor"\nior = 1.5\n'),
-                         "materials.m.ior: only allowed with type 'dielectric' or 'principled' or 'plastic', not 'conductor'"),
+                         "materials.m.ior: only allowed with type 'dielectric' or 'principled' or 'plastic' or 'disney', not 'conductor'"),
     "ior on default diffuse": (scene_text(materials="[materials.m]\nior = 1.5\n"),
-                               "materials.m.ior: only allowed with type 'dielectric' or 'principled' or 'plastic', not 'diffuse'"),
+                               "materials.m.ior: only allowed with type 'dielectric' or 'principled' or 'plastic' or 'disney', not 'diffuse'"),
     "metallic on diffuse": (scene_text(materials="[materials.m]\nmetallic = 1\n"),
-                            "materials.m.metallic: only allowed with type 'principled', not 'diffuse'"),
+                            "materials.m.metallic: only allowed with type 'principled' or 'disney', not 'diffuse'"),
     "transmission on dielectric": (scene_text(materials='[materials.m]\ntype = "dielectric"\ntransmission = 1\n'),
-                                   "materials.m.transmission: only allowed with type 'principled', not 'dielectric'"),
+                                   "materials.m.transmission: only allowed with type 'principled' or 'disney', not 'dielectric'"),
     "metallic above 1": (scene_text(materials='[materials.m]\ntype = "principled"\nmetallic = 1.5\n'),
                          "materials.m.metallic: 1.5 is out of range (allowed: [0, 1])"),
     "transmission negative": (scene_text(materials='[materials.m]\ntype = "principled"\ntransmission = -0.1\n'),

@@ -1,9 +1,9 @@
 """Mitsuba 3 BSDF plugins made into Lantern material specs.
 
-Mitsuba's BSDFs are one-sided unless they transmit: diffuse, conductors, plastics and a principled
-without transmission are black from behind (sidedness "back_black"); `twosided` makes the BSDF it
-wraps shade both sides alike; dielectrics, thin dielectrics, principledthin and null are two-sided
-by nature. Rough BSDFs keep Mitsuba's microfacet model: GGX or Beckmann with Smith's separable
+Mitsuba's BSDFs are one-sided unless they transmit: diffuse, conductors and plastics are black
+from behind (sidedness "back_black"); `twosided` makes the BSDF it wraps shade both sides alike;
+dielectrics, thin dielectrics, principledthin and null are two-sided by nature, and principled
+(Lantern's `disney` kind) shades its back side itself. Rough BSDFs keep Mitsuba's microfacet model: GGX or Beckmann with Smith's separable
 masking (renderer/materials/microfacet.py). `mask` becomes stochastic coverage (opacity, or its
 texture); `normalmap` and `bumpmap` tilt the shading normal of the BSDF inside (surface_maps.py).
 The builder (scene_builder.py) supplies the value readers (colours, textures, scalars) and the
@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+from renderer.materials.kinds import MAX_MIX_DEPTH
 from renderer.materials.metals import metal_names
 from renderer.scene.description import MaterialSpec, TextureSpec
 from renderer.scene.mitsuba.ior_names import IOR_NAMES
@@ -25,9 +26,16 @@ from renderer.scene.mitsuba.surface_maps import mapped_spec
 DEFAULT_REFLECTANCE = (0.5, 0.5, 0.5)  # Mitsuba's diffuse and plastics
 DEFAULT_GLASS_IOR = 1.5046  # Mitsuba's dielectrics: bk7
 DEFAULT_PLASTIC_IOR = IOR_NAMES["polypropylene"]  # Mitsuba's plastics
-# Parameters of Mitsuba's principled (Disney) BSDF that Lantern's glTF principled shapes otherwise.
-DISNEY_ONLY = ("anisotropic", "clearcoat", "clearcoat_gloss", "sheen", "sheen_tint", "specular_tint",
-               "spec_tint", "specular")
+# Mitsuba's principled and principledthin parameters (name, default) that Lantern's `disney`
+# kind takes as they are (DISNEY_FIELDS renames the one it names otherwise).
+_SHARED_PRINCIPLED = (("roughness", 0.5), ("anisotropic", 0.0), ("spec_trans", 0.0), ("sheen", 0.0),
+                      ("sheen_tint", 0.0), ("flatness", 0.0), ("spec_tint", 0.0))
+PRINCIPLED_PARAMS = (*_SHARED_PRINCIPLED, ("metallic", 0.0), ("clearcoat", 0.0), ("clearcoat_gloss", 0.0))
+PRINCIPLEDTHIN_PARAMS = (*_SHARED_PRINCIPLED, ("diff_trans", 0.0))
+DISNEY_FIELDS = {"spec_trans": "transmission"}
+SAMPLING_RATES = ("main_specular_sampling_rate", "clearcoat_sampling_rate", "diffuse_reflectance_sampling_rate",
+                  "specular_reflectance_sampling_rate", "specular_transmittance_sampling_rate",
+                  "diffuse_transmittance_sampling_rate")
 # Mitsuba's masking is Smith's separable form for both distributions.
 MICROFACET = {"ggx": "ggx_separable", "beckmann": "beckmann"}
 SMOOTH = {"roughness": 0.0, "microfacet": "ggx"}  # the lobe fields of a smooth BSDF
@@ -40,7 +48,7 @@ def bsdf_spec(builder, bsdf: Plugin) -> MaterialSpec:
         nested = bsdf.objects("bsdf")
         if len(nested) > 1:
             warn(nested[1], "twosided with a second BSDF for the back face: the first shades both sides")
-        return replace(_inner(builder, bsdf), sidedness="two_sided")
+        return _two_sided(_inner(builder, bsdf))
     if t == "mask":
         return _mask(builder, bsdf)
     if t in ("bumpmap", "normalmap"):
@@ -49,9 +57,7 @@ def bsdf_spec(builder, bsdf: Plugin) -> MaterialSpec:
         blended = blended_diffuse(builder, bsdf)  # two diffuse colours: exactly one diffuse BSDF
         if blended is not None:
             return blended
-        warn(bsdf, "blendbsdf is not supported yet: its first BSDF is used")
-        bsdf.used.add("weight")
-        return _inner(builder, bsdf)
+        return _blend(builder, bsdf)
     if t == "diffuse":
         colour, texture = builder.base_colour(bsdf, "reflectance", DEFAULT_REFLECTANCE)
         return MaterialSpec("", "diffuse", base_color=colour, base_color_texture=texture, sidedness="back_black")
@@ -70,6 +76,41 @@ def bsdf_spec(builder, bsdf: Plugin) -> MaterialSpec:
         return MaterialSpec("", "null")
     warn(bsdf, "this BSDF type is not supported yet: rendered as Mitsuba's default diffuse")
     return MaterialSpec("", "diffuse", base_color=DEFAULT_REFLECTANCE, sidedness="back_black")
+
+
+def _two_sided(spec: MaterialSpec) -> MaterialSpec:
+    """Mitsuba's twosided around a BSDF: the back shades as the front (a mix: both of its own)."""
+    if spec.mix is not None:
+        return replace(spec, mix=tuple(_two_sided(part) for part in spec.mix))
+    return replace(spec, sidedness="two_sided", front_both_sides=spec.kind == "disney")
+
+
+def _blend(builder, bsdf: Plugin) -> MaterialSpec:
+    """Mitsuba's blendbsdf: a mix of its two BSDFs, the second with probability `weight` (a number
+    or a texture's first channel) at each shading point."""
+    nested = bsdf.objects("bsdf")
+    if len(nested) != 2:
+        raise bsdf.error(f"needs two nested BSDFs, not {len(nested)}")
+    parts = tuple(bsdf_spec(builder, builder.visit(b)) for b in nested)
+    if _mix_depth(parts[0]) >= MAX_MIX_DEPTH or _mix_depth(parts[1]) >= MAX_MIX_DEPTH:
+        raise bsdf.error(f"blendbsdf nested more than {MAX_MIX_DEPTH} deep")
+    for part, plugin in zip(parts, nested):
+        if part.opacity < 1.0 or part.opacity_texture is not None:
+            warn(plugin, "a mask inside a blendbsdf is left out (wrap the blendbsdf in the mask)")
+    weight = bsdf.properties.get("weight")
+    textures = ()
+    if isinstance(weight, Plugin) and weight.kind == "texture" and weight.type in ("bitmap", "checkerboard"):
+        bsdf.used.add("weight")
+        w, textures = 1.0, (("mix_weight", float_texture(builder, weight)),)
+    else:
+        w = builder.scalar(bsdf, "weight", 0.5)
+        if not 0.0 <= w <= 1.0:
+            raise bsdf.error(f"weight {w:g} is not between 0 and 1")
+    return MaterialSpec("", parts[0].kind, mix=parts, mix_weight=w, parameter_textures=textures)
+
+
+def _mix_depth(spec: MaterialSpec) -> int:
+    return 0 if spec.mix is None else 1 + max(_mix_depth(part) for part in spec.mix)
 
 
 def _inner(builder, bsdf: Plugin) -> MaterialSpec:
@@ -193,20 +234,53 @@ def _ior_value(bsdf: Plugin, name: str, default: float) -> float:
 
 
 def _principled(builder, bsdf: Plugin) -> MaterialSpec:
+    """Mitsuba's principled and principledthin: Lantern's `disney` kind is their model, every
+    scalar parameter a number or a texture (its first channel)."""
     thin = bsdf.type == "principledthin"
-    if thin:
-        bsdf.used.update(("diff_trans", "flatness"))
-    # Mitsuba's principled is Disney's model; Lantern's is glTF's. Base colour, roughness, metallic,
-    # transmission and index mean the same in both; the other lobes are shaped differently.
-    different = [name for name in DISNEY_ONLY if bsdf.has(name)]
-    if different:
-        warn(bsdf, f"{', '.join(different)}: Disney's lobes are not Lantern's (glTF) principled model; "
-                           "left out")
-        bsdf.used.update(different)
     colour, texture = builder.base_colour(bsdf, "base_color", DEFAULT_REFLECTANCE)
-    transmission = builder.scalar(bsdf, "spec_trans", 0.0)
-    return MaterialSpec(
-        "", "principled", base_color=colour, base_color_texture=texture,
-        roughness=builder.scalar(bsdf, "roughness", 0.5), metallic=builder.scalar(bsdf, "metallic", 0.0),
-        transmission=transmission, ior=builder.scalar(bsdf, "eta", 1.5), thin=thin,
-        sidedness="two_sided" if thin or transmission > 0.0 else "back_black")
+    fields, textures = {}, []
+    for name, default in (PRINCIPLEDTHIN_PARAMS if thin else PRINCIPLED_PARAMS):
+        value = bsdf.properties.get(name)
+        field = DISNEY_FIELDS.get(name, name)
+        if isinstance(value, Plugin) and value.kind == "texture" and value.type in ("bitmap", "checkerboard"):
+            bsdf.used.add(name)
+            fields[field] = 1.0  # the texture's value multiplies 1
+            textures.append((field, float_texture(builder, value)))
+        else:
+            fields[field] = builder.scalar(bsdf, name, default)
+    rates = [name for name in SAMPLING_RATES if bsdf.has(name)]
+    if rates:
+        bsdf.used.update(rates)
+        if any(builder.scalar(bsdf, name, 1.0) != 1.0 for name in rates):
+            warn(bsdf, f"{', '.join(rates)}: Lantern draws the lobes at Mitsuba's default rates (only the noise "
+                       "differs)")
+    return MaterialSpec("", "disney", base_color=colour, base_color_texture=texture, **fields,
+                        ior=_principled_eta(builder, bsdf, thin), thin=thin, parameter_textures=tuple(textures),
+                        sidedness="two_sided")  # the model itself shades the back side
+
+
+def _principled_eta(builder, bsdf: Plugin, thin: bool) -> float:
+    """The index: principledthin's `eta`; principled's `eta`, or Disney's `specular` made an index
+    as Mitsuba makes it (never both), kept above 1 where the surface transmits."""
+    if thin:
+        return builder.scalar(bsdf, "eta", 1.5)
+    transmits = _flag(bsdf, "spec_trans")
+    if bsdf.has("eta"):
+        if bsdf.has("specular"):
+            raise bsdf.error("give eta or specular, not both (each sets the index)")
+        eta = builder.scalar(bsdf, "eta", 1.5)
+        if eta <= 0.0:
+            raise bsdf.error(f"eta {eta:g} is not positive")
+        return 1.001 if transmits and eta == 1.0 else eta
+    specular = builder.scalar(bsdf, "specular", 0.5)
+    if not 0.0 <= specular < 12.5:
+        raise bsdf.error(f"specular {specular:g} is outside [0, 12.5), where it gives an index")
+    if transmits and specular == 0.0:
+        specular = 1e-3
+    return 2.0 / (1.0 - math.sqrt(0.08 * specular)) - 1.0
+
+
+def _flag(bsdf: Plugin, name: str) -> bool:
+    """Mitsuba's get_flag: the parameter is given and is not the number 0."""
+    value = bsdf.properties.get(name)
+    return value is not None and not (isinstance(value, (int, float)) and not isinstance(value, bool) and value == 0)

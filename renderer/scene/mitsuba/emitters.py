@@ -60,14 +60,13 @@ class EmitterReader:
         if name is None:
             raise emitter.error("needs a filename")
         file = self.builder.find(emitter, name)
-        rotation = emitter.transform()[:3, :3]
-        angle = math.degrees(math.atan2(rotation[0, 2], rotation[0, 0]))
-        c, s = math.cos(math.radians(angle)), math.sin(math.radians(angle))
-        about_y = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-        if not np.allclose(rotation, about_y, atol=1e-6):
-            warn(emitter, "its to_world is more than a rotation about +y, which Lantern's environment supports: "
-                          "only that part is kept")
-        return EnvironmentSpec(kind="map", file=file, intensity=emitter.number("scale", 1.0), rotation=angle)
+        frame = envmap_frame(emitter)
+        spec = EnvironmentSpec(kind="map", file=file, intensity=emitter.number("scale", 1.0),
+                               to_world=tuple(tuple(float(x) for x in row) for row in frame))
+        angle = spec.y_rotation()
+        if angle is not None:  # a turn about +y: the azimuth offset, no matrix compiled in
+            return EnvironmentSpec(kind="map", file=file, intensity=spec.intensity, rotation=angle)
+        return spec
 
     # --- lights without a surface ----------------------------------------------------------------
 
@@ -207,6 +206,22 @@ def projector_fov(emitter: Plugin) -> tuple[float, str]:
     if not 0.0 < fov < 180.0:
         raise emitter.error(f"fov {fov:g} is not between 0 and 180 degrees")
     return fov, axis
+
+
+def envmap_frame(emitter: Plugin) -> np.ndarray:
+    """The orthogonal part of an envmap's to_world (3x3; a mirror kept, as Mitsuba mirrors the map).
+
+    Mitsuba looks a direction up at to_world^-1 d without normalising it, so a scale or shear there
+    bends its map (and its samples disagree with its lookups): that is one warning, and the
+    orthogonal factor of the polar decomposition, the rotation nearest the matrix, is kept.
+    Translation does not move directions and is ignored, as in Mitsuba."""
+    matrix = emitter.transform()[:3, :3]
+    u, sigma, vt = np.linalg.svd(matrix)
+    if not sigma[-1] > 1e-12 * max(sigma[0], 1e-300):
+        raise emitter.error("its to_world is singular: it gives the map no orientation")
+    if not np.allclose(sigma, 1.0, rtol=0.0, atol=1e-5):
+        warn(emitter, "its to_world scales or shears, which an environment cannot: only its rotation is kept")
+    return u @ vt
 
 
 def _similarity(matrix: np.ndarray) -> bool:

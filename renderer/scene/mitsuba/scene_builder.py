@@ -114,6 +114,7 @@ class _Builder:
         films = sensor.objects("film")
         width, height = FILM_DEFAULT_SIZE
         pixel_filter, radius, stddev = "gaussian", 1.0, 0.5  # Mitsuba's film without an rfilter
+        crop = None
         if films:
             film = self.visit(films[0])
             if film.type != "hdrfilm":
@@ -121,10 +122,7 @@ class _Builder:
             width, height = film.integer("width", width), film.integer("height", height)
             if width < 1 or height < 1:
                 raise film.error(f"a {width}x{height} image has no pixels")
-            for crop in ("crop_offset_x", "crop_offset_y", "crop_width", "crop_height"):
-                if film.has(crop):
-                    warn(film, f"'{crop}' is not supported: the whole image is rendered")
-                    film.used.add(crop)
+            crop = self.crop_window(film, width, height)
             filters = film.objects("rfilter")
             pixel_filter = filters[0].type if filters else "gaussian"  # Mitsuba's default filter
             if filters:
@@ -163,7 +161,22 @@ class _Builder:
         else:
             camera = replace(camera, fov=self.vertical_fov(sensor, width, height))
         return camera, RenderSettings(width=width, height=height, spp=spp, sampler=sampler, pixel_filter=pixel_filter,
-                                      filter_radius=radius, filter_stddev=stddev)
+                                      filter_radius=radius, filter_stddev=stddev, crop=crop)
+
+    @staticmethod
+    def crop_window(film: Plugin, width: int, height: int) -> tuple[int, int, int, int] | None:
+        """The film's crop window (x, y, width, height) from the image's top-left corner, as Mitsuba's
+        film reads it (the crop's size defaults to the image's, its offset to 0); None where it is
+        the whole image."""
+        names = ("crop_offset_x", "crop_offset_y", "crop_width", "crop_height")
+        if not any(film.has(name) for name in names):
+            return None
+        x, y = film.integer("crop_offset_x", 0), film.integer("crop_offset_y", 0)
+        w, h = film.integer("crop_width", width), film.integer("crop_height", height)
+        if x < 0 or y < 0 or w < 1 or h < 1 or x + w > width or y + h > height:
+            raise film.error(f"the crop window at ({x}, {y}) of size {w}x{h} is not a window of the {width}x{height} "
+                             "image (offsets at least 0, a size of at least 1x1, offset + size within the image)")
+        return None if (x, y, w, h) == (0, 0, width, height) else (x, y, w, h)
 
     @staticmethod
     def ortho_height(sensor: Plugin, width: int, height: int) -> float:

@@ -7,7 +7,8 @@ hands each top-level shape here and gives each shape its material).
                          default, PLY: off; Lantern's readers turn both formats' v over, so the object
                          turns it back where Mitsuba does not), shape_index (serialized)
   sphere, rectangle      Lantern's analytic spheres (texture coordinates in the frame of to_world, as
-                         Mitsuba's) and quads: exact, as Mitsuba's
+                         Mitsuba's) and quads: exact, as Mitsuba's, flip_normals (and a mirroring
+                         to_world) included
   disk, cube, cylinder   the `disc_fan`, `cube` and `cylinder` generators' meshes (flip_normals): the
                          cube is a mesh in Mitsuba too; the disk and the open tube (p0, p1, radius)
                          are finely tessellated, with exact normals and Mitsuba's (u, v), and take
@@ -80,10 +81,11 @@ class ShapeReader:
             scales = np.linalg.norm(placement[:3, :3], axis=0)
             if not np.allclose(scales, scales[0], rtol=1e-5):
                 raise shape.error("a sphere's to_world must scale uniformly")
-            self.add(MeshObject(kind="sphere", radius=radius, material=material), placement @ _translation(centre),
-                     shape)
+            self.add(MeshObject(kind="sphere", radius=radius, material=material,
+                                flip_normals=analytic_flip(shape, placement)), placement @ _translation(centre), shape)
         elif t == "rectangle":
-            self.add(MeshObject(kind="quad", size=(2.0, 2.0), material=material), placement @ XZ_TO_XY, shape)
+            self.add(MeshObject(kind="quad", size=(2.0, 2.0), material=material,
+                                flip_normals=analytic_flip(shape, placement)), placement @ XZ_TO_XY, shape)
         elif t == "disk":
             self.add(self.generated(shape, "disc_fan", material), placement @ Y_AXIS_TO_Z, shape)
         elif t == "cube":
@@ -158,6 +160,15 @@ def cylinder_frame(shape: Plugin) -> np.ndarray:
     frame = np.eye(4)
     frame[:3, 0], frame[:3, 1], frame[:3, 2], frame[:3, 3] = radius * s, radius * t, length * n, p0
     return frame
+
+
+def analytic_flip(shape: Plugin, placement: np.ndarray) -> bool:
+    """Whether Lantern's sphere or quad must turn its normal over to be Mitsuba's shape: flip_normals,
+    exclusive-or a to_world that mirrors. Under a mirror Mitsuba's sphere points its normals inwards
+    (its to_world decomposes with a negative scale) where Lantern's point outwards, and Mitsuba's
+    rectangle keeps to_world's transformed normal where Lantern's quad takes edge u x edge v, which
+    a mirror turns over."""
+    return _flag(shape, "flip_normals", False) != bool(np.linalg.det(placement[:3, :3]) < 0.0)
 
 
 def _flag(plugin: Plugin, name: str, default: bool) -> bool:

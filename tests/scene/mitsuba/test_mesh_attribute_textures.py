@@ -96,14 +96,15 @@ def test_a_blend_of_two_diffuse_colours_by_a_face_attribute(tmp_path):
     np.testing.assert_allclose(colours, expected, rtol=1e-6)
 
 
-def test_a_blend_by_a_number_and_a_blend_left_approximate(tmp_path):
+def test_a_blend_by_a_number_and_a_general_blend(tmp_path):
     scene, _ = load(tmp_path, '<bsdf type="blendbsdf"><float name="weight" value="0.25"/>'
                               '<bsdf type="diffuse"><rgb name="reflectance" value="0.8"/></bsdf>'
                               '<bsdf type="diffuse"><rgb name="reflectance" value="0, 0.4, 0"/></bsdf></bsdf>')
     assert scene.materials[0].base_color == pytest.approx((0.6, 0.7, 0.6))
-    _, messages = load(tmp_path, '<bsdf type="blendbsdf"><float name="weight" value="0.25"/>'
-                                 '<bsdf type="diffuse"/><bsdf type="conductor"/></bsdf>', expect_warnings=1)
-    assert "blendbsdf is not supported yet: its first BSDF is used" in messages[0]
+    scene, _ = load(tmp_path, '<bsdf type="blendbsdf"><float name="weight" value="0.25"/>'
+                              '<bsdf type="diffuse"/><bsdf type="conductor"/></bsdf>')
+    mix = scene.materials[0]
+    assert mix.mix_weight == 0.25 and [part.kind for part in mix.mix] == ["diffuse", "conductor"]
 
 
 @pytest.mark.parametrize("texture, message", [

@@ -185,6 +185,49 @@ def test_anisotropic_and_textured_widths(tmp_path):
                             '<float name="alpha_v" value="0.2"/></bsdf>')
 
 
+def test_principled_and_principledthin_are_the_disney_kind(tmp_path):
+    thick, _ = materials(tmp_path, '''<bsdf type="principled"><rgb name="base_color" value="0.2, 0.8, 0.1"/>
+        <float name="roughness" value="0.15"/><float name="specular" value="0.7"/><float name="sheen" value="0.3"/>
+        <texture name="metallic" type="checkerboard"><float name="color0" value="0.7"/>
+        <float name="color1" value="0.1"/></texture><float name="clearcoat_gloss" value="0.4"/></bsdf>''')
+    assert (thick.kind, thick.thin, thick.roughness, thick.sheen, thick.clearcoat_gloss, thick.metallic) == (
+        "disney", False, 0.15, 0.3, 0.4, 1.0)
+    assert thick.ior == pytest.approx(2.0 / (1.0 - math.sqrt(0.08 * 0.7)) - 1.0)  # Mitsuba's specular -> eta
+    (role, checker), = thick.parameter_textures
+    assert role == "metallic" and (checker.color0, checker.color1) == ((0.1,) * 3, (0.7,) * 3)  # read as a number
+    assert thick.sidedness == "two_sided" and not thick.front_both_sides
+    wrapped, _ = materials(tmp_path, '<bsdf type="twosided"><bsdf type="principled"/></bsdf>')
+    assert wrapped.front_both_sides and wrapped.ior == pytest.approx(1.5) and wrapped.roughness == 0.5
+    thin, _ = materials(tmp_path, '''<bsdf type="principledthin"><float name="eta" value="1.33"/>
+        <float name="spec_trans" value="0.4"/><float name="diff_trans" value="1.4"/></bsdf>''')
+    assert (thin.kind, thin.thin, thin.ior, thin.transmission, thin.diff_trans) == ("disney", True, 1.33, 0.4, 1.4)
+    with pytest.raises(SceneError, match="give eta or specular, not both"):
+        materials(tmp_path, '<bsdf type="principled"><float name="eta" value="1.4"/><float name="specular" value="0.5"/>'
+                            '</bsdf>')
+    transmits, _ = materials(tmp_path, '<bsdf type="principled"><float name="spec_trans" value="0.5"/>'
+                                       '<float name="eta" value="1"/></bsdf>')
+    assert transmits.ior == pytest.approx(1.001)  # as Mitsuba: an index of 1 cannot refract
+
+
+def test_blendbsdf_is_a_mix_of_its_two_bsdfs(tmp_path):
+    blend, _ = materials(tmp_path, '''<bsdf type="twosided"><bsdf type="blendbsdf"><float name="weight" value="0.3"/>
+        <bsdf type="roughconductor"/><bsdf type="blendbsdf"><texture name="weight" type="checkerboard"/>
+        <bsdf type="plastic"/><bsdf type="diffuse"/></bsdf></bsdf></bsdf>''')
+    metal, inner = blend.mix
+    assert (blend.mix_weight, metal.kind, inner.mix_weight) == (0.3, "conductor", 1.0)
+    assert [part.kind for part in inner.mix] == ["plastic", "diffuse"]
+    (role, checker), = inner.parameter_textures
+    assert role == "mix_weight" and checker.color0 == (0.2,) * 3  # read as a number: parities swapped
+    # twosided reaches every material of the mix; the mix's textures carry their part's prefix
+    assert {metal.sidedness, *(p.sidedness for p in inner.mix)} == {"two_sided"}
+    assert set(blend.textures) == {"mix1.mix_weight"}
+    two_diffuse, _ = materials(tmp_path, '<bsdf type="blendbsdf"><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>')
+    assert two_diffuse.mix is None and two_diffuse.kind == "diffuse"  # plain colours: one diffuse, exactly
+    with pytest.raises(SceneError, match="needs two nested BSDFs, not 1"):
+        materials(tmp_path, '<bsdf type="blendbsdf"><bsdf type="diffuse"/><float name="weight" value="0.1"/></bsdf>'
+                            .replace('<float name="weight" value="0.1"/>', '<bsdf type="conductor"/>', 0))
+
+
 def test_dielectrics_and_named_indices(tmp_path):
     glass, _ = materials(tmp_path, '''<bsdf type="dielectric"><string name="int_ior" value="diamond"/>
         <string name="ext_ior" value="water"/></bsdf>''')
@@ -277,3 +320,30 @@ def test_reconstruction_filters(tmp_path, rfilter, expected, warned):
                            expect_warnings=int(warned))
     r = scene.render
     assert (r.pixel_filter, r.filter_stddev, r.filter_radius) == expected
+
+
+def film(crop: str) -> str:
+    return (f'<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="40"/>'
+            f'<integer name="height" value="30"/>{crop}</film></sensor>' + SHAPE)
+
+
+def crop_values(**values) -> str:
+    return "".join(f'<integer name="crop_{name}" value="{value}"/>' for name, value in values.items())
+
+
+def test_the_films_crop_window_is_read_as_mitsubas(tmp_path):
+    scene, _ = load(tmp_path, film(crop_values(offset_x=5, offset_y=4, width=10, height=6)))
+    r = scene.render
+    assert (r.width, r.height, r.crop, r.image_size) == (40, 30, (5, 4, 10, 6), (10, 6))
+    # Mitsuba's defaults: offset 0, size the image's (so an offset alone must come with a size)
+    assert load(tmp_path, film(crop_values(height=6)))[0].render.crop == (0, 0, 40, 6)
+    assert load(tmp_path, film(crop_values(offset_x=0, width=40)))[0].render.crop is None  # the whole image
+
+
+@pytest.mark.parametrize("values", [dict(offset_x=35, width=10), dict(offset_y=1), dict(width=0),
+                                    dict(offset_x=-1, width=10), dict(height=31)])
+def test_a_crop_window_outside_the_image_is_one_line_naming_file_and_line(tmp_path, values):
+    with pytest.raises(SceneError, match="is not a window of the 40x30 image") as excinfo:
+        load(tmp_path, film(crop_values(**values)))
+    message = str(excinfo.value)
+    assert "\n" not in message and message.startswith(f"{tmp_path / 's.xml'}: line 2: <film type=\"hdrfilm\">")

@@ -173,3 +173,29 @@ def test_a_group_alone_draws_nothing_and_an_instance_needs_one(tmp_path):
         load(tmp_path, GROUP, expect_warnings=None)
     with pytest.raises(SceneError, match=r"line 2: <shape type=\"instance\">: needs one <shapegroup>"):
         load(tmp_path, '<shape type="instance"><shape type="sphere"/></shape>')
+
+
+@pytest.mark.parametrize("shape", ["sphere", "rectangle"])
+def test_flip_normals_and_a_mirror_turn_analytic_shapes_over_as_mitsubas(tmp_path, shape):
+    """Rays from +z onto the sphere's top and the rectangle (facing +z, Mitsuba's way): flip_normals
+    turns the normal over; a mirroring to_world turns Mitsuba's sphere inwards (and a flipped one
+    back out) and keeps its rectangle's transformed normal (+z under a mirror of x, where Lantern's
+    quad, edge u x edge v, would turn); flip_normals keeps texture coordinates."""
+    rays = [((0.2, 0.1, 5.0), (0.0, 0.0, -1.0))]
+    mirror = '<transform name="to_world"><scale x="-1"/></transform>'
+
+    def hit(options):
+        scene = load(tmp_path, f'<shape type="{shape}">{options}<bsdf type="diffuse"/></shape>')[0]
+        return probe(scene, rays)[0]
+    plain = hit("")
+    assert plain[SurfaceProbe.FRONT] == 1 and plain[SurfaceProbe.N_GEO][2] > 0.9
+    flip = '<boolean name="flip_normals" value="true"/>'
+    for options, turned in (("", False), (flip, True), (mirror, shape == "sphere"), (flip + mirror, shape != "sphere")):
+        out = hit(options)
+        assert out[SurfaceProbe.FRONT] == (0 if turned else 1), options
+        np.testing.assert_allclose(out[SurfaceProbe.N_GEO], -plain[SurfaceProbe.N_GEO] if turned
+                                   else plain[SurfaceProbe.N_GEO], atol=1e-6)
+        if not options.endswith(mirror):
+            np.testing.assert_array_equal(out[SurfaceProbe.UV], plain[SurfaceProbe.UV])
+    with pytest.raises(SceneError, match="'flip_normals' must be a <boolean>"):
+        load(tmp_path, f'<shape type="{shape}"><integer name="flip_normals" value="1"/></shape>')
