@@ -123,6 +123,8 @@ class Bsdf:
                     mat.alpha_v = ti.max(tex.sample(rec.alpha_textures[1], surface.uv, surface.uv1).x, MIN_ALPHA)
             if rec.transmission_texture != NO_TEXTURE:
                 mat.transmission *= tex.sample(rec.transmission_texture, surface.uv, surface.uv1).x
+            if rec.specular_color_texture != NO_TEXTURE:
+                mat.specular_color *= tex.sample(rec.specular_color_texture, surface.uv, surface.uv1).xyz
             if ti.static(self.features.has_kind("disney")):
                 if mat.kind == _DISNEY:
                     mat = _disney_textures(tex, rec, surface, mat)

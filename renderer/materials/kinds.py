@@ -111,6 +111,9 @@ class MaterialLayer:
 _F = LobeFlags
 _IOR = Column("ior", "f32", 1.5, from_spec=True)
 _THIN = Column("thin", "i32", 0)
+# A tint of the specular reflection: the glTF specular layer's colour, a plastic's coating's and a
+# conductor's Fresnel's (Mitsuba's specular_reflectance); its texture: specular_color_texture.
+_SPECULAR_COLOR = Column("specular_color", "vec3", (1.0, 1.0, 1.0), from_spec=True, gltf="specular_color_factor")
 _CLEARCOAT = Column("clearcoat", "f32", 0.0, from_spec=True, gltf="clearcoat_factor")  # principled's layer, disney's lobe
 # The roughness of a material that names none, unless its kind has its own: what `principled`
 # starts from in Blender and Mitsuba 3 (diffuse and null surfaces ignore it).
@@ -145,6 +148,7 @@ SHARED_COLUMNS = (
     Column("roughness_v", "f32", -1.0),
     Column("alpha_textures", "ivec4", (NO_TEXTURE,) * 4),  # alpha (along u), alpha_v, unused, unused
     Column("opacity_texture", "i32", NO_TEXTURE),  # coverage from a texture's first channel (Mitsuba's mask)
+    Column("specular_color_texture", "i32", NO_TEXTURE),  # multiplies specular_color (conductors, plastics)
     # A mix row (MaterialSpec.mix): the rows of its two materials, its weight's texture slot, unused;
     # -1 in the first: not a mix.
     Column("mix", "ivec4", (-1, -1, NO_TEXTURE, NO_TEXTURE)),
@@ -162,8 +166,10 @@ DISNEY_TEXTURED = ("roughness", "anisotropic", "metallic", "sheen", "sheen_tint"
 
 KINDS = (
     MaterialKind("diffuse", "diffuse", (), (), _F.REFLECTION | _F.DIFFUSE, "renderer.materials.diffuse"),
-    MaterialKind("conductor", "conductor", ("edge_tint", "eta", "k", "metal", "microfacet", "roughness_v"),
+    MaterialKind("conductor", "conductor", ("edge_tint", "eta", "k", "metal", "microfacet", "roughness_v",
+                                            "specular_color"),
                  (Column("edge_tint", "vec3", (1.0, 1.0, 1.0), from_spec=True), Column("complex_ior", "i32", 0),
+                  _SPECULAR_COLOR,
                   Column("eta", "vec3", (0.0, 0.0, 0.0)), Column("k", "vec3", (0.0, 0.0, 0.0)),
                   Column("fresnel_avg", "vec3", (0.0, 0.0, 0.0))),
                  _F.REFLECTION | _F.GLOSSY | _F.SPECULAR, "renderer.materials.conductor", compensation="rough",
@@ -182,7 +188,7 @@ KINDS = (
     # Mitsuba 3's plastic and roughplastic: a diffuse base under a smooth or rough dielectric
     # coating, its internal reflections summed in closed form (renderer/materials/plastic.py).
     MaterialKind("plastic", "plastic", ("ior", "nonlinear", "specular_color", "microfacet"),
-                 (_IOR, Column("nonlinear", "i32", 0), Column("specular_color", "vec3", (1.0, 1.0, 1.0), from_spec=True),
+                 (_IOR, Column("nonlinear", "i32", 0), _SPECULAR_COLOR,
                   Column("plastic_table", "i32", NO_TABLE), Column("internal_reflectance", "f32", 0.0),
                   Column("specular_weight", "f32", 0.5)),
                  _F.REFLECTION | _F.DIFFUSE | _F.GLOSSY | _F.SPECULAR, "renderer.materials.plastic",
@@ -220,7 +226,7 @@ LAYERS = (
     # glTF's defaults (1, white) or a texture varies them.
     MaterialLayer("specular", "principled", ("specular", "specular_color"),
                   (Column("specular", "f32", 1.0, from_spec=True, gltf="specular_factor"),
-                   Column("specular_color", "vec3", (1.0, 1.0, 1.0), from_spec=True, gltf="specular_color_factor")),
+                   _SPECULAR_COLOR),
                   _F.REFLECTION | _F.GLOSSY | _F.SPECULAR,
                   lambda r: r["kind"] == KIND_IDS["principled"] and (
                       r["specular"] != 1.0 or min(r["specular_color"]) != 1.0

@@ -78,13 +78,14 @@ def conductor_fresnel_average(reflectivity, edge_tint):
 @ti.func
 def conductor_reflectance(mat, cos_i):
     """The Fresnel of a conductor material at cos_i, by the row's switch: exact from its complex
-    index eta + i k (`complex_ior`), or from base_color and edge_tint (conductor_fresnel)."""
+    index eta + i k (`complex_ior`), or from base_color and edge_tint (conductor_fresnel); times
+    the row's specular_color."""
     f = vec3(0.0)
     if mat.complex_ior == 1:
         f = mf.fresnel_conductor(cos_i, mat.eta, mat.k)
     else:
         f = conductor_fresnel(cos_i, mat.base_color, mat.edge_tint)
-    return f
+    return f * mat.specular_color  # a tint (Mitsuba's specular_reflectance), white unless given
 
 
 @ti.func
@@ -96,7 +97,7 @@ def conductor_reflectance_average(mat):
         f = mat.fresnel_avg
     else:
         f = conductor_fresnel_average(mat.base_color, mat.edge_tint)
-    return f
+    return f * mat.specular_color
 
 
 # --- GGX reflection (conductor, metal, dielectric coat) ------------------------------------------------

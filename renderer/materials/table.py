@@ -86,6 +86,7 @@ class MaterialRows:
                    alpha_textures=(slots.get("alpha", NO_TEXTURE), slots.get("alpha_v", NO_TEXTURE), NO_TEXTURE,
                                    NO_TEXTURE),
                    **dispersion_row(spec), **conductor_ior_row(spec))
+        row["specular_color_texture"] = slots.get("specular_color", NO_TEXTURE)
         if spec.opacity < 1.0 or "opacity" in slots:
             row.update(alpha_mode=ALPHA_BLEND, base_alpha=spec.opacity,
                        opacity_texture=slots.get("opacity", NO_TEXTURE))
@@ -158,7 +159,8 @@ class MaterialRows:
                 "textures": (any(slots) or layer_textures
                              or any(r["transmission_texture"] != NO_TEXTURE for r in rows)
                              or any(t != NO_TEXTURE for r in rows for c in _DISNEY_TEXTURE_COLUMNS for t in r[c])
-                             or any(r["mix"][2] != NO_TEXTURE for r in rows)
+                             or any(r["mix"][2] != NO_TEXTURE or r["specular_color_texture"] != NO_TEXTURE
+                                    for r in rows)
                              or any(t != NO_TEXTURE for r in rows for t in r["alpha_textures"])),
                 "normal_maps": any(r["textures"][2] != NO_TEXTURE and r["normal_map_model"] == TANGENT_SPACE_MAP
                                    for r in rows),

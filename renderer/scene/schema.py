@@ -300,7 +300,8 @@ MATERIAL = Section(
               "`KHR_materials_specular` `specularFactor`); what it does not reflect goes to the "
               "diffuse base.", UNIT),
         Field("specular_color", "vec3", (1.0, 1.0, 1.0), "Colour of that specular reflection "
-              "(`specularColorFactor`).", UNIT),
+              "(`specularColorFactor`); on a `plastic` its coating's tint, on a `conductor` a tint of its "
+              "Fresnel (both Mitsuba's `specular_reflectance`).", UNIT),
         Field("anisotropic", "float", 0.0, "`disney`: stretches the specular lobe along the surface's "
               "texture direction u (widths roughness^2 / a and roughness^2 a along u and v, a = sqrt(1 - 0.9 "
               "anisotropic)). Mesh scenes with texture coordinates.", UNIT),

@@ -65,7 +65,8 @@ def bsdf_spec(builder, bsdf: Plugin) -> MaterialSpec:
         return _conductor(builder, bsdf)
     if t in ("dielectric", "roughdielectric", "thindielectric"):
         lobe = _roughness(builder, bsdf) if t == "roughdielectric" else SMOOTH
-        return MaterialSpec("", "dielectric", base_color=builder.colour(bsdf, "specular_transmittance", (1.0,) * 3),
+        tint, tint_texture = _tint(builder, bsdf, "specular_transmittance", (1.0,) * 3)
+        return MaterialSpec("", "dielectric", base_color=tint, base_color_texture=tint_texture,
                             ior=_relative_ior(bsdf, DEFAULT_GLASS_IOR), **lobe,
                             thin=t == "thindielectric")
     if t in ("plastic", "roughplastic"):
@@ -113,6 +114,20 @@ def _mix_depth(spec: MaterialSpec) -> int:
     return 0 if spec.mix is None else 1 + max(_mix_depth(part) for part in spec.mix)
 
 
+def _tint(builder, bsdf: Plugin, name: str, default) -> tuple:
+    """A specular tint: (colour, None) or ((1, 1, 1), a bitmap or checkerboard texture); a mesh
+    attribute there is a warning (only diffuse colours take them)."""
+    value = bsdf.properties.get(name)
+    if isinstance(value, Plugin) and value.kind == "texture" and value.type in ("bitmap", "checkerboard"):
+        bsdf.used.add(name)
+        return (1.0, 1.0, 1.0), builder.texture(builder.visit(value))
+    if isinstance(value, Plugin) and value.kind == "texture" and value.type == "mesh_attribute":
+        bsdf.used.add(name)
+        warn(bsdf, f"a mesh_attribute on '{name}' is not supported: white is used")
+        return tuple(default), None
+    return builder.colour(bsdf, name, default), None
+
+
 def _inner(builder, bsdf: Plugin) -> MaterialSpec:
     nested = bsdf.objects("bsdf")
     if not nested:
@@ -134,22 +149,25 @@ def _mask(builder, bsdf: Plugin) -> MaterialSpec:
 
 
 def _conductor(builder, bsdf: Plugin) -> MaterialSpec:
-    tint = builder.colour(bsdf, "specular_reflectance", (1.0, 1.0, 1.0))
-    common = {**(_roughness(builder, bsdf) if bsdf.type == "roughconductor" else SMOOTH), "sidedness": "back_black"}
+    """Mitsuba's conductor and roughconductor: a named metal, eta and k, or a perfect mirror (`none`),
+    the Fresnel tinted by specular_reflectance (a colour or a texture)."""
+    tint, tint_texture = _tint(builder, bsdf, "specular_reflectance", (1.0, 1.0, 1.0))
+    common = {**(_roughness(builder, bsdf) if bsdf.type == "roughconductor" else SMOOTH), "sidedness": "back_black",
+              "specular_color": tint}
+    if tint_texture is not None:
+        common["parameter_textures"] = (*common.get("parameter_textures", ()), ("specular_color", tint_texture))
     if bsdf.has("eta") or bsdf.has("k"):
         eta = builder.colour(bsdf, "eta", (0.0, 0.0, 0.0), bounded=False)
         k = builder.colour(bsdf, "k", (1.0, 1.0, 1.0), bounded=False)
         spec = MaterialSpec("", "conductor", eta=eta, k=k, **common)
     else:
         name = bsdf.text("material", "none")
-        if name == "none":  # Mitsuba's perfect mirror
-            return MaterialSpec("", "conductor", base_color=tint, edge_tint=tint, **common)
+        if name == "none":  # Mitsuba's perfect mirror: a Fresnel of 1 (Schlick from 1), times the tint
+            return MaterialSpec("", "conductor", base_color=(1.0, 1.0, 1.0), **common)
         known = {m.lower(): m for m in metal_names()}
         if name.lower() not in known:
             raise bsdf.error(f"unknown conductor material '{name}' (known: {', '.join(sorted(known.values()))})")
         spec = MaterialSpec("", "conductor", metal=known[name.lower()], **common)
-    if tint != (1.0, 1.0, 1.0):
-        warn(bsdf, "specular_reflectance on a conductor with a complex index is not supported: ignored")
     return spec
 
 
@@ -164,9 +182,11 @@ def _plastic(builder, bsdf: Plugin) -> MaterialSpec:
     if eta == 1.0:
         raise bsdf.error("int_ior and ext_ior are equal: the coating would not be there")
     colour, texture = builder.base_colour(bsdf, "diffuse_reflectance", DEFAULT_REFLECTANCE)
+    specular, tint_texture = _tint(builder, bsdf, "specular_reflectance", (1.0, 1.0, 1.0))
+    specular_texture = () if tint_texture is None else (("specular_color", tint_texture),)
     return MaterialSpec("", "plastic", base_color=colour, base_color_texture=texture, roughness=lobe["roughness"],
                         microfacet=lobe["microfacet"], ior=eta, nonlinear=bool(bsdf.get("nonlinear", False)),
-                        specular_color=builder.colour(bsdf, "specular_reflectance", (1.0, 1.0, 1.0)),
+                        specular_color=specular, parameter_textures=specular_texture,
                         sidedness="back_black")
 
 

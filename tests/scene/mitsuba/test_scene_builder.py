@@ -138,6 +138,13 @@ def test_conductors(tmp_path):
     beckmann, _ = materials(tmp_path, '<bsdf type="roughconductor"/>')  # Mitsuba's defaults: Beckmann, 0.1
     assert beckmann.roughness == pytest.approx(math.sqrt(0.1)) and beckmann.microfacet == "beckmann"
     assert gold.microfacet == "ggx_separable" and mirror.sidedness == gold.sidedness == "back_black"
+    tinted, _ = materials(tmp_path, '<bsdf type="conductor"><rgb name="specular_reflectance" value="0.9, 0.5, 0.2"/></bsdf>')
+    assert (tinted.base_color, tinted.edge_tint, tinted.specular_color) == ((1, 1, 1), (1, 1, 1), (0.9, 0.5, 0.2))
+    textured, _ = materials(tmp_path, '''<bsdf type="roughconductor"><string name="material" value="Cu"/>
+        <texture name="specular_reflectance" type="checkerboard"/></bsdf>''')
+    (role, checker), = textured.parameter_textures
+    assert role == "specular_color" and checker.color0 == (0.4,) * 3  # a colour: Mitsuba's own parity
+    assert textured.specular_color == (1, 1, 1) and textured.metal == "Cu"
     with pytest.raises(SceneError, match="distribution 'phong'"):
         materials(tmp_path, '<bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf>')
     with pytest.raises(SceneError, match="unknown conductor material 'Unobtainium'"):
