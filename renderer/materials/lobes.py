@@ -139,7 +139,7 @@ def conductor_sample(mat, wo, u2, model=mf.GGX, alpha_v=mf.ISOTROPIC):
         h = mf.sample_normal(wo, alpha, u2, model, alpha_v)
         wi = mf.reflect(wo, h)
         cos_oh = wo.dot(h)
-        if wi.z > 0.0 and cos_oh > 0.0:  # (Beckmann's normals, drawn from D cos, can face away from wo)
+        if wi.z > 0.0 and cos_oh > 0.0:  # (a guard: rounding can leave a sampled normal facing away from wo)
             # f cos / pdf: D and the Jacobian cancel (microfacet.sampled_weight).
             weight = conductor_reflectance(mat, cos_oh) * mf.sampled_weight(wo, wi, h, alpha, model, alpha_v)
             s = BsdfSample(wi=wi, weight=weight, pdf=mf.normal_pdf(wo, h, alpha, model, alpha_v) / (4.0 * cos_oh),
@@ -189,7 +189,7 @@ def dielectric_sample(tint, alpha, eta, wo, u1, u2, model=mf.GGX, alpha_v=mf.ISO
         h = mf.sample_normal(wo, alpha, u2, model, alpha_v)
         s.delta = 0
     cos_oh = wo.dot(h)
-    facing_away = cos_oh <= 0.0  # (Beckmann's normals, drawn from D cos, can face away from wo)
+    facing_away = cos_oh <= 0.0  # (a guard: rounding can leave a sampled normal facing away from wo)
     cos_oh = ti.max(cos_oh, 0.0)
     f, cos_t = mf.fresnel_dielectric(cos_oh, eta)
     reflect = u1 < f
@@ -267,7 +267,7 @@ def thin_dielectric_sample(tint, alpha, ior, wo, u1, u2, model=mf.GGX, alpha_v=m
         h = mf.sample_normal(wo, alpha, u2, model, alpha_v)
         s.delta = 0
     cos_oh = wo.dot(h)
-    facing_away = cos_oh <= 0.0  # (Beckmann's normals, drawn from D cos, can face away from wo)
+    facing_away = cos_oh <= 0.0  # (a guard: rounding can leave a sampled normal facing away from wo)
     r = thin_reflectance(cos_oh, ior)
     wr = mf.reflect(wo, h)
     if wr.z <= 0.0 or facing_away:

@@ -7,7 +7,10 @@ distribution and the masking-shadowing form:
       normals drawn from the visible normals (Heitz 2018);
   GGX_SEPARABLE: GGX with Smith's separable G2 = G1(wo) G1(wi), Mitsuba 3's and Walter et al.'s;
   BECKMANN: Beckmann's Gaussian slopes with the separable G2 and Walter et al.'s rational fit
-      of G1 (under 0.35% from the exact one), as Mitsuba 3 has it; normals drawn from D(h) cos(h).
+      of G1 (under 0.35% from the exact one), as Mitsuba 3 has it; normals drawn from the visible
+      normals as Mitsuba 3 draws them (Jakob 2014's numerical inversion), so that a sample's
+      weight is G2 / G1(wo), about 1 at most: drawn from D(h) cos(h), the weight grew as
+      |wo.h| / wo.z at grazing wo, and rough glass seen edge-on had fireflies Mitsuba's has not.
 The `model` arguments default to GGX, which compiles to the GGX code alone.
 """
 import taichi as ti
@@ -19,6 +22,7 @@ GGX, GGX_SEPARABLE, BECKMANN = MODELS["ggx"], MODELS["ggx_separable"], MODELS["b
 # An `alpha_v` argument below 0: the distribution is isotropic, alpha wide in every direction;
 # otherwise alpha is its width along the frame's x axis (the surface's dp/du) and alpha_v along y.
 ISOTROPIC = -1.0
+_INV_SQRT_PI = 0.5641895835477563
 
 
 @ti.func
@@ -119,21 +123,96 @@ def beckmann_g1(w, alpha, alpha_v=ISOTROPIC):
 
 
 @ti.func
-def beckmann_sample_normal(alpha, u, alpha_v=ISOTROPIC):
-    """A normal drawn from D(h) cos(theta_h): Beckmann's slopes are Gaussian, so slopes
-    (alpha_u cos(phi), alpha_v sin(phi)) r with r^2 = -log(1 - u.x) exponential and phi uniform
-    (isotropic: tan^2 = -alpha^2 log(1 - u.x))."""
-    h = ti.math.vec3(0.0, 0.0, 1.0)
-    phi = 2.0 * PI * u.y
-    if alpha_v < 0.0:
-        tan2 = -alpha * alpha * ti.log(ti.max(1.0 - u.x, 1e-12))
-        cos_t = 1.0 / ti.sqrt(1.0 + tan2)
-        sin_t = ti.sqrt(ti.max(0.0, 1.0 - cos_t * cos_t))
-        h = ti.math.vec3(sin_t * ti.cos(phi), sin_t * ti.sin(phi), cos_t)
+def _erf(x):
+    """Abramowitz and Stegun 7.1.26 (absolute error under 1.5e-7)."""
+    a = ti.abs(x)
+    t = 1.0 / (1.0 + 0.3275911 * a)
+    poly = (((1.061405429 * t - 1.453152027) * t + 1.421413741) * t - 0.284496736) * t + 0.254829592
+    y = 1.0 - poly * t * ti.exp(-a * a)
+    if x < 0.0:
+        y = -y
+    return y
+
+
+@ti.func
+def _erfinv(x):
+    """Giles 2010's single-precision inverse error function, x in (-1, 1)."""
+    w = -ti.log((1.0 - x) * (1.0 + x))
+    p = 0.0
+    if w < 5.0:
+        w = w - 2.5
+        p = 2.81022636e-08
+        p = 3.43273939e-07 + p * w
+        p = -3.5233877e-06 + p * w
+        p = -4.39150654e-06 + p * w
+        p = 0.00021858087 + p * w
+        p = -0.00125372503 + p * w
+        p = -0.00417768164 + p * w
+        p = 0.246640727 + p * w
+        p = 1.50140941 + p * w
     else:
-        r = ti.sqrt(-ti.log(ti.max(1.0 - u.x, 1e-12)))
-        h = ti.math.normalize(ti.math.vec3(alpha * r * ti.cos(phi), alpha_v * r * ti.sin(phi), 1.0))
-    return h
+        w = ti.sqrt(w) - 3.0
+        p = -0.000200214257
+        p = 0.000100950558 + p * w
+        p = 0.00134934322 + p * w
+        p = -0.00367342844 + p * w
+        p = 0.00573950773 + p * w
+        p = -0.0076224613 + p * w
+        p = 0.00943887047 + p * w
+        p = 1.00167406 + p * w
+        p = 2.83297682 + p * w
+    return p * x
+
+
+@ti.func
+def beckmann_visible_g1(w, alpha, alpha_v=ISOTROPIC):
+    """Beckmann's exact Smith G1 = 1 / (1 + Lambda), Lambda = (erf(a) - 1) / 2 + exp(-a^2) /
+    (2 a sqrt(pi)), a = 1 / (alpha tan(theta)): the normalisation of the visible normals that
+    beckmann_sample_visible_normal draws (the masking in f stays the rational fit, as Mitsuba's)."""
+    lam = 0.0
+    xy = _projected_alpha2_xy(w, alpha, alpha_v)
+    if xy > 0.0:
+        a = ti.abs(w.z) / ti.sqrt(xy)
+        if a < 8.0:  # beyond, Lambda < 1e-29
+            lam = ti.max(0.0, 0.5 * (_erf(a) - 1.0) + ti.exp(-a * a) * _INV_SQRT_PI / (2.0 * ti.max(a, 1e-30)))
+    return 1.0 / (1.0 + lam)
+
+
+@ti.func
+def beckmann_sample_visible_normal(wo, alpha, u, alpha_v=ISOTROPIC):
+    """A normal drawn from Beckmann's visible normals, density G1(wo) max(0, wo.h) D(h) / wo.z
+    (G1 the exact one, beckmann_visible_g1): Mitsuba 3's routine (Jakob 2014, 'An improved
+    visible normal sampling routine for the Beckmann distribution'): wo stretched to unit width,
+    the slope across wo's plane by three Newton steps on its CDF in erf's domain, the other
+    slope Gaussian, then rotated and unstretched. wo.z must be > 0."""
+    ay = alpha if alpha_v < 0.0 else alpha_v
+    ws = ti.math.normalize(ti.math.vec3(alpha * wo.x, ay * wo.y, wo.z))
+    cos_i = ws.z
+    sin_i = ti.sqrt(ti.max(0.0, 1.0 - cos_i * cos_i))
+    tan_i = sin_i / cos_i
+    cot_i = ti.min(cos_i / ti.max(sin_i, 1e-30), 1e4)  # (beyond, erf is 1 and exp(-cot^2) 0 in float32)
+    cos_phi = 1.0
+    sin_phi = 0.0
+    if sin_i > 0.0:
+        r = ti.sqrt(ws.x * ws.x + ws.y * ws.y)
+        if r > 0.0:
+            cos_phi = ws.x / r
+            sin_phi = ws.y / r
+    u1 = ti.math.clamp(u.x, 1e-6, 1.0 - 1e-6)
+    u2 = ti.math.clamp(u.y, 1e-6, 1.0 - 1e-6)
+    # The slope's CDF, in x = erf(slope) up to erf(cot): (1 + x + tan exp(-slope^2) / sqrt(pi)) / norm.
+    maxval = _erf(cot_i)
+    x = maxval - (maxval + 1.0) * _erf(ti.sqrt(-ti.log(u1)))  # the exact solution at grazing incidence
+    target = u1 * (1.0 + maxval + _INV_SQRT_PI * tan_i * ti.exp(-cot_i * cot_i))
+    for _ in ti.static(range(3)):
+        slope = _erfinv(x)
+        value = 1.0 + x + _INV_SQRT_PI * tan_i * ti.exp(-slope * slope) - target
+        x -= value / (1.0 - slope * tan_i)
+    sx = _erfinv(x)
+    sy = _erfinv(2.0 * u2 - 1.0)
+    mx = (cos_phi * sx - sin_phi * sy) * alpha
+    my = (sin_phi * sx + cos_phi * sy) * ay
+    return ti.math.normalize(ti.math.vec3(-mx, -my, 1.0))
 
 
 # --- A material's model: the distribution and masking a row names -----------------------------------
@@ -179,7 +258,7 @@ def sample_normal(wo, alpha, u, model=GGX, alpha_v=ISOTROPIC):
     """A microfacet normal as the model draws them (see normal_pdf)."""
     h = ti.math.vec3(0.0, 0.0, 1.0)
     if model == BECKMANN:
-        h = beckmann_sample_normal(alpha, u, alpha_v)
+        h = beckmann_sample_visible_normal(wo, alpha, u, alpha_v)
     else:
         h = sample_visible_normal(wo, alpha, u, alpha_v)
     return h
@@ -187,10 +266,10 @@ def sample_normal(wo, alpha, u, model=GGX, alpha_v=ISOTROPIC):
 
 @ti.func
 def normal_pdf(wo, h, alpha, model=GGX, alpha_v=ISOTROPIC):
-    """The density of sample_normal's h: GGX's visible normals, Beckmann's D(h) cos(theta_h)."""
+    """The density of sample_normal's h: the model's visible normals."""
     pdf = 0.0
     if model == BECKMANN:
-        pdf = beckmann_d(h, alpha, alpha_v) * ti.max(h.z, 0.0)
+        pdf = beckmann_visible_g1(wo, alpha, alpha_v) * ti.max(0.0, wo.dot(h)) * beckmann_d(h, alpha, alpha_v) / wo.z
     else:
         pdf = visible_normal_pdf(wo, h, alpha, alpha_v)
     return pdf
@@ -199,11 +278,10 @@ def normal_pdf(wo, h, alpha, model=GGX, alpha_v=ISOTROPIC):
 @ti.func
 def sampled_weight(wo, wi, h, alpha, model=GGX, alpha_v=ISOTROPIC):
     """D G2 |wo.h| / (wo.z pdf(h)): the weight of a direction sampled through h, Fresnel and
-    tint aside. GGX's visible normals leave G2 / G1(wo); Beckmann's D cancels against its pdf."""
+    tint aside. Visible normals leave G2 / G1(wo) (Beckmann: its exact G1 over the fitted G2)."""
     w = 0.0
     if model == BECKMANN:
-        if h.z > 0.0:
-            w = g2(wo, wi, alpha, model, alpha_v) * ti.abs(wo.dot(h)) / (wo.z * h.z)
+        w = g2(wo, wi, alpha, model, alpha_v) / beckmann_visible_g1(wo, alpha, alpha_v)
     else:
         w = g2(wo, wi, alpha, model, alpha_v) / smith_g1(wo, alpha, alpha_v)
     return w
