@@ -8,8 +8,13 @@ a hash of the world ray and the primitive, so one ray always decides alike for o
 and rays sampled independently decide independently, which makes the path tracer converge to
 the blended image. OPAQUE ignores alpha. Mitsuba's mask BSDF is BLEND with the alpha of its
 opacity texture's first channel. A back-face-culled material (glTF doubleSided: false) is not
-there for rays that meet its triangles from behind. Compiled only into scenes whose materials use
-MASK, BLEND or culling (MeshGeometry.has_alpha).
+there for rays that meet its triangles from behind. Which side that is depends on the direction a
+ray is traced, so culling, unlike alpha, is not symmetric: a path from the camera passes a culled
+face from behind, while a point in front of the face still sees it, so the face shadows what it
+faces. Photons (SPPM) travel against the paths' direction: they pass the face where paths stop at
+it and stop where paths pass, so SPPM does not converge to the path tracers' image where light
+crosses a culled face. Compiled only into scenes whose materials use MASK, BLEND or culling
+(MeshGeometry.has_alpha).
 """
 import taichi as ti
 

@@ -1,6 +1,8 @@
 """Sidedness and coverage, rendered: a one-sided (Mitsuba) BSDF is black from behind and `twosided`
 lights both sides; a back-face-culled material (glTF doubleSided: false) lets rays through from
-behind; Mitsuba's `mask` lets a ray through with probability 1 - opacity (a constant or a texture).
+behind (in a glTF file too, where a node's mirroring decides which side is the front) and still
+shadows what its front faces; Mitsuba's `mask` lets a ray through with probability 1 - opacity (a
+constant or a texture).
 
 Each scene is a rectangle in front of a constant white environment, seen head-on; statistics are
 z-tests at the 1% level per test (fixed seeds)."""
@@ -15,6 +17,7 @@ from renderer.materials.table import ALPHA_BLEND, MaterialRows
 from renderer.renderer import Renderer
 from renderer.scene.catalog import load_any
 from renderer.scene.mesh_model import PbrMaterial
+from tests.scene.model_file_helpers import write_quads_gltf
 
 SIZE = 16
 SPP = 64
@@ -113,6 +116,83 @@ material = "card"
     assert front[INSIDE].max() < 0.9  # from the front it is there, a grey card
     kept, _ = render(scene(False, True))
     assert kept[INSIDE].max() < 0.9  # two-sided: there from behind too
+
+
+def test_a_culled_face_still_shadows_what_its_front_faces(tmp_path):
+    """A card facing down over a floor, seen from above: the camera sees the floor through its
+    culled back, and that floor sees the card's front, which blocks the sky (paths are traced from
+    the camera: renderer/geometry/coverage.py). Under the card's centre the floor gets about a fifth
+    of the light the open floor gets, against all of it if the card let the sky through: the bound,
+    0.4, is far from both (decided at the fixed seed, no test level)."""
+    path = tmp_path / "shadow.toml"
+    path.write_text(f'''[scene]
+name = "shadow"
+geometry = "mesh"
+[camera]
+position = [0, 5, 0]
+look_at = [0, 0, 0]
+up = [0, 0, -1]
+fov = 30
+[render]
+width = {SIZE}
+height = {SIZE}
+[environment]
+type = "constant"
+color = [1, 1, 1]
+[materials.floor]
+type = "diffuse"
+base_color = [0.5, 0.5, 0.5]
+[materials.card]
+type = "diffuse"
+base_color = [0.5, 0.5, 0.5]
+sidedness = "back_culled"
+[[objects]]
+type = "quad"
+size = [8, 8]
+material = "floor"
+[[objects]]
+type = "quad"
+size = [1.2, 1.2]
+rotate = [180, 0, 0]
+translate = [0, 0.2, 0]
+material = "card"
+''')
+    image, _ = render(load_any(path))
+    under, open_floor = image[6:10, 6:10].mean(), image[[0, 0, -1, -1], [0, -1, 0, -1]].mean()
+    assert under < 0.4 * open_floor
+
+
+def test_a_mirrored_gltf_quad_is_culled_from_behind_its_turned_front(tmp_path):
+    """A black single-sided glTF quad under a node mirrored through its plane (scale z = -1): its
+    front, +z in the mesh, faces -z. From -z it is there; from +z the environment shows through.
+    Without vertex normals, which would rewind it by themselves (renderer/scene/orientation.py)."""
+    model = write_quads_gltf(tmp_path / "mirrored.gltf", [("mirrored", (0, 0, 0), (2, 2, -1), None, False, False)],
+                             normals=False)
+
+    def scene(z):
+        path = tmp_path / f"mirrored_{z}.toml"
+        path.write_text(f'''[scene]
+name = "mirrored"
+geometry = "mesh"
+[camera]
+position = [0, 0, {z}]
+look_at = [0, 0, 0]
+fov = 30
+[render]
+width = {SIZE}
+height = {SIZE}
+[environment]
+type = "constant"
+color = [1, 1, 1]
+[[objects]]
+type = "mesh"
+file = "{model.name}"
+''')
+        return load_any(path)
+    front, _ = render(scene(-5))
+    assert front[INSIDE].max() < 0.5  # its black front (a little specular reflection)
+    behind, _ = render(scene(5))
+    assert (behind == 1.0).all()  # only the environment, through the culled back face
 
 
 def test_gltf_single_sided_materials_are_culled_and_other_formats_are_not():

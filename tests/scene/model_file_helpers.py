@@ -69,3 +69,45 @@ def write_gltf(path: Path, positions, indices, extra_doc=None) -> Path:
 
 
 TRIANGLE = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+
+
+# A unit quad in the z = 0 plane, counter-clockwise seen from +z: its front faces +z.
+UNIT_QUAD = np.array([[-0.5, -0.5, 0.0], [0.5, -0.5, 0.0], [0.5, 0.5, 0.0], [-0.5, 0.5, 0.0]], np.float32)
+UNIT_QUAD_INDICES = np.array([0, 1, 2, 0, 2, 3], np.uint16)
+
+
+def write_quads_gltf(path: Path, placements, normals=True) -> Path:
+    """A glTF file of unit quads (UNIT_QUAD, vertex normals +z unless not `normals`: then the
+    winding alone says which side is the front), black and rough: one node per
+    placement (name, translation, scale, parent_scale, double_sided, shared). parent_scale (or
+    None) puts the node under a parent that holds the translation and that scale; the quads of
+    `shared` placements are one mesh placed by several nodes (the loader instances it), each other
+    quad a mesh of its own (the loader places it in the world)."""
+    b = BufferBuilder()
+    attributes = {"POSITION": b.accessor(UNIT_QUAD)}
+    if normals:
+        attributes["NORMAL"] = b.accessor(np.tile(np.float32([0.0, 0.0, 1.0]), (4, 1)))
+    indices = b.accessor(UNIT_QUAD_INDICES)
+    black = {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}
+    materials = [{"name": "single", "doubleSided": False, "pbrMetallicRoughness": black},
+                 {"name": "double", "doubleSided": True, "pbrMetallicRoughness": black}]
+    meshes, nodes, roots, shared_mesh = [], [], [], {}
+    for name, translation, scale, parent_scale, double_sided, shared in placements:
+        key = (shared, double_sided)
+        if not shared or key not in shared_mesh:
+            meshes.append({"name": name, "primitives": [{"attributes": attributes, "indices": indices,
+                                                         "material": int(double_sided)}]})
+            shared_mesh[key] = len(meshes) - 1
+        node = {"name": name, "mesh": shared_mesh[key] if shared else len(meshes) - 1, "scale": list(scale)}
+        if parent_scale is None:
+            node["translation"] = list(translation)
+            nodes.append(node)
+        else:
+            nodes.append(node)
+            nodes.append({"name": f"{name}_parent", "translation": list(translation), "scale": list(parent_scale),
+                          "children": [len(nodes) - 1]})
+        roots.append(len(nodes) - 1)
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": roots}], "nodes": nodes, "meshes": meshes,
+           "materials": materials, "accessors": b.accessors, "bufferViews": b.views, "buffers": data_uri_buffer(b)}
+    path.write_text(json.dumps(doc))
+    return path
