@@ -131,8 +131,8 @@ def test_a_textured_blend_of_a_metal_and_a_plastic_agrees_with_mitsuba(tmp_path)
 
 def test_textured_specular_tints_agree_with_mitsuba(tmp_path):
     """Mitsuba's specular_reflectance as a checkerboard on a rough gold, as a colour on a tinted
-    mirror, on a plastic's coating, and specular_transmittance as a checkerboard on a glass: the
-    tints agree with Mitsuba's render by the per-pixel rule."""
+    mirror, on a plastic's coating and on a rough glass, whose specular_transmittance is a
+    checkerboard: the tints agree with Mitsuba's render by the per-pixel rule."""
     checker = ('<texture name="{0}" type="checkerboard"><transform name="to_uv"><scale x="4" y="3"/></transform>'
                '<rgb name="color0" value="{1}"/><rgb name="color1" value="{2}"/></texture>')
     sphere = '<shape type="sphere"><point name="center" x="{0}" y="{1}" z="0"/><float name="radius" value="0.45"/>{2}</shape>'
@@ -142,7 +142,9 @@ def test_textured_specular_tints_agree_with_mitsuba(tmp_path):
         '<bsdf type="conductor"><rgb name="specular_reflectance" value="0.9, 0.4, 0.2"/></bsdf>',
         f'<bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.1, 0.1, 0.4"/>'
         f'{checker.format("specular_reflectance", "1, 0.2, 0.2", "0.5, 0.5, 0.5")}</bsdf>',
-        f'<bsdf type="dielectric">{checker.format("specular_transmittance", "0.9, 0.3, 0.3", "0.3, 0.3, 0.9")}</bsdf>',
+        f'<bsdf type="roughdielectric"><float name="alpha" value="0.1"/>'
+        f'{checker.format("specular_transmittance", "0.9, 0.3, 0.3", "0.3, 0.3, 0.9")}'
+        f'<rgb name="specular_reflectance" value="0.2, 1, 0.2"/></bsdf>',
     ]
     shapes = "".join(sphere.format(x, y, b) for (x, y), b in zip([(-0.5, 0.5), (0.5, 0.5), (-0.5, -0.5), (0.5, -0.5)], bsdfs))
     scene = tmp_path / "tints.xml"

@@ -66,7 +66,9 @@ def bsdf_spec(builder, bsdf: Plugin) -> MaterialSpec:
     if t in ("dielectric", "roughdielectric", "thindielectric"):
         lobe = _roughness(builder, bsdf) if t == "roughdielectric" else SMOOTH
         tint, tint_texture = _tint(builder, bsdf, "specular_transmittance", (1.0,) * 3)
-        return MaterialSpec("", "dielectric", base_color=tint, base_color_texture=tint_texture,
+        reflect, reflect_texture = _tint(builder, bsdf, "specular_reflectance", (1.0,) * 3)
+        return MaterialSpec("", "dielectric", base_color=tint, base_color_texture=tint_texture, specular_color=reflect,
+                            parameter_textures=() if reflect_texture is None else (("specular_color", reflect_texture),),
                             ior=_relative_ior(bsdf, DEFAULT_GLASS_IOR), **lobe,
                             thin=t == "thindielectric")
     if t in ("plastic", "roughplastic"):
