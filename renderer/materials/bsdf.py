@@ -125,6 +125,10 @@ class Bsdf:
                 mat.transmission *= tex.sample(rec.transmission_texture, surface.uv, surface.uv1).x
             if rec.specular_color_texture != NO_TEXTURE:
                 mat.specular_color *= tex.sample(rec.specular_color_texture, surface.uv, surface.uv1).xyz
+            if rec.index_textures[0] != NO_TEXTURE:  # (the row's F_avg stays the untextured index's)
+                mat.eta *= tex.sample(rec.index_textures[0], surface.uv, surface.uv1).xyz
+            if rec.index_textures[1] != NO_TEXTURE:
+                mat.k *= tex.sample(rec.index_textures[1], surface.uv, surface.uv1).xyz
             if ti.static(self.features.has_kind("disney")):
                 if mat.kind == _DISNEY:
                     mat = _disney_textures(tex, rec, surface, mat)

@@ -149,6 +149,7 @@ SHARED_COLUMNS = (
     Column("alpha_textures", "ivec4", (NO_TEXTURE,) * 4),  # alpha (along u), alpha_v, unused, unused
     Column("opacity_texture", "i32", NO_TEXTURE),  # coverage from a texture's first channel (Mitsuba's mask)
     Column("specular_color_texture", "i32", NO_TEXTURE),  # multiplies specular_color (conductors, plastics)
+    Column("index_textures", "ivec4", (NO_TEXTURE,) * 4),  # multiply a complex index's eta and k; unused, unused
     # A mix row (MaterialSpec.mix): the rows of its two materials, its weight's texture slot, unused;
     # -1 in the first: not a mix.
     Column("mix", "ivec4", (-1, -1, NO_TEXTURE, NO_TEXTURE)),

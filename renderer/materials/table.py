@@ -87,6 +87,7 @@ class MaterialRows:
                                    NO_TEXTURE),
                    **dispersion_row(spec), **conductor_ior_row(spec))
         row["specular_color_texture"] = slots.get("specular_color", NO_TEXTURE)
+        row["index_textures"] = (slots.get("eta", NO_TEXTURE), slots.get("k", NO_TEXTURE), NO_TEXTURE, NO_TEXTURE)
         if spec.opacity < 1.0 or "opacity" in slots:
             row.update(alpha_mode=ALPHA_BLEND, base_alpha=spec.opacity,
                        opacity_texture=slots.get("opacity", NO_TEXTURE))
@@ -160,6 +161,7 @@ class MaterialRows:
                              or any(r["transmission_texture"] != NO_TEXTURE for r in rows)
                              or any(t != NO_TEXTURE for r in rows for c in _DISNEY_TEXTURE_COLUMNS for t in r[c])
                              or any(r["mix"][2] != NO_TEXTURE or r["specular_color_texture"] != NO_TEXTURE
+                                    or r["index_textures"][0] != NO_TEXTURE or r["index_textures"][1] != NO_TEXTURE
                                     for r in rows)
                              or any(t != NO_TEXTURE for r in rows for t in r["alpha_textures"])),
                 "normal_maps": any(r["textures"][2] != NO_TEXTURE and r["normal_map_model"] == TANGENT_SPACE_MAP

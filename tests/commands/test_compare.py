@@ -132,10 +132,11 @@ def test_a_textured_blend_of_a_metal_and_a_plastic_agrees_with_mitsuba(tmp_path)
 def test_textured_specular_tints_agree_with_mitsuba(tmp_path):
     """Mitsuba's specular_reflectance as a checkerboard on a rough gold, as a colour on a tinted
     mirror, on a plastic's coating and on a rough glass, whose specular_transmittance is a
-    checkerboard: the tints agree with Mitsuba's render by the per-pixel rule."""
+    checkerboard, and a conductor whose eta and k are checkerboards (Mitsuba's checkerboard holds
+    values up to 1, so a low index): the tints and the textured index agree with Mitsuba's render by the per-pixel rule."""
     checker = ('<texture name="{0}" type="checkerboard"><transform name="to_uv"><scale x="4" y="3"/></transform>'
                '<rgb name="color0" value="{1}"/><rgb name="color1" value="{2}"/></texture>')
-    sphere = '<shape type="sphere"><point name="center" x="{0}" y="{1}" z="0"/><float name="radius" value="0.45"/>{2}</shape>'
+    sphere = '<shape type="sphere"><point name="center" x="{0}" y="{1}" z="0"/><float name="radius" value="0.33"/>{2}</shape>'
     bsdfs = [
         f'<bsdf type="roughconductor"><string name="material" value="Au"/><float name="alpha" value="0.1"/>'
         f'{checker.format("specular_reflectance", "0.2, 0.9, 0.3", "1, 1, 1")}</bsdf>',
@@ -145,14 +146,17 @@ def test_textured_specular_tints_agree_with_mitsuba(tmp_path):
         f'<bsdf type="roughdielectric"><float name="alpha" value="0.1"/>'
         f'{checker.format("specular_transmittance", "0.9, 0.3, 0.3", "0.3, 0.3, 0.9")}'
         f'<rgb name="specular_reflectance" value="0.2, 1, 0.2"/></bsdf>',
+        f'<bsdf type="roughconductor"><float name="alpha" value="0.05"/>{checker.format("eta", "0.2, 0.9, 0.6", "0.5, 0.5, 0.5")}'
+        f'{checker.format("k", "0.9, 0.6, 0.4", "1, 1, 1")}</bsdf>',
     ]
-    shapes = "".join(sphere.format(x, y, b) for (x, y), b in zip([(-0.5, 0.5), (0.5, 0.5), (-0.5, -0.5), (0.5, -0.5)], bsdfs))
+    centres = [(x, y) for y in (0.4, -0.4) for x in (-0.72, 0.0, 0.72)]
+    shapes = "".join(sphere.format(x, y, b) for (x, y), b in zip(centres, bsdfs))
     scene = tmp_path / "tints.xml"
     scene.write_text(f'''<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="4"/></integrator>
         <sensor type="perspective"><float name="fov" value="35"/>
             <transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
-            <film type="hdrfilm"><rfilter type="box"/><integer name="width" value="24"/>
-            <integer name="height" value="24"/></film></sensor>
+            <film type="hdrfilm"><rfilter type="box"/><integer name="width" value="30"/>
+            <integer name="height" value="20"/></film></sensor>
         <emitter type="envmap"><string name="filename" value="{ROOT / 'assets' / 'envmaps' / 'sky.exr'}"/></emitter>
         {shapes}</scene>''')
     proc = compare(tmp_path, str(scene))

@@ -116,6 +116,16 @@ def _mix_depth(spec: MaterialSpec) -> int:
     return 0 if spec.mix is None else 1 + max(_mix_depth(part) for part in spec.mix)
 
 
+def _index_part(builder, bsdf: Plugin, name: str, default) -> tuple:
+    """A conductor's eta or k: (a colour, None) or ((1, 1, 1), a bitmap or checkerboard texture whose
+    values are the index itself, unbounded as Mitsuba reads them)."""
+    value = bsdf.properties.get(name)
+    if isinstance(value, Plugin) and value.kind == "texture" and value.type in ("bitmap", "checkerboard"):
+        bsdf.used.add(name)
+        return (1.0, 1.0, 1.0), builder.texture(builder.visit(value))
+    return builder.colour(bsdf, name, default, bounded=False), None
+
+
 def _tint(builder, bsdf: Plugin, name: str, default) -> tuple:
     """A specular tint: (colour, None) or ((1, 1, 1), a bitmap or checkerboard texture); a mesh
     attribute there is a warning (only diffuse colours take them)."""
@@ -159,8 +169,10 @@ def _conductor(builder, bsdf: Plugin) -> MaterialSpec:
     if tint_texture is not None:
         common["parameter_textures"] = (*common.get("parameter_textures", ()), ("specular_color", tint_texture))
     if bsdf.has("eta") or bsdf.has("k"):
-        eta = builder.colour(bsdf, "eta", (0.0, 0.0, 0.0), bounded=False)
-        k = builder.colour(bsdf, "k", (1.0, 1.0, 1.0), bounded=False)
+        (eta, eta_texture), (k, k_texture) = (_index_part(builder, bsdf, "eta", (0.0, 0.0, 0.0)),
+                                              _index_part(builder, bsdf, "k", (1.0, 1.0, 1.0)))
+        textures = tuple((role, t) for role, t in (("eta", eta_texture), ("k", k_texture)) if t is not None)
+        common["parameter_textures"] = (*common.get("parameter_textures", ()), *textures)
         spec = MaterialSpec("", "conductor", eta=eta, k=k, **common)
     else:
         name = bsdf.text("material", "none")
