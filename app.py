@@ -128,7 +128,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     view = sub.add_parser("view", help="open the interactive viewer")
     view.add_argument("scene", nargs="?", default=None,
-                      help="scene name, scene file (.toml, Mitsuba 3 .xml) or model file (default: showcase)")
+                      help="scene name, scene file (.toml, Mitsuba 3 .xml, pbrt-v4 .pbrt) or model file (default: showcase)")
     view.add_argument("--size", type=_size, default=(960, 540), help="window size WxH (default 960x540)")
     view.add_argument("--arch", choices=ARCHES, default="auto")
     view.add_argument("--integrator", default=None)
@@ -139,7 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     render = sub.add_parser("render", help="render headless to a file")
     render.add_argument("scene", nargs="?",
-                        help="scene name, scene file (.toml, Mitsuba 3 .xml) or model file (.glb .gltf .obj .ply .stl); "
+                        help="scene name, scene file (.toml, Mitsuba 3 .xml, pbrt-v4 .pbrt) or model file (.glb .gltf .obj .ply .stl); "
                              "with --resume, the checkpoint's scene by default")
     budget = render.add_mutually_exclusive_group()
     budget.add_argument("--spp", type=_render_setting("spp", I32_MAX), help="samples per pixel (default: the scene's)")
@@ -226,8 +226,12 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--quick", action="store_true", help="a short run (smaller sizes, fewer repeats)")
     bench.add_argument("--out-dir", type=Path, default=ROOT / "reports")
     bench.add_argument("--data", type=Path, metavar="DIR",
-                       help="mitsuba-tests: a checkout of the mitsuba-data repository (its tests/scenes)")
-    bench.add_argument("--only", metavar="TEXT", help="mitsuba-tests: only the scenes whose name contains TEXT")
+                       help="mitsuba-tests: a checkout of the mitsuba-data repository (its tests/scenes); "
+                            "scenes: a folder of scene folders in pbrt-v4 form (e.g. gonsolo/bitterli)")
+    bench.add_argument("--only", metavar="TEXT",
+                       help="mitsuba-tests, scenes: only the scenes whose name contains TEXT")
+    bench.add_argument("--time", type=float, metavar="S", dest="seconds",
+                       help="scenes: seconds of sampling per scene (default 20; 2 with --quick)")
     return parser
 
 
@@ -334,7 +338,7 @@ def cmd_warm_cache(args) -> int:
     return 1 if any(result["error"] for result in results) else 0
 
 
-DATA_BENCHMARKS = ("mitsuba-tests",)  # the benchmarks that read a data set of their own (--data, --only)
+DATA_BENCHMARKS = ("mitsuba-tests", "scenes")  # the benchmarks that read a data set of their own (--data, --only)
 
 
 def cmd_bench(args) -> int:
@@ -345,6 +349,12 @@ def cmd_bench(args) -> int:
         options.update(data=args.data, only=args.only)
     elif args.data is not None or args.only is not None:
         raise ValueError(f"--data and --only are for bench {', '.join(DATA_BENCHMARKS)}, not {args.name}")
+    if args.seconds is not None:
+        if args.name != "scenes":
+            raise ValueError(f"--time is for bench scenes, not {args.name}")
+        if args.seconds <= 0:
+            raise ValueError(f"--time {args.seconds:g}: needs a positive number of seconds")
+        options["seconds"] = args.seconds
     return run_benchmark(args.name, **options)
 
 

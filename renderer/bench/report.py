@@ -34,6 +34,7 @@ from renderer.bench.report_error_sections import (
 )
 from renderer.bench.report_generic import generic_section
 from renderer.bench.report_mitsuba_section import mitsuba_tests_section
+from renderer.bench.report_scenes_section import scenes_section
 from renderer.bench.report_markdown import Section, num
 from renderer.bench.report_speed_sections import (
     bvh_section,
@@ -49,7 +50,7 @@ THIS = "report"  # this command's own name in BENCHMARKS: not a benchmark with a
 SECTIONS: dict[str, Callable[[dict], Section]] = {
     "sdf": sdf_section, "startup": startup_section, "bvh": bvh_section, "integrators": integrators_section,
     "features": features_section, "photons": photons_section, "interactive": interactive_section,
-    "denoise": denoise_section, "mitsuba-tests": mitsuba_tests_section,
+    "denoise": denoise_section, "mitsuba-tests": mitsuba_tests_section, "scenes": scenes_section,
 }
 
 

@@ -29,7 +29,7 @@ import importlib
 import taichi as ti
 
 from renderer.geometry.shading import consistent_shading_normal
-from renderer.materials import lobes
+from renderer.materials import coated, lobes
 from renderer.materials import microfacet as mf
 from renderer.materials.lobes import BsdfSample
 from renderer.materials.kinds import BACK_BLACK, KIND_IDS, KINDS, MAX_MIX_DEPTH, TANGENT_SPACE_MAP, TWO_SIDED
@@ -41,8 +41,9 @@ from renderer.sampling.warps import cosine_hemisphere, orthonormal_basis, to_loc
 
 vec3 = ti.math.vec3
 # The kinds whose smooth part has_smooth_part cannot tell from the roughness alone.
-_DIFFUSE, _NULL, _PRINCIPLED, _PLASTIC, _DISNEY = (KIND_IDS[name] for name in
-                                                    ("diffuse", "null", "principled", "plastic", "disney"))
+_DIFFUSE, _NULL, _PRINCIPLED, _PLASTIC, _DISNEY, _COATED = (KIND_IDS[name] for name in
+                                                             ("diffuse", "null", "principled", "plastic", "disney",
+                                                              "coated"))
 
 
 @ti.data_oriented
@@ -101,6 +102,11 @@ class Bsdf:
             mat.spec_tint, mat.clearcoat_gloss, mat.flatness, mat.diff_trans = (rec.spec_tint, rec.clearcoat_gloss,
                                                                                 rec.flatness, rec.diff_trans)
             mat.front_both_sides = rec.front_both_sides
+        if ti.static(self.features.has_kind("coated")):
+            mat.coat_base, mat.coat_thickness, mat.coat_albedo, mat.coat_g = (rec.coat_base, rec.coat_thickness,
+                                                                              rec.coat_albedo, rec.coat_g)
+            mat.coat_maxdepth, mat.coat_nsamples = rec.coat_maxdepth, rec.coat_nsamples
+            mat.conductor_alpha = alpha_of(rec.conductor_roughness)
         if ti.static(self.features.has_vertex_colors):
             mat.base_color *= surface.color.xyz
         if ti.static(self.features.has_textures):
@@ -428,6 +434,9 @@ class Bsdf:
             smooth = True
         elif mat.kind == _NULL:
             smooth = False
+        elif mat.kind == _COATED:  # pbrt's layered flags: delta only with a smooth coat over a smooth metal
+            if ti.static(self.features.has_kind("coated")):
+                smooth = coated.has_smooth_part(mat)
         elif mat.kind == _PRINCIPLED:
             if ti.static(self.features.has_kind("principled")):
                 smooth = principled_has_smooth_part(self, mat)

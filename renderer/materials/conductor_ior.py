@@ -17,12 +17,16 @@ _PANELS, _ORDER = 256, 8
 
 def complex_ior(spec):
     """(eta, k) of a conductor spec that has them (written, or from its `metal`), else None."""
-    if spec is None or spec.kind != "conductor":
+    if spec is None or spec.kind not in ("conductor", "coated"):
+        return None
+    if spec.kind == "coated" and spec.coat_base != "conductor":
         return None
     if spec.metal:
         return metal_ior(spec.metal)
     if spec.eta is not None:
         return tuple(spec.eta), tuple(spec.k)
+    if spec.kind == "coated":
+        return metal_ior("Cu")  # pbrt-v4's coatedconductor default: copper
     return None
 
 

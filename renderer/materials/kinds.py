@@ -211,6 +211,21 @@ KINDS = (
                   Column("front_both_sides", "i32", 0, from_spec=True)),
                  _F.REFLECTION | _F.TRANSMISSION | _F.DIFFUSE | _F.GLOSSY, "renderer.materials.disney",
                  refracts=True),
+    # pbrt-v4's coateddiffuse and coatedconductor (coat_base): a dielectric interface (ior, roughness,
+    # roughness_v) over a diffuse (base_color) or conductor (eta, k or metal; conductor_roughness)
+    # base, a scattering slab between; f and pdf are pbrt's random-walk estimates
+    # (renderer/materials/coated.py).
+    MaterialKind("coated", "coated (pbrt)", ("ior", "roughness_v", "coat_base", "coat_thickness", "coat_albedo",
+                                             "coat_g", "coat_maxdepth", "coat_nsamples", "conductor_roughness",
+                                             "eta", "k", "metal"),
+                 (_IOR, Column("coat_base", "i32", 0), Column("coat_thickness", "f32", 0.01, from_spec=True),
+                  Column("coat_albedo", "vec3", (0.0, 0.0, 0.0), from_spec=True),
+                  Column("coat_g", "f32", 0.0, from_spec=True), Column("coat_maxdepth", "i32", 10, from_spec=True),
+                  Column("coat_nsamples", "i32", 1, from_spec=True),
+                  Column("conductor_roughness", "f32", 0.0, from_spec=True), Column("complex_ior", "i32", 0),
+                  Column("eta", "vec3", (0.0, 0.0, 0.0)), Column("k", "vec3", (0.0, 0.0, 0.0)),
+                  Column("fresnel_avg", "vec3", (0.0, 0.0, 0.0))),
+                 _F.REFLECTION | _F.DIFFUSE | _F.GLOSSY | _F.SPECULAR, "renderer.materials.coated", defaults=_SMOOTH),
 )
 
 LAYERS = (

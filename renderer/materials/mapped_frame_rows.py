@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from renderer.materials.kinds import HEIGHT_MAP, NO_TEXTURE, SHADING_FRAME_MAP, TANGENT_SPACE_MAP
+from renderer.materials.kinds import HEIGHT_MAP, KIND_IDS, NO_TEXTURE, SHADING_FRAME_MAP, TANGENT_SPACE_MAP
 
 
 def normal_map_row(spec, texture_slots: dict) -> dict:
@@ -34,10 +34,17 @@ def mapped_frame_uses(rows) -> dict:
             "bump_maps": any(r["textures"][2] != NO_TEXTURE and r["normal_map_model"] == HEIGHT_MAP for r in rows)}
 
 
+def oriented_rows(arrays: dict) -> np.ndarray:
+    """Per row of the table's arrays (MaterialRows.arrays): whether its lobes are oriented along
+    the surface's dp/du (anisotropic widths, or the Disney kind's `anisotropic`)."""
+    disney = np.asarray(arrays["kind"]) == KIND_IDS["disney"]
+    disney_oriented = (np.asarray(arrays["anisotropic"]) != 0.0) | (np.asarray(arrays["disney_textures"])[:, 1] != NO_TEXTURE)
+    return ((np.asarray(arrays["roughness_v"]) >= 0.0) | (np.asarray(arrays["alpha_textures"])[:, 1] != NO_TEXTURE)
+            | (disney & disney_oriented))
+
+
 def needs_uv_partials(arrays: dict) -> bool:
     """Whether any row of the table's arrays (MaterialRows.arrays) shades in the frame of the
     surface's texture parametrisation, so hits must carry dp/du and dp/dv."""
     textures, models = arrays["textures"], arrays["normal_map_model"]
-    # lobes oriented along dp/du
-    anisotropic = (np.asarray(arrays["roughness_v"]) >= 0.0) | (np.asarray(arrays["alpha_textures"])[:, 1] != NO_TEXTURE)
-    return bool(np.any((textures[:, 2] != NO_TEXTURE) & (models != TANGENT_SPACE_MAP)) or np.any(anisotropic))
+    return bool(np.any((textures[:, 2] != NO_TEXTURE) & (models != TANGENT_SPACE_MAP)) or np.any(oriented_rows(arrays)))

@@ -6,13 +6,14 @@ Rows come from scene-file materials (`MaterialSpec`) and from model files (glTF 
 import numpy as np
 import taichi as ti
 
+from renderer.materials.coat_bases import COAT_BASES
 from renderer.materials.conductor_ior import conductor_ior_row
 from renderer.materials.dispersion import dispersion_row
 from renderer.materials.kinds import (COLUMNS, DISNEY_TEXTURED, KIND_IDS, KIND_NAMES, LAYER_COLUMNS, LAYERS, NO_MEDIUM, NO_TEXTURE,
                                       BACK_BLACK, BACK_CULLED, MIN_ALPHA, SIDEDNESS, TANGENT_SPACE_MAP, TWO_SIDED,
                                       alpha_from_roughness,
                                       compensated_when_rough)  # noqa: F401 (re-exported)
-from renderer.materials.mapped_frame_rows import mapped_frame_uses, normal_map_row
+from renderer.materials.mapped_frame_rows import mapped_frame_uses, normal_map_row, oriented_rows
 from renderer.materials.microfacet import GGX, MODELS
 from renderer.materials.plastic_tables import plastic_row
 from renderer.materials.texture_sampler import TextureTable
@@ -51,7 +52,10 @@ Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=
                            # itself, and the weights of its lobes and tints.
                            roughness=ti.f32, anisotropic=ti.f32, sheen=ti.f32, sheen_tint=ti.f32,
                            spec_tint=ti.f32, clearcoat_gloss=ti.f32, flatness=ti.f32, diff_trans=ti.f32,
-                           front_both_sides=ti.i32)
+                           front_both_sides=ti.i32,
+                           # The coated kind's (renderer/materials/coated.py).
+                           coat_base=ti.i32, coat_thickness=ti.f32, coat_albedo=vec3, coat_g=ti.f32,
+                           coat_maxdepth=ti.i32, coat_nsamples=ti.i32, conductor_alpha=ti.f32)
 
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = 0, 1, 2
 ALPHA_MODE_IDS = {"OPAQUE": ALPHA_OPAQUE, "MASK": ALPHA_MASK, "BLEND": ALPHA_BLEND}
@@ -95,6 +99,8 @@ class MaterialRows:
             row.update(plastic_row(spec, self.plastic_tables))
         if spec.kind == "disney":
             row.update(_disney_texture_row(slots))
+        if spec.kind == "coated":
+            row["coat_base"] = COAT_BASES[spec.coat_base]
         self.rows.append(row)
         index = len(self.rows) - 1
         if spec.mix is not None:
@@ -175,10 +181,7 @@ class MaterialRows:
                 "microfacet_models": any(r["microfacet"] != GGX for r in rows),
                 "mixes": any(r["mix"][0] >= 0 for r in rows),
                 "sidedness": any(r["sidedness"] == BACK_BLACK for r in rows),
-                "anisotropy": any(r["roughness_v"] >= 0.0 or r["alpha_textures"][1] != NO_TEXTURE
-                                  or (r["kind"] == KIND_IDS["disney"]
-                                      and (r["anisotropic"] != 0.0 or r["disney_textures"][1] != NO_TEXTURE))
-                                  for r in rows)}
+                "anisotropy": bool(rows) and bool(oriented_rows(self.arrays()).any())}
 
 
 # The Disney kind's texture slots: DISNEY_TEXTURED's parameters four to a column, in order (the

@@ -24,7 +24,7 @@ def scene_names() -> list[str]:
 
 
 def load_any(path, options: LoadOptions | None = None):
-    """A scene file (Lantern's .toml, Mitsuba 3's .xml) or a model file (glTF/GLB, OBJ, PLY, STL) as a
+    """A scene file (Lantern's .toml, Mitsuba 3's .xml, pbrt-v4's .pbrt) or a model file (glTF/GLB, OBJ, PLY, STL) as a
     Scene, read under `options` (memory budget, files outside a model's folder, -D parameters;
     default LoadOptions())."""
     from renderer.scene.model_formats import MESH_EXTENSIONS
@@ -33,6 +33,10 @@ def load_any(path, options: LoadOptions | None = None):
         from renderer.scene.mitsuba import load_mitsuba_scene
 
         return load_mitsuba_scene(path, options)
+    if Path(path).name.lower().endswith((".pbrt", ".pbrt.gz")):
+        from renderer.scene.pbrt import load_pbrt_scene
+
+        return load_pbrt_scene(path, options)
     if Path(path).suffix.lower() in MESH_EXTENSIONS:
         from renderer.scene.model_scene import scene_for_model
 

@@ -204,6 +204,16 @@ class MaterialSpec:
     alpha_texture: Optional[TextureSpec] = None
     alpha_v_texture: Optional[TextureSpec] = None
     nonlinear: bool = False  # plastic: Mitsuba's `nonlinear` (the base's colour deepens under the coat)
+    # coated (pbrt-v4's coateddiffuse / coatedconductor): the base ("diffuse": base_color;
+    # "conductor": eta and k, or metal, default copper), the slab's thickness, its medium's albedo
+    # and HG g, the random walks' depth and count, the conductor's perceptual roughness.
+    coat_base: str = "diffuse"
+    coat_thickness: float = 0.01
+    coat_albedo: Vec3 = (0.0, 0.0, 0.0)
+    coat_g: float = 0.0
+    coat_maxdepth: int = 10
+    coat_nsamples: int = 1
+    conductor_roughness: float = 0.0
     sidedness: str = "two_sided"  # "two_sided", "back_black" (Mitsuba's one-sided BSDFs) or "back_culled"
     # Coverage (Mitsuba's mask BSDF): the surface is there with probability opacity (times the
     # opacity texture's first channel where given); 1 is opaque.

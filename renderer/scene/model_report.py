@@ -108,8 +108,9 @@ def device_lines(mesh_scene) -> list[str]:
 
 def scene_report(scene, mesh_scene) -> list[str]:
     """Every model file of a mesh scene, then the scene's device memory."""
-    lines = []
+    lines, seen = [], set()
     for obj in scene.mesh_objects:
-        if obj.kind == "mesh" and obj.file is not None:
+        if obj.kind == "mesh" and obj.file is not None and obj.file not in seen:  # a file's parts: one report
+            seen.add(obj.file)
             lines += model_lines(scene.model_files.load(obj.file), obj.file.name)
     return lines + device_lines(mesh_scene)

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from renderer.materials.kinds import MICROFACET_MODELS, SHARED_ROUGHNESS, SIDEDNESS, kinds_with_param, own_defaults
+from renderer.materials.coat_bases import COAT_BASES
 from renderer.materials.metals import metal_names
 from renderer.film.filter_keys import PIXEL_FILTERS
 from renderer.sampling.names import SAMPLERS
@@ -301,7 +302,7 @@ MATERIAL = Section(
               "diffuse base.", UNIT),
         Field("specular_color", "vec3", (1.0, 1.0, 1.0), "Colour of that specular reflection "
               "(`specularColorFactor`); on a `plastic` its coating's tint, on a `conductor` a tint of its "
-              "Fresnel (both Mitsuba's `specular_reflectance`).", UNIT),
+              "Fresnel, on a `dielectric` its reflection's tint (Mitsuba's `specular_reflectance`).", UNIT),
         Field("anisotropic", "float", 0.0, "`disney`: stretches the specular lobe along the surface's "
               "texture direction u (widths roughness^2 / a and roughness^2 a along u and v, a = sqrt(1 - 0.9 "
               "anisotropic)). Mesh scenes with texture coordinates.", UNIT),
@@ -329,6 +330,18 @@ MATERIAL = Section(
         Field("nonlinear", "bool", False, "A plastic whose base colour deepens under its coating "
               "(Mitsuba's `nonlinear`: the light the coating reflects back to the base is tinted "
               "by it again)."),
+        Field("coat_base", "string", "diffuse", "`coated`: the base under the coat, `diffuse` (reflectance "
+              "`base_color`) or `conductor` (`eta` and `k` or `metal`; copper if none).",
+              choices=tuple(COAT_BASES)),
+        Field("coat_thickness", "float", 0.01, "`coated`: the slab's thickness, in units of its mean free "
+              "path (pbrt's `thickness`).", Range(0.0, 1e6)),
+        Field("coat_albedo", "vec3", (0.0, 0.0, 0.0), "`coated`: single-scattering albedo of the medium in "
+              "the slab; black: no medium, only its transmittance.", UNIT),
+        Field("coat_g", "float", 0.0, "`coated`: Henyey-Greenstein asymmetry of that medium.", Range(-1.0, 1.0)),
+        Field("coat_maxdepth", "int", 10, "`coated`: longest random walk in the slab.", AT_LEAST_ONE),
+        Field("coat_nsamples", "int", 1, "`coated`: random walks per evaluation.", AT_LEAST_ONE),
+        Field("conductor_roughness", "float", 0.0, "`coated` with a conductor base: the conductor's "
+              "perceptual roughness.", UNIT),
         Field("sidedness", "string", "two_sided", "`two_sided`: both sides shade alike; "
               "`back_black`: the back face reflects nothing (Mitsuba's one-sided BSDFs); "
               "`back_culled`: rays pass through the back face (glTF `doubleSided: false`).",

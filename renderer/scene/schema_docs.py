@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from renderer.scene.mitsuba.format_doc import MITSUBA_SECTION
+from renderer.scene.pbrt.format_doc import PBRT_SECTION
 
 from .schema import GENERATORS, MESH_KINDS, MESH_OBJECT, NODE, OPERATORS, PRIMITIVES, SECTIONS
 from .schema_types import VALUE_KINDS, Field, Generator, MeshKind, NodeKind, Rule, Section
@@ -356,7 +357,8 @@ def render_markdown() -> str:
               "in `assets/models/`. An `sdf` scene:", "",
               "```toml", EXAMPLE.rstrip("\n"), "```", "",
               "A `mesh` scene:", "",
-              "```toml", MESH_EXAMPLE.rstrip("\n"), "```", "", MITSUBA_SECTION.rstrip("\n")]
+              "```toml", MESH_EXAMPLE.rstrip("\n"), "```", "", MITSUBA_SECTION.rstrip("\n"),
+              "", PBRT_SECTION.rstrip("\n")]
     return "\n".join(lines) + "\n"
 
 

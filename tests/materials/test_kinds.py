@@ -13,7 +13,8 @@ from renderer.scene.features import Features, features_from
 
 
 def test_ids_are_positions_and_names_unique():
-    assert MATERIAL_KINDS == KIND_NAMES == ("diffuse", "conductor", "dielectric", "principled", "null", "plastic", "disney")
+    assert MATERIAL_KINDS == KIND_NAMES == ("diffuse", "conductor", "dielectric", "principled", "null", "plastic", "disney",
+                                                  "coated")
     assert [KIND_IDS[n] for n in KIND_NAMES] == list(range(len(KINDS)))
     assert len(set(LAYER_NAMES)) == len(LAYERS) and not set(LAYER_NAMES) & set(KIND_NAMES)
     assert all(layer.of in KIND_NAMES for layer in LAYERS)
@@ -32,7 +33,7 @@ def test_flags_are_pbrt_bits():
     for entry in (*KINDS, *LAYERS):
         assert entry.flags and entry.flags & ~sum(bits) == 0, entry.name
     # What photon mapping and light sampling rely on: which kinds can be diffuse, and which refract.
-    assert [k.name for k in KINDS if k.flags & LobeFlags.DIFFUSE] == ["diffuse", "principled", "plastic", "disney"]
+    assert [k.name for k in KINDS if k.flags & LobeFlags.DIFFUSE] == ["diffuse", "principled", "plastic", "disney", "coated"]
     assert [k.name for k in KINDS if k.refracts] == ["dielectric", "principled", "disney"]
     assert kinds.kind("null").flags & LobeFlags.NON_DELTA == 0
 
@@ -47,7 +48,7 @@ def test_scene_format_fields_follow_the_registry():
     for layer in LAYERS:  # a layer's field belongs to its kind, and to kinds that name it as their own
         for p in layer.params:
             assert set(fields[p].only_for) == {layer.of} | {k.name for k in KINDS if p in k.params}, p
-    assert fields["ior"].only_for == ("dielectric", "principled", "plastic", "disney")
+    assert fields["ior"].only_for == ("dielectric", "principled", "plastic", "disney", "coated")
     assert fields["microfacet"].only_for == ("conductor", "dielectric", "plastic")
     assert fields["edge_tint"].only_for == ("conductor",)
     assert fields["base_color"].only_for is None and fields["roughness"].only_for is None

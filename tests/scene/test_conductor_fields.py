@@ -32,9 +32,9 @@ BAD = {
     "k without eta": (conductor("k = [1, 1, 1]\n"), "materials.m: `k` needs `eta`"),
     "negative k": (conductor("eta = [1, 1, 1]\nk = [2, -1, 2]\n"), "materials.m.k[1]: -1 is out of range"),
     "metal on a diffuse material": (scene_text(materials='[materials.m]\nmetal = "Au"\n'),
-                                    "materials.m.metal: only allowed with type 'conductor', not 'diffuse'"),
+                                    "materials.m.metal: only allowed with type 'conductor' or 'coated', not 'diffuse'"),
     "eta on a dielectric": (scene_text(materials='[materials.m]\ntype = "dielectric"\neta = [1, 1, 1]\n'),
-                            "materials.m.eta: only allowed with type 'conductor', not 'dielectric'"),
+                            "materials.m.eta: only allowed with type 'conductor' or 'coated', not 'dielectric'"),
 }
 
 

@@ -11,7 +11,7 @@ from renderer.scene.schema_docs import render_markdown
 from tests.scene.scene_file_helpers import scene_text, write
 
 EXPECTED_ROUGHNESS = {"diffuse": 0.5, "conductor": 0.0, "dielectric": 0.0, "principled": 0.5, "null": 0.5,
-                      "plastic": 0.0, "disney": 0.5}
+                      "plastic": 0.0, "disney": 0.5, "coated": 0.0}
 
 
 def _loaded(tmp_path, body: str):
@@ -29,7 +29,7 @@ def test_glass_and_metal_are_smooth_and_principled_is_not(tmp_path):
     assert _loaded(tmp_path, 'type = "dielectric"\nior = 1.5\n').roughness == 0.0
     assert _loaded(tmp_path, 'type = "conductor"\nmetal = "Au"\n').roughness == 0.0
     assert _loaded(tmp_path, 'type = "principled"\nmetallic = 1\n').roughness == SHARED_ROUGHNESS == 0.5
-    assert own_defaults("roughness") == {"conductor": 0.0, "dielectric": 0.0, "plastic": 0.0}
+    assert own_defaults("roughness") == {"conductor": 0.0, "dielectric": 0.0, "plastic": 0.0, "coated": 0.0}
 
 
 @pytest.mark.parametrize("kind_name", ["conductor", "dielectric", "principled"])
@@ -60,4 +60,4 @@ def test_smooth_defaults_compile_no_roughness_compensation():
 
 def test_the_documentation_gives_the_defaults_per_kind():
     row = next(line for line in render_markdown().splitlines() if line.startswith("| `roughness` |"))
-    assert "`0.0` with `conductor` or `dielectric` or `plastic`; `0.5` with the other types" in row
+    assert "`0.0` with `conductor` or `dielectric` or `plastic` or `coated`; `0.5` with the other types" in row

@@ -408,15 +408,15 @@ BAD_SCENES = {
                           "ground)"),
     # materials
     "material unknown field": (scene_text(materials="[materials.glass]\ntype = \"dielectric\"\niorr = 1.5\n"),
-                               "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, thin, microfacet, roughness_v, "
-                               "sidedness, "
+                               "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, thin, "
+                               "specular_color, microfacet, roughness_v, sidedness, "
                                "opacity, emission, emission_strength, abbe, glass, medium, normal_map, bump_map, bump_scale)"),
     "material unknown type": (scene_text(materials='[materials.m]\ntype = "metal"\n'),
-                              "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null, plastic, disney)"),
+                              "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null, plastic, disney, coated)"),
     "ior on conductor": (scene_text(materials='[materials.m]\ntype = "conductor"\nior = 1.5\n'),
-                         "materials.m.ior: only allowed with type 'dielectric' or 'principled' or 'plastic' or 'disney', not 'conductor'"),
+                         "materials.m.ior: only allowed with type 'dielectric' or 'principled' or 'plastic' or 'disney' or 'coated', not 'conductor'"),
     "ior on default diffuse": (scene_text(materials="[materials.m]\nior = 1.5\n"),
-                               "materials.m.ior: only allowed with type 'dielectric' or 'principled' or 'plastic' or 'disney', not 'diffuse'"),
+                               "materials.m.ior: only allowed with type 'dielectric' or 'principled' or 'plastic' or 'disney' or 'coated', not 'diffuse'"),
     "metallic on diffuse": (scene_text(materials="[materials.m]\nmetallic = 1\n"),
                             "materials.m.metallic: only allowed with type 'principled' or 'disney', not 'diffuse'"),
     "transmission on dielectric": (scene_text(materials='[materials.m]\ntype = "dielectric"\ntransmission = 1\n'),

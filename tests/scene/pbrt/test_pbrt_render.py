@@ -1,0 +1,73 @@
+"""A pbrt-v4 scene rendered: an area light over a diffuse floor, the floor's radiance against the
+form factor of the emitter (a z-test on the image mean at the 1% level, fixed seed)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from renderer.camera import CameraFrame
+from renderer.renderer import Renderer
+
+from tests.scene.pbrt.pbrt_helpers import load
+
+ALPHA = 0.01  # two-sided significance level
+HALF, HEIGHT, ALBEDO, RADIANCE = 10.0, 1.0, 0.5, 2.0
+
+SCENE_OPTIONS = """LookAt 0 0.5 0  0 0 0  0 0 1
+Camera "perspective" "float fov" 2
+Film "rgb" "integer xresolution" 8 "integer yresolution" 8
+Sampler "independent" "integer pixelsamples" 32 "integer seed" 5
+Integrator "path" "integer maxdepth" 1
+PixelFilter "box"
+"""
+# the emitter faces down (its triangles wind clockwise seen from above); the floor faces up
+WORLD = f"""AttributeBegin
+AreaLightSource "diffuse" "rgb L" [{RADIANCE} {RADIANCE} {RADIANCE}]
+Shape "trianglemesh" "point3 P" [-{HALF} {HEIGHT} -{HALF}  {HALF} {HEIGHT} -{HALF}  {HALF} {HEIGHT} {HALF}  -{HALF} {HEIGHT} {HALF}]
+  "integer indices" [0 1 2 0 2 3]
+AttributeEnd
+Material "diffuse" "rgb reflectance" [{ALBEDO} {ALBEDO} {ALBEDO}]
+Shape "bilinearmesh" "point3 P" [-{HALF} 0 -{HALF}  -{HALF} 0 {HALF}  {HALF} 0 -{HALF}  {HALF} 0 {HALF}]
+"""
+
+
+def corner_form_factor(a: float, b: float, c: float) -> float:
+    """From a point to a parallel a x b rectangle at distance c whose corner is above it."""
+    x, y = a / c, b / c
+    return (x / math.sqrt(1 + x * x) * math.atan(y / math.sqrt(1 + x * x))
+            + y / math.sqrt(1 + y * y) * math.atan(x / math.sqrt(1 + y * y))) / (2 * math.pi)
+
+
+def test_area_light_lights_a_diffuse_floor(tmp_path):
+    scene, _ = load(tmp_path, WORLD, options=SCENE_OPTIONS)
+    assert scene.render.max_depth == 2 and scene.render.seed == 5
+    renderer = Renderer(scene)
+    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp)
+    # radiance = albedo / pi * irradiance, irradiance = pi L (4 corner form factors)
+    expected = ALBEDO * RADIANCE * 4.0 * corner_form_factor(HALF, HALF, HEIGHT)
+    mean = renderer.film.mean_image()[..., 1]
+    var = renderer.film.variance_of_mean_image()[..., 1]
+    z = (mean.mean() - expected) / np.sqrt(var.sum() / mean.size ** 2)
+    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), expected, z)
+    assert np.sqrt(var.sum()) / mean.size < 0.02 * expected  # the test can tell a 6% error apart
+
+
+@pytest.mark.parametrize("scale, side", [("Scale -1 1 1\n", "right"), ("", "left")])
+def test_marked_object_lands_on_pbrts_side_of_the_image(tmp_path, scale, side):
+    """An emitter at world +x: on the right under `Scale -1 1 1`, on the left under a bare LookAt
+    (pbrt's camera x is up x direction)."""
+    options = (scale + 'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective" "float fov" 60\n'
+               'Film "rgb" "integer xresolution" 16 "integer yresolution" 8\n'
+               'Sampler "independent" "integer pixelsamples" 4\nIntegrator "path" "integer maxdepth" 0\n'
+               'PixelFilter "box"\n')  # samples stay in their pixel: the halves are apart
+    world = ('AreaLightSource "diffuse" "rgb L" [1 1 1]\n'
+             'Shape "trianglemesh" "point3 P" [0.5 -1.5 0  3 -1.5 0  3 1.5 0  0.5 1.5 0] "integer indices" [0 1 2 0 2 3]\n')
+    scene, _ = load(tmp_path, world, options=options)
+    renderer = Renderer(scene)
+    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp)
+    image = renderer.film.mean_image()[..., 1]
+    left, right = image[:, :8].sum(), image[:, 8:].sum()
+    assert (right > 0 and left == 0) if side == "right" else (left > 0 and right == 0), (left, right)
