@@ -19,7 +19,7 @@ from renderer.output.atomic_write import atomic_output
 from renderer.scene.errors import SceneError
 from renderer.scene.limits import MemoryBudget
 
-ENVIRONMENT_EXTENSIONS = (".exr", ".hdr")
+ENVIRONMENT_EXTENSIONS = (".exr", ".hdr", ".pfm")
 # Bytes per pixel while an environment map is read, checked against the memory budget from the
 # header's size before any pixel is decoded: the decoder's channels (up to 4 of float32), the
 # RGB image (float32) and its flipped or stacked copy, and the finiteness and sign masks.
@@ -50,6 +50,8 @@ def read_environment(path: str | os.PathLike, budget: Optional[MemoryBudget] = N
         image = _read_exr_rgb(name, budget)
     elif extension == ".hdr":
         image = _read_radiance_hdr(name, budget)
+    elif extension == ".pfm":
+        image = _read_pfm(name, budget)
     else:
         raise SceneError(
             name,
@@ -232,6 +234,28 @@ def _read_radiance_hdr(path: str | os.PathLike, budget: MemoryBudget) -> np.ndar
     if bgr is None or bgr.ndim != 3 or bgr.shape[2] != 3 or bgr.size == 0:
         raise SceneError(path, "cannot read Radiance HDR file (corrupt or not RGBE)")
     return np.ascontiguousarray(bgr[:, :, ::-1], dtype=np.float32)
+
+
+def _read_pfm(path: str | os.PathLike, budget: MemoryBudget) -> np.ndarray:
+    """A portable float map (pbrt's and Tungsten's scenes ship their maps so): its header read here
+    for the budget, its pixels by OpenCV (which turns them top row first)."""
+    import cv2
+
+    with open(path, "rb") as f:
+        header = f.read(256).split(maxsplit=3)
+    try:
+        kind, width, height = header[0], int(header[1]), int(header[2])
+    except (IndexError, ValueError):
+        raise SceneError(path, "cannot read PFM file (no 'PF' header with a width and height)") from None
+    if kind not in (b"PF", b"Pf") or width <= 0 or height <= 0:
+        raise SceneError(path, "cannot read PFM file (no 'PF' header with a width and height)")
+    _check_pixels(path, budget, width, height, "PFM map", _READ_BYTES_PER_PIXEL)
+    image = cv2.imread(os.fspath(path), cv2.IMREAD_UNCHANGED)
+    if image is None or image.shape[:2] != (height, width):
+        raise SceneError(path, "cannot read PFM file (truncated or corrupt)")
+    if image.ndim == 2:  # "Pf": one grey channel
+        image = np.repeat(image[:, :, None], 3, axis=2)
+    return np.ascontiguousarray(image[:, :, 2::-1], dtype=np.float32)
 
 
 def _one_line(error: Exception) -> str:

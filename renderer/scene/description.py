@@ -460,6 +460,10 @@ class MeshObject:
     flip_v: bool = False
     part: Optional[str] = None
     vertex_colors: bool = True
+    # A model file that does not read (malformed, nothing drawable) is left out with one warning
+    # instead of stopping the scene: set by readers of formats whose scenes name many mesh files
+    # (pbrt-v4), where one bad file should not refuse the rest.
+    skip_unreadable: bool = False
 
     def matrix(self) -> np.ndarray:
         """The 4x4 object-to-world matrix."""

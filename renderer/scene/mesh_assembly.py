@@ -140,7 +140,13 @@ class _Assembler:
         return self.material_ids[name]
 
     def add_asset(self, obj, index):
-        asset = self.scene.model_files.load(obj.file)
+        try:
+            asset = self.scene.model_files.load(obj.file)
+        except SceneError as error:
+            if not obj.skip_unreadable:
+                raise
+            warnings.warn(MeshWarning(f"{error}: the shape is left out"), stacklevel=2)
+            return
         if obj.material is not None:
             mats = [self.material(obj.material, f"objects[{index}]")] * max(1, len(asset.materials))
         else:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import fields
 
+from renderer.scene.errors import SceneError
 from renderer.scene.model_formats.gltf import SUPPORTED_GLTF_EXTENSIONS
 from renderer.scene.mesh_model import MeshAsset, PbrMaterial
 
@@ -112,5 +113,12 @@ def scene_report(scene, mesh_scene) -> list[str]:
     for obj in scene.mesh_objects:
         if obj.kind == "mesh" and obj.file is not None and obj.file not in seen:  # a file's parts: one report
             seen.add(obj.file)
-            lines += model_lines(scene.model_files.load(obj.file), obj.file.name)
+            try:
+                asset = scene.model_files.load(obj.file)
+            except SceneError:
+                if not obj.skip_unreadable:
+                    raise
+                lines.append(f"model:       {obj.file.name}  (left out: it does not read)")
+                continue
+            lines += model_lines(asset, obj.file.name)
     return lines + device_lines(mesh_scene)

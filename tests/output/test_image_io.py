@@ -161,3 +161,17 @@ def test_path_is_reported_as_given(tmp_path, monkeypatch):
     with pytest.raises(SceneError) as error:
         read_environment("missing.hdr")
     assert str(error.value).startswith("missing.hdr: ")
+
+
+@pytest.mark.parametrize("kind, channels", [(b"PF", 3), (b"Pf", 1)])
+def test_a_pfm_map_reads_top_row_first(tmp_path, kind, channels):
+    """A portable float map (its rows stored bottom to top, little-endian for a negative scale)
+    reads as the image itself, a grey one as three equal channels; a file without its header is
+    one error naming it."""
+    image = np.random.default_rng(2).random((3, 5, channels)).astype(np.float32)
+    path = tmp_path / "map.pfm"
+    path.write_bytes(kind + b"\n5 3\n-1.0\n" + image[::-1].astype("<f4").tobytes())
+    assert np.array_equal(read_environment(path), np.repeat(image, 3 // channels, axis=2))
+    (tmp_path / "bad.pfm").write_bytes(b"P6\n1 1\n255\n\0\0\0")
+    with pytest.raises(SceneError, match="bad.pfm: cannot read PFM file"):
+        read_environment(tmp_path / "bad.pfm")

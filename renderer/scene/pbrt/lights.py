@@ -131,8 +131,8 @@ def image_environment(d: Directive, mirror: np.ndarray | None, budget=None) -> E
         warn(d, "illuminance is not supported: the map's own values times scale are used")
     warn_unused(d)
     path = resolve(p.find("filename").token, name)
-    if path.suffix.lower() not in (".exr", ".hdr"):
-        warn(d, f"{name}: only .exr and .hdr maps are supported: the environment is black")
+    if path.suffix.lower() not in (".exr", ".hdr", ".pfm"):
+        warn(d, f"{name}: only .exr, .hdr and .pfm maps are supported: the environment is black")
         return BLACK
     if not path.is_file():
         warn(d, f"{name}: file not found (looked for {path}): the environment is black")

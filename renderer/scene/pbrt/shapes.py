@@ -82,7 +82,7 @@ def shape_objects(d: Directive, material: str, files) -> list[tuple[MeshObject, 
                                       flip_normals=flip, vertex_colors=False))
         else:
             objects.append(MeshObject(kind="mesh", file=path, material=material, flip_normals=flip,
-                                      vertex_colors=False))
+                                      vertex_colors=False, skip_unreadable=True))
     elif t == "sphere":
         radius = p.float("radius", 1.0)
         zmin, zmax, phimax = p.float("zmin", -radius), p.float("zmax", radius), p.float("phimax", 360.0)

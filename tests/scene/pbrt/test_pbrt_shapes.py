@@ -58,6 +58,22 @@ def test_missing_ply_warns_and_the_rest_renders(tmp_path):
     assert 'line 5: Shape "plymesh": gone.ply: ' in messages[0] and "left out" in messages[0]
 
 
+def test_an_unreadable_ply_is_left_out_with_a_warning_and_the_rest_renders(tmp_path):
+    """One malformed mesh of many (here: every triangle degenerate) leaves its shape out, with a
+    warning naming the file, where a model file given alone stops with an error."""
+    import warnings
+
+    flat = trimesh.Trimesh(vertices=[[0, 0, 0], [1, 0, 0], [2, 0, 0]], faces=[[0, 1, 2]], process=False)
+    (tmp_path / "flat.ply").write_bytes(trimesh.exchange.ply.export_ply(flat))
+    scene, _ = load(tmp_path, 'Shape "plymesh" "string filename" "flat.ply"\nShape "sphere"\n')
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assembly = assemble(scene)
+    messages = [str(w.message) for w in caught]
+    assert any("flat.ply" in m and "the shape is left out" in m for m in messages), messages
+    assert len(assembly.data.spheres) == 1  # the sphere is there
+
+
 def test_sphere_disk_cylinder(tmp_path):
     scene, messages = load(tmp_path, 'Shape "sphere" "float radius" 2 "float zmax" 1\n'
                                      'Scale 1 2 1\nShape "sphere"\nShape "disk" "float radius" 3 "float height" 1\n'
