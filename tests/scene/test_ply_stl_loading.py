@@ -52,6 +52,22 @@ def test_ply_vertex_colours_normals_and_quads():
     assert (np.einsum("ij,ij->i", n, face_centres - centre) > 0).all()
 
 
+def test_a_hard_edge_keeps_its_normals_beside_per_vertex_texture_coordinates(tmp_path):
+    """Two faces meeting at a crease store their shared corners twice, with the same position and
+    texture coordinate but each face's normal: every vertex keeps its own normal (a parser that
+    merges such vertices lost the crease and left the normals out of step with the positions)."""
+    rows = [(0, 0, 0, 0, 0, 1, 0, 0), (1, 0, 0, 0, 0, 1, 1, 0), (0, 1, 0, 0, 0, 1, 0, 1),
+            (0, 0, 0, 0, 1, 0, 0, 0), (1, 0, 0, 0, 1, 0, 1, 0), (0, 0, 1, 0, 1, 0, 0, 1)]
+    header = ("ply\nformat ascii 1.0\nelement vertex 6\n" + "".join(f"property float {p}\n" for p in
+              ("x", "y", "z", "nx", "ny", "nz", "u", "v")) + "element face 2\nproperty list uchar int vertex_indices\n"
+              "end_header\n")
+    body = "".join(" ".join(str(v) for v in r) + "\n" for r in rows) + "3 0 1 2\n3 3 5 4\n"
+    (tmp_path / "crease.ply").write_text(header + body)
+    mesh = load_mesh_asset(tmp_path / "crease.ply").meshes[0]
+    assert len(mesh.positions) == len(mesh.normals) == 6
+    assert mesh.normals[0].tolist() == [0, 0, 1] and mesh.normals[3].tolist() == [0, 1, 0]
+
+
 def test_stl_loads(tmp_path):
     import trimesh
 

@@ -43,8 +43,19 @@ def read_ply(b: AssetBuilder) -> None:
     from trimesh.exchange.ply import load_ply
 
     b.check_peak("parsing the PLY file", b.file.stat().st_size * TRIMESH_PARSE_BYTES_PER_BYTE)
-    with open(b.file, "rb") as f:
-        kwargs = load_ply(f, fix_texture=True, skip_materials=True)
+
+    def parsed(fix_texture: bool) -> dict:
+        with open(b.file, "rb") as f:
+            return load_ply(f, fix_texture=fix_texture, skip_materials=True)
+
+    # Per-vertex attributes as the file has them. trimesh's fix_texture re-indexes vertices for
+    # texture coordinates given per face; for per-vertex ones it merges vertices that differ only
+    # in their normals and keeps the normals unmerged (a hard edge lost, the arrays out of step), so
+    # it is used only where the file's coordinates are per face.
+    kwargs = parsed(False)
+    uv = getattr(kwargs.get("visual"), "uv", None)
+    if uv is not None and len(uv) != len(kwargs.get("vertices", ())):
+        kwargs = parsed(True)
     faces = kwargs.get("faces")
     vertices = kwargs.get("vertices")
     if faces is None or vertices is None or len(faces) == 0:
@@ -67,8 +78,10 @@ def read_ply(b: AssetBuilder) -> None:
                 b.materials[material] = dataclasses.replace(
                     b.materials[material], base_color_texture=TextureRef(texture=index),
                     base_color_factor=(1.0, 1.0, 1.0, 1.0))
-    b.add_mesh("mesh", vertices, faces, material=material, normals=kwargs.get("vertex_normals"),
-               uv0=uv, colors=colors, name=b.file.stem)
+    normals = kwargs.get("vertex_normals")
+    if normals is not None and len(normals) != len(vertices):  # re-indexed above: the file's normals no longer fit
+        normals = None
+    b.add_mesh("mesh", vertices, faces, material=material, normals=normals, uv0=uv, colors=colors, name=b.file.stem)
 
 
 def read_stl(b: AssetBuilder) -> None:
