@@ -116,7 +116,11 @@ def render_scene(name: str, path: Path, reference_path: Path | None, seconds: fl
     reference = None
     if reference_path is not None:
         reference = read_exr(reference_path)[..., :3].astype(np.float64)
-        ref_mean = reference.mean(axis=(0, 1))
+        finite = np.isfinite(reference).all(axis=-1)
+        if not finite.all():  # (water-caustic's reference holds an infinite pixel): left out of its mean
+            row["reference_non_finite_pixels"] = int(np.count_nonzero(~finite))
+            reference = np.where(finite[..., None], reference, 0.0)
+        ref_mean = reference[finite].mean(axis=0)
         row["reference_mean_rgb"] = [float(v) for v in ref_mean]
         row["mean_ratio_rgb"] = [float(a / b) if b > 0 else None for a, b in zip(image.mean(axis=(0, 1)), ref_mean)]
         if name in MATCHED:
