@@ -27,6 +27,7 @@ from renderer.materials import microfacet as mf
 from renderer.materials.coat_bases import COAT_BASES
 from renderer.materials.kinds import LobeFlags
 from renderer.materials.lobes import BsdfSample, invalid_sample
+from renderer.media.phase import hg_eval
 from renderer.sampling.rng import pcg_hash, uniform
 from renderer.sampling.warps import INV_PI, PI, cosine_hemisphere, orthonormal_basis
 
@@ -83,12 +84,7 @@ def _tr_sample(w, ax, ay, u):
 
 @ti.func
 def _fr_dielectric(cos_i, eta):
-    c = ti.math.clamp(cos_i, -1.0, 1.0)
-    e = eta
-    if c < 0.0:
-        e = 1.0 / eta
-        c = -c
-    f, _ = mf.fresnel_dielectric(c, e)
+    f, _, _, _ = mf.fresnel_dielectric_either_side(ti.math.clamp(cos_i, -1.0, 1.0), eta)
     return f
 
 
@@ -305,15 +301,16 @@ def _tr(dz, w):
 
 @ti.func
 def hg(cos_theta, g):
-    gc = ti.math.clamp(g, -0.99, 0.99)
-    denom = 1.0 + gc * gc + 2.0 * gc * cos_theta
-    return _INV_4PI * (1.0 - gc * gc) / (denom * ti.sqrt(ti.max(denom, 0.0)))
+    """The media's Henyey-Greenstein (renderer/media/phase.py, pbrt's convention) with pbrt's clamp of
+    g for layered BSDFs, 0.99."""
+    return hg_eval(ti.math.clamp(g, -0.99, 0.99), cos_theta)
 
 
 @ti.func
 def _hg_sample(wo, g, u):
     """pbrt's SampleHenyeyGreenstein: wi about wo, density hg(wo.wi) (g > 0 scatters forward, wi
-    near -wo)."""
+    near -wo). Not phase.hg_sample: the same density, but pbrt's inversion and azimuth frame, so that
+    the walk draws pbrt's directions from the same numbers (tests/materials/coated_reference.py)."""
     gc = ti.math.clamp(g, -0.99, 0.99)
     cos_t = 1.0 - 2.0 * u.x
     if ti.abs(gc) >= 1e-3:

@@ -50,26 +50,6 @@ def _mitsuba_frame(v, entering):
 
 
 @ti.func
-def _fresnel(cos_i, eta):
-    """Mitsuba's dielectric Fresnel for either side: (F, signed cos_t, eta_it, eta_ti); cos_i < 0
-    is from inside."""
-    outside = cos_i >= 0.0
-    eta_it = eta if outside else 1.0 / eta
-    eta_ti = 1.0 / eta if outside else eta
-    cos_t_sqr = 1.0 - (1.0 - cos_i * cos_i) * (eta_ti * eta_ti)
-    ci = ti.abs(cos_i)
-    ct = ti.sqrt(ti.max(cos_t_sqr, 0.0))
-    r = 1.0
-    if eta == 1.0:
-        r = 0.0
-    elif ci > 0.0:
-        a_s = (ci - eta_it * ct) / (ci + eta_it * ct)
-        a_p = (ct - eta_it * ci) / (ct + eta_it * ci)
-        r = 0.5 * (a_s * a_s + a_p * a_p)
-    return r, (-ct if cos_i >= 0.0 else ct), eta_it, eta_ti
-
-
-@ti.func
 def _refract(wi, m, cos_t, eta_ti):
     return m * (wi.dot(m) * eta_ti + cos_t) - wi * eta_ti
 
@@ -231,7 +211,7 @@ def _thick(mat, wi, wo):
         wh = _mulsign(wh, wh.z)
         ax, ay = _widths(mat.anisotropic, mat.roughness)
         cos_ih, cos_oh = wi.dot(wh), wo.dot(wh)
-        f, _, _, _ = _fresnel(cos_ih, eta)
+        f, _, _, _ = mf.fresnel_dielectric_either_side(cos_ih, eta)
         reflection_ok = reflect and _compatible(wh, wi, wo, cos_i, True)
         refraction_ok = refract and _compatible(wh, wi, wo, cos_i, False)
         d = _ggx_d(wh, ax, ay)
@@ -288,7 +268,7 @@ def _thick_direction(mat, wi, u1, u2):
     front = cos_i > 0.0
     ax, ay = _widths(mat.anisotropic, mat.roughness)
     m = mf.sample_visible_normal(_mulsign(wi, cos_i), ax, u2, ay)
-    f, cos_t, _, eta_ti = _fresnel(wi.dot(m), mat.ior)
+    f, cos_t, _, eta_ti = mf.fresnel_dielectric_either_side(wi.dot(m), mat.ior)
     p_refract = _refraction_probability(spec_trans, btdf, f, front)
     p_clearcoat = 0.25 * clearcoat if front else 0.0
     p_diffuse = brdf if front else 0.0
@@ -333,7 +313,7 @@ def _thin(mat, wi_any, wo_any):
         refraction_ok = refract and _compatible(wh, wi, wo, wi.z, False)
         ax, ay = _widths(mat.anisotropic, mat.roughness)
         tx, ty = _widths(mat.anisotropic, (0.65 * eta - 0.35) * mat.roughness)
-        f, _, _, _ = _fresnel(wi.dot(wh), eta)
+        f, _, _, _ = mf.fresnel_dielectric_either_side(wi.dot(wh), eta)
         if spec_trans > 0.0 and reflection_ok:
             tinted = _schlick(_hue(mat.base_color) * _r0(eta), wi.dot(wh), eta)
             fresnel = ti.math.mix(vec3(f), tinted, mat.spec_tint)  # Mitsuba's thin_fresnel

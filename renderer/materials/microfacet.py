@@ -319,6 +319,27 @@ def fresnel_dielectric(cos_i, eta):
 
 
 @ti.func
+def fresnel_dielectric_either_side(cos_i, eta):
+    """fresnel_dielectric for light from either side, as Mitsuba's fresnel(): cos_i < 0 is from
+    inside (the index then inverted). Returns (F, signed cos_t, eta_it, eta_ti): cos_t on the far
+    side (negative for cos_i > 0), eta_it = n_t / n_i and eta_ti its inverse."""
+    outside = cos_i >= 0.0
+    eta_it = eta if outside else 1.0 / eta
+    eta_ti = 1.0 / eta if outside else eta
+    cos_t_sqr = 1.0 - (1.0 - cos_i * cos_i) * (eta_ti * eta_ti)
+    ci = ti.abs(cos_i)
+    ct = ti.sqrt(ti.max(cos_t_sqr, 0.0))
+    r = 1.0
+    if eta == 1.0:
+        r = 0.0
+    elif ci > 0.0:
+        a_s = (ci - eta_it * ct) / (ci + eta_it * ct)
+        a_p = (ct - eta_it * ci) / (ct + eta_it * ci)
+        r = 0.5 * (a_s * a_s + a_p * a_p)
+    return r, (-ct if cos_i >= 0.0 else ct), eta_it, eta_ti
+
+
+@ti.func
 def _fresnel_conductor_channel(c, s2, eta, k):
     """One channel of fresnel_conductor: c = cos_i, s2 = sin_i^2."""
     # u = sqrt((eta + i k)^2 - sin^2) = a + i b, the square root taken from whichever of a, b is

@@ -51,26 +51,37 @@ def test_what_mitsuba_cannot_express_is_one_line(tmp_path, scene, problem):
     assert proc.returncode == 2 and problem in proc.stderr and "Traceback" not in proc.stderr
 
 
+def checker(name: str, color0, color1, scale=(3, 2), kind: str = "float") -> str:
+    """A Mitsuba checkerboard texture on parameter `name` (colours as numbers, or "r, g, b" with kind "rgb")."""
+    return (f'<texture name="{name}" type="checkerboard"><transform name="to_uv"><scale x="{scale[0]}" y="{scale[1]}"/>'
+            f'</transform><{kind} name="color0" value="{color0}"/><{kind} name="color1" value="{color1}"/></texture>')
+
+
+def assert_agrees(tmp_path, name: str, shapes: str, envmap: str = "sky.exr", max_depth: int = 2, size=(20, 20),
+                  fov: int = 30, origin: str = "0,1.5,4") -> None:
+    """`compare` on a Mitsuba scene of `shapes` under an environment map, seen by a box-filtered
+    camera aimed at the origin: Lantern agrees with Mitsuba's reference by the per-pixel rule."""
+    scene = tmp_path / f"{name}.xml"
+    scene.write_text(f'''<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="{max_depth}"/></integrator>
+        <sensor type="perspective"><float name="fov" value="{fov}"/>
+            <transform name="to_world"><lookat origin="{origin}" target="0,0,0" up="0,1,0"/></transform>
+            <film type="hdrfilm"><rfilter type="box"/><integer name="width" value="{size[0]}"/>
+            <integer name="height" value="{size[1]}"/></film></sensor>
+        <emitter type="envmap"><string name="filename" value="{ROOT / 'assets' / 'envmaps' / envmap}"/></emitter>
+        {shapes}</scene>''')
+    proc = compare(tmp_path, str(scene))
+    assert proc.returncode == 0, proc.stderr
+    assert "Lantern vs Mitsuba's reference: agree" in proc.stdout, proc.stdout
+
+
 def test_textured_anisotropic_roughness_agrees_with_mitsuba(tmp_path):
     """A Beckmann conductor sphere whose alpha_u and alpha_v are checkerboards (Mitsuba's float
     evaluation of a checkerboard takes the other parity than its colour evaluation) under a sky:
     Lantern's anisotropic lobes, oriented along the sphere's dp/du, and its textured widths agree
     with Mitsuba's render by the per-pixel rule."""
-    checker = ('<texture name="{0}" type="checkerboard"><transform name="to_uv"><scale x="3" y="2"/></transform>'
-               '<float name="color0" value="{1}"/><float name="color1" value="{2}"/></texture>')
-    scene = tmp_path / "aniso.xml"
-    scene.write_text(f'''<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="2"/></integrator>
-        <sensor type="perspective"><float name="fov" value="30"/>
-            <transform name="to_world"><lookat origin="0,1.5,4" target="0,0,0" up="0,1,0"/></transform>
-            <film type="hdrfilm"><rfilter type="box"/><integer name="width" value="20"/>
-            <integer name="height" value="20"/></film></sensor>
-        <emitter type="envmap"><string name="filename" value="{ROOT / 'assets' / 'envmaps' / 'sky.exr'}"/></emitter>
-        <shape type="sphere"><bsdf type="roughconductor"><string name="distribution" value="beckmann"/>
-            {checker.format("alpha_u", 0.02, 0.4)}{checker.format("alpha_v", 0.4, 0.02)}
-            <string name="material" value="Au"/></bsdf></shape></scene>''')
-    proc = compare(tmp_path, str(scene))
-    assert proc.returncode == 0, proc.stderr
-    assert "Lantern vs Mitsuba's reference: agree" in proc.stdout, proc.stdout
+    assert_agrees(tmp_path, "aniso", f'''<shape type="sphere"><bsdf type="roughconductor">
+        <string name="distribution" value="beckmann"/>{checker("alpha_u", 0.02, 0.4)}{checker("alpha_v", 0.4, 0.02)}
+        <string name="material" value="Au"/></bsdf></shape>''')
 
 
 @pytest.mark.parametrize("bsdf", [
@@ -86,75 +97,44 @@ def test_textured_principled_agrees_with_mitsuba(tmp_path, bsdf):
     a sky with a sun (and a point light) the rare paths that reach the small bright source through
     the rough transmission gave both renderers heavy tails, which failed 3 or 4 of the 1,200
     channels in about one short run in four (a 4,096-spp run agrees everywhere)."""
-    checker = ('<texture name="{0}" type="checkerboard"><transform name="to_uv"><scale x="4" y="3"/></transform>'
-               '<float name="color0" value="{1}"/><float name="color1" value="{2}"/></texture>')
-    body = bsdf.format(anisotropic=checker.format("anisotropic", 0.1, 0.8), spec_trans=checker.format("spec_trans", 0.7, 0.1))
-    scene = tmp_path / "disney.xml"
-    scene.write_text(f'''<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="4"/></integrator>
-        <sensor type="perspective"><float name="fov" value="30"/>
-            <transform name="to_world"><lookat origin="0,1.5,4" target="0,0,0" up="0,1,0"/></transform>
-            <film type="hdrfilm"><rfilter type="box"/><integer name="width" value="20"/>
-            <integer name="height" value="20"/></film></sensor>
-        <emitter type="envmap"><string name="filename" value="{ROOT / 'assets' / 'envmaps' / 'venice.exr'}"/></emitter>
-        <shape type="sphere">{body}</shape></scene>''')
-    proc = compare(tmp_path, str(scene))
-    assert proc.returncode == 0, proc.stderr
-    assert "Lantern vs Mitsuba's reference: agree" in proc.stdout, proc.stdout
+    body = bsdf.format(anisotropic=checker("anisotropic", 0.1, 0.8, (4, 3)),
+                       spec_trans=checker("spec_trans", 0.7, 0.1, (4, 3)))
+    assert_agrees(tmp_path, "disney", f'<shape type="sphere">{body}</shape>', envmap="venice.exr", max_depth=4)
 
 
 def test_a_textured_blend_of_a_metal_and_a_plastic_agrees_with_mitsuba(tmp_path):
     """Mitsuba's blendbsdf of a rough gold and a rough plastic, its weight a checkerboard, on a
     sphere under a sky: Lantern's mix (one of the two per shading point, the second with the
     weight's probability) agrees with Mitsuba's weighted sum by the per-pixel rule."""
-    scene = tmp_path / "blend.xml"
-    scene.write_text(f'''<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="3"/></integrator>
-        <sensor type="perspective"><float name="fov" value="30"/>
-            <transform name="to_world"><lookat origin="0,1.5,4" target="0,0,0" up="0,1,0"/></transform>
-            <film type="hdrfilm"><rfilter type="box"/><integer name="width" value="20"/>
-            <integer name="height" value="20"/></film></sensor>
-        <emitter type="envmap"><string name="filename" value="{ROOT / 'assets' / 'envmaps' / 'sky.exr'}"/></emitter>
-        <shape type="sphere"><bsdf type="blendbsdf">
-            <texture name="weight" type="checkerboard"><transform name="to_uv"><scale x="4" y="3"/></transform>
-                <float name="color0" value="0.2"/><float name="color1" value="0.9"/></texture>
+    assert_agrees(tmp_path, "blend", f'''<shape type="sphere"><bsdf type="blendbsdf">{checker("weight", 0.2, 0.9, (4, 3))}
             <bsdf type="roughconductor"><string name="material" value="Au"/><string name="distribution" value="ggx"/>
                 <float name="alpha" value="0.15"/></bsdf>
             <bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.1, 0.3, 0.7"/>
-                <float name="alpha" value="0.2"/></bsdf></bsdf></shape></scene>''')
-    proc = compare(tmp_path, str(scene))
-    assert proc.returncode == 0, proc.stderr
-    assert "Lantern vs Mitsuba's reference: agree" in proc.stdout, proc.stdout
+                <float name="alpha" value="0.2"/></bsdf></bsdf></shape>''', max_depth=3)
 
 
 def test_textured_specular_tints_agree_with_mitsuba(tmp_path):
     """Mitsuba's specular_reflectance as a checkerboard on a rough gold, as a colour on a tinted
     mirror, on a plastic's coating and on a rough glass, whose specular_transmittance is a
     checkerboard, and a conductor whose eta and k are checkerboards (Mitsuba's checkerboard holds
-    values up to 1, so a low index): the tints and the textured index agree with Mitsuba's render by the per-pixel rule."""
-    checker = ('<texture name="{0}" type="checkerboard"><transform name="to_uv"><scale x="4" y="3"/></transform>'
-               '<rgb name="color0" value="{1}"/><rgb name="color1" value="{2}"/></texture>')
+    values up to 1, so a low index): the tints and the textured index agree with Mitsuba's render
+    by the per-pixel rule."""
+    def rgb_checker(name, color0, color1):
+        return checker(name, color0, color1, (4, 3), "rgb")
+
     sphere = '<shape type="sphere"><point name="center" x="{0}" y="{1}" z="0"/><float name="radius" value="0.33"/>{2}</shape>'
     bsdfs = [
         f'<bsdf type="roughconductor"><string name="material" value="Au"/><float name="alpha" value="0.1"/>'
-        f'{checker.format("specular_reflectance", "0.2, 0.9, 0.3", "1, 1, 1")}</bsdf>',
+        f'{rgb_checker("specular_reflectance", "0.2, 0.9, 0.3", "1, 1, 1")}</bsdf>',
         '<bsdf type="conductor"><rgb name="specular_reflectance" value="0.9, 0.4, 0.2"/></bsdf>',
         f'<bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.1, 0.1, 0.4"/>'
-        f'{checker.format("specular_reflectance", "1, 0.2, 0.2", "0.5, 0.5, 0.5")}</bsdf>',
+        f'{rgb_checker("specular_reflectance", "1, 0.2, 0.2", "0.5, 0.5, 0.5")}</bsdf>',
         f'<bsdf type="roughdielectric"><float name="alpha" value="0.1"/>'
-        f'{checker.format("specular_transmittance", "0.9, 0.3, 0.3", "0.3, 0.3, 0.9")}'
+        f'{rgb_checker("specular_transmittance", "0.9, 0.3, 0.3", "0.3, 0.3, 0.9")}'
         f'<rgb name="specular_reflectance" value="0.2, 1, 0.2"/></bsdf>',
-        f'<bsdf type="roughconductor"><float name="alpha" value="0.05"/>{checker.format("eta", "0.2, 0.9, 0.6", "0.5, 0.5, 0.5")}'
-        f'{checker.format("k", "0.9, 0.6, 0.4", "1, 1, 1")}</bsdf>',
+        f'<bsdf type="roughconductor"><float name="alpha" value="0.05"/>{rgb_checker("eta", "0.2, 0.9, 0.6", "0.5, 0.5, 0.5")}'
+        f'{rgb_checker("k", "0.9, 0.6, 0.4", "1, 1, 1")}</bsdf>',
     ]
     centres = [(x, y) for y in (0.4, -0.4) for x in (-0.72, 0.0, 0.72)]
-    shapes = "".join(sphere.format(x, y, b) for (x, y), b in zip(centres, bsdfs))
-    scene = tmp_path / "tints.xml"
-    scene.write_text(f'''<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="4"/></integrator>
-        <sensor type="perspective"><float name="fov" value="35"/>
-            <transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
-            <film type="hdrfilm"><rfilter type="box"/><integer name="width" value="30"/>
-            <integer name="height" value="20"/></film></sensor>
-        <emitter type="envmap"><string name="filename" value="{ROOT / 'assets' / 'envmaps' / 'sky.exr'}"/></emitter>
-        {shapes}</scene>''')
-    proc = compare(tmp_path, str(scene))
-    assert proc.returncode == 0, proc.stderr
-    assert "Lantern vs Mitsuba's reference: agree" in proc.stdout, proc.stdout
+    assert_agrees(tmp_path, "tints", "".join(sphere.format(x, y, b) for (x, y), b in zip(centres, bsdfs)),
+                  max_depth=4, size=(30, 20), fov=35, origin="0,0,4")

@@ -139,6 +139,18 @@ class BsdfBench:
         return lambda d: self.eval(mat, normal, wo, d)[1].astype(np.float64)
 
 
+class FixedBench(BsdfBench):
+    """A bench whose table holds exactly the given materials, built with them (kinds whose rows
+    carry tables made at the table's construction, as rough plastics, need it)."""
+
+    def __init__(self, specs, features: Features):
+        self.capacity = len(specs)
+        self.rows = MaterialRows()
+        self.ids = {spec: self.rows.add_spec(spec) for spec in specs}
+        self.table = MaterialTable(self.rows)
+        self.bsdf = Bsdf(self.table, features)
+
+
 def uniforms(n: int, seed: int) -> np.ndarray:
     """(n, 3) float32 uniforms in [0, 1) from a fixed seed."""
     return np.random.default_rng(seed).random((n, 3), dtype=np.float32)

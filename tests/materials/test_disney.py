@@ -12,11 +12,10 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from renderer.materials.bsdf import Bsdf
-from renderer.materials.table import MaterialRows, MaterialTable
+from renderer.materials.table import MaterialRows
 from renderer.scene.description import MaterialSpec
 from renderer.scene.features import Features
-from tests.materials.bsdf_kernels import BsdfBench, chi2_adaptive, direction, frame_about, uniforms
+from tests.materials.bsdf_kernels import FixedBench, chi2_adaptive, direction, frame_about, uniforms
 from tests.stats.chi2 import sidak_alpha
 
 ALPHA = 0.01
@@ -51,18 +50,9 @@ NUM_TESTS = len(SAMPLING) + len(FURNACE)
 FEATURES = Features(material_kinds=frozenset({"disney"}), has_anisotropy=True, has_thin=True)
 
 
-class DisneyBench(BsdfBench):
-    def __init__(self, specs):
-        self.capacity = len(specs)
-        self.rows = MaterialRows()
-        self.ids = {spec: self.rows.add_spec(spec) for spec in specs}
-        self.table = MaterialTable(self.rows)
-        self.bsdf = Bsdf(self.table, FEATURES)
-
-
 @pytest.fixture(scope="module")
 def bench(taichi_runtime):
-    return DisneyBench([spec for _, spec in CASES.values()])
+    return FixedBench([spec for _, spec in CASES.values()], FEATURES)
 
 
 def _mitsuba(variant):

@@ -12,14 +12,12 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from renderer.materials.bsdf import Bsdf
 from renderer.materials.plastic_tables import (diffuse_fresnel_reflectance, fresnel_dielectric,
                                                rough_internal_reflectance, rough_transmittance, table_cosines)
 from renderer.materials.kinds import alpha_from_roughness
-from renderer.materials.table import MaterialRows, MaterialTable
 from renderer.scene.description import MaterialSpec
 from renderer.scene.features import Features
-from tests.materials.bsdf_kernels import BsdfBench, chi2_adaptive, direction, frame_about, uniforms
+from tests.materials.bsdf_kernels import FixedBench, chi2_adaptive, direction, frame_about, uniforms
 from tests.stats.chi2 import sidak_alpha
 
 ALPHA = 0.01
@@ -56,21 +54,10 @@ NUM_TESTS = len(CHI2_CASES) + len(FURNACE_CASES) + len(MITSUBA_FURNACE)
 FEATURES = Features(material_kinds=frozenset({"plastic"}), has_microfacet_models=True)
 
 
-class PlasticBench(BsdfBench):
-    """A bench whose table holds exactly the given materials (rough plastics need their
-    transmittance tables in the table's construction)."""
-
-    def __init__(self, specs):
-        self.capacity = len(specs)
-        self.rows = MaterialRows()
-        self.ids = {spec: self.rows.add_spec(spec) for spec in specs}
-        self.table = MaterialTable(self.rows)
-        self.bsdf = Bsdf(self.table, FEATURES)
-
 
 @pytest.fixture(scope="module")
 def bench(taichi_runtime):
-    return PlasticBench([*PLASTICS.values(), *WHITE.values()])
+    return FixedBench([*PLASTICS.values(), *WHITE.values()], FEATURES)
 
 
 # --- the model in numpy, written from its definition (plastic_tables.py's docstring) -------------------
