@@ -72,7 +72,7 @@ def scene_dict(scene: Scene, mesh_dir: Path, size: tuple[int, int] | None = None
         result[f"light_{k}"] = _light(light, T)
     assembly = assemble(scene, instancing=False)  # every triangle placed in the world
     media = {m.name: m for m in scene.media}
-    bsdfs = [_bsdf(m, media, notes) if isinstance(m, MaterialSpec) else _gltf_bsdf(m, notes)
+    bsdfs = [_sided(_bsdf(m, notes), m) if isinstance(m, MaterialSpec) else _gltf_bsdf(m, notes)
              for m in assembly.materials]
     emission = [m.emission if isinstance(m, MaterialSpec) else tuple(m.pbr.emissive_factor)
                 for m in assembly.materials]
@@ -80,12 +80,23 @@ def scene_dict(scene: Scene, mesh_dir: Path, size: tuple[int, int] | None = None
         notes.append("glTF volume absorption left out")
     data = assembly.data
 
+    # Mitsuba's path leaves a medium for the shape's interior or exterior only where they are set:
+    # Lantern's outside is the scene's medium unless the material names one.
+    scene_medium = scene.fog.medium if scene.fog.model == "medium" else ""
+    if scene_medium:
+        result["sensor"]["medium"] = _medium(media[scene_medium])
+    sides = [(m.medium, m.outside_medium or scene_medium) if isinstance(m, MaterialSpec) else ("", scene_medium)
+             for m in assembly.materials]
+    if scene_medium or any(any(pair) for pair in sides):
+        result["integrator"]["type"] = "volpath"  # (Mitsuba's path ignores media)
+
     def add(key, shape, material):
         shape["bsdf"] = bsdfs[material]
         if max(emission[material]) > 0.0:
             shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": list(map(float, emission[material]))}}
-        if "interior" in bsdfs[material]:
-            shape["interior"] = bsdfs[material].pop("interior")
+        for side, name in zip(("interior", "exterior"), sides[material]):
+            if name:
+                shape[side] = _medium(media[name])
         result[key] = shape
 
     for material in np.unique(data.tri_material):
@@ -169,16 +180,20 @@ def _rgb(value) -> dict:
     return {"type": "rgb", "value": [float(c) for c in value]}
 
 
-def _bsdf(spec: MaterialSpec, media: dict, notes: list[str]) -> dict:
+def _bsdf(spec: MaterialSpec, notes: list[str]) -> dict:
     alpha = float(spec.roughness) ** 2  # Lantern's perceptual roughness, Mitsuba's GGX alpha
     if spec.base_color_texture is not None:
         notes.append(f"material '{spec.name}': its texture is left out")
     if spec.normal_map is not None or spec.bump_map is not None:
         notes.append(f"material '{spec.name}': its normal or bump map is left out")
+    distribution = "beckmann" if spec.microfacet == "beckmann" else "ggx"
+    if spec.microfacet == "ggx" and alpha > 0 and spec.kind in ("conductor", "dielectric"):
+        notes.append(f"material '{spec.name}': Mitsuba's GGX masking is separable where Lantern's (as pbrt's) is "
+                     "height-correlated: rough lobes differ by a few percent near grazing angles")
     if spec.kind == "diffuse":
         return {"type": "diffuse", "reflectance": _rgb(spec.base_color)}
     if spec.kind == "conductor":
-        rough = {"type": "roughconductor", "distribution": "ggx", "alpha": alpha} if alpha > 0 else {"type": "conductor"}
+        rough = {"type": "roughconductor", "distribution": distribution, "alpha": alpha} if alpha > 0 else {"type": "conductor"}
         if spec.metal:
             return {**rough, "material": spec.metal}
         if spec.eta is not None:
@@ -189,10 +204,10 @@ def _bsdf(spec: MaterialSpec, media: dict, notes: list[str]) -> dict:
     if spec.kind == "dielectric":
         if spec.thin:
             return {"type": "thindielectric", "int_ior": float(spec.ior), "ext_ior": 1.0}
-        glass = ({"type": "roughdielectric", "distribution": "ggx", "alpha": alpha} if alpha > 0
+        glass = ({"type": "roughdielectric", "distribution": distribution, "alpha": alpha} if alpha > 0
                  else {"type": "dielectric"})
         glass.update(int_ior=float(spec.ior), ext_ior=1.0, specular_transmittance=_rgb(spec.base_color))
-        return _with_medium(glass, spec, media)
+        return glass
     if spec.kind == "principled":
         if spec.clearcoat > 0 or max(spec.sheen_color) > 0:
             notes.append(f"material '{spec.name}': its glTF clearcoat and sheen layers are not Disney's")
@@ -200,20 +215,29 @@ def _bsdf(spec: MaterialSpec, media: dict, notes: list[str]) -> dict:
                 "roughness": float(spec.roughness), "metallic": float(spec.metallic),
                 "spec_trans": float(spec.transmission), "eta": max(float(spec.ior), 1.0001)}
     if spec.kind == "null":
-        return _with_medium({"type": "null"}, spec, media)
+        return {"type": "null"}
     raise ValueError(f"material '{spec.name}': kind '{spec.kind}' has no Mitsuba counterpart")
 
 
-def _with_medium(bsdf: dict, spec: MaterialSpec, media: dict) -> dict:
-    if spec.medium:
-        m = media[spec.medium]
-        if m.kind == "grid":  # (its grids would need writing out as .vol files first)
-            raise ValueError(f"medium '{m.name}': grid media have no Mitsuba counterpart here yet")
-        sigma_t = np.add(m.sigma_a, m.sigma_s)
-        albedo = np.divide(m.sigma_s, sigma_t, out=np.zeros(3), where=sigma_t > 0)
-        bsdf["interior"] = {"type": "homogeneous", "sigma_t": _rgb(sigma_t), "albedo": _rgb(albedo),
-                            "phase": {"type": "hg", "g": float(m.g)}}
+# Mitsuba BSDFs that reflect from the front only; Lantern's two-sided rows shade both faces alike.
+_ONE_SIDED = ("diffuse", "roughconductor", "conductor", "plastic", "roughplastic")
+
+
+def _sided(bsdf: dict, spec: MaterialSpec) -> dict:
+    """A two-sided Lantern material as Mitsuba's twosided around its reflective BSDF (pbrt's and
+    Lantern's default: the back of a wall shades as its front); "back_black" stays one-sided."""
+    if spec.sidedness == "two_sided" and bsdf["type"] in _ONE_SIDED:
+        return {"type": "twosided", "bsdf": bsdf}
     return bsdf
+
+
+def _medium(m) -> dict:
+    if m.kind == "grid":  # (its grids would need writing out as .vol files first)
+        raise ValueError(f"medium '{m.name}': grid media have no Mitsuba counterpart here yet")
+    sigma_t = np.add(m.sigma_a, m.sigma_s)
+    albedo = np.divide(m.sigma_s, sigma_t, out=np.zeros(3), where=sigma_t > 0)
+    return {"type": "homogeneous", "sigma_t": _rgb(sigma_t), "albedo": _rgb(albedo),
+            "phase": {"type": "hg", "g": float(m.g)}}
 
 
 def _gltf_bsdf(material, notes: list[str]) -> dict:

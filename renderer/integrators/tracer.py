@@ -20,8 +20,8 @@ Along each segment a free-flight distance is sampled (spectral MIS over RGB); a 
 before the surface is a vertex with the Henyey-Greenstein phase function in place of a BSDF,
 light-sampled like any other. Shadow rays carry the transmittance of their medium and pass
 through `null` surfaces and smooth thin dielectrics (times the wall's transmittance), switching
-medium; any other surface blocks them. Media do not nest: crossing out of a surface leads back to
-the scene's medium. As in Mitsuba, a smooth thin wall's straight passage is like a null crossing
+medium; any other surface blocks them. Media do not nest: crossing out of a surface leads to its
+material's outside medium, the scene's unless named (pbrt's MediumInterface). As in Mitsuba, a smooth thin wall's straight passage is like a null crossing
 (no bounce, and MIS keeps the vertex before it), and a thin wall that bounds a medium of its own
 is entered like any other boundary. Grid media (Features.has_grid_media,
 renderer/media/grid.py) sample the free flight by delta tracking and the shadow rays'
@@ -40,7 +40,7 @@ import taichi as ti
 from renderer.geometry.interface import INF, MEDIUM_POINT, Hit, Surface
 from renderer.integrators.light_sampling import emission_weight, environment_weight, light_weight, sample_direct
 from renderer.materials import dispersion, lobes
-from renderer.materials.kinds import KIND_IDS, NULL_KIND
+from renderer.materials.kinds import KIND_IDS, NULL_KIND, SCENE_MEDIUM
 from renderer.materials.table import NO_MEDIUM
 from renderer.media import grid, homogeneous, phase
 from renderer.sampling import dims
@@ -68,7 +68,7 @@ def _medium_point(p, cone_width, cone_spread):
 def _medium_beyond(ctx, s, wo, wi, current):
     """The medium a ray from surface s towards wi travels in: `current` unless it crosses the
     surface; crossing inwards (from the side the outward normal faces) enters the material's
-    medium, crossing outwards returns to the scene's."""
+    medium, crossing outwards its outside medium (the scene's unless the material names one)."""
     medium = current
     crosses = s.eps >= 0.0 and wi.dot(s.n_geo) * wo.dot(s.n_geo) < 0.0
     if ti.static(ctx.features.has_thin):
@@ -78,9 +78,10 @@ def _medium_beyond(ctx, s, wo, wi, current):
             # bounds a medium of its own (Mitsuba's thindielectric with an interior).
             crosses = False
     if crosses:
-        medium = ctx.media.outside()
+        crossed = ctx.bsdf.materials.table[s.material]
+        medium = ctx.media.outside() if crossed.outside_medium == SCENE_MEDIUM else crossed.outside_medium
         if wo.dot(s.n_geo) > 0.0:
-            medium = ctx.bsdf.materials.table[s.material].medium
+            medium = crossed.medium
     return medium
 
 

@@ -43,6 +43,7 @@ def alpha_from_roughness(roughness: float) -> float:
 NO_TEXTURE = -1
 MAX_MIX_DEPTH = 4  # mixes within mixes: how deep shading follows them (MaterialSpec.mix)
 NO_MEDIUM = -1
+SCENE_MEDIUM = -2  # a material's outside_medium: whatever surrounds every object (the fog's medium)
 NO_TABLE = -1
 # Sidedness, one property for every reader: a surface shades alike from both sides (Lantern's and
 # glTF's doubleSided), its back face is black (Mitsuba's one-sided BSDFs), or its back face is
@@ -132,6 +133,7 @@ SHARED_COLUMNS = (
     Column("textures", "ivec4", (NO_TEXTURE,) * 4),  # base colour, metallic-roughness, normal, emissive
     Column("normal_map_model", "i32", TANGENT_SPACE_MAP),  # NORMAL_MAP_MODELS: what the normal slot holds
     Column("medium", "i32", NO_MEDIUM),
+    Column("outside_medium", "i32", SCENE_MEDIUM),  # crossing outwards leads here (SCENE_MEDIUM: the scene's)
     Column("alpha_mode", "i32", 0),
     Column("alpha_cutoff", "f32", 0.5),
     Column("base_alpha", "f32", 1.0),

@@ -10,7 +10,8 @@ from renderer.materials.coat_bases import COAT_BASES
 from renderer.materials.conductor_ior import conductor_ior_row
 from renderer.materials.dispersion import dispersion_row
 from renderer.materials.kinds import (COLUMNS, DISNEY_TEXTURED, KIND_IDS, KIND_NAMES, LAYER_COLUMNS, LAYERS, NO_MEDIUM, NO_TEXTURE,
-                                      BACK_BLACK, BACK_CULLED, MIN_ALPHA, SIDEDNESS, TANGENT_SPACE_MAP, TWO_SIDED,
+                                      BACK_BLACK, BACK_CULLED, MIN_ALPHA, SCENE_MEDIUM, SIDEDNESS, TANGENT_SPACE_MAP,
+                                      TWO_SIDED,
                                       alpha_from_roughness,
                                       compensated_when_rough)  # noqa: F401 (re-exported)
 from renderer.materials.mapped_frame_rows import mapped_frame_uses, normal_map_row, oriented_rows
@@ -85,6 +86,7 @@ class MaterialRows:
                            slots.get("normal", slots.get("bump", NO_TEXTURE)), slots.get("emission", NO_TEXTURE))
         row.update(normal_map_row(spec, slots))
         row.update(kind=KIND_IDS[spec.kind], medium=self.medium_ids[spec.medium] if spec.medium else NO_MEDIUM,
+                   outside_medium=self.medium_ids[spec.outside_medium] if spec.outside_medium else SCENE_MEDIUM,
                    thin=int(spec.thin), microfacet=MODELS[spec.microfacet], sidedness=SIDEDNESS[spec.sidedness],
                    roughness_v=-1.0 if spec.roughness_v is None else float(spec.roughness_v),
                    alpha_textures=(slots.get("alpha", NO_TEXTURE), slots.get("alpha_v", NO_TEXTURE), NO_TEXTURE,
@@ -173,7 +175,7 @@ class MaterialRows:
                 "normal_maps": any(r["textures"][2] != NO_TEXTURE and r["normal_map_model"] == TANGENT_SPACE_MAP
                                    for r in rows),
                 **mapped_frame_uses(rows), "emission": any(max(r["emission"]) > 0 for r in rows),
-                "media": any(r["medium"] != NO_MEDIUM for r in rows),
+                "media": any(r["medium"] != NO_MEDIUM or r["outside_medium"] >= 0 for r in rows),
                 "dispersion": any(r["dispersion"] != 0 for r in rows),
                 "rough": any(compensated_when_rough(KIND_NAMES[r["kind"]]) and r["roughness"] > 0.0 for r in rows),
                 "alpha": any(r["alpha_mode"] != ALPHA_OPAQUE for r in rows),

@@ -179,6 +179,9 @@ class MaterialSpec:
     metallic: float = 0.0  # principled only: 0 dielectric base, 1 metal (glTF metallic)
     transmission: float = 0.0  # principled only: fraction of the dielectric base that transmits
     medium: str = ""  # the participating medium inside surfaces of this material ("" = none)
+    # the medium a path crossing out of such a surface enters ("" = the scene's: the fog's medium, or
+    # none); pbrt's MediumInterface outside, e.g. a glass sphere standing in a gas
+    outside_medium: str = ""
     abbe: float = 0.0  # dielectric dispersion: Abbe number of a Cauchy curve through ior (0 = none)
     glass: str = ""  # dielectric dispersion: a real glass's Sellmeier curve (overrides ior and abbe)
     eta: Optional[Vec3] = None  # conductor only: real part of the complex index (RGB), with k

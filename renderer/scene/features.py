@@ -233,7 +233,7 @@ def scene_features(scene: Scene, aperture: float | None = None) -> Features:
     used = [m for m in scene.materials if m.name in used_materials] or list(scene.materials)
     nodes = [node for top in scene.sdf_objects for node in top.walk()]
     uses = {"kinds": {m.kind for m in used}, "textures": False, "normal_maps": False,
-            "emission": any(m.is_emissive for m in used), "media": any(m.medium for m in used),
+            "emission": any(m.is_emissive for m in used), "media": any(m.medium or m.outside_medium for m in used),
             "grid_media": scene_grid_media(scene),
             "dispersion": any(m.is_dispersive for m in used),
             "microfacet_models": any(m.microfacet != "ggx" for m in used),

@@ -362,6 +362,9 @@ MATERIAL = Section(
               "made of this material: paths that cross the surface inwards (by refraction, or "
               "through a `null` surface) travel in it. Media do not nest.",
               default_doc="none", allowed_doc="a defined medium"),
+        Field("outside_medium", "string", "", "Name of a `[media]` entry that paths crossing the surface "
+              "outwards enter (a glass sphere standing in a gas; pbrt's MediumInterface outside).",
+              default_doc="the scene's: the `[fog]` medium, or none", allowed_doc="a defined medium"),
         Field("normal_map", "string", None, "An image file, relative to the scene file, read as data "
               "(not sRGB): each texel's RGB is a normal 2 rgb - 1 in the surface's frame, x along "
               "increasing texture coordinate u, y along normal x that, z along the normal (Mitsuba's "

@@ -667,6 +667,7 @@ def _build_scene(data: dict, path: Path, model_files: ModelFiles) -> Scene:
     media = _read_media(data.get("media"), path, model_files)
     for m in materials:
         _check_medium_name(m.medium, media, f"materials.{m.name}.medium")
+        _check_medium_name(m.outside_medium, media, f"materials.{m.name}.outside_medium")
     fog = _read_fog(data.get("fog"), media)
     geometry = _GEOMETRY_READERS[header["geometry"]](data.get("objects"), materials, path)
     return Scene(

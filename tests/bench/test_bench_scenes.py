@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from renderer.bench.scenes import bench_size, find_scenes, reduce_to
+from renderer.bench.scenes import bench_size, comparable_reference, find_scenes, reduce_to
 
 
 def test_scene_folders_are_found_with_their_references(tmp_path):
@@ -34,3 +34,15 @@ def test_a_reference_is_reduced_by_block_means_that_keep_its_mean():
     assert small.shape == (9, 16, 3)
     assert np.allclose(small[0, 0], image[:10, :10].mean(axis=(0, 1)))
     assert np.allclose(small.mean(axis=(0, 1)), image.mean(axis=(0, 1)))  # equal blocks: the mean is kept
+
+
+def test_a_non_finite_reference_pixel_leaves_its_neighbourhood_out_of_both_means():
+    reference = np.ones((90, 160, 3))
+    reference[42, 75] = (np.inf, 5e4, 1e4)  # a half-float overflow where a small light is seen
+    reference[43, 74] = 4e4  # the same light, finite, in the bench pixel beside it
+    reduced, kept = comparable_reference(reference, (16, 9))
+    assert np.isfinite(reduced).all() and kept.shape == (9, 16)
+    assert not kept[3:6, 6:9].any() and kept.sum() == 16 * 9 - 9  # the overflow's block and its 8 neighbours
+    assert np.allclose(reduced[kept], 1.0)  # what stays is untouched by the light
+    _, everything = comparable_reference(np.ones((90, 160, 3)), (16, 9))
+    assert everything.all()

@@ -21,3 +21,28 @@ def test_a_map_keeps_its_orientation(spec):
     envmap = _environment(SimpleNamespace(environment=spec), mi.ScalarTransform4f)
     assert envmap["type"] == "envmap" and envmap["filename"] == "sky.exr"
     np.testing.assert_allclose(np.array(envmap["to_world"].matrix)[:3, :3], spec.rotation_matrix(), atol=1e-6)
+
+
+def test_two_sided_walls_and_media_on_both_sides_reach_mitsuba(tmp_path):
+    """pbrt's walls shade both faces (Mitsuba's twosided), and a sphere standing in a gas names it as
+    its exterior, with Mitsuba's volumetric path tracer (its `path` ignores media)."""
+    from renderer.bench.mitsuba_scene_dict import scene_dict
+    from tests.scene.pbrt.pbrt_helpers import load
+
+    mi.set_variant("scalar_rgb")
+    world = ('MakeNamedMedium "gas" "string type" "homogeneous" "rgb sigma_a" [1 1 1] "rgb sigma_s" [0.5 0.5 0.5]\n'
+             'Material "diffuse"\nShape "trianglemesh" "point3 P" [-1 -1 -2  1 -1 -2  1 1 -2] "integer indices" [0 1 2]\n'
+             'AttributeBegin\nMediumInterface "gas" ""\nMaterial "interface"\nShape "sphere" "float radius" 1.5\n'
+             'AttributeEnd\nAttributeBegin\nMediumInterface "" "gas"\nMaterial "dielectric"\n'
+             'Shape "sphere" "float radius" 0.5\nAttributeEnd\n')
+    scene, _ = load(tmp_path, world)
+    result, _ = scene_dict(scene, tmp_path)
+    assert result["integrator"]["type"] == "volpath"
+    wall = next(v for k, v in result.items() if k.startswith("mesh_"))
+    assert wall["bsdf"]["type"] == "twosided" and wall["bsdf"]["bsdf"]["type"] == "diffuse"
+    boundary, glass = (result[k] for k in sorted(k for k in result if k.startswith("sphere_")))
+    if boundary["bsdf"]["type"] != "null":
+        boundary, glass = glass, boundary
+    assert "interior" in boundary and "exterior" not in boundary
+    assert glass["bsdf"]["type"] == "dielectric" and "exterior" in glass and "interior" not in glass
+    assert glass["exterior"]["sigma_t"]["value"] == [1.5, 1.5, 1.5]

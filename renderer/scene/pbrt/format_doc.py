@@ -30,7 +30,8 @@ spectra and `blackbody` are normalised to luminance 1 first, as pbrt-v4 normalis
 | pbrt's left-handed camera space (image right = camera +x; a bare `LookAt` shows the world mirrored against a right-handed camera, which is why exported scenes begin with `Scale -1 1 1`) | the image pbrt renders: where it is mirrored against Lantern's right-handed camera the scene (shapes and lights) is reflected through the plane of the camera's forward and up directions |
 | `Film "rgb"` (`xresolution`, `yresolution`, by default 1280 x 720; `cropwindow`) | the image size; `render.crop` with pbrt's pixel bounds (ceil of each fraction times the size) |
 | `Sampler` (`pixelsamples`, by default 16; `stratified`: `xsamples` x `ysamples`; `seed`) | `spp` and the seed; `independent` is Lantern's `independent`, the others its `sobol` |
-| `Integrator` `volpath` (the default), `path`, `bdpt`, `mlt`, `sppm`, `lightpath`, `simplepath`, `simplevolpath`, `randomwalk` (`maxdepth`, by default 5) | `mis` with max_depth = maxdepth + 1 (pbrt counts bounces, 1 being direct light; Lantern counts as Mitsuba, 2 being direct light); energy compensation off, as pbrt's rough BSDFs scatter once |
+| `Integrator` `volpath` (the default), `path`, `bdpt`, `mlt`, `lightpath`, `simplepath`, `simplevolpath`, `randomwalk` (`maxdepth`, by default 5) | `mis` with max_depth = maxdepth + 1 (pbrt counts bounces, 1 being direct light; Lantern counts as Mitsuba, 2 being direct light); energy compensation off, as pbrt's rough BSDFs scatter once |
+| `Integrator` `sppm` (`maxdepth`; `radius` warned) | Lantern's `sppm` (photon mapping finds the caustics of small lights behind glass), its search radius starting at two pixel footprints; `mis` with a warning in scenes with media or point, spot and distant lights, which Lantern's photons do not serve |
 | `PixelFilter` `gaussian` (the default; `sigma`), `triangle` (`xradius`), `box` (radius 0.5) | the `gaussian` (cut at four deviations where pbrt cuts at its radius), `tent` and `box` filters; `mitchell`, `sinc`: the box filter, with a warning |
 | `diffuse` (`reflectance` a colour or texture) | `diffuse` |
 | `conductor` (`eta` and `k` as `metal-X-eta` / `metal-X-k` named spectra, Lantern's measured metal X, by default copper; as `rgb` or sampled spectra; or `reflectance`) | `conductor` with `metal`, `eta` and `k`; a `reflectance` r as pbrt makes it an index, eta 1 and k = 2 sqrt(r / (1 - r)) (a textured one: Schlick's Fresnel from it, a warning) |
@@ -53,13 +54,13 @@ spectra and `blackbody` are normalised to luminance 1 first, as pbrt-v4 normalis
 | `LightSource` `point` (`from`, `I`, `scale`, `power`), `spot` (`from`, `to`, `coneangle`, `conedeltaangle`, `power`), `distant` (`from`, `to`, `L`, `scale`, `illuminance`) | `[[lights]]` point, spot (cutoff = coneangle, beam = coneangle - conedeltaangle; Lantern's falloff is linear in angle between them where pbrt's is smooth in the cosine) and directional |
 | `LightSource "infinite"` with `L` (or nothing: white) | a constant environment |
 | `LightSource "infinite"` with `filename` (an `.exr` or `.hdr` equal-area square map; `scale`) | an environment map: the square resampled once into a latitude-longitude map (bilinearly, as pbrt looks it up) with the light's rotation and the scene's mirror baked in, cached as an EXR under `$XDG_CACHE_HOME/lantern/pbrt-environments` (by default `~/.cache`) |
-| `MakeNamedMedium` `homogeneous` (`sigma_a`, `sigma_s`, `scale`, `g`) with `MediumInterface` | a medium inside the shapes' material; the camera's medium (the outside one current at `Camera`) fills the scene as `fog.model = "medium"` |
+| `MakeNamedMedium` `homogeneous` (`sigma_a`, `sigma_s`, `scale`, `g`) with `MediumInterface` | the inside medium is the shapes' material's `medium`, the outside one its `outside_medium` unless it is the camera's; the camera's medium (the outside one current at `Camera`) fills the scene as `fog.model = "medium"`; a shape without a transition (inside = outside) keeps the medium a ray is in |
 
 Left out with one warning each, naming file, line and directive, while the rest renders: maps in
 formats other than EXR and Radiance HDR, `illuminance`, goniometric and projection lights, other
 shapes (curves, cones, paraboloids, hyperboloids), other materials (rendered diffuse 0.5),
 other textures (the parameter's default), media other than `homogeneous` and named scattering
-presets, outside media other than the camera's, float textures on roughness and indices, textures inside a checkerboard,
+presets, empty space outside a shape while the camera is in a medium, float textures on roughness and indices, textures inside a checkerboard,
 shape `alpha`, area lights on object instances, motion blur (`ActiveTransform`,
 `TransformTimes`), `Attribute`, `Option`, colour spaces other than sRGB, and any parameter no
 mapping reads. A missing image or PLY file is one warning naming it and what stands in. A scene

@@ -374,14 +374,16 @@ class MaterialReader:
         return name
 
 
-    def with_surface(self, base: MaterialSpec, emission, medium: str) -> str:
-        """The name of `base` with a shape's emission and interior medium (a material of its own,
-        shared by the shapes that have the same)."""
-        if max(emission) <= 0.0 and not medium:
+    def with_surface(self, base: MaterialSpec, emission, medium: str, outside: str = "") -> str:
+        """The name of `base` with a shape's emission, interior medium and outside medium (a
+        material of its own, shared by the shapes that have the same)."""
+        if max(emission) <= 0.0 and not medium and not outside:
             return base.name
-        key = (base.name, tuple(emission), medium)
+        key = (base.name, tuple(emission), medium, outside)
         if key not in self.surfaces:
-            suffix = "+".join(part for part in ("emitter" if max(emission) > 0.0 else "", medium) if part)
-            spec = replace(base, name=f"{base.name}+{suffix}", emission=tuple(emission), medium=medium)
+            parts = ("emitter" if max(emission) > 0.0 else "", medium, f"in {outside}" if outside else "")
+            suffix = "+".join(part for part in parts if part)
+            spec = replace(base, name=f"{base.name}+{suffix}", emission=tuple(emission), medium=medium,
+                           outside_medium=outside)
             self.surfaces[key] = self._add(spec).name
         return self.surfaces[key]

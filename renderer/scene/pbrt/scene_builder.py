@@ -88,9 +88,7 @@ class _Builder:
                 self.emission[id(d.area_light)] = area_emission(d.area_light)
         if d.area_light is not None and not instanced:
             emission, power = self.emission[id(d.area_light)]
-        inside = self.reader.medium(d.inside, d)
-        if d.outside and d.outside != self.parsed.camera_medium and d.outside != d.inside:
-            warn(d, f"an outside medium ('{d.outside}') other than the camera's is not supported: left out there")
+        inside, outside = self.media_of(d)
         if id(d) not in self.shapes:  # an object's shapes are read once, however many instances place them
             self.shapes[id(d)] = shape_objects(d, base.name, self.model_files)
         placed = []
@@ -106,8 +104,27 @@ class _Builder:
                         "pbrt; their parts differ in area, so the radiance of their mean area is used")
             if areas and min(areas) > 0:
                 emission = tuple(c * power / (math.pi * float(np.mean(areas))) for c in emission)
-        material = self.reader.with_surface(base, emission, inside)
+        material = self.reader.with_surface(base, emission, inside, outside)
         return [replace(obj, material=material, to_world=_rows(matrix)) for obj, matrix in placed]
+
+    def media_of(self, d: Directive) -> tuple[str, str]:
+        """(Lantern's medium inside the shape, its outside medium: "" for the scene's, which is the
+        camera's). pbrt's shape without a medium transition (inside = outside) leaves a ray in the
+        medium it was in: the one named on both sides, else the camera's."""
+        camera = self.parsed.camera_medium
+        if d.inside == d.outside:
+            if not d.inside:
+                return self.reader.medium(camera, d), ""
+            named = self.reader.medium(d.inside, d)
+            return named, "" if d.inside == camera else named
+        inside = self.reader.medium(d.inside, d)
+        if d.outside == camera:
+            return inside, ""
+        if not d.outside:
+            warn(d, f"empty space outside the shape while the camera is in the medium '{camera}' is not supported: "
+                    "the camera's medium stands there")
+            return inside, ""
+        return inside, self.reader.medium(d.outside, d)
 
     # --- camera and options -----------------------------------------------------------------------
 
@@ -225,10 +242,31 @@ class _Builder:
         depth = d.params.integer("maxdepth", DEFAULT_MAX_DEPTH)
         if depth < 0:
             raise d.error(f"maxdepth {depth} is negative")
+        if d.type == "sppm":
+            render = self.photon_mapping(d, render)
         self.unused(d)
         # pbrt counts bounces (1: direct light only); Lantern counts as Mitsuba (2: direct light),
         # and a maxdepth of 0 shows only what the camera sees emit
         return replace(render, max_depth=depth + 1)
+
+    def photon_mapping(self, d: Directive, render: RenderSettings) -> RenderSettings:
+        """pbrt's sppm as Lantern's: the caustics of small lights behind glass (water-caustic) are
+        what a path tracer cannot find. Lantern's search radius starts at two pixel footprints."""
+        if self.parsed.media or self.parsed.camera_medium:
+            why = "Lantern's sppm does not simulate media"
+        elif any(light.type in ("point", "spot", "distant", "goniometric", "projection") for light in self.parsed.lights):
+            why = "Lantern's sppm emits photons from area lights and environments only"
+        else:
+            why = ""
+        if why:
+            warn(d, f"{why}: rendered with its path tracer (mis)")
+            return render
+        if d.params.has("radius"):
+            d.params.find("radius")
+            warn(d, "sppm's radius: Lantern's initial search radius is two pixel footprints at each visible point")
+        if d.params.integer("photonsperiteration", -1) > 0:
+            warn(d, "sppm's photonsperiteration: Lantern emits one photon per pixel in each iteration")
+        return replace(render, integrator="sppm")
 
     def pixel_filter(self, render: RenderSettings) -> RenderSettings:
         d = self.option("PixelFilter")

@@ -135,3 +135,31 @@ def test_camera_medium_is_fog(tmp_path):
     scene, _ = load(tmp_path, SPHERE, options=options)
     assert (scene.fog.model, scene.fog.medium) == ("medium", "air")
     assert scene.media[0].sigma_s == (0.2, 0.2, 0.2)
+
+
+GAS = 'MakeNamedMedium "gas" "string type" "homogeneous" "rgb sigma_a" [1 1 1] "rgb sigma_s" [0 0 0]\n'
+
+
+@pytest.mark.parametrize("interface, inside, outside", [
+    ('"" "gas"', "", "gas"),  # a glass sphere standing in a gas
+    ('"gas" ""', "gas", ""),  # a gas behind a boundary, the camera in empty space
+    ('"gas" "gas"', "gas", "gas"),  # no transition: a ray stays in the gas
+    ('"" ""', "", ""),
+])
+def test_medium_interface_gives_the_inside_and_the_outside(tmp_path, interface, inside, outside):
+    spec, _, scene = one(tmp_path, f'MediumInterface {interface}\nMaterial "dielectric"', extra=GAS)
+    assert (spec.medium, spec.outside_medium) == (inside, outside)
+    assert [m.name for m in scene.media] == (["gas"] if inside or outside else [])
+
+
+def test_a_shape_in_the_cameras_medium_keeps_it(tmp_path):
+    options = GAS + 'MediumInterface "" "gas"\n' + CAMERA
+    scene, _ = load(tmp_path, 'MediumInterface "" ""\nMaterial "dielectric"\n' + SPHERE, options=options)
+    spec = material(scene, scene.mesh_objects[0].material)
+    assert (scene.fog.medium, spec.medium, spec.outside_medium) == ("gas", "gas", "")  # no transition
+
+
+def test_empty_space_outside_while_the_camera_is_in_a_medium_warns(tmp_path):
+    options = GAS + 'MediumInterface "" "gas"\n' + CAMERA
+    scene, messages = load(tmp_path, 'MediumInterface "gas" ""\n' + SPHERE, options=options, expect_warnings=1)
+    assert "empty space outside" in messages[0]

@@ -71,3 +71,39 @@ def test_marked_object_lands_on_pbrts_side_of_the_image(tmp_path, scale, side):
     image = renderer.film.mean_image()[..., 1]
     left, right = image[:, :8].sum(), image[:, 8:].sum()
     assert (right > 0 and left == 0) if side == "right" else (left > 0 and right == 0), (left, right)
+
+
+# A glass sphere of index 1 (no bend, no reflection) whose outside is the absorbing gas it stands in,
+# inside a boundary that holds the gas: a ray through the centre crosses 2 x (1 - 0.5) of gas.
+NESTED_OPTIONS = """LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective" "float fov" 1
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4
+Sampler "independent" "integer pixelsamples" 256 "integer seed" 3
+Integrator "volpath" "integer maxdepth" 10
+PixelFilter "box"
+"""
+NESTED_WORLD = """LightSource "infinite" "rgb L" [1 1 1]
+MakeNamedMedium "gas" "string type" "homogeneous" "rgb sigma_a" [1 1 1] "rgb sigma_s" [0 0 0]
+AttributeBegin
+MediumInterface "gas" ""
+Material "interface"
+Shape "sphere" "float radius" 1
+AttributeEnd
+AttributeBegin
+MediumInterface "" "gas"
+Material "dielectric" "float eta" 1
+Shape "sphere" "float radius" 0.5
+AttributeEnd
+"""
+
+
+def test_a_ray_leaving_a_sphere_enters_the_medium_outside_it(tmp_path):
+    scene, _ = load(tmp_path, NESTED_WORLD, options=NESTED_OPTIONS)
+    renderer = Renderer(scene)
+    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp)
+    mean = renderer.film.mean_image()[..., 1]
+    expected = math.exp(-1.0)  # (the scene's empty space after the inner sphere would give exp(-0.5))
+    # each sample is 0 or 1 (absorbed or not): a z-test on the binomial mean at the 1% level
+    n = mean.size * scene.render.spp
+    z = (mean.mean() - expected) / math.sqrt(expected * (1 - expected) / n)
+    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), expected, z)

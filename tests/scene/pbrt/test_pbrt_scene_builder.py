@@ -94,3 +94,19 @@ def test_nothing_to_render_is_one_error(tmp_path):
     with pytest.raises(SceneError) as e:
         load(tmp_path, 'Shape "cone"\n', expect_warnings=1)
     assert str(e.value) == f"{tmp_path / 's.pbrt'}: nothing Lantern can render: the scene has no shape it supports"
+
+
+def test_sppm_is_lanterns_photon_mapping(tmp_path):
+    scene, messages = load(tmp_path, MARKED, options='Integrator "sppm" "integer maxdepth" 9 "float radius" 0.01\n',
+                           expect_warnings=1)
+    assert (scene.render.integrator, scene.render.max_depth) == ("sppm", 10)
+    assert "initial search radius" in messages[0]
+
+
+@pytest.mark.parametrize("world, why", [
+    ('LightSource "point" "rgb I" [1 1 1]\n', "area lights and environments only"),
+    ('MakeNamedMedium "gas" "string type" "homogeneous"\n', "does not simulate media"),
+])
+def test_sppm_falls_back_to_the_path_tracer_where_lanterns_cannot_follow(tmp_path, world, why):
+    scene, messages = load(tmp_path, world + MARKED, options='Integrator "sppm"\n', expect_warnings=1)
+    assert scene.render.integrator == "mis" and why in messages[0]
