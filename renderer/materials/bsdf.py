@@ -107,6 +107,12 @@ class Bsdf:
                                                                               rec.coat_albedo, rec.coat_g)
             mat.coat_maxdepth, mat.coat_nsamples = rec.coat_maxdepth, rec.coat_nsamples
             mat.conductor_alpha = alpha_of(rec.conductor_roughness)
+        if ti.static(self.features.has_kind("diffuse_transmission")):
+            mat.transmittance = rec.transmittance
+            if ti.static(self.features.has_textures):
+                if rec.transmittance_texture != NO_TEXTURE:
+                    mat.transmittance *= self.materials.textures.sample(rec.transmittance_texture, surface.uv,
+                                                                        surface.uv1).xyz
         if ti.static(self.features.has_vertex_colors):
             mat.base_color *= surface.color.xyz
         if ti.static(self.features.has_textures):

@@ -228,6 +228,12 @@ KINDS = (
                   Column("eta", "vec3", (0.0, 0.0, 0.0)), Column("k", "vec3", (0.0, 0.0, 0.0)),
                   Column("fresnel_avg", "vec3", (0.0, 0.0, 0.0))),
                  _F.REFLECTION | _F.DIFFUSE | _F.GLOSSY | _F.SPECULAR, "renderer.materials.coated", defaults=_SMOOTH),
+    # pbrt-v4's diffusetransmission: Lambert reflection (base_color) and Lambert transmission
+    # (transmittance, its texture in parameter_textures) through a sheet without an inside.
+    MaterialKind("diffuse_transmission", "diffuse transmission", ("transmittance",),
+                 (Column("transmittance", "vec3", (0.2, 0.2, 0.2), from_spec=True),
+                  Column("transmittance_texture", "i32", NO_TEXTURE)),
+                 _F.REFLECTION | _F.TRANSMISSION | _F.DIFFUSE, "renderer.materials.diffuse_transmission"),
 )
 
 LAYERS = (

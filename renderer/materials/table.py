@@ -56,7 +56,8 @@ Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=
                            front_both_sides=ti.i32,
                            # The coated kind's (renderer/materials/coated.py).
                            coat_base=ti.i32, coat_thickness=ti.f32, coat_albedo=vec3, coat_g=ti.f32,
-                           coat_maxdepth=ti.i32, coat_nsamples=ti.i32, conductor_alpha=ti.f32)
+                           coat_maxdepth=ti.i32, coat_nsamples=ti.i32, conductor_alpha=ti.f32,
+                           transmittance=vec3)  # diffuse_transmission's
 
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = 0, 1, 2
 ALPHA_MODE_IDS = {"OPAQUE": ALPHA_OPAQUE, "MASK": ALPHA_MASK, "BLEND": ALPHA_BLEND}
@@ -93,6 +94,7 @@ class MaterialRows:
                                    NO_TEXTURE),
                    **dispersion_row(spec), **conductor_ior_row(spec))
         row["specular_color_texture"] = slots.get("specular_color", NO_TEXTURE)
+        row["transmittance_texture"] = slots.get("transmittance", NO_TEXTURE)
         row["index_textures"] = (slots.get("eta", NO_TEXTURE), slots.get("k", NO_TEXTURE), NO_TEXTURE, NO_TEXTURE)
         if spec.opacity < 1.0 or "opacity" in slots:
             row.update(alpha_mode=ALPHA_BLEND, base_alpha=spec.opacity,
@@ -166,7 +168,8 @@ class MaterialRows:
         return {"kinds": {KIND_NAMES[r["kind"]] for r in rows},
                 "layers": {layer.name for layer in LAYERS if any(layer.in_use(r) for r in rows)},
                 "textures": (any(slots) or layer_textures
-                             or any(r["transmission_texture"] != NO_TEXTURE for r in rows)
+                             or any(r["transmission_texture"] != NO_TEXTURE or r["transmittance_texture"] != NO_TEXTURE
+                                    for r in rows)
                              or any(t != NO_TEXTURE for r in rows for c in _DISNEY_TEXTURE_COLUMNS for t in r[c])
                              or any(r["mix"][2] != NO_TEXTURE or r["specular_color_texture"] != NO_TEXTURE
                                     or r["index_textures"][0] != NO_TEXTURE or r["index_textures"][1] != NO_TEXTURE

@@ -340,6 +340,9 @@ MATERIAL = Section(
         Field("coat_g", "float", 0.0, "`coated`: Henyey-Greenstein asymmetry of that medium.", Range(-1.0, 1.0)),
         Field("coat_maxdepth", "int", 10, "`coated`: longest random walk in the slab.", AT_LEAST_ONE),
         Field("coat_nsamples", "int", 1, "`coated`: random walks per evaluation.", AT_LEAST_ONE),
+        Field("transmittance", "vec3", (0.2, 0.2, 0.2), "`diffuse_transmission`: colour of the Lambert "
+              "transmission to the other side (`base_color` is the reflection's); with `base_color` at "
+              "most 1 per channel for a sheet that keeps no more light than it receives.", UNIT),
         Field("conductor_roughness", "float", 0.0, "`coated` with a conductor base: the conductor's "
               "perceptual roughness.", UNIT),
         Field("sidedness", "string", "two_sided", "`two_sided`: both sides shade alike; "

@@ -14,7 +14,7 @@ from renderer.scene.features import Features, features_from
 
 def test_ids_are_positions_and_names_unique():
     assert MATERIAL_KINDS == KIND_NAMES == ("diffuse", "conductor", "dielectric", "principled", "null", "plastic", "disney",
-                                                  "coated")
+                                                  "coated", "diffuse_transmission")
     assert [KIND_IDS[n] for n in KIND_NAMES] == list(range(len(KINDS)))
     assert len(set(LAYER_NAMES)) == len(LAYERS) and not set(LAYER_NAMES) & set(KIND_NAMES)
     assert all(layer.of in KIND_NAMES for layer in LAYERS)
@@ -33,7 +33,8 @@ def test_flags_are_pbrt_bits():
     for entry in (*KINDS, *LAYERS):
         assert entry.flags and entry.flags & ~sum(bits) == 0, entry.name
     # What photon mapping and light sampling rely on: which kinds can be diffuse, and which refract.
-    assert [k.name for k in KINDS if k.flags & LobeFlags.DIFFUSE] == ["diffuse", "principled", "plastic", "disney", "coated"]
+    assert [k.name for k in KINDS if k.flags & LobeFlags.DIFFUSE] == ["diffuse", "principled", "plastic", "disney", "coated",
+                                                                             "diffuse_transmission"]
     assert [k.name for k in KINDS if k.refracts] == ["dielectric", "principled", "disney"]
     assert kinds.kind("null").flags & LobeFlags.NON_DELTA == 0
 

@@ -11,7 +11,8 @@ from renderer.scene.schema_docs import render_markdown
 from tests.scene.scene_file_helpers import scene_text, write
 
 EXPECTED_ROUGHNESS = {"diffuse": 0.5, "conductor": 0.0, "dielectric": 0.0, "principled": 0.5, "null": 0.5,
-                      "plastic": 0.0, "disney": 0.5, "coated": 0.0}
+                      "plastic": 0.0, "disney": 0.5, "coated": 0.0,
+                      "diffuse_transmission": 0.5}
 
 
 def _loaded(tmp_path, body: str):

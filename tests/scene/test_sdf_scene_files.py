@@ -412,7 +412,7 @@ BAD_SCENES = {
                                "specular_color, microfacet, roughness_v, sidedness, "
                                "opacity, emission, emission_strength, abbe, glass, medium, outside_medium, normal_map, bump_map, bump_scale)"),
     "material unknown type": (scene_text(materials='[materials.m]\ntype = "metal"\n'),
-                              "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null, plastic, disney, coated)"),
+                              "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null, plastic, disney, coated, diffuse_transmission)"),
     "ior on conductor": (scene_text(materials='[materials.m]\ntype = "conductor"\nior = 1.5\n'),
                          "materials.m.ior: only allowed with type 'dielectric' or 'principled' or 'plastic' or 'disney' or 'coated', not 'conductor'"),
     "ior on default diffuse": (scene_text(materials="[materials.m]\nior = 1.5\n"),

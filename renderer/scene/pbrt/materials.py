@@ -95,9 +95,12 @@ class MaterialReader:
         elif t == "mix":
             spec = self.mix(d, name)
         elif t == "diffusetransmission":
+            scale = self.number(d, "scale", 1.0)
             rgb, texture = self.colour(d, "reflectance", 0.25)
-            warn(d, "rendered as a diffuse reflector (its transmittance is left out)")
-            spec = MaterialSpec(name, "diffuse", base_color=rgb, base_color_texture=texture)
+            trgb, ttexture = self.colour(d, "transmittance", 0.25)
+            spec = MaterialSpec(name, "diffuse_transmission", base_color=tuple(scale * c for c in rgb),
+                                base_color_texture=texture, transmittance=tuple(scale * c for c in trgb),
+                                parameter_textures=(("transmittance", ttexture),) if ttexture is not None else ())
         elif t == "coateddiffuse":
             rgb, texture = self.colour(d, "reflectance", DEFAULT_REFLECTANCE)
             spec = MaterialSpec(name, "coated", coat_base="diffuse", base_color=rgb, base_color_texture=texture,

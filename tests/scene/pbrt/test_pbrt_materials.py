@@ -74,7 +74,17 @@ def test_mix_chooses_the_second_with_probability_amount(tmp_path):
     assert spec.mix_weight == 1.0 and dict(spec.parameter_textures)["mix_weight"].kind == "checkerboard"
 
 
-@pytest.mark.parametrize("kind, lantern", [("diffusetransmission", "diffuse"), ("hair", "diffuse")])
+def test_diffuse_transmission_with_its_scale_and_textures(tmp_path):
+    spec, _, _ = one(tmp_path, 'Material "diffusetransmission"')
+    assert (spec.kind, spec.base_color, spec.transmittance) == ("diffuse_transmission", (0.25,) * 3, (0.25,) * 3)
+    extra = 'Texture "leaf" "spectrum" "checkerboard" "rgb tex1" [0 1 0] "rgb tex2" [0 0.5 0]\n'
+    spec, _, _ = one(tmp_path, 'Material "diffusetransmission" "texture reflectance" "leaf" '
+                               '"texture transmittance" "leaf" "float scale" 0.5', extra=extra)
+    assert spec.base_color == (0.5,) * 3 and spec.transmittance == (0.5,) * 3
+    assert spec.base_color_texture.kind == "checkerboard" and dict(spec.parameter_textures)["transmittance"].kind == "checkerboard"
+
+
+@pytest.mark.parametrize("kind, lantern", [("hair", "diffuse")])
 def test_materials_without_a_kind_map_to_the_nearest_with_one_warning(tmp_path, kind, lantern):
     spec, messages, _ = one(tmp_path, f'Material "{kind}"', expect_warnings=1)
     assert spec.kind == lantern and f'Material "{kind}"' in messages[0]

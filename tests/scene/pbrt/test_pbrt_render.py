@@ -107,3 +107,22 @@ def test_a_ray_leaving_a_sphere_enters_the_medium_outside_it(tmp_path):
     n = mean.size * scene.render.spp
     z = (mean.mean() - expected) / math.sqrt(expected * (1 - expected) / n)
     assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), expected, z)
+
+
+def test_light_through_a_diffuse_transmitter(tmp_path):
+    """The floor of the first test as pbrt's diffusetransmission, seen from below: its radiance
+    there is transmittance / pi times the irradiance on its top (light sampled through the sheet)."""
+    transmittance = 0.3
+    world = WORLD.replace(f'Material "diffuse" "rgb reflectance" [{ALBEDO} {ALBEDO} {ALBEDO}]',
+                          f'Material "diffusetransmission" "rgb reflectance" [0.2 0.2 0.2] '
+                          f'"rgb transmittance" [{transmittance} {transmittance} {transmittance}]')
+    options = SCENE_OPTIONS.replace("LookAt 0 0.5 0  0 0 0  0 0 1", "LookAt 0 -0.5 0  0 0 0  0 0 1")
+    scene, _ = load(tmp_path, world, options=options)
+    renderer = Renderer(scene)
+    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp)
+    expected = transmittance * RADIANCE * 4.0 * corner_form_factor(HALF, HALF, HEIGHT)
+    mean = renderer.film.mean_image()[..., 1]
+    var = renderer.film.variance_of_mean_image()[..., 1]
+    z = (mean.mean() - expected) / np.sqrt(var.sum() / mean.size ** 2)
+    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), expected, z)
+    assert np.sqrt(var.sum()) / mean.size < 0.02 * expected
