@@ -54,6 +54,7 @@ spectra and `blackbody` are normalised to luminance 1 first, as pbrt-v4 normalis
 | `LightSource` `point` (`from`, `I`, `scale`, `power`), `spot` (`from`, `to`, `coneangle`, `conedeltaangle`, `power`), `distant` (`from`, `to`, `L`, `scale`, `illuminance`) | `[[lights]]` point, spot (cutoff = coneangle, beam = coneangle - conedeltaangle; Lantern's falloff is linear in angle between them where pbrt's is smooth in the cosine) and directional |
 | `LightSource "infinite"` with `L` (or nothing: white) | a constant environment |
 | `LightSource "infinite"` with `filename` (an `.exr` or `.hdr` equal-area square map; `scale`) | an environment map: the square resampled once into a latitude-longitude map (bilinearly, as pbrt looks it up) with the light's rotation and the scene's mirror baked in, cached as an EXR under `$XDG_CACHE_HOME/lantern/pbrt-environments` (by default `~/.cache`) |
+| a shape's `alpha` (a number or a float texture) | the opacity of its material (a copy for the shape): the coverage, a texture's first channel; Lantern's opacity is stochastic, as pbrt's alpha test |
 | `MakeNamedMedium` `homogeneous` (`sigma_a`, `sigma_s`, `scale`, `g`) with `MediumInterface` | the inside medium is the shapes' material's `medium`, the outside one its `outside_medium` unless it is the camera's; the camera's medium (the outside one current at `Camera`) fills the scene as `fog.model = "medium"`; a shape without a transition (inside = outside) keeps the medium a ray is in |
 
 Left out with one warning each, naming file, line and directive, while the rest renders: maps in
@@ -61,7 +62,7 @@ formats other than EXR and Radiance HDR, `illuminance`, goniometric and projecti
 shapes (curves, cones, paraboloids, hyperboloids), other materials (rendered diffuse 0.5),
 other textures (the parameter's default), media other than `homogeneous` and named scattering
 presets, empty space outside a shape while the camera is in a medium, float textures on roughness and indices, textures inside a checkerboard,
-shape `alpha`, area lights on object instances, motion blur (`ActiveTransform`,
+area lights on object instances, motion blur (`ActiveTransform`,
 `TransformTimes`), `Attribute`, `Option`, colour spaces other than sRGB, and any parameter no
 mapping reads. A missing image or PLY file is one warning naming it and what stands in. A scene
 with nothing left to render, an unterminated string, an unknown directive, a malformed

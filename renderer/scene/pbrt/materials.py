@@ -377,16 +377,34 @@ class MaterialReader:
         return name
 
 
-    def with_surface(self, base: MaterialSpec, emission, medium: str, outside: str = "") -> str:
-        """The name of `base` with a shape's emission, interior medium and outside medium (a
-        material of its own, shared by the shapes that have the same)."""
-        if max(emission) <= 0.0 and not medium and not outside:
+    def alpha(self, d: Directive) -> tuple:
+        """(opacity, its texture or None) of a shape's `alpha`: a number, or a float texture whose
+        first channel is the coverage (pbrt's alpha test, Lantern's stochastic opacity)."""
+        p = d.params.find("alpha")
+        if p is None:
+            return 1.0, None
+        if p.type == "texture":
+            rgb, texture = self.texture(p.values[0], p, (1.0, 1.0, 1.0))
+            return float(rgb[0]), texture
+        if p.type != "float" or len(p.values) != 1 or not 0.0 <= float(p.values[0]) <= 1.0:
+            raise p.error("alpha must be one number in [0, 1] or a float texture")
+        return float(p.values[0]), None
+
+    def with_surface(self, base: MaterialSpec, emission, medium: str, outside: str = "",
+                     alpha: tuple = (1.0, None)) -> str:
+        """The name of `base` with a shape's emission, interior medium, outside medium and alpha
+        (a material of its own, shared by the shapes that have the same)."""
+        opacity, opacity_texture = alpha
+        cut = opacity < 1.0 or opacity_texture is not None
+        if max(emission) <= 0.0 and not medium and not outside and not cut:
             return base.name
-        key = (base.name, tuple(emission), medium, outside)
+        key = (base.name, tuple(emission), medium, outside, opacity, id(opacity_texture))
         if key not in self.surfaces:
-            parts = ("emitter" if max(emission) > 0.0 else "", medium, f"in {outside}" if outside else "")
+            parts = ("emitter" if max(emission) > 0.0 else "", medium, f"in {outside}" if outside else "",
+                     "alpha" if cut else "")
             suffix = "+".join(part for part in parts if part)
             spec = replace(base, name=f"{base.name}+{suffix}", emission=tuple(emission), medium=medium,
-                           outside_medium=outside)
+                           outside_medium=outside, opacity=opacity if cut else base.opacity,
+                           opacity_texture=opacity_texture if cut else base.opacity_texture)
             self.surfaces[key] = self._add(spec).name
         return self.surfaces[key]

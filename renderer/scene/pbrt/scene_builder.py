@@ -104,7 +104,7 @@ class _Builder:
                         "pbrt; their parts differ in area, so the radiance of their mean area is used")
             if areas and min(areas) > 0:
                 emission = tuple(c * power / (math.pi * float(np.mean(areas))) for c in emission)
-        material = self.reader.with_surface(base, emission, inside, outside)
+        material = self.reader.with_surface(base, emission, inside, outside, self.reader.alpha(d))
         return [replace(obj, material=material, to_world=_rows(matrix)) for obj, matrix in placed]
 
     def media_of(self, d: Directive) -> tuple[str, str]:

@@ -123,9 +123,7 @@ def shape_objects(d: Directive, material: str, files) -> list[tuple[MeshObject, 
             param.used = True
         warn(d, f"the {t} shape is not supported: left out")
         return []
-    alpha = p.find("alpha")
-    if alpha is not None and not (alpha.type == "float" and alpha.values == [1.0]):
-        warn(d, "alpha is not supported: the shape is opaque")
+    p.find("alpha")  # (the material's opacity: scene_builder.place)
     warn_unused(d)
     return [o if isinstance(o, tuple) else (o, np.eye(4)) for o in objects]
 

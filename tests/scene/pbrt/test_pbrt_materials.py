@@ -173,3 +173,15 @@ def test_empty_space_outside_while_the_camera_is_in_a_medium_warns(tmp_path):
     options = GAS + 'MediumInterface "" "gas"\n' + CAMERA
     scene, messages = load(tmp_path, 'MediumInterface "gas" ""\n' + SPHERE, options=options, expect_warnings=1)
     assert "empty space outside" in messages[0]
+
+
+def test_a_shapes_alpha_is_its_materials_opacity(tmp_path):
+    scene, _ = load(tmp_path, 'Material "diffuse"\nShape "sphere" "float radius" 0.5 "float alpha" 0.25\n' + SPHERE)
+    cut, whole = (material(scene, o.material) for o in scene.mesh_objects)
+    assert (cut.opacity, cut.opacity_texture, whole.opacity) == (0.25, None, 1.0)
+    extra = 'Texture "mask" "float" "checkerboard" "float tex1" 1 "float tex2" 0\n'
+    scene, _ = load(tmp_path, extra + 'Shape "sphere" "float radius" 0.5 "texture alpha" "mask"\n')
+    spec = material(scene, scene.mesh_objects[0].material)
+    assert spec.opacity == 1.0 and spec.opacity_texture.kind == "checkerboard"
+    with pytest.raises(SceneError, match="alpha must be one number"):
+        load(tmp_path, 'Shape "sphere" "float alpha" 2\n')

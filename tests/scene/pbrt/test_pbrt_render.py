@@ -126,3 +126,20 @@ def test_light_through_a_diffuse_transmitter(tmp_path):
     z = (mean.mean() - expected) / np.sqrt(var.sum() / mean.size ** 2)
     assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), expected, z)
     assert np.sqrt(var.sum()) / mean.size < 0.02 * expected
+
+
+def test_a_shapes_alpha_lets_that_share_of_the_light_through(tmp_path):
+    """A black sphere of alpha 0.3 before an emitter of radiance 1 fills the view: each camera
+    sample passes with probability 0.7 (a binomial z-test at the 1% level)."""
+    options = NESTED_OPTIONS.replace("Integrator \"volpath\" \"integer maxdepth\" 10", "Integrator \"path\" \"integer maxdepth\" 1")
+    world = ('AttributeBegin\nAreaLightSource "diffuse" "rgb L" [1 1 1]\n'
+             'Shape "trianglemesh" "point3 P" [-5 -5 -3  5 -5 -3  5 5 -3  -5 5 -3] "integer indices" [0 1 2 0 2 3]\n'
+             'AttributeEnd\nMaterial "diffuse" "rgb reflectance" [0 0 0]\n'
+             'Shape "sphere" "float radius" 1 "float alpha" 0.3\n')
+    scene, _ = load(tmp_path, world, options=options)
+    renderer = Renderer(scene)
+    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp)
+    mean = renderer.film.mean_image()[..., 1]
+    n = mean.size * scene.render.spp
+    z = (mean.mean() - 0.7) / math.sqrt(0.7 * 0.3 / n)
+    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), z)
