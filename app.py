@@ -230,6 +230,8 @@ def build_parser() -> argparse.ArgumentParser:
                             "scenes: a folder of scene folders in pbrt-v4 form (e.g. gonsolo/bitterli)")
     bench.add_argument("--only", metavar="TEXT",
                        help="mitsuba-tests, scenes: only the scenes whose name contains TEXT")
+    bench.add_argument("--mitsuba", action="store_true",
+                       help="scenes: also render each scene that converts with Mitsuba 3 for the same time")
     bench.add_argument("--time", type=float, metavar="S", dest="seconds",
                        help="scenes: seconds of sampling per scene (default 20; 2 with --quick)")
     return parser
@@ -355,6 +357,10 @@ def cmd_bench(args) -> int:
         if args.seconds <= 0:
             raise ValueError(f"--time {args.seconds:g}: needs a positive number of seconds")
         options["seconds"] = args.seconds
+    if args.mitsuba:
+        if args.name != "scenes":
+            raise ValueError(f"--mitsuba is for bench scenes, not {args.name}")
+        options["mitsuba"] = True
     return run_benchmark(args.name, **options)
 
 

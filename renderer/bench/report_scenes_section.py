@@ -24,6 +24,19 @@ def scenes_section(report: dict) -> Section:
         [[r["scene"], r.get("size", ""), r.get("spp"), r.get("verdict") or "", _ratios(r), r.get("load_s"),
           None if "samples_per_s" not in r else r["samples_per_s"] / 1e6, r.get("triangles"),
           r.get("bytes_per_triangle"), r.get("warnings")] for r in rows]))
+    if report.get("mitsuba"):
+        converted = [r for r in rows if "mitsuba_spp" in r]
+        section.findings.append(
+            f"{len(converted)} of {len(rows)} scenes convert to Mitsuba 3 as Lantern reads them; rendered by it for "
+            "the same time, their means say whether a difference from Tungsten's lies in the file as read "
+            "(Mitsuba / Lantern near 1) or in Lantern (Mitsuba / Tungsten near 1).")
+        section.blocks.append(table(
+            ["scene", "Mitsuba / Tungsten (R G B)", "Mitsuba / Lantern (R G B)", "Mitsuba spp", "Mitsuba Msamples/s",
+             "Mitsuba load s", "not converted because"],
+            [[r["scene"], " ".join(f"{v:.3f}" for v in r.get("mitsuba_mean_ratio_rgb") or []),
+              " ".join(f"{v:.3f}" for v in r.get("mitsuba_to_lantern_rgb") or []), r.get("mitsuba_spp"),
+              None if "mitsuba_samples_per_s" not in r else r["mitsuba_samples_per_s"] / 1e6, r.get("mitsuba_load_s"),
+              (r.get("mitsuba_note") or "").replace("<", "&lt;").replace(">", "&gt;")] for r in rows]))
     left_out = [(r["scene"], w) for r in rows for w in (r.get("left_out") or [])] + \
                [(r["scene"], r["note"]) for r in rows if r.get("note")]
     if left_out:

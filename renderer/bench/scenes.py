@@ -84,7 +84,8 @@ def comparable_reference(reference: np.ndarray, size: tuple[int, int]) -> tuple[
     return reduce_to(np.where(finite[..., None], reference, 0.0), size), kept
 
 
-def render_scene(name: str, path: Path, reference_path: Path | None, seconds: float, long_side: int) -> dict:
+def render_scene(name: str, path: Path, reference_path: Path | None, seconds: float, long_side: int,
+                 with_mitsuba: bool = False) -> dict:
     """One scene's row (and its images under "_images")."""
     from renderer.camera import CameraFrame
     from renderer.output.image_io import read_exr
@@ -131,6 +132,7 @@ def render_scene(name: str, path: Path, reference_path: Path | None, seconds: fl
         reference = read_exr(reference_path)[..., :3].astype(np.float64)
         non_finite = int(np.count_nonzero(~np.isfinite(reference).all(axis=-1)))
         reference, kept = comparable_reference(reference, size)
+        row["_kept"] = kept
         if non_finite:
             row["reference_non_finite_pixels"] = non_finite
             row["bench_pixels_left_out"] = int(np.count_nonzero(~kept))
@@ -141,6 +143,21 @@ def render_scene(name: str, path: Path, reference_path: Path | None, seconds: fl
             within = all(r is not None and abs(r - 1.0) <= TARGET for r in row["mean_ratio_rgb"])
             row["verdict"] = "PASS" if within else "FAIL"
     row["_images"] = (image, reference)
+    if with_mitsuba:
+        from renderer.bench.scenes_mitsuba import mitsuba_side
+
+        theirs = mitsuba_side(scene, size, MAX_DEPTH, seconds)
+        image_m = theirs.pop("_image", None)
+        row.update(theirs)
+        if image_m is not None:
+            kept = row.get("_kept", np.ones(image.shape[:2], bool))
+            row["mitsuba_mean_rgb"] = [float(v) for v in image_m[kept].mean(axis=0)]
+            row["mitsuba_to_lantern_rgb"] = [float(m / a) if a > 0 else None
+                                             for m, a in zip(image_m[kept].mean(axis=0), image[kept].mean(axis=0))]
+            if reference is not None:
+                row["mitsuba_mean_ratio_rgb"] = [float(m / b) if b > 0 else None for m, b in
+                                                 zip(image_m[kept].mean(axis=0), reference[kept].mean(axis=0))]
+    row.pop("_kept", None)
     return row
 
 
@@ -159,7 +176,7 @@ def write_strip(row: dict, out_dir: Path) -> Path:
 
 
 def run(quick: bool = False, out_dir: Path = Path("reports"), data: Path | None = None, only: str | None = None,
-        seconds: float | None = None) -> int:
+        seconds: float | None = None, mitsuba: bool = False) -> int:
     if data is None:
         raise ValueError("bench scenes needs --data DIR: a folder of scene folders in pbrt-v4 form "
                          "(e.g. a checkout of gonsolo/bitterli)")
@@ -182,7 +199,7 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), data: Path | None 
         log(f"[{name}] ...")
         init_taichi("cpu")  # a fresh runtime per scene (bounded field trees; kernels come from the cache)
         try:
-            row = render_scene(name, path, reference, seconds, long_side)
+            row = render_scene(name, path, reference, seconds, long_side, with_mitsuba=mitsuba)
         finally:
             ti.reset()
         if "_images" in row:
@@ -202,8 +219,15 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), data: Path | None 
                  for r in rows],
                 title=f"Research scenes: {len(rows)} found, {sum('spp' in r for r in rows)} rendered; "
                       f"{passed} of {len(judged)} matched scenes within {100 * TARGET:.0f}% of Tungsten's means")
+    if mitsuba:
+        print_table(["scene", "Mitsuba / Tungsten (R, G, B)", "Mitsuba / Lantern", "Mitsuba Msamples/s", "note"],
+                    [[r["scene"], " ".join(f"{v:.3f}" for v in r.get("mitsuba_mean_ratio_rgb") or []),
+                      " ".join(f"{v:.3f}" for v in r.get("mitsuba_to_lantern_rgb") or []),
+                      f"{r['mitsuba_samples_per_s'] / 1e6:.2f}" if "mitsuba_samples_per_s" in r else "",
+                      r.get("mitsuba_note", "")] for r in rows],
+                    title="The same scenes as read, rendered by Mitsuba 3 for the same time")
     report = report_header("scenes", quick, load_before, data=str(data), seconds=seconds, long_side=long_side,
-                           target=TARGET, matched=list(MATCHED))
+                           target=TARGET, matched=list(MATCHED), mitsuba=mitsuba)
     report.update(results=rows, passed=passed, judged=len(judged))
     path = write_json(out_dir / "bench_scenes.json", report)
     print(f"wrote {path}")

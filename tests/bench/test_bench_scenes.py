@@ -46,3 +46,25 @@ def test_a_non_finite_reference_pixel_leaves_its_neighbourhood_out_of_both_means
     assert np.allclose(reduced[kept], 1.0)  # what stays is untouched by the light
     _, everything = comparable_reference(np.ones((90, 160, 3)), (16, 9))
     assert everything.all()
+
+
+def test_the_mitsuba_side_renders_what_converts_and_says_why_not_otherwise(tmp_path):
+    """`bench scenes --mitsuba` on two small pbrt-v4 scenes: a diffuse room converts and Mitsuba's
+    figures sit beside Lantern's; a coated sphere (pbrt's layered BSDF, which Mitsuba lacks) is a note."""
+    pytest.importorskip("mitsuba", reason="--mitsuba needs the optional mitsuba package")
+    import json
+
+    from renderer.bench.scenes import run
+    from tests.commands.test_compare import PBRT_ROOM
+
+    for name, text in (("room", PBRT_ROOM),
+                       ("coated", PBRT_ROOM.replace('Material "diffuse" "rgb reflectance" [0.2 0.5 0.8]',
+                                                    'Material "coateddiffuse"'))):
+        folder = tmp_path / "data" / name / "pbrt"
+        folder.mkdir(parents=True)
+        (folder / "scene-v4.pbrt").write_text(text)
+    assert run(quick=True, out_dir=tmp_path / "out", data=tmp_path / "data", seconds=0.2, mitsuba=True) == 0
+    rows = {r["scene"]: r for r in json.loads((tmp_path / "out" / "bench_scenes.json").read_text())["results"]}
+    room, coated = rows["room"], rows["coated"]
+    assert room["mitsuba_spp"] > 0 and all(v > 0 for v in room["mitsuba_to_lantern_rgb"])
+    assert "mitsuba_spp" not in coated and "coated" in coated["mitsuba_note"]
