@@ -76,6 +76,10 @@ def scene_dict(scene: Scene, mesh_dir: Path, size: tuple[int, int] | None = None
              for m in assembly.materials]
     emission = [m.emission if isinstance(m, MaterialSpec) else tuple(m.pbr.emissive_factor)
                 for m in assembly.materials]
+    for m in assembly.materials:
+        if isinstance(m, MaterialSpec) and m.two_sided_emission and max(m.emission) > 0.0:
+            raise ValueError(f"material '{m.name}': emission from both faces has no Mitsuba counterpart "
+                             "(its area lights emit from the front)")
     if any(isinstance(m, ModelMaterial) and m.medium is not None for m in assembly.materials):
         notes.append("glTF volume absorption left out")
     data = assembly.data

@@ -534,7 +534,7 @@ class SppmProgram(RenderProgram):
             wo = -ray.d
             mat, n = self.bsdf.shade(s, wo)
             if ti.static(self.features.has_emission):
-                if s.front_face == 1 and mat.emission.max() > 0.0:
+                if (s.front_face == 1 or mat.two_sided_emission == 1) and mat.emission.max() > 0.0:
                     weight = emission_weight(lights, True, prev_delta, prev_pdf, prev_p, prev_n, s)
                     radiance += beta * weight * mat.emission
             if probing == 1:

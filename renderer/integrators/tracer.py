@@ -311,7 +311,7 @@ class PathTracerBase:
                     if features_only and not aov_open:
                         break
                 if ti.static(ctx.features.has_emission):
-                    if s.front_face == 1 and mat.emission.max() > 0.0:
+                    if (s.front_face == 1 or mat.two_sided_emission == 1) and mat.emission.max() > 0.0:
                         weight = 1.0
                         if ti.static(self.light_sampling):
                             weight = emission_weight(ctx.lights, self.mis, prev_delta, prev_pdf, prev_p, prev_n, s)

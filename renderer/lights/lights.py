@@ -8,7 +8,8 @@ renderer/lights/delta_lights.py).
   pdf_env(direction) -> f32                 density of `sample` giving that environment direction
 All densities are per unit solid angle at `ref` and include the choice of the light, so MIS
 weights can compare them with BSDF densities directly. Emitters are one-sided (Lambertian, like
-Mitsuba's area lights): they emit from the side their normal faces.
+Mitsuba's area lights): they emit from the side their normal faces, or from both where their
+material says so (`two_sided_emission`, pbrt's twosided area lights).
 
 A sample of a light without a surface has `delta` = 1: its `pdf` is only the probability of
 choosing that light, its `radiance` the value that multiplies f / pdf (I falloff / r^2 or E), and
@@ -188,7 +189,8 @@ class Lights:
                     if pt.pdf > 0.0 and dist > 0.0:
                         wi = to / dist
                         radiance = vec3(0.0)
-                        if pt.n.dot(wi) < 0.0:  # the emitting (front) side faces ref
+                        two_sided = ctx.bsdf.materials.table[self.geometry.material_of(g)].two_sided_emission
+                        if pt.n.dot(wi) < 0.0 or two_sided == 1:  # the emitting side (front, or either) faces ref
                             radiance = emitted_radiance(ctx, self.geometry, g, pt.p, pt.n, pt.uv, -wi)
                         pdf = pt.pdf * pmf * (1.0 - share)
                         if ti.static(self.has_delta):
@@ -233,8 +235,12 @@ def emitter_table(geometry, rows_arrays: dict) -> dict:
     emission = rows_arrays["emission"][info["material"]] if len(info["prim"]) else np.zeros((0, 3))
     luminance = emission @ np.array(LUMINANCE_WEIGHTS)
     keep = luminance > 0.0
-    # Flux of a one-sided Lambertian emitter: radiance x area x pi.
-    power = luminance[keep] * info["area"][keep] * math.pi
+    two_sided = (rows_arrays["two_sided_emission"][info["material"]] != 0 if len(info["prim"])
+                 else np.zeros(0, bool))[keep]
+    # Flux of a one-sided Lambertian emitter: radiance x area x pi; twice that from both faces,
+    # whose normals then span every direction (theta_o pi for the light tree).
+    power = luminance[keep] * info["area"][keep] * math.pi * np.where(two_sided, 2.0, 1.0)
+    theta_o = np.where(two_sided, math.pi, info["theta_o"][keep])
     return {"prim": info["prim"][keep], "power": power, "area": info["area"][keep], "lo": info["lo"][keep],
-            "hi": info["hi"][keep], "axis": info["axis"][keep], "theta_o": info["theta_o"][keep],
-            "theta_e": info["theta_e"][keep]}
+            "hi": info["hi"][keep], "axis": info["axis"][keep], "theta_o": theta_o,
+            "theta_e": info["theta_e"][keep], "two_sided": two_sided}

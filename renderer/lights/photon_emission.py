@@ -104,7 +104,9 @@ class Emission:
         area = np.asarray(table["area"], np.float64)
         lo, hi = np.asarray(table["lo"], np.float64), np.asarray(table["hi"], np.float64)
         axis = np.asarray(table["axis"], np.float64)
-        all_round = np.asarray(table["theta_o"], np.float64) > 0.5 * math.pi  # spheres emit all around
+        two_sided = np.asarray(table.get("two_sided", np.zeros(len(table["prim"]), bool)), bool)
+        # spheres emit all around (a flat shape emitting from both faces is still aimed at from one)
+        all_round = (np.asarray(table["theta_o"], np.float64) > 0.5 * math.pi) & ~two_sided
         power = np.asarray(table["power"], np.float64)
         self.count = len(prims)
         self.has_area = self.count > 0 and float(power.sum()) > 0.0
@@ -115,6 +117,7 @@ class Emission:
         self.prim = ti.field(ti.i32, shape=n)
         self.area = ti.field(ti.f32, shape=n)
         self.eps = ti.field(ti.f32, shape=n)
+        self.two_sided = ti.field(ti.i32, shape=n)
         self.anchor = ti.Vector.field(3, ti.f32, shape=n)
         self.cdf = ti.field(ti.f32, shape=n + 1)
         # [centre.xyz, radius] of the scene's bounding sphere; [area power, env integral]
@@ -131,6 +134,7 @@ class Emission:
             cdf = np.concatenate([[0.0], np.cumsum(power)]) / power.sum()
             cdf[-1] = 1.0
             upload_fields([(self.prim, prims), (self.area, area), (self.anchor, anchor), (self.cdf, cdf),
+                           (self.two_sided, two_sided.astype(np.int32)),
                            (self.eps, np.maximum(MIN_EMIT_EPS, EMIT_EPS_FRACTION * np.sqrt(area)))])
         upload_fields([(self.powers, np.array([self.area_power, self.env_integral], np.float32))])
         self.bounds_per_pass = scene_bounds is None
@@ -246,6 +250,8 @@ class Emission:
                     cos_max = ti.sqrt(ti.max(0.0, 1.0 - sin2_max))
                     one_minus_cos_max = sin2_max / (1.0 + cos_max)  # accurate for small cones
                     d = vec3(0.0, 1.0, 0.0)
+                    # A two-sided emitter's cosine-weighted directions go to either face, half each.
+                    sides = 2.0 if self.two_sided[e] == 1 else 1.0
                     if u_mix < share:
                         # uniform in the cone the target subtends
                         one_minus_cos = u_dir.x * one_minus_cos_max
@@ -255,14 +261,20 @@ class Emission:
                         ta, tb = orthonormal_basis(axis)
                         d = ti.cos(phi) * sin_t * ta + ti.sin(phi) * sin_t * tb + cos_t * axis
                     else:
-                        t, b = orthonormal_basis(pt.n)
-                        d = to_world(cosine_hemisphere(u_dir), t, b, pt.n)
+                        face = pt.n
+                        if sides > 1.0 and (u_mix - share) < 0.5 * (1.0 - share):
+                            face = -pt.n
+                        t, b = orthonormal_basis(face)
+                        d = to_world(cosine_hemisphere(u_dir), t, b, face)
                     cos_n = d.dot(pt.n)
+                    if sides > 1.0:
+                        cos_n = ti.abs(cos_n)
+                        pt.n = pt.n if d.dot(pt.n) > 0.0 else -pt.n  # the face the photon leaves
                     in_cone = 1.0 - d.dot(axis) <= one_minus_cos_max
-                    pdf_dir = (1.0 - share) * ti.max(cos_n, 0.0) / PI
+                    pdf_dir = (1.0 - share) * ti.max(cos_n, 0.0) / (PI * sides)
                     if share > 0.0 and in_cone:
                         pdf_dir += share / (2.0 * PI * one_minus_cos_max)
-                    if cos_n > 0.0 and pdf_dir > 0.0:  # emitters emit from their front side only
+                    if cos_n > 0.0 and pdf_dir > 0.0:  # from the front face only, unless two-sided
                         radiance = emitted_radiance(ctx, self.geometry, g, pt.p, pt.n, pt.uv, d)
                         # Le cos / (pmf (1 - p_env) (1 / area) pdf_dir)
                         beta = radiance * (cos_n * self.area[e] / (pmf * (1.0 - p_env) * pdf_dir))

@@ -83,6 +83,8 @@ class Bsdf:
                        sheen_color=rec.sheen_color, sheen_roughness=rec.sheen_roughness, specular=rec.specular,
                        specular_color=rec.specular_color, coat_normal=n, microfacet=0, nonlinear=0, plastic_table=-1,
                        internal_reflectance=0.0, specular_weight=0.0, sidedness=TWO_SIDED)
+        if ti.static(self.features.has_emission):
+            mat.two_sided_emission = rec.two_sided_emission
         if ti.static(self.features.has_sidedness):
             mat.sidedness = rec.sidedness
         if ti.static(self.features.has_microfacet_models):

@@ -133,7 +133,8 @@ SHARED_COLUMNS = (
     Column("textures", "ivec4", (NO_TEXTURE,) * 4),  # base colour, metallic-roughness, normal, emissive
     Column("normal_map_model", "i32", TANGENT_SPACE_MAP),  # NORMAL_MAP_MODELS: what the normal slot holds
     Column("medium", "i32", NO_MEDIUM),
-    Column("outside_medium", "i32", SCENE_MEDIUM),  # crossing outwards leads here (SCENE_MEDIUM: the scene's)
+    Column("outside_medium", "i32", SCENE_MEDIUM),
+    Column("two_sided_emission", "i32", 0, from_spec=True),  # emission from both faces (else the front's)  # crossing outwards leads here (SCENE_MEDIUM: the scene's)
     Column("alpha_mode", "i32", 0),
     Column("alpha_cutoff", "f32", 0.5),
     Column("base_alpha", "f32", 1.0),

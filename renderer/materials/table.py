@@ -57,7 +57,8 @@ Material = ti.types.struct(kind=ti.i32, base_color=vec3, alpha=ti.f32, metallic=
                            # The coated kind's (renderer/materials/coated.py).
                            coat_base=ti.i32, coat_thickness=ti.f32, coat_albedo=vec3, coat_g=ti.f32,
                            coat_maxdepth=ti.i32, coat_nsamples=ti.i32, conductor_alpha=ti.f32,
-                           transmittance=vec3)  # diffuse_transmission's
+                           transmittance=vec3,  # diffuse_transmission's
+                           two_sided_emission=ti.i32)
 
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = 0, 1, 2
 ALPHA_MODE_IDS = {"OPAQUE": ALPHA_OPAQUE, "MASK": ALPHA_MASK, "BLEND": ALPHA_BLEND}

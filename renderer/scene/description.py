@@ -182,6 +182,7 @@ class MaterialSpec:
     # the medium a path crossing out of such a surface enters ("" = the scene's: the fog's medium, or
     # none); pbrt's MediumInterface outside, e.g. a glass sphere standing in a gas
     outside_medium: str = ""
+    two_sided_emission: bool = False  # an emitter shines from both faces (pbrt's twosided area light)
     transmittance: Vec3 = (0.2, 0.2, 0.2)  # diffuse_transmission: Lambert transmission's colour (with base_color, <= 1)
     abbe: float = 0.0  # dielectric dispersion: Abbe number of a Cauchy curve through ior (0 = none)
     glass: str = ""  # dielectric dispersion: a real glass's Sellmeier curve (overrides ior and abbe)

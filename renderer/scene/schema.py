@@ -354,6 +354,8 @@ MATERIAL = Section(
         Field("emission", "vec3", (0.0, 0.0, 0.0), "Emitted radiance, linear RGB.", NON_NEGATIVE),
         Field("emission_strength", "float", 1.0, "Multiplier folded into `emission`.",
               NON_NEGATIVE, in_model=False),
+        Field("two_sided_emission", "bool", False, "Emit from both faces of the surface (pbrt's `twosided` "
+              "area light), not only from the front one the normal points out of; twice the power."),
         Field("abbe", "float", 0.0, "Dispersion: the Abbe number of the glass (about 64 for crown "
               "glass, 25-35 for flint, lower disperses more); the index then follows a Cauchy curve "
               "through `ior` at 587.6 nm. 0 is no dispersion. A dispersive material makes the scene "

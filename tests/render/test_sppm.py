@@ -250,7 +250,7 @@ def _aim(program: ti.template(), lo: ti.math.vec3, hi: ti.math.vec3):
         program.emission.set_target_func(lo, hi)
 
 
-@pytest.mark.parametrize("light", ["area", "environment"])
+@pytest.mark.parametrize("light", ["area", "environment", "two-sided area"])
 def test_aimed_photons_carry_the_scene_power_on_average(tmp_path, light):
     """With a target region (a unit sphere on the floor, away from the light), most photons are
     aimed at it, and their mean power is still the scene's emitted power (the mixture's density is
@@ -258,7 +258,9 @@ def test_aimed_photons_carry_the_scene_power_on_average(tmp_path, light):
     error is an overestimate for them, so the test is conservative)."""
     from tests.scene_builder import scene_from_toml
 
-    body = AIM_SCENE.format(env=0.5 if light == "environment" else 0.0, lamp=50.0 if light == "area" else 0.0)
+    body = AIM_SCENE.format(env=0.5 if light == "environment" else 0.0, lamp=0.0 if light == "environment" else 50.0)
+    if light == "two-sided area":  # its power twice the one-sided lamp's, half of it sent upwards
+        body = body.replace("emission = [50.0, 50.0, 50.0]", "emission = [50.0, 50.0, 50.0]\ntwo_sided_emission = true")
     scene = scene_from_toml(tmp_path, body)
     r = Renderer(scene, (8, 8))
     program = r.program("sppm", r.features(), "independent")
@@ -270,6 +272,11 @@ def test_aimed_photons_carry_the_scene_power_on_average(tmp_path, light):
     beta, origin, direction = (out[:, k].astype(np.float64) for k in range(3))
     luminance = beta @ np.array(LUMINANCE_WEIGHTS)
     expected = program.emission.total_power()
+    if light != "environment":
+        lamp = 50.0 * sum(LUMINANCE_WEIGHTS) * 0.01 * np.pi * (2.0 if light == "two-sided area" else 1.0)
+        assert expected == pytest.approx(lamp, rel=1e-5)
+        upwards = (direction[:, 1] > 0.0) & (out[:, 4, 0] == 1)
+        assert upwards.any() == (light == "two-sided area")  # (the lamp faces down)
     z = (luminance.mean() - expected) / (luminance.std() / np.sqrt(n))
     assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (luminance.mean(), expected)
     # Most photons head for the target: their line passes within its radius of its centre.

@@ -410,7 +410,8 @@ BAD_SCENES = {
     "material unknown field": (scene_text(materials="[materials.glass]\ntype = \"dielectric\"\niorr = 1.5\n"),
                                "materials.glass: unknown field 'iorr' (allowed: type, base_color, roughness, ior, thin, "
                                "specular_color, microfacet, roughness_v, sidedness, "
-                               "opacity, emission, emission_strength, abbe, glass, medium, outside_medium, normal_map, bump_map, bump_scale)"),
+                               "opacity, emission, emission_strength, two_sided_emission, abbe, glass, medium, outside_medium, normal_map, "
+                               "bump_map, bump_scale)"),
     "material unknown type": (scene_text(materials='[materials.m]\ntype = "metal"\n'),
                               "materials.m.type: unknown value 'metal' (allowed: diffuse, conductor, dielectric, principled, null, plastic, disney, coated, diffuse_transmission)"),
     "ior on conductor": (scene_text(materials='[materials.m]\ntype = "conductor"\nior = 1.5\n'),

@@ -96,26 +96,24 @@ def read_lights(lights: list[Directive]) -> tuple[list[LightSpec], EnvironmentSp
     return out, environment or BLACK
 
 
-def area_emission(d: Directive | None) -> tuple[tuple, float]:
-    """The radiance a shape emits under an AreaLightSource (zero without one), and the factor
-    `power` asks for: the radiance is then that times power / (pi area), twice the area where
-    two-sided, as pbrt-v4 has it (-1: no power given)."""
+def area_emission(d: Directive | None) -> tuple[tuple, float, bool]:
+    """The radiance a shape emits under an AreaLightSource (zero without one), the factor `power`
+    asks for (the radiance is then that times power / (pi area), twice the area where two-sided,
+    as pbrt-v4 has it; -1: no power given), and whether it emits from both faces."""
     if d is None:
-        return (0.0, 0.0, 0.0), -1.0
+        return (0.0, 0.0, 0.0), -1.0, False
     if d.type != "diffuse":
         warn(d, f"the {d.type} area light is not supported: the shape does not emit")
-        return (0.0, 0.0, 0.0), -1.0
+        return (0.0, 0.0, 0.0), -1.0, False
     p = d.params
     rgb = spectrum(d, "L") * p.float("scale", 1.0)
     two_sided = p.boolean("twosided", False)
-    if two_sided:
-        warn(d, "twosided is not supported: the shape emits from its front side only")
     power = p.float("power", -1.0)
     if p.has("filename"):
         p.find("filename")
         warn(d, "an image on an area light is not supported: L is used")
     warn_unused(d)
-    return _vec(rgb), (power / (2.0 if two_sided else 1.0) if power > 0 else -1.0)
+    return _vec(rgb), (power / (2.0 if two_sided else 1.0) if power > 0 else -1.0), two_sided
 
 
 def image_environment(d: Directive, mirror: np.ndarray | None, budget=None) -> EnvironmentSpec:

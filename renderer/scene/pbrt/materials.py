@@ -391,19 +391,21 @@ class MaterialReader:
         return float(p.values[0]), None
 
     def with_surface(self, base: MaterialSpec, emission, medium: str, outside: str = "",
-                     alpha: tuple = (1.0, None)) -> str:
+                     alpha: tuple = (1.0, None), two_sided: bool = False) -> str:
         """The name of `base` with a shape's emission, interior medium, outside medium and alpha
         (a material of its own, shared by the shapes that have the same)."""
         opacity, opacity_texture = alpha
         cut = opacity < 1.0 or opacity_texture is not None
         if max(emission) <= 0.0 and not medium and not outside and not cut:
             return base.name
-        key = (base.name, tuple(emission), medium, outside, opacity, id(opacity_texture))
+        two_sided = two_sided and max(emission) > 0.0
+        key = (base.name, tuple(emission), medium, outside, opacity, id(opacity_texture), two_sided)
         if key not in self.surfaces:
             parts = ("emitter" if max(emission) > 0.0 else "", medium, f"in {outside}" if outside else "",
                      "alpha" if cut else "")
             suffix = "+".join(part for part in parts if part)
-            spec = replace(base, name=f"{base.name}+{suffix}", emission=tuple(emission), medium=medium,
+            spec = replace(base, name=f"{base.name}+{suffix}", emission=tuple(emission), two_sided_emission=two_sided,
+                           medium=medium,
                            outside_medium=outside, opacity=opacity if cut else base.opacity,
                            opacity_texture=opacity_texture if cut else base.opacity_texture)
             self.surfaces[key] = self._add(spec).name

@@ -78,16 +78,16 @@ class _Builder:
 
     def place(self, d: Directive, outer: np.ndarray, instanced: bool = False) -> list:
         base = self.reader.of_shape(d.material)
-        emission, power = (0.0, 0.0, 0.0), -1.0
+        emission, power, two_sided = (0.0, 0.0, 0.0), -1.0, False
         if d.area_light is not None and id(d.area_light) not in self.emission:
             if instanced:
                 warn(d.area_light, "area lights on object instances are not supported (nor in pbrt-v4): "
                                    "the instances do not emit")
-                self.emission[id(d.area_light)] = (0.0, 0.0, 0.0), -1.0
+                self.emission[id(d.area_light)] = (0.0, 0.0, 0.0), -1.0, False
             else:
                 self.emission[id(d.area_light)] = area_emission(d.area_light)
         if d.area_light is not None and not instanced:
-            emission, power = self.emission[id(d.area_light)]
+            emission, power, two_sided = self.emission[id(d.area_light)]
         inside, outside = self.media_of(d)
         if id(d) not in self.shapes:  # an object's shapes are read once, however many instances place them
             self.shapes[id(d)] = shape_objects(d, base.name, self.model_files)
@@ -104,7 +104,7 @@ class _Builder:
                         "pbrt; their parts differ in area, so the radiance of their mean area is used")
             if areas and min(areas) > 0:
                 emission = tuple(c * power / (math.pi * float(np.mean(areas))) for c in emission)
-        material = self.reader.with_surface(base, emission, inside, outside, self.reader.alpha(d))
+        material = self.reader.with_surface(base, emission, inside, outside, self.reader.alpha(d), two_sided)
         return [replace(obj, material=material, to_world=_rows(matrix)) for obj, matrix in placed]
 
     def media_of(self, d: Directive) -> tuple[str, str]:

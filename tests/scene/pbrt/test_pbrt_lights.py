@@ -90,13 +90,14 @@ def test_area_light_power_divides_by_each_lights_area(tmp_path):
                              'Scale 2 2 2\nShape "sphere"\n'
                              'Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 1 1 0 0 1 0] "integer indices" [0 1 2 0 2 3]\n'
                              'Shape "bilinearmesh" "point3 P" [0 0 0 1 0 0 0 1 0 1 1 0]\n'
-                             'AttributeEnd\nAreaLightSource "diffuse" "bool twosided" true\n' + SPHERE,
-                             expect_warnings=1)
-    sphere, triangles, patch = (material(scene, o.material) for o in scene.mesh_objects[:3])
+                             'AttributeEnd\nAreaLightSource "diffuse" "bool twosided" true "float power" 100\n'
+                             'Shape "sphere" "float radius" 2\n')
+    sphere, triangles, patch, both = (material(scene, o.material) for o in scene.mesh_objects[:4])
     assert sphere.emission == pytest.approx((100 / (math.pi * 16 * math.pi),) * 3)  # radius 2: area 16 pi
     assert triangles.emission == pytest.approx((100 / (math.pi * 2),) * 3)  # each triangle: half of 2 x 2
     assert patch.emission == pytest.approx((100 / (math.pi * 4),) * 3)  # one patch of 2 x 2
-    assert "twosided" in messages[0]
+    assert not sphere.two_sided_emission and both.two_sided_emission
+    assert both.emission == pytest.approx((50 / (math.pi * 16 * math.pi),) * 3)  # both faces share the power
 
 
 def test_unsupported_light_warns(tmp_path):

@@ -143,3 +143,23 @@ def test_a_shapes_alpha_lets_that_share_of_the_light_through(tmp_path):
     n = mean.size * scene.render.spp
     z = (mean.mean() - 0.7) / math.sqrt(0.7 * 0.3 / n)
     assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), z)
+
+
+@pytest.mark.parametrize("integrator", ["mis", "path"])
+def test_a_two_sided_light_facing_away_lights_the_floor_from_its_back(tmp_path, integrator):
+    """The first test's emitter turned to face up (away from the floor) and made two-sided: the floor
+    receives the same irradiance, by light sampling through its back face (mis) and by paths that
+    hit it (path); one-sided, it would be dark."""
+    world = WORLD.replace('AreaLightSource "diffuse" "rgb L" [{0} {0} {0}]'.format(RADIANCE),
+                          'AreaLightSource "diffuse" "rgb L" [{0} {0} {0}] "bool twosided" true'.format(RADIANCE))
+    world = world.replace("[0 1 2 0 2 3]", "[0 2 1 0 3 2]", 1)  # the emitter's winding turned over
+    scene, _ = load(tmp_path, world, options=SCENE_OPTIONS.replace('"integer pixelsamples" 32',
+                                                                    '"integer pixelsamples" 128'))
+    renderer = Renderer(scene)
+    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp, integrator)
+    expected = ALBEDO * RADIANCE * 4.0 * corner_form_factor(HALF, HALF, HEIGHT)
+    mean = renderer.film.mean_image()[..., 1]
+    var = renderer.film.variance_of_mean_image()[..., 1]
+    z = (mean.mean() - expected) / np.sqrt(var.sum() / mean.size ** 2)
+    assert abs(z) < stats.norm.ppf(1 - ALPHA / 4), (mean.mean(), expected, z)  # Sidak over the two
+    assert np.sqrt(var.sum()) / mean.size < 0.05 * expected
