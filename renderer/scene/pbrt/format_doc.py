@@ -56,11 +56,12 @@ spectra and `blackbody` are normalised to luminance 1 first, as pbrt-v4 normalis
 | `LightSource "infinite"` with `filename` (an `.exr` or `.hdr` equal-area square map; `scale`) | an environment map: the square resampled once into a latitude-longitude map (bilinearly, as pbrt looks it up) with the light's rotation and the scene's mirror baked in, cached as an EXR under `$XDG_CACHE_HOME/lantern/pbrt-environments` (by default `~/.cache`) |
 | a shape's `alpha` (a number or a float texture) | the opacity of its material (a copy for the shape): the coverage, a texture's first channel; Lantern's opacity is stochastic, as pbrt's alpha test |
 | `MakeNamedMedium` `homogeneous` (`sigma_a`, `sigma_s`, `scale`, `g`) with `MediumInterface` | the inside medium is the shapes' material's `medium`, the outside one its `outside_medium` unless it is the camera's; the camera's medium (the outside one current at `Camera`) fills the scene as `fog.model = "medium"`; a shape without a transition (inside = outside) keeps the medium a ray is in |
+| `MakeNamedMedium` `uniformgrid` (`density` with `nx`, `ny`, `nz`; `p0`, `p1`; `sigma_a`, `sigma_s`, `scale`, `g`) | a grid medium: extinction (sigma_a + sigma_s) scale density over [p0, p1] in the medium's space, the density at cell centres read trilinearly as pbrt's, albedo sigma_s / (sigma_a + sigma_s); emission (`Le`, `temperature`) a warning |
 
 Left out with one warning each, naming file, line and directive, while the rest renders: maps in
 formats other than EXR and Radiance HDR, `illuminance`, goniometric and projection lights, other
 shapes (curves, cones, paraboloids, hyperboloids), other materials (rendered diffuse 0.5),
-other textures (the parameter's default), media other than `homogeneous` and named scattering
+other textures (the parameter's default), media other than `homogeneous` and `uniformgrid` (`rgbgrid`, `cloud`, `nanovdb`) and named scattering
 presets, empty space outside a shape while the camera is in a medium, float textures on roughness and indices, textures inside a checkerboard,
 area lights on object instances, motion blur (`ActiveTransform`,
 `TransformTimes`), `Attribute`, `Option`, colour spaces other than sRGB, and any parameter no

@@ -15,7 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from renderer.scene.description import MaterialSpec, MediumSpec, TextureSpec
+from renderer.scene.description import MaterialSpec, MediumSpec, TextureSpec, VolumeGridSpec
 from renderer.scene.errors import SceneError
 from renderer.scene.pbrt.directives import Directive, NamedRef
 from renderer.scene.pbrt.parameters import resolve
@@ -350,6 +350,8 @@ class MaterialReader:
         return self.media[name]
 
     def _medium(self, d: Directive, name: str) -> str:
+        if d.type == "uniformgrid":
+            return self._grid_medium(d, name)
         if d.type != "homogeneous":
             warn(d, f"the {d.type} medium is not supported: left out")
             d.params.find("type")
@@ -360,6 +362,14 @@ class MaterialReader:
         if d.params.has("preset"):
             warn(d, "named scattering presets are not supported: sigma_a and sigma_s are used")
             d.params.find("preset")
+        sigma_a, sigma_s, scale, g = self._coefficients(d)
+        warn_unused(d)
+        self.builder.media.append(MediumSpec(name, sigma_a=tuple(scale * c for c in sigma_a),
+                                             sigma_s=tuple(scale * c for c in sigma_s), g=g))
+        return name
+
+    def _coefficients(self, d: Directive) -> tuple:
+        """(sigma_a, sigma_s, scale, g) of a medium directive, pbrt's defaults 1, 1, 1, 0."""
         sigma = []
         for param in ("sigma_a", "sigma_s"):
             p = d.params.find(param)
@@ -371,9 +381,42 @@ class MaterialReader:
         g = self.number(d, "g", 0.0)
         if not -1.0 < g < 1.0:
             raise d.error(f"g {g:g} is not between -1 and 1")
+        return sigma[0], sigma[1], scale, g
+
+    def _grid_medium(self, d: Directive, name: str) -> str:
+        """pbrt's uniformgrid as Lantern's grid medium: extinction (sigma_a + sigma_s) scale
+        density(p) over the box [p0, p1] of the medium's space (its transform at MakeNamedMedium),
+        density at the cell centres read trilinearly as pbrt's SampledGrid; albedo sigma_s /
+        (sigma_a + sigma_s) throughout. Emission (Le, temperature) is left out with a warning."""
+        d.params.find("type")
+        sigma_a, sigma_s, scale, g = self._coefficients(d)
+        res = [d.params.integer(axis, 1) for axis in ("nx", "ny", "nz")]
+        density = d.params.floats("density")
+        if density is None:
+            raise d.error("a uniformgrid needs \"float density\" values")
+        if min(res) < 1 or len(density) != res[0] * res[1] * res[2]:
+            raise d.error(f"{len(density)} density values for a grid of {res[0]} x {res[1]} x {res[2]}")
+        values = np.asarray(density, np.float32).reshape(res[2], res[1], res[0], 1)
+        if not np.isfinite(values).all() or values.min() < 0.0:
+            raise d.error("density values must be finite and not negative")
+        p0, p1 = (np.asarray(d.params.point3(k, v), np.float64) for k, v in (("p0", (0, 0, 0)), ("p1", (1, 1, 1))))
+        if np.any(p1 <= p0):
+            raise d.error("p1 must exceed p0 on every axis")
+        for emitted in ("Le", "Lescale", "temperature", "temperaturescale", "temperatureoffset"):
+            if d.params.has(emitted):
+                d.params.find(emitted)
+                warn(d, f"'{emitted}': emission from a medium is not supported: left out")
         warn_unused(d)
-        self.builder.media.append(MediumSpec(name, sigma_a=tuple(scale * c for c in sigma[0]),
-                                             sigma_s=tuple(scale * c for c in sigma[1]), g=g))
+        box = np.diag([*(p1 - p0), 1.0])
+        box[:3, 3] = p0
+        to_world = tuple(tuple(float(v) for v in row) for row in d.ctm @ box)
+        extinction = np.add(sigma_a, sigma_s)
+        albedo = np.divide(sigma_s, extinction, out=np.zeros(3), where=extinction > 0)
+        self.builder.media.append(MediumSpec(
+            name, kind="grid", g=g, scale=scale,
+            density=VolumeGridSpec(values=values * extinction.astype(np.float32), to_world=to_world),
+            albedo=VolumeGridSpec(values=albedo.astype(np.float32).reshape(1, 1, 1, 3), to_world=to_world,
+                                  constant=tuple(float(a) for a in albedo))))
         return name
 
 

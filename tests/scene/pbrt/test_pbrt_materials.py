@@ -185,3 +185,24 @@ def test_a_shapes_alpha_is_its_materials_opacity(tmp_path):
     assert spec.opacity == 1.0 and spec.opacity_texture.kind == "checkerboard"
     with pytest.raises(SceneError, match="alpha must be one number"):
         load(tmp_path, 'Shape "sphere" "float alpha" 2\n')
+
+
+GRID = ('AttributeBegin\nTranslate 1 0 0\nMakeNamedMedium "smoke" "string type" "uniformgrid" "integer nx" 2 "integer ny" 1 '
+        '"integer nz" 1 "float density" [0 2] "point3 p0" [-1 -1 -1] "point3 p1" [1 1 1] "rgb sigma_a" [1 1 1] '
+        '"rgb sigma_s" [1 2 3] "float scale" 0.5\nAttributeEnd\n')
+
+
+def test_a_uniform_grid_is_a_grid_medium(tmp_path):
+    _, _, scene = one(tmp_path, 'MediumInterface "smoke" ""\nMaterial "interface"', extra=GRID)
+    m = scene.media[0]
+    assert (m.kind, m.scale) == ("grid", 0.5)
+    np.testing.assert_allclose(m.density.values[..., 0], [[[0.0, 4.0]]])  # density x (sigma_a + sigma_s): 2 x 2
+    np.testing.assert_allclose(m.density.values[0, 0, 1], [4.0, 6.0, 8.0])
+    np.testing.assert_allclose(m.albedo.constant, (0.5, 2 / 3, 0.75))
+    # the unit cube onto [p0, p1] in the medium's space, then its transform (x + 1)
+    np.testing.assert_allclose(np.array(m.density.to_world), [[2, 0, 0, 0], [0, 2, 0, -1], [0, 0, 2, -1], [0, 0, 0, 1]])
+
+
+def test_a_grid_with_the_wrong_number_of_values_is_an_error(tmp_path):
+    with pytest.raises(SceneError, match="3 density values for a grid of 2 x 1 x 1"):
+        one(tmp_path, 'MediumInterface "smoke" ""', extra=GRID.replace("[0 2]", "[0 2 3]"))

@@ -163,3 +163,24 @@ def test_a_two_sided_light_facing_away_lights_the_floor_from_its_back(tmp_path, 
     z = (mean.mean() - expected) / np.sqrt(var.sum() / mean.size ** 2)
     assert abs(z) < stats.norm.ppf(1 - ALPHA / 4), (mean.mean(), expected, z)  # Sidak over the two
     assert np.sqrt(var.sum()) / mean.size < 0.05 * expected
+
+
+def test_light_through_a_uniform_grid_medium(tmp_path):
+    """pbrt's uniformgrid (two cells: density 0 and 2 at their centres x = -0.5 and 0.5, clamped
+    beyond) inside an interface sphere of radius 1, absorbing only: the rays at x = 0.75 cross a
+    chord of 2 sqrt(1 - 0.75^2) at density 2 (a binomial z-test at the 1% level)."""
+    options = NESTED_OPTIONS.replace("LookAt 0 0 5  0 0 0  0 1 0", "LookAt 0.75 0 5  0.75 0 0  0 1 0")
+    world = ('LightSource "infinite" "rgb L" [1 1 1]\n'
+             'MakeNamedMedium "smoke" "string type" "uniformgrid" "integer nx" 2 "integer ny" 1 "integer nz" 1 '
+             '"float density" [0 2] "point3 p0" [-1 -1 -1] "point3 p1" [1 1 1] "rgb sigma_a" [1 1 1] '
+             '"rgb sigma_s" [0 0 0]\n'
+             'AttributeBegin\nMediumInterface "smoke" ""\nMaterial "interface"\nShape "sphere" "float radius" 1\n'
+             'AttributeEnd\n')
+    scene, _ = load(tmp_path, world, options=options)
+    renderer = Renderer(scene)
+    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp)
+    mean = renderer.film.mean_image()[..., 1]
+    expected = math.exp(-2.0 * 2.0 * math.sqrt(1 - 0.75 ** 2))
+    n = mean.size * scene.render.spp
+    z = (mean.mean() - expected) / math.sqrt(expected * (1 - expected) / n)
+    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), expected, z)
