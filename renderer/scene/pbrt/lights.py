@@ -117,7 +117,8 @@ def area_emission(d: Directive | None) -> tuple[tuple, float, bool]:
 
 
 def image_environment(d: Directive, mirror: np.ndarray | None, budget=None) -> EnvironmentSpec:
-    """An image infinite light as a lat-long map (environment_map.py), or black with a warning."""
+    """An image infinite light as a lat-long map (environment_map.py); a missing map is a uniform
+    white one, a format that cannot be read black, each with a warning."""
     from renderer.scene.pbrt.environment_map import converted_map
     from renderer.scene.pbrt.parameters import resolve
 
@@ -132,9 +133,10 @@ def image_environment(d: Directive, mirror: np.ndarray | None, budget=None) -> E
     if path.suffix.lower() not in (".exr", ".hdr", ".pfm"):
         warn(d, f"{name}: only .exr, .hdr and .pfm maps are supported: the environment is black")
         return BLACK
-    if not path.is_file():
-        warn(d, f"{name}: file not found (looked for {path}): the environment is black")
-        return BLACK
+    if not path.is_file():  # a neutral stand-in, as 0.5 is for a missing texture: the scene stays visible
+        warn(d, f"{name}: file not found (looked for {path}): a uniform white environment (times its scale) "
+                "stands in")
+        return EnvironmentSpec(kind="constant", color=(1.0, 1.0, 1.0), intensity=scale)
     m3 = d.ctm[:3, :3] if mirror is None else mirror[:3, :3] @ d.ctm[:3, :3]
     try:
         file = converted_map(path, np.linalg.inv(m3), budget)
