@@ -4,6 +4,8 @@ benchmark's numbers do not give. Needs Xvfb and ImageMagick's `import`.
 
     python scripts/view_scenes.py --data DIR [--seconds 30] [--only TEXT] [--out reports/viewer_scenes]
 
+Needs the Debian packages xvfb, xdotool and imagemagick.
+
 Writes OUT/<scene>.png (the window) and OUT/montage.png, and prints per scene whether the viewer
 was still running when the screenshot was taken and what it wrote to stderr last."""
 from __future__ import annotations
