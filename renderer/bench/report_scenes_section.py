@@ -9,6 +9,14 @@ def _ratios(row: dict) -> str:
     return " ".join("-" if v is None else f"{v:.3f}" for v in row.get("mean_ratio_rgb") or [])
 
 
+def _mitsuba_notes(row: dict) -> str:
+    if row.get("mitsuba_note"):
+        return row["mitsuba_note"]
+    notes = row.get("mitsuba_notes") or []
+    left_out = [n for n in notes if "left out" in n]  # what changes the scene, before what changes a lobe
+    return "; ".join((left_out + [n for n in notes if n not in left_out])[:2]) + (" ..." if len(notes) > 2 else "")
+
+
 def scenes_section(report: dict) -> Section:
     rows = report.get("results", [])
     rendered = [r for r in rows if "spp" in r]
@@ -29,14 +37,15 @@ def scenes_section(report: dict) -> Section:
         section.findings.append(
             f"{len(converted)} of {len(rows)} scenes convert to Mitsuba 3 as Lantern reads them; rendered by it for "
             "the same time, their means say whether a difference from Tungsten's lies in the file as read "
-            "(Mitsuba / Lantern near 1) or in Lantern (Mitsuba / Tungsten near 1).")
+            "(Mitsuba / Lantern near 1) or in Lantern (Mitsuba / Tungsten near 1), where the conversion left "
+            "nothing out (its notes: a texture left out makes the two scenes differ).")
         section.blocks.append(table(
             ["scene", "Mitsuba / Tungsten (R G B)", "Mitsuba / Lantern (R G B)", "Mitsuba spp", "Mitsuba Msamples/s",
-             "Mitsuba load s", "not converted because"],
+             "Mitsuba load s", "not converted because, or the conversion's notes"],
             [[r["scene"], " ".join(f"{v:.3f}" for v in r.get("mitsuba_mean_ratio_rgb") or []),
               " ".join(f"{v:.3f}" for v in r.get("mitsuba_to_lantern_rgb") or []), r.get("mitsuba_spp"),
               None if "mitsuba_samples_per_s" not in r else r["mitsuba_samples_per_s"] / 1e6, r.get("mitsuba_load_s"),
-              (r.get("mitsuba_note") or "").replace("<", "&lt;").replace(">", "&gt;")] for r in rows]))
+              _mitsuba_notes(r).replace("<", "&lt;").replace(">", "&gt;")] for r in rows]))
     left_out = [(r["scene"], w) for r in rows for w in (r.get("left_out") or [])] + \
                [(r["scene"], r["note"]) for r in rows if r.get("note")]
     if left_out:

@@ -224,7 +224,8 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), data: Path | None 
                     [[r["scene"], " ".join(f"{v:.3f}" for v in r.get("mitsuba_mean_ratio_rgb") or []),
                       " ".join(f"{v:.3f}" for v in r.get("mitsuba_to_lantern_rgb") or []),
                       f"{r['mitsuba_samples_per_s'] / 1e6:.2f}" if "mitsuba_samples_per_s" in r else "",
-                      r.get("mitsuba_note", "")] for r in rows],
+                      r.get("mitsuba_note") or next((n for n in r.get("mitsuba_notes") or [] if "left out" in n), "")]
+                     for r in rows],
                     title="The same scenes as read, rendered by Mitsuba 3 for the same time")
     report = report_header("scenes", quick, load_before, data=str(data), seconds=seconds, long_side=long_side,
                            target=TARGET, matched=list(MATCHED), mitsuba=mitsuba)
