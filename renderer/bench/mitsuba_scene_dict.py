@@ -180,13 +180,32 @@ def _image(texture) -> dict:
             "filter_type": "nearest" if texture.nearest else "bilinear"}
 
 
+def _colour(factor, texture) -> dict:
+    """A diffuse reflectance: the factor, or Mitsuba's bitmap or checkerboard (with the same uv
+    transform, Lantern's TextureSpec being Mitsuba's) where the factor is white."""
+    if texture is None:
+        return _rgb(factor)
+    if tuple(factor) != (1.0, 1.0, 1.0):
+        raise ValueError("a texture times a colour other than white has no Mitsuba counterpart here")
+    from renderer.bench.mitsuba_side import _import_mitsuba
+
+    mi = _import_mitsuba()[0]
+    to_uv = mi.ScalarTransform3f([list(row) for row in texture.transform])
+    if texture.kind == "checkerboard":
+        return {"type": "checkerboard", "color0": _rgb(texture.color0), "color1": _rgb(texture.color1), "to_uv": to_uv}
+    if texture.kind == "bitmap":
+        return {"type": "bitmap", "filename": str(texture.file), "raw": not texture.srgb, "wrap_mode": texture.wrap,
+                "filter_type": "nearest" if texture.nearest else "bilinear", "to_uv": to_uv}
+    raise ValueError(f"a {texture.kind} texture has no Mitsuba counterpart here")
+
+
 def _rgb(value) -> dict:
     return {"type": "rgb", "value": [float(c) for c in value]}
 
 
 def _bsdf(spec: MaterialSpec, notes: list[str]) -> dict:
     alpha = float(spec.roughness) ** 2  # Lantern's perceptual roughness, Mitsuba's GGX alpha
-    if spec.base_color_texture is not None:
+    if spec.base_color_texture is not None and spec.kind != "diffuse":
         notes.append(f"material '{spec.name}': its texture is left out")
     if spec.normal_map is not None or spec.bump_map is not None:
         notes.append(f"material '{spec.name}': its normal or bump map is left out")
@@ -195,7 +214,7 @@ def _bsdf(spec: MaterialSpec, notes: list[str]) -> dict:
         notes.append(f"material '{spec.name}': Mitsuba's GGX masking is separable where Lantern's (as pbrt's) is "
                      "height-correlated: rough lobes differ by a few percent near grazing angles")
     if spec.kind == "diffuse":
-        return {"type": "diffuse", "reflectance": _rgb(spec.base_color)}
+        return {"type": "diffuse", "reflectance": _colour(spec.base_color, spec.base_color_texture)}
     if spec.kind == "conductor":
         rough = {"type": "roughconductor", "distribution": distribution, "alpha": alpha} if alpha > 0 else {"type": "conductor"}
         if spec.metal:
@@ -259,12 +278,16 @@ def _mesh_file(mi, data, mask, path: Path) -> Path:
     corners = np.ascontiguousarray(data.tri_vertices[mask], np.float32).reshape(-1, 3)
     normals = None if data.tri_normals is None else np.asarray(data.tri_normals[mask], np.float32).reshape(-1, 3)
     has_normals = normals is not None and bool(np.all(np.linalg.norm(normals, axis=1) > 0))
-    mesh = mi.Mesh(path.stem, len(corners), len(corners) // 3, has_vertex_normals=has_normals)
+    uvs = None if data.tri_uvs is None else np.asarray(data.tri_uvs[mask], np.float32).reshape(-1, 2)
+    mesh = mi.Mesh(path.stem, len(corners), len(corners) // 3, has_vertex_normals=has_normals,
+                   has_vertex_texcoords=uvs is not None)
     params = mi.traverse(mesh)
     params["vertex_positions"] = corners.ravel()
     params["faces"] = np.arange(len(corners), dtype=np.uint32)
     if has_normals:
         params["vertex_normals"] = normals.ravel()
+    if uvs is not None:
+        params["vertex_texcoords"] = uvs.ravel()
     params.update()
     mesh.write_ply(str(path))
     return path

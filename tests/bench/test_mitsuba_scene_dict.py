@@ -46,3 +46,26 @@ def test_two_sided_walls_and_media_on_both_sides_reach_mitsuba(tmp_path):
     assert "interior" in boundary and "exterior" not in boundary
     assert glass["bsdf"]["type"] == "dielectric" and "exterior" in glass and "interior" not in glass
     assert glass["exterior"]["sigma_t"]["value"] == [1.5, 1.5, 1.5]
+
+
+def test_a_textured_diffuse_reaches_mitsuba_with_its_uv_transform(tmp_path):
+    """A pbrt checkerboard on a diffuse reflectance becomes Mitsuba's checkerboard with the same
+    to_uv (Lantern's TextureSpec is Mitsuba's), and the mesh keeps its texture coordinates."""
+    from renderer.bench.mitsuba_scene_dict import scene_dict
+    from tests.scene.pbrt.pbrt_helpers import load
+
+    mi.set_variant("scalar_rgb")
+    world = ('Texture "c" "spectrum" "checkerboard" "rgb tex1" [1 0 0] "rgb tex2" [0 0 1] "float uscale" 4\n'
+             'Material "diffuse" "texture reflectance" "c"\n'
+             'Shape "trianglemesh" "point3 P" [-1 -1 -2  1 -1 -2  1 1 -2] "point2 uv" [0 0 1 0 1 1] '
+             '"integer indices" [0 1 2]\n')
+    scene, _ = load(tmp_path, world)
+    result, notes = scene_dict(scene, tmp_path)
+    bsdf = next(v for k, v in result.items() if k.startswith("mesh_"))["bsdf"]["bsdf"]
+    texture = bsdf["reflectance"]
+    spec = scene.materials[0].base_color_texture
+    assert texture["type"] == "checkerboard" and texture["color0"]["value"] == list(spec.color0)
+    np.testing.assert_allclose(np.array(texture["to_uv"].matrix), np.array(spec.transform), atol=1e-7)
+    assert not any("texture" in n for n in notes)
+    mesh = mi.load_dict({"type": "ply", "filename": next(v for k, v in result.items() if k.startswith("mesh_"))["filename"]})
+    assert mesh.has_vertex_texcoords()
