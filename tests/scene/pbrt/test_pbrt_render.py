@@ -41,18 +41,33 @@ def corner_form_factor(a: float, b: float, c: float) -> float:
             + y / math.sqrt(1 + y * y) * math.atan(x / math.sqrt(1 + y * y))) / (2 * math.pi)
 
 
+def rendered(scene, integrator: str | None = None):
+    """(mean, variance of the mean) of the green channel of the scene rendered at its spp."""
+    renderer = Renderer(scene)
+    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp, *([integrator] if integrator else []))
+    return renderer.film.mean_image()[..., 1], renderer.film.variance_of_mean_image()[..., 1]
+
+
+def assert_image_mean(mean, var, expected, level=ALPHA, precision=0.02):
+    """A z-test of the image mean at `level` (two-sided), and a run precise enough to tell a
+    3 x `precision` error apart."""
+    z = (mean.mean() - expected) / np.sqrt(var.sum() / mean.size ** 2)
+    assert abs(z) < stats.norm.ppf(1 - level / 2), (mean.mean(), expected, z)
+    assert np.sqrt(var.sum()) / mean.size < precision * expected
+
+
+def assert_binomial_mean(mean, spp, expected):
+    """Each sample 0 or 1 (absorbed or not, blocked or not): a z-test on the binomial mean at ALPHA."""
+    n = mean.size * spp
+    z = (mean.mean() - expected) / math.sqrt(expected * (1 - expected) / n)
+    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), expected, z)
+
+
 def test_area_light_lights_a_diffuse_floor(tmp_path):
     scene, _ = load(tmp_path, WORLD, options=SCENE_OPTIONS)
     assert scene.render.max_depth == 2 and scene.render.seed == 5
-    renderer = Renderer(scene)
-    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp)
     # radiance = albedo / pi * irradiance, irradiance = pi L (4 corner form factors)
-    expected = ALBEDO * RADIANCE * 4.0 * corner_form_factor(HALF, HALF, HEIGHT)
-    mean = renderer.film.mean_image()[..., 1]
-    var = renderer.film.variance_of_mean_image()[..., 1]
-    z = (mean.mean() - expected) / np.sqrt(var.sum() / mean.size ** 2)
-    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), expected, z)
-    assert np.sqrt(var.sum()) / mean.size < 0.02 * expected  # the test can tell a 6% error apart
+    assert_image_mean(*rendered(scene), ALBEDO * RADIANCE * 4.0 * corner_form_factor(HALF, HALF, HEIGHT))
 
 
 @pytest.mark.parametrize("scale, side", [("Scale -1 1 1\n", "right"), ("", "left")])
@@ -99,14 +114,8 @@ AttributeEnd
 
 def test_a_ray_leaving_a_sphere_enters_the_medium_outside_it(tmp_path):
     scene, _ = load(tmp_path, NESTED_WORLD, options=NESTED_OPTIONS)
-    renderer = Renderer(scene)
-    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp)
-    mean = renderer.film.mean_image()[..., 1]
-    expected = math.exp(-1.0)  # (the scene's empty space after the inner sphere would give exp(-0.5))
-    # each sample is 0 or 1 (absorbed or not): a z-test on the binomial mean at the 1% level
-    n = mean.size * scene.render.spp
-    z = (mean.mean() - expected) / math.sqrt(expected * (1 - expected) / n)
-    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), expected, z)
+    # (the scene's empty space after the inner sphere would give exp(-0.5))
+    assert_binomial_mean(rendered(scene)[0], scene.render.spp, math.exp(-1.0))
 
 
 def test_light_through_a_diffuse_transmitter(tmp_path):
@@ -118,14 +127,7 @@ def test_light_through_a_diffuse_transmitter(tmp_path):
                           f'"rgb transmittance" [{transmittance} {transmittance} {transmittance}]')
     options = SCENE_OPTIONS.replace("LookAt 0 0.5 0  0 0 0  0 0 1", "LookAt 0 -0.5 0  0 0 0  0 0 1")
     scene, _ = load(tmp_path, world, options=options)
-    renderer = Renderer(scene)
-    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp)
-    expected = transmittance * RADIANCE * 4.0 * corner_form_factor(HALF, HALF, HEIGHT)
-    mean = renderer.film.mean_image()[..., 1]
-    var = renderer.film.variance_of_mean_image()[..., 1]
-    z = (mean.mean() - expected) / np.sqrt(var.sum() / mean.size ** 2)
-    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), expected, z)
-    assert np.sqrt(var.sum()) / mean.size < 0.02 * expected
+    assert_image_mean(*rendered(scene), transmittance * RADIANCE * 4.0 * corner_form_factor(HALF, HALF, HEIGHT))
 
 
 def test_a_shapes_alpha_lets_that_share_of_the_light_through(tmp_path):
@@ -137,12 +139,7 @@ def test_a_shapes_alpha_lets_that_share_of_the_light_through(tmp_path):
              'AttributeEnd\nMaterial "diffuse" "rgb reflectance" [0 0 0]\n'
              'Shape "sphere" "float radius" 1 "float alpha" 0.3\n')
     scene, _ = load(tmp_path, world, options=options)
-    renderer = Renderer(scene)
-    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp)
-    mean = renderer.film.mean_image()[..., 1]
-    n = mean.size * scene.render.spp
-    z = (mean.mean() - 0.7) / math.sqrt(0.7 * 0.3 / n)
-    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), z)
+    assert_binomial_mean(rendered(scene)[0], scene.render.spp, 0.7)
 
 
 @pytest.mark.parametrize("integrator", ["mis", "path"])
@@ -155,14 +152,8 @@ def test_a_two_sided_light_facing_away_lights_the_floor_from_its_back(tmp_path, 
     world = world.replace("[0 1 2 0 2 3]", "[0 2 1 0 3 2]", 1)  # the emitter's winding turned over
     scene, _ = load(tmp_path, world, options=SCENE_OPTIONS.replace('"integer pixelsamples" 32',
                                                                     '"integer pixelsamples" 128'))
-    renderer = Renderer(scene)
-    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp, integrator)
-    expected = ALBEDO * RADIANCE * 4.0 * corner_form_factor(HALF, HALF, HEIGHT)
-    mean = renderer.film.mean_image()[..., 1]
-    var = renderer.film.variance_of_mean_image()[..., 1]
-    z = (mean.mean() - expected) / np.sqrt(var.sum() / mean.size ** 2)
-    assert abs(z) < stats.norm.ppf(1 - ALPHA / 4), (mean.mean(), expected, z)  # Sidak over the two
-    assert np.sqrt(var.sum()) / mean.size < 0.05 * expected
+    assert_image_mean(*rendered(scene, integrator), ALBEDO * RADIANCE * 4.0 * corner_form_factor(HALF, HALF, HEIGHT),
+                      level=ALPHA / 2, precision=0.05)  # (about Sidak's level over the two)
 
 
 def test_light_through_a_uniform_grid_medium(tmp_path):
@@ -177,10 +168,4 @@ def test_light_through_a_uniform_grid_medium(tmp_path):
              'AttributeBegin\nMediumInterface "smoke" ""\nMaterial "interface"\nShape "sphere" "float radius" 1\n'
              'AttributeEnd\n')
     scene, _ = load(tmp_path, world, options=options)
-    renderer = Renderer(scene)
-    renderer.render(CameraFrame.from_spec(scene.camera), scene.render.spp)
-    mean = renderer.film.mean_image()[..., 1]
-    expected = math.exp(-2.0 * 2.0 * math.sqrt(1 - 0.75 ** 2))
-    n = mean.size * scene.render.spp
-    z = (mean.mean() - expected) / math.sqrt(expected * (1 - expected) / n)
-    assert abs(z) < stats.norm.ppf(1 - ALPHA / 2), (mean.mean(), expected, z)
+    assert_binomial_mean(rendered(scene)[0], scene.render.spp, math.exp(-2.0 * 2.0 * math.sqrt(1 - 0.75 ** 2)))
