@@ -78,12 +78,14 @@ def view(scene: Path, env: dict, seconds: float, out: Path) -> dict:
                 subprocess.run(["xdotool", *map(str, step)], env=env, capture_output=True, timeout=30)  # HUD off
         # While its kernels compile the viewer shows a preview under a "Please wait" box (from a few
         # seconds after the window opens): wait for the box to come and go (or not come in a minute).
-        seen = False
+        # (the box goes between the programs it compiles one after another: gone for three looks)
+        seen, clear = False, 0
         while time.monotonic() - t0 < 900 and viewer.poll() is None:
             time.sleep(5.0)
             waiting = _waiting(_grab(env, out), geometry)
             seen = seen or waiting
-            if not waiting and (seen or time.monotonic() - t0 > opened + 60.0):
+            clear = 0 if waiting else clear + 1
+            if clear >= 3 and (seen or time.monotonic() - t0 > opened + 60.0):
                 break
         ready = time.monotonic() - t0
         time.sleep(seconds)
@@ -121,7 +123,7 @@ def main(argv=None) -> int:
                 continue
             row = view(path, env, args.seconds, args.out / f"{name}.png")
             rows.append(row)
-            print(f"{name:20s} window after {row['open_s']:5.1f} s, compiled after {row['ready_s']:5.1f} s, "
+            print(f"{name:20s} window after {row['open_s']:5.1f} s, settled after {row['ready_s']:5.1f} s, "
                   f"{'running' if row['alive'] else 'ENDED'}, "
                   f"mean grey {row['mean']:5.1f}  {row['last_line']}", flush=True)
     finally:
