@@ -244,7 +244,10 @@ class _Builder:
             raise d.error(f"maxdepth {depth} is negative")
         if d.type == "sppm":
             render = self.photon_mapping(d, render)
-        self.unused(d)
+        elif d.type not in ("volpath", "path"):  # bdpt, mlt, ...: other estimators of the same image
+            warn(d, "rendered with Lantern's path tracer (mis), which estimates the same image")
+            for q in d.params.params:
+                q.used = True  # (their own knobs: mutations, light paths)
         # pbrt counts bounces (1: direct light only); Lantern counts as Mitsuba (2: direct light),
         # and a maxdepth of 0 shows only what the camera sees emit
         return replace(render, max_depth=depth + 1)

@@ -110,3 +110,11 @@ def test_sppm_is_lanterns_photon_mapping(tmp_path):
 def test_sppm_falls_back_to_the_path_tracer_where_lanterns_cannot_follow(tmp_path, world, why):
     scene, messages = load(tmp_path, world + MARKED, options='Integrator "sppm"\n', expect_warnings=1)
     assert scene.render.integrator == "mis" and why in messages[0]
+
+
+@pytest.mark.parametrize("integrator", ["bdpt", "mlt", "lightpath"])
+def test_other_estimators_render_with_the_path_tracer_and_one_line(tmp_path, integrator):
+    scene, messages = load(tmp_path, MARKED, options=f'Integrator "{integrator}" "integer maxdepth" 3 '
+                                                     f'"integer mutationsperpixel" 8\n', expect_warnings=1)
+    assert (scene.render.integrator, scene.render.max_depth) == ("mis", 4)
+    assert f'Integrator "{integrator}"' in messages[0] and "path tracer (mis)" in messages[0]
