@@ -207,6 +207,8 @@ def _bsdf(spec: MaterialSpec, notes: list[str]) -> dict:
     alpha = float(spec.roughness) ** 2  # Lantern's perceptual roughness, Mitsuba's GGX alpha
     if spec.base_color_texture is not None and spec.kind != "diffuse":
         notes.append(f"material '{spec.name}': its texture is left out")
+    if spec.alpha_texture is not None or spec.alpha_v_texture is not None:
+        notes.append(f"material '{spec.name}': its textured roughness is left out (a width of {alpha:g} stands in)")
     if spec.normal_map is not None or spec.bump_map is not None:
         notes.append(f"material '{spec.name}': its normal or bump map is left out")
     distribution = "beckmann" if spec.microfacet == "beckmann" else "ggx"

@@ -35,7 +35,7 @@ spectra and `blackbody` are normalised to luminance 1 first, as pbrt-v4 normalis
 | `PixelFilter` `gaussian` (the default; `sigma`), `triangle` (`xradius`), `box` (radius 0.5) | the `gaussian` (cut at four deviations where pbrt cuts at its radius), `tent` and `box` filters; `mitchell`, `sinc`: the box filter, with a warning |
 | `diffuse` (`reflectance` a colour or texture) | `diffuse` |
 | `conductor` (`eta` and `k` as `metal-X-eta` / `metal-X-k` named spectra, Lantern's measured metal X, by default copper; as `rgb` or sampled spectra; or `reflectance`) | `conductor` with `metal`, `eta` and `k`; a `reflectance` r as pbrt makes it an index, eta 1 and k = 2 sqrt(r / (1 - r)) (a textured one: Schlick's Fresnel from it, a warning) |
-| `roughness`, `uroughness`, `vroughness`, `remaproughness` (by default true) | alpha = sqrt(r) when remapped, else r; Lantern's `roughness` = sqrt(alpha) (`roughness_v` where v differs), GGX with height-correlated masking (`microfacet` `ggx`) as pbrt's; alpha below 0.001 is smooth |
+| `roughness`, `uroughness`, `vroughness`, `remaproughness` (by default true) | alpha = sqrt(r) when remapped, else r; Lantern's `roughness` = sqrt(alpha) (`roughness_v` where v differs), GGX with height-correlated masking (`microfacet` `ggx`) as pbrt's; alpha below 0.001 is smooth; a texture of roughness is a textured width (a checkerboard's two widths remapped as pbrt remaps; an image only with `remaproughness false`); under a coat, a warning and a checkerboard's mean width |
 | `dielectric`, `thindielectric` (`eta` a number, a sampled spectrum read at 550 nm, or `glass-BK7`, `-BAF10`, `-FK51A`, `-LASF9`, `-F5`, `-F10`, `-F11` at 550 nm) | `dielectric` (`thin` for `thindielectric`), without dispersion |
 | `interface` (and no material, `""` or `none`) | `null` |
 | `mix` (`materials`, two named materials; `amount` a number or a texture) | a mix (`MaterialSpec.mix`): the second with probability `amount` (a texture's first channel), as pbrt chooses per point |
@@ -62,7 +62,7 @@ Left out with one warning each, naming file, line and directive, while the rest 
 formats other than EXR and Radiance HDR, `illuminance`, goniometric and projection lights, other
 shapes (curves, cones, paraboloids, hyperboloids), other materials (rendered diffuse 0.5),
 other textures (the parameter's default), media other than `homogeneous` and `uniformgrid` (`rgbgrid`, `cloud`, `nanovdb`) and named scattering
-presets, empty space outside a shape while the camera is in a medium, float textures on roughness and indices, textures inside a checkerboard,
+presets, empty space outside a shape while the camera is in a medium, float textures on indices, images of roughness where pbrt remaps them, textures inside a checkerboard,
 area lights on object instances, motion blur (`ActiveTransform`,
 `TransformTimes`), `Attribute`, `Option`, colour spaces other than sRGB, and any parameter no
 mapping reads. A missing image or PLY file is one warning naming it and what stands in. A scene

@@ -110,7 +110,10 @@ class MaterialReader:
             if base.roughness_v is not None:
                 warn(d, "an anisotropic conductor under a coat is not supported: its u roughness is used")
             spec = MaterialSpec(name, "coated", coat_base="conductor", ior=self.interface_eta(d, "interface.eta"),
-                                metal=base.metal, eta=base.eta, k=base.k, conductor_roughness=base.roughness,
+                                metal=base.metal, eta=base.eta, k=base.k,
+                                conductor_roughness=(base.roughness if base.alpha_texture is None else
+                                                     _untextured(d, {"alpha_texture": base.alpha_texture},
+                                                                 "the base conductor's")),
                                 **self.coat_lobe(d, "interface."), **self.slab(d))
         else:
             warn(d, f"the {t} material is not supported: rendered as diffuse {DEFAULT_REFLECTANCE:g}")
@@ -146,6 +149,8 @@ class MaterialReader:
     def coat_lobe(self, d: Directive, prefix: str) -> dict:
         """A coat's interface roughness (the coated kind's roughness and roughness_v)."""
         lobe = self.lobe(d, prefix)
+        if "alpha_texture" in lobe:
+            return {"roughness": _untextured(d, lobe, "the coat's"), "roughness_v": None}
         return {"roughness": lobe["roughness"], "roughness_v": lobe.get("roughness_v")}
 
     def interface_eta(self, d: Directive, name: str) -> float:
@@ -172,6 +177,9 @@ class MaterialReader:
     def lobe(self, d: Directive, prefix: str = "") -> dict:
         """roughness (and roughness_v where it differs) from pbrt's roughness or u/vroughness."""
         remap = d.params.boolean("remaproughness", True)  # never prefixed (coatedconductor)
+        names = [prefix + n for n in ("roughness", "uroughness", "vroughness")]
+        if any(p is not None and p.type == "texture" for p in (d.params.find(n) for n in names)):
+            return self.textured_lobe(d, names, remap)
         r = self.number(d, prefix + "roughness", 0.0)
         u, v = self.number(d, prefix + "uroughness", r), self.number(d, prefix + "vroughness", r)
         if min(u, v) < 0:
@@ -180,6 +188,39 @@ class MaterialReader:
         if max(au, av) < SMOOTH_ALPHA:
             return {"roughness": 0.0}
         return {"roughness": math.sqrt(au), "roughness_v": math.sqrt(av) if av != au else None, "microfacet": "ggx"}
+
+    def textured_lobe(self, d: Directive, names: list[str], remap: bool) -> dict:
+        """A lobe whose width is a texture (Lantern's alpha_texture and alpha_v_texture, alpha itself;
+        the constant roughness then only marks the lobe rough): a checkerboard's two widths remapped
+        as pbrt remaps, an image's texels as they are where pbrt does not remap them."""
+        rough, u_name, v_name = names
+        base = self.width(d, rough, 0.0, remap)
+        u = self.width(d, u_name, None, remap) if d.params.has(u_name) else base
+        v = self.width(d, v_name, None, remap) if d.params.has(v_name) else base
+        as_texture = [w if isinstance(w, TextureSpec) else _constant_width(w) for w in (u, v)]
+        return {"roughness": 0.5, "microfacet": "ggx", "alpha_texture": as_texture[0],
+                "alpha_v_texture": as_texture[1] if v is not u else None}
+
+    def width(self, d: Directive, name: str, default, remap: bool):
+        """pbrt's roughness parameter `name` as Lantern's width alpha: a number or a TextureSpec."""
+        p = d.params.find(name)
+        if p is None:
+            return default
+        if p.type != "texture":
+            value = self.number(d, name, 0.0)
+            return math.sqrt(value) if remap else value
+        (factor, _, _), texture = self.texture(p.values[0], p, (0.0, 0.0, 0.0))
+        if texture is None:  # a constant or scaled number
+            return math.sqrt(factor) if remap else factor
+        if texture.kind == "checkerboard":
+            widths = [factor * c[0] for c in (texture.color0, texture.color1)]
+            widths = [math.sqrt(w) if remap else w for w in widths]
+            return replace(texture, color0=(widths[0],) * 3, color1=(widths[1],) * 3)
+        if remap or factor != 1.0:
+            warn(d, f"'{name}': an image of roughness is read as widths only as it stands (remaproughness false, "
+                    "no scale): 0.5 is used")
+            return math.sqrt(0.5) if remap else 0.5
+        return texture
 
     def mix(self, d: Directive, name: str) -> MaterialSpec:
         p = d.params.find("materials", ("string",))
@@ -453,3 +494,19 @@ class MaterialReader:
                            opacity_texture=opacity_texture if cut else base.opacity_texture)
             self.surfaces[key] = self._add(spec).name
         return self.surfaces[key]
+
+
+def _constant_width(alpha: float) -> TextureSpec:
+    """A width the same everywhere as a texture (for a lobe whose other width is textured)."""
+    return TextureSpec("checkerboard", color0=(alpha,) * 3, color1=(alpha,) * 3, nearest=True)
+
+
+def _untextured(d: Directive, lobe: dict, whose: str) -> float:
+    """The one roughness a coated material's lobe can have where pbrt's is a texture (with a
+    warning): a checkerboard's mean width, else smooth."""
+    texture = lobe["alpha_texture"]
+    alpha = 0.5 * (texture.color0[0] + texture.color1[0]) if texture.kind == "checkerboard" else 0.0
+    warn(d, f"{whose} textured roughness is not supported under a coat: "
+            + (f"its mean width {alpha:g} is used" if alpha > 0.0 else "it is smooth"))
+    return math.sqrt(alpha)
+

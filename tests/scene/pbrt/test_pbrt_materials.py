@@ -206,3 +206,29 @@ def test_a_uniform_grid_is_a_grid_medium(tmp_path):
 def test_a_grid_with_the_wrong_number_of_values_is_an_error(tmp_path):
     with pytest.raises(SceneError, match="3 density values for a grid of 2 x 1 x 1"):
         one(tmp_path, 'MediumInterface "smoke" ""', extra=GRID.replace("[0 2]", "[0 2 3]"))
+
+
+@pytest.mark.parametrize("remap, expected", [("false", (0.04, 0.36)), ("true", (0.2, 0.6))])
+def test_a_checkerboard_of_roughness_is_a_textured_width(tmp_path, remap, expected):
+    extra = 'Texture "r" "float" "checkerboard" "float tex1" 0.04 "float tex2" 0.36\n'
+    spec, _, _ = one(tmp_path, f'Material "conductor" "texture roughness" "r" "bool remaproughness" {remap}', extra=extra)
+    t = spec.alpha_texture
+    assert spec.roughness > 0 and t.kind == "checkerboard" and spec.alpha_v_texture is None
+    assert (t.color0[0], t.color1[0]) == pytest.approx(expected)  # the widths alpha, remapped as pbrt does
+
+
+def test_an_image_of_roughness_is_read_as_widths_where_pbrt_does_not_remap(tmp_path):
+    Image.new("L", (2, 2), 40).save(tmp_path / "r.png")
+    extra = 'Texture "r" "float" "imagemap" "string filename" "r.png" "string encoding" "linear"\n'
+    spec, _, _ = one(tmp_path, 'Material "dielectric" "texture uroughness" "r" "float vroughness" 0.09 '
+                               '"bool remaproughness" false', extra=extra)
+    assert spec.alpha_texture.kind == "bitmap" and spec.alpha_v_texture.color0 == (0.09,) * 3
+    spec, messages, _ = one(tmp_path, 'Material "dielectric" "texture roughness" "r"', extra=extra, expect_warnings=1)
+    assert "remaproughness false" in messages[0] and spec.alpha_texture.color0 == (math.sqrt(0.5),) * 3
+
+
+def test_a_textured_coat_roughness_warns_and_takes_the_mean_width(tmp_path):
+    extra = 'Texture "r" "float" "checkerboard" "float tex1" 0.04 "float tex2" 0.16\n'
+    spec, messages, _ = one(tmp_path, 'Material "coateddiffuse" "texture roughness" "r" "bool remaproughness" false',
+                            extra=extra, expect_warnings=1)
+    assert spec.kind == "coated" and spec.roughness == pytest.approx(math.sqrt(0.1)) and "mean width 0.1" in messages[0]
