@@ -152,6 +152,11 @@ class TextureSpec:
     color0: Vec3 = (0.4, 0.4, 0.4)  # checkerboard: where frac(u') and frac(v') fall on the same side of 1/2
     color1: Vec3 = (0.2, 0.2, 0.2)  # checkerboard: elsewhere
 
+    @staticmethod
+    def constant(value: float) -> "TextureSpec":
+        """One value everywhere (a textured lobe's other, untextured width)."""
+        return TextureSpec("checkerboard", color0=(value,) * 3, color1=(value,) * 3, nearest=True)
+
 
 @dataclass(frozen=True)
 class MeshAttributeColor:

@@ -221,7 +221,7 @@ def _roughness(builder, bsdf: Plugin) -> dict:
     if isinstance(alpha, float) and isinstance(alpha_v, float):
         return {**fields, "roughness": min(1.0, math.sqrt(alpha)),
                 "roughness_v": None if alpha_v == alpha else min(1.0, math.sqrt(alpha_v))}
-    as_texture = [w if not isinstance(w, float) else _constant_texture(w) for w in (alpha, alpha_v)]
+    as_texture = [w if not isinstance(w, float) else TextureSpec.constant(w) for w in (alpha, alpha_v)]
     return {**fields, "roughness": 0.5, "alpha_texture": as_texture[0],
             "alpha_v_texture": as_texture[1] if anisotropic else None}
 
@@ -246,10 +246,6 @@ def float_texture(builder, texture: Plugin) -> TextureSpec:
     if spec.kind == "checkerboard":
         spec = replace(spec, color0=spec.color1, color1=spec.color0)
     return spec
-
-
-def _constant_texture(value: float) -> TextureSpec:
-    return TextureSpec("checkerboard", color0=(value,) * 3, color1=(value,) * 3, nearest=True)
 
 
 def _relative_ior(bsdf: Plugin, default_int: float) -> float:

@@ -197,7 +197,7 @@ class MaterialReader:
         base = self.width(d, rough, 0.0, remap)
         u = self.width(d, u_name, None, remap) if d.params.has(u_name) else base
         v = self.width(d, v_name, None, remap) if d.params.has(v_name) else base
-        as_texture = [w if isinstance(w, TextureSpec) else _constant_width(w) for w in (u, v)]
+        as_texture = [w if isinstance(w, TextureSpec) else TextureSpec.constant(w) for w in (u, v)]
         return {"roughness": 0.5, "microfacet": "ggx", "alpha_texture": as_texture[0],
                 "alpha_v_texture": as_texture[1] if v is not u else None}
 
@@ -494,11 +494,6 @@ class MaterialReader:
                            opacity_texture=opacity_texture if cut else base.opacity_texture)
             self.surfaces[key] = self._add(spec).name
         return self.surfaces[key]
-
-
-def _constant_width(alpha: float) -> TextureSpec:
-    """A width the same everywhere as a texture (for a lobe whose other width is textured)."""
-    return TextureSpec("checkerboard", color0=(alpha,) * 3, color1=(alpha,) * 3, nearest=True)
 
 
 def _untextured(d: Directive, lobe: dict, whose: str) -> float:
