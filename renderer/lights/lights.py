@@ -139,6 +139,12 @@ class Lights:
             self.delta_share = ti.field(ti.f32, shape=())
             self.delta_share[None] = (delta_intensity / (delta_intensity + area_intensity) if area_intensity > 0.0
                                       else 1.0)
+        # Emitters that shine from both faces: compiled in only where the scene has one (a lookup
+        # per light sample otherwise paid by every scene).
+        self.has_two_sided = self.has_area and bool(np.any(emitters.get("two_sided", ())))
+        self.emitter_two_sided = ti.field(ti.i32, shape=max(1, self.count))
+        if self.has_two_sided:
+            upload_fields([(self.emitter_two_sided, np.asarray(emitters["two_sided"], np.int32))])
         prim_total = max(1, geometry.primitive_count())
         self.prim_emitter = ti.field(ti.i32, shape=prim_total)
         self.emitter_prim = ti.field(ti.i32, shape=max(1, self.count))
@@ -189,8 +195,10 @@ class Lights:
                     if pt.pdf > 0.0 and dist > 0.0:
                         wi = to / dist
                         radiance = vec3(0.0)
-                        two_sided = ctx.bsdf.materials.table[self.geometry.material_of(g)].two_sided_emission
-                        if pt.n.dot(wi) < 0.0 or two_sided == 1:  # the emitting side (front, or either) faces ref
+                        faces_ref = pt.n.dot(wi) < 0.0  # the emitting (front) side faces ref
+                        if ti.static(self.has_two_sided):
+                            faces_ref = faces_ref or self.emitter_two_sided[e] == 1
+                        if faces_ref:
                             radiance = emitted_radiance(ctx, self.geometry, g, pt.p, pt.n, pt.uv, -wi)
                         pdf = pt.pdf * pmf * (1.0 - share)
                         if ti.static(self.has_delta):

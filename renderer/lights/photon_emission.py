@@ -109,6 +109,7 @@ class Emission:
         all_round = (np.asarray(table["theta_o"], np.float64) > 0.5 * math.pi) & ~two_sided
         power = np.asarray(table["power"], np.float64)
         self.count = len(prims)
+        self.has_two_sided = bool(two_sided.any())  # (the face choice compiled in only then)
         self.has_area = self.count > 0 and float(power.sum()) > 0.0
         self.has_env = lights.has_env
         self.area_power = float(power.sum()) if self.has_area else 0.0
@@ -251,7 +252,9 @@ class Emission:
                     one_minus_cos_max = sin2_max / (1.0 + cos_max)  # accurate for small cones
                     d = vec3(0.0, 1.0, 0.0)
                     # A two-sided emitter's cosine-weighted directions go to either face, half each.
-                    sides = 2.0 if self.two_sided[e] == 1 else 1.0
+                    sides = 1.0
+                    if ti.static(self.has_two_sided):
+                        sides = 2.0 if self.two_sided[e] == 1 else 1.0
                     if u_mix < share:
                         # uniform in the cone the target subtends
                         one_minus_cos = u_dir.x * one_minus_cos_max
@@ -271,7 +274,9 @@ class Emission:
                         cos_n = ti.abs(cos_n)
                         pt.n = pt.n if d.dot(pt.n) > 0.0 else -pt.n  # the face the photon leaves
                     in_cone = 1.0 - d.dot(axis) <= one_minus_cos_max
-                    pdf_dir = (1.0 - share) * ti.max(cos_n, 0.0) / (PI * sides)
+                    pdf_dir = (1.0 - share) * ti.max(cos_n, 0.0) / PI
+                    if ti.static(self.has_two_sided):
+                        pdf_dir /= sides
                     if share > 0.0 and in_cone:
                         pdf_dir += share / (2.0 * PI * one_minus_cos_max)
                     if cos_n > 0.0 and pdf_dir > 0.0:  # from the front face only, unless two-sided
