@@ -196,6 +196,14 @@ def _colour(factor, texture) -> dict:
     if texture.kind == "bitmap":
         return {"type": "bitmap", "filename": str(texture.file), "raw": not texture.srgb, "wrap_mode": texture.wrap,
                 "filter_type": "nearest" if texture.nearest else "bilinear", "to_uv": to_uv}
+    if texture.kind in ("mix", "product"):  # Mitsuba has no such texture: the image Lantern bakes
+        from renderer.scene.limits import MemoryBudget, MemoryLedger
+        from renderer.scene.texture_images import texture_image
+
+        pixels = texture_image(texture, MemoryLedger(MemoryBudget.from_settings())).pixels[..., :3]
+        return {"type": "bitmap", "bitmap": mi.Bitmap(np.ascontiguousarray(pixels)), "raw": True,
+                "wrap_mode": texture.wrap, "filter_type": "nearest" if texture.nearest else "bilinear",
+                "to_uv": to_uv}
     raise ValueError(f"a {texture.kind} texture has no Mitsuba counterpart here")
 
 

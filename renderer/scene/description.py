@@ -134,7 +134,7 @@ class EnvironmentSpec:
 
 
 IDENTITY_UV = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-TEXTURE_KINDS = ("bitmap", "checkerboard")
+TEXTURE_KINDS = ("bitmap", "checkerboard", "mix", "product")
 
 
 @dataclass(frozen=True)
@@ -151,6 +151,13 @@ class TextureSpec:
     transform: tuple[tuple[float, float, float], ...] = IDENTITY_UV  # uv' = transform @ (u, v, 1)
     color0: Vec3 = (0.4, 0.4, 0.4)  # checkerboard: where frac(u') and frac(v') fall on the same side of 1/2
     color1: Vec3 = (0.2, 0.2, 0.2)  # checkerboard: elsewhere
+    # mix and product (pbrt's `mix` and `scale` of two textures): two operands, each a colour times
+    # a texture or None; mix: (1 - amount) * first + amount * second, the amount a number times the
+    # first channel of a texture or None; product: first * second. Baked into one image when the
+    # scene is assembled (renderer/scene/texture_mixing.py), read with this spec's transform, wrap
+    # and filter, which are its operands' own.
+    operands: tuple = ()
+    amount: tuple = (0.5, None)
 
     @staticmethod
     def constant(value: float) -> "TextureSpec":

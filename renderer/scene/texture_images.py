@@ -24,6 +24,10 @@ from renderer.scene.references import missing_file_problem
 def texture_image(spec: TextureSpec, ledger: MemoryLedger) -> TextureImage:
     if spec.kind == "checkerboard":
         return checkerboard_image(spec.color0, spec.color1)
+    if spec.kind in ("mix", "product"):
+        from renderer.scene.texture_mixing import mixed_image  # it reads its operands through here
+
+        return mixed_image(spec, ledger)
     if spec.kind != "bitmap":
         raise ValueError(f"unknown texture kind '{spec.kind}'")
     return _bitmap(spec, ledger)

@@ -69,3 +69,25 @@ def test_a_textured_diffuse_reaches_mitsuba_with_its_uv_transform(tmp_path):
     assert not any("texture" in n for n in notes)
     mesh = mi.load_dict({"type": "ply", "filename": next(v for k, v in result.items() if k.startswith("mesh_"))["filename"]})
     assert mesh.has_vertex_texcoords()
+
+
+def test_a_mixed_texture_reaches_mitsuba_as_the_image_lantern_bakes(tmp_path):
+    """Mitsuba has no mix texture: the bitmap it gets holds Lantern's baked texels, and it loads."""
+    from PIL import Image
+
+    from renderer.bench.mitsuba_scene_dict import scene_dict
+    from tests.scene.pbrt.pbrt_helpers import load
+
+    mi.set_variant("scalar_rgb")
+    Image.new("RGB", (2, 2), (255, 0, 0)).save(tmp_path / "red.png")
+    world = ('Texture "r" "spectrum" "imagemap" "string filename" "red.png" "string encoding" "linear"\n'
+             'Texture "m" "spectrum" "mix" "texture tex1" "r" "rgb tex2" [0 0 1] "float amount" 0.25\n'
+             'Material "diffuse" "texture reflectance" "m"\n'
+             'Shape "trianglemesh" "point3 P" [-1 -1 -2  1 -1 -2  1 1 -2] "point2 uv" [0 0 1 0 1 1] '
+             '"integer indices" [0 1 2]\n')
+    scene, _ = load(tmp_path, world)
+    result, _ = scene_dict(scene, tmp_path)
+    texture = next(v for k, v in result.items() if k.startswith("mesh_"))["bsdf"]["bsdf"]["reflectance"]
+    assert texture["type"] == "bitmap" and texture["raw"]
+    np.testing.assert_allclose(np.array(texture["bitmap"])[0, 0], [0.75, 0.0, 0.25], atol=1e-6)
+    mi.load_dict(texture)

@@ -43,7 +43,8 @@ spectra and `blackbody` are normalised to luminance 1 first, as pbrt-v4 normalis
 | `coatedconductor` (`interface.*` roughness and `eta`, `conductor.eta` / `conductor.k` or `reflectance`, `conductor.roughness`, the slab's parameters) | `coated` with `coat_base = "conductor"` (an anisotropic conductor under the coat: its u roughness, a warning) |
 | `diffusetransmission` (`reflectance`, `transmittance`, each a colour or texture, `scale`) | `diffuse_transmission`: Lambert reflection and transmission, chosen in proportion to their largest channels as pbrt does |
 | `Texture` `imagemap` (`filename`, `filter` `point` nearest else bilinear, `encoding` `sRGB` or `linear` (by default linear for .exr, .hdr, .pfm), `scale`, `wrap` `repeat` or `clamp`, `uscale`, `vscale`, `udelta`, `vdelta`) | a bitmap texture on a colour, times `scale`; pbrt's v (up the image) turned into Lantern's (down it) |
-| `Texture` `checkerboard` (2D, constant `tex1`, `tex2`, `uscale`, `vscale`) and `scale` (`tex` times a constant `scale`), `constant` | a checkerboard texture, a texture or colour times the scale |
+| `Texture` `checkerboard` (2D, constant `tex1`, `tex2`, `uscale`, `vscale`), `constant` | a checkerboard texture, a colour |
+| `Texture` `scale` (`tex` times `scale`) and `mix` (`(1 - amount) tex1 + amount tex2`; `amount` a float texture's first channel), each operand a colour, a number or a texture | a colour where no operand is a texture; a texture times colours where one is; else one image baked texel by texel when the scene is assembled (kind `mix` or `product`, renderer/scene/texture_mixing.py), exact where the textures share a size and a uv mapping (different mappings: a warning, the first's used for all; other sizes resampled to the largest) |
 | `Shape` `trianglemesh` (`P`, `indices`, `N`, `uv`), `bilinearmesh` (two triangles per patch), `loopsubdiv` (its control mesh, a warning) | meshes kept inside the scene's own model asset (named parts of the scene file) |
 | `Shape` `plymesh` (`.ply`, or `.ply.gz` decompressed) | the PLY mesh; a missing file: one warning, the shape left out |
 | `Shape` `sphere` (`radius`) | an analytic sphere (an icosphere under a non-uniform scale); `zmin`, `zmax`, `phimax` cutting it: a warning, the whole sphere |
@@ -61,7 +62,7 @@ spectra and `blackbody` are normalised to luminance 1 first, as pbrt-v4 normalis
 Left out with one warning each, naming file, line and directive, while the rest renders: maps in
 formats other than EXR and Radiance HDR, `illuminance`, goniometric and projection lights, other
 shapes (curves, cones, paraboloids, hyperboloids), other materials (rendered diffuse 0.5),
-other textures (the parameter's default), media other than `homogeneous` and `uniformgrid` (`rgbgrid`, `cloud`, `nanovdb`) and named scattering
+other textures (`directionmix`, `bilerp`, `dots`, `fbm`, `wrinkled`, `windy`, `marble`, `ptex`: the parameter's default), media other than `homogeneous` and `uniformgrid` (`rgbgrid`, `cloud`, `nanovdb`) and named scattering
 presets, empty space outside a shape while the camera is in a medium, float textures on indices, images of roughness where pbrt remaps them, textures inside a checkerboard,
 area lights on object instances, motion blur (`ActiveTransform`,
 `TransformTimes`), `Attribute`, `Option`, colour spaces other than sRGB, and any parameter no

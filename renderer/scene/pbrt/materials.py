@@ -307,20 +307,32 @@ class MaterialReader:
             return self.imagemap(t, fallback)
         if t.type == "checkerboard":
             return self.checkerboard(t, fallback)
-        if t.type in ("scale", "constant"):
-            factor = self.number(t, "scale", 1.0) if t.type == "scale" else 1.0
-            inner = t.params.find("tex" if t.type == "scale" else "value")
-            if inner is not None and inner.type == "texture":
-                rgb, texture = self.texture(inner.values[0], inner, fallback)
-            else:
-                rgb, texture = (colour(inner, REFLECTANCE) if inner is not None else (1.0, 1.0, 1.0)), None
-                if isinstance(rgb, NamedSpectrum):
-                    warn(t, f"the named spectrum '{rgb}' is not supported here: 1 is used")
-                    rgb = (1.0, 1.0, 1.0)
+        if t.type == "constant":
+            value = self.colour(t, "value", 1.0)
             warn_unused(t)
-            return tuple(factor * c for c in rgb), texture
+            return value
+        if t.type in ("scale", "mix"):
+            return self.combined(t)
         warn(t, f"the {t.type} texture is not supported: the parameter is {fallback[0]:g}")
         return fallback, None
+
+    def combined(self, t: Directive) -> tuple:
+        """pbrt's `scale` (tex times scale) and `mix` ((1 - amount) tex1 + amount tex2) textures,
+        each operand a colour, a number or a texture: a colour where none is a texture, else one
+        TextureSpec baked at assembly (renderer/scene/texture_mixing.py)."""
+        if t.type == "scale":
+            kind, first, second = "product", self.colour(t, "tex", 1.0), self.colour(t, "scale", 1.0)
+            amount = (0.5, None)
+        else:
+            kind, first, second = "mix", self.colour(t, "tex1", 0.0), self.colour(t, "tex2", 1.0)
+            (weight, _, _), weight_texture = self.colour(t, "amount", 0.5)
+            amount = (weight, weight_texture)
+        warn_unused(t)
+        textures = [x for x in (first[1], second[1], amount[1]) if x is not None]
+        mappings = {(x.transform, x.wrap, x.nearest) for x in textures}
+        if len(mappings) > 1:
+            warn(t, "its textures have different uv mappings, filters or wraps: the first's are used for all")
+        return combined_texture(kind, first, second, amount)
 
     def mapping(self, t: Directive, checker: bool) -> tuple:
         kind = t.params.string("mapping", "uv")
@@ -505,3 +517,22 @@ def _untextured(d: Directive, lobe: dict, whose: str) -> float:
             + (f"its mean width {alpha:g} is used" if alpha > 0.0 else "it is smooth"))
     return math.sqrt(alpha)
 
+
+
+def combined_texture(kind: str, first: tuple, second: tuple, amount: tuple = (0.5, None)) -> tuple:
+    """(colour, TextureSpec or None) of a product or mix of two (colour, texture or None)
+    operands; a texture only where one is needed (a texture times colours stays that texture)."""
+    (c1, t1), (c2, t2), (a, ta) = first, second, amount
+    if kind == "product" and (t1 is None or t2 is None):
+        return tuple(x * y for x, y in zip(c1, c2)), t1 or t2
+    if kind == "mix" and ta is None:
+        if t1 is None and t2 is None:
+            return tuple((1.0 - a) * x + a * y for x, y in zip(c1, c2)), None
+        if t2 is None and not any(c2):
+            return tuple((1.0 - a) * x for x in c1), t1
+        if t1 is None and not any(c1):
+            return tuple(a * y for y in c2), t2
+    shape = next(x for x in (t1, t2, ta) if x is not None)
+    operands = ((tuple(map(float, c1)), t1), (tuple(map(float, c2)), t2))
+    return (1.0, 1.0, 1.0), TextureSpec(kind, operands=operands, amount=(float(a), ta), transform=shape.transform,
+                                        wrap=shape.wrap, nearest=shape.nearest)

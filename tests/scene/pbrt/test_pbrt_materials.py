@@ -126,6 +126,32 @@ def test_imagemap_checkerboard_and_scale_textures(tmp_path):
     assert t.transform[0] == (2.0, 0.0, 0.0)  # pbrt's squares are a unit of st, Lantern's half a period
 
 
+def test_mix_and_scale_textures(tmp_path):
+    Image.new("RGB", (4, 4), (200, 100, 50)).save(tmp_path / "wood.png")
+    extra = ('Texture "wood" "spectrum" "imagemap" "string filename" "wood.png"\n'
+             'Texture "mask" "float" "imagemap" "string filename" "wood.png"\n'
+             'Texture "checks" "spectrum" "checkerboard" "rgb tex1" [1 0 0] "rgb tex2" [0 0 1]\n'
+             'Texture "grey" "spectrum" "mix" "rgb tex1" [0 0 1] "rgb tex2" [1 1 0] "float amount" 0.25\n'
+             'Texture "dim" "spectrum" "mix" "texture tex1" "checks" "float tex2" 0 "float amount" 0.25\n'
+             'Texture "both" "spectrum" "mix" "texture tex1" "wood" "rgb tex2" [0 1 0] "texture amount" "mask"\n'
+             'Texture "odd" "spectrum" "mix" "texture tex1" "wood" "texture tex2" "checks"\n'
+             'Texture "prod" "spectrum" "scale" "texture tex" "wood" "texture scale" "mask"\n')
+    spec = one(tmp_path, 'Material "diffuse" "texture reflectance" "grey"', extra=extra)[0]
+    assert spec.base_color == (0.25, 0.25, 0.75) and spec.base_color_texture is None
+    spec = one(tmp_path, 'Material "diffuse" "texture reflectance" "dim"', extra=extra)[0]
+    assert spec.base_color == (0.75, 0.75, 0.75) and spec.base_color_texture.kind == "checkerboard"
+    spec = one(tmp_path, 'Material "diffuse" "texture reflectance" "both"', extra=extra)[0]
+    t = spec.base_color_texture
+    assert spec.base_color == (1.0, 1.0, 1.0) and t.kind == "mix" and t.amount[1].file.name == "wood.png"
+    assert [o[0] for o in t.operands] == [(1.0, 1.0, 1.0), (0.0, 1.0, 0.0)] and t.operands[1][1] is None
+    assert t.transform == t.operands[0][1].transform and not t.nearest
+    spec, messages, _ = one(tmp_path, 'Material "diffuse" "texture reflectance" "odd"', extra=extra,
+                            expect_warnings=1)
+    assert spec.base_color_texture.kind == "mix" and "different uv mappings" in messages[0]
+    t = one(tmp_path, 'Material "diffuse" "texture reflectance" "prod"', extra=extra)[0].base_color_texture
+    assert t.kind == "product" and [o[1].file.name for o in t.operands] == ["wood.png", "wood.png"]
+
+
 def test_missing_image_warns_and_keeps_the_default(tmp_path):
     extra = 'Texture "gone" "spectrum" "imagemap" "string filename" "gone.png"\n'
     spec, messages, _ = one(tmp_path, 'Material "diffuse" "texture reflectance" "gone"', extra=extra,

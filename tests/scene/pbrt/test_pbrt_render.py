@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from PIL import Image
 from scipy import stats
 
 from renderer.camera import CameraFrame
@@ -128,6 +129,22 @@ def test_light_through_a_diffuse_transmitter(tmp_path):
     options = SCENE_OPTIONS.replace("LookAt 0 0.5 0  0 0 0  0 0 1", "LookAt 0 -0.5 0  0 0 0  0 0 1")
     scene, _ = load(tmp_path, world, options=options)
     assert_image_mean(*rendered(scene), transmittance * RADIANCE * 4.0 * corner_form_factor(HALF, HALF, HEIGHT))
+
+
+def test_a_mix_of_images_colours_the_floor(tmp_path):
+    """The floor of the first test textured by pbrt's mix of two grey images by a third: its
+    albedo is (1 - a) v1 + a v2 everywhere (with the amount turned round it would be 0.65)."""
+    values = {"v1.png": 51, "v2.png": 204, "a.png": 64}
+    for name, value in values.items():
+        Image.new("RGB", (2, 2), (value,) * 3).save(tmp_path / name)
+    v1, v2, a = (values[n] / 255 for n in ("v1.png", "v2.png", "a.png"))
+    textures = "".join(f'Texture "{n[:2]}" "spectrum" "imagemap" "string filename" "{n}" "string encoding" "linear"\n'
+                       for n in values)
+    textures += 'Texture "m" "spectrum" "mix" "texture tex1" "v1" "texture tex2" "v2" "texture amount" "a."\n'
+    world = textures + WORLD.replace(f'"rgb reflectance" [{ALBEDO} {ALBEDO} {ALBEDO}]', '"texture reflectance" "m"')
+    scene, _ = load(tmp_path, world, options=SCENE_OPTIONS)
+    albedo = (1 - a) * v1 + a * v2
+    assert_image_mean(*rendered(scene), albedo * RADIANCE * 4.0 * corner_form_factor(HALF, HALF, HEIGHT))
 
 
 def test_a_shapes_alpha_lets_that_share_of_the_light_through(tmp_path):
