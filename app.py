@@ -153,7 +153,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="1 = emitters seen directly, 2 = direct light..., -1 = unlimited")
     render.add_argument("--seed", type=_render_setting("seed", U32_MAX), help="random seed (same seed, same image)")
     render.add_argument("--arch", choices=ARCHES, help="back-end (default auto; on --resume, the checkpoint's)")
-    render.add_argument("--exposure", type=_exposure, help="exposure in EV stops (PNG only; default 0)")
+    render.add_argument("--exposure", type=_exposure, help="exposure in EV stops (PNG only; default: the scene's, 0 unless it sets one)")
     render.add_argument("--tonemapper", choices=TONEMAPPERS, help="PNG tone mapper (default aces)")
     render.add_argument("--optimize", choices=OPTIMIZE_FOR,
                         help="kernel optimisation: compile (fast compiling) or run (every optimisation: a few %% faster, "

@@ -330,6 +330,7 @@ class ViewerSession:
         self.controller.set_state(self.scene_cameras.get(self.scene_path, self.home_camera))
         self.controller.move_speed = 0.5 * scene_scale(scene.camera)
         self.max_depth = scene.render.max_depth
+        self.exposure = float(scene.render.exposure)
         # The first frame of a scene is a reduced-resolution preview (as while moving): a picture
         # appears at once, and the full-resolution accumulation starts on the next frame.
         self.request_reset(interactive=True)

@@ -15,7 +15,8 @@ def job_from_arguments(args, scene, previous: CheckpointHeader | None) -> Render
     spp, seconds = args.spp, args.seconds
     if previous is not None and spp is None and seconds is None:
         spp, seconds = previous.spp_target, previous.seconds_budget
-    exposure = args.exposure if args.exposure is not None else (previous.exposure if previous else 0.0)
+    exposure = args.exposure if args.exposure is not None else (
+        previous.exposure if previous else scene.render.exposure)
     job = RenderJob(spp=spp, seconds=seconds, size=args.size, integrator=args.integrator, max_depth=args.max_depth,
                     seed=args.seed, exposure=exposure, tonemapper=args.tonemapper, denoise=bool(args.denoise),
                     aovs=args.aovs, noise_threshold=args.noise_threshold,

@@ -79,6 +79,7 @@ class RenderSettings:
     # pixels from its top-left corner (Mitsuba's hdrfilm crop): the projection stays the whole
     # image's (renderer/film/crop_window.py). None: the whole image.
     crop: Optional[tuple[int, int, int, int]] = None
+    exposure: float = 0.0  # EV: display values are radiance times 2^exposure (PNG, the viewer); EXR keeps radiance
 
     @property
     def image_size(self) -> tuple[int, int]:

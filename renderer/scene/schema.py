@@ -161,6 +161,11 @@ RENDER = Section(
               "crops of one image tile it (`sppm`'s photon passes, shared by the window's pixels, depend on "
               "its size). The viewer shows the window scaled to fit, centred.",
               NON_NEGATIVE, default_doc="none (the whole image)"),
+        Field("exposure", "float", 0.0, "Exposure in EV stops for what is displayed: PNG output and the "
+              "viewer scale radiance by 2^exposure before tone mapping; EXR output keeps radiance. `render "
+              "--exposure` and the viewer's slider override it. A pbrt-v4 film's `iso` and the camera's "
+              "shutter time set it (log2 of shutter time x iso / 100, pbrt-v4's imaging ratio).",
+              Range(-126.0, 127.0)),
         Field("energy_compensation", "bool", True, "Give rough metals and rough glass back the light "
               "that single-scattering microfacet models lose between microfacets (Kulla and Conty 2017): "
               "without it a white metal of roughness 1 reflects 31% head-on, and a white glass ball of "

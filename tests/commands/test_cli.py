@@ -313,3 +313,15 @@ def test_resume_needs_a_target_beyond_the_checkpoint_and_a_film_integrator(tmp_p
     assert code == 2 and "missing.ckpt: checkpoint not found" in one_line_error(err)
     code, _, err = run_main(["render"], capsys)
     assert code == 2 and "--resume" in one_line_error(err)
+
+
+def test_the_scenes_exposure_is_the_default_and_the_option_overrides_it():
+    from types import SimpleNamespace
+
+    from renderer.commands.render_job import job_from_arguments
+    from renderer.scene.description import RenderSettings
+
+    scene = SimpleNamespace(render=RenderSettings(exposure=1.5))
+    parse = app.build_parser().parse_args
+    assert job_from_arguments(parse(["render", "s"]), scene, None).exposure == 1.5
+    assert job_from_arguments(parse(["render", "s", "--exposure", "0"]), scene, None).exposure == 0.0

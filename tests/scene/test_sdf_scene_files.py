@@ -189,6 +189,12 @@ def test_full_scene_round_trips(tmp_path):
     assert all(type(c) is int for c in scene.sdf_objects[2].param("limit"))
 
 
+def test_a_scenes_exposure_is_read(tmp_path):
+    scene = load_scene(write(tmp_path, scene_text(extra="[render]\nexposure = -1.5\n")))
+    assert scene.render.exposure == -1.5
+    assert "render.exposure: 200 is out of range" in load_error(write(tmp_path, scene_text(extra="[render]\nexposure = 200\n")))
+
+
 def test_minimal_scene_gets_model_defaults(tmp_path):
     path = write(tmp_path, scene_text(), "my_scene.toml")
     scene = load_scene(path)
@@ -376,7 +382,7 @@ BAD_SCENES = {
     "max_depth -2": (scene_text(extra="[render]\nmax_depth = -2\n"), "render.max_depth: -2 is out of range"),
     "seed negative": (scene_text(extra="[render]\nseed = -1\n"), "render.seed: -1 is out of range"),
     "integrator number": (scene_text(extra="[render]\nintegrator = 3\n"), "render.integrator: expected a string, got integer 3"),
-    "render unknown field": (scene_text(extra="[render]\nsamples = 3\n"), "render: unknown field 'samples' (allowed: width, height, spp, max_depth, integrator, seed, sampler, pixel_filter, filter_radius, filter_stddev, crop, energy_compensation, march)"),
+    "render unknown field": (scene_text(extra="[render]\nsamples = 3\n"), "render: unknown field 'samples' (allowed: width, height, spp, max_depth, integrator, seed, sampler, pixel_filter, filter_radius, filter_stddev, crop, exposure, energy_compensation, march)"),
     "march not table": (scene_text(extra="[render]\nmarch = 3\n"), "render.march: expected a table, got integer 3"),
     "over_relaxation 4": (scene_text(extra="[render.march]\nover_relaxation = 4.0\n"), "render.march.over_relaxation: 4 is out of range (allowed: [1, 4))"),
     "fixed over_relaxation 2": (scene_text(extra="[render.march]\nover_relaxation = 2.0\nadaptive = false\n"),

@@ -18,10 +18,10 @@ FULL = (960, 540)
 PIXELS = FULL[0] * FULL[1]
 
 
-def fake_scene(name="a", position=(0.0, 1.0, 5.0), max_depth=8):
+def fake_scene(name="a", position=(0.0, 1.0, 5.0), max_depth=8, exposure=0.0):
     camera = SimpleNamespace(position=position, look_at=(0.0, 1.0, 0.0), up=(0.0, 1.0, 0.0), fov=40.0,
                              aperture=0.0, focus_distance=5.0, projection="perspective", ortho_height=2.0)
-    return SimpleNamespace(name=name, camera=camera, render=SimpleNamespace(max_depth=max_depth))
+    return SimpleNamespace(name=name, camera=camera, render=SimpleNamespace(max_depth=max_depth, exposure=exposure))
 
 
 def make_session(settle=0.1, scenes=("a", "b", "c"), skip_preview=True):
@@ -392,6 +392,13 @@ def test_scene_camera_is_remembered():
     assert s.controller.state != moved
     s.cycle_scene(-1, load)
     assert s.controller.state == moved
+
+
+def test_a_scene_brings_its_exposure():
+    s = make_session()
+    s.exposure = 3.0  # the slider's, for the scene being left
+    s.switch_scene(1, fake_scene("b", exposure=-1.5))
+    assert s.exposure == -1.5
 
 
 def test_move_speed_scales_with_the_scene():

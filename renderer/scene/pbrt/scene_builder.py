@@ -191,7 +191,7 @@ class _Builder:
         film = self.option("Film")
         width, height = DEFAULT_RESOLUTION
         if film is None:
-            return RenderSettings(width=width, height=height)
+            return RenderSettings(width=width, height=height, exposure=self.exposure(None))
         if film.type not in ("rgb", "gbuffer", "spectral"):
             warn(film, "read as an rgb film")
         elif film.type != "rgb":
@@ -209,8 +209,30 @@ class _Builder:
             y0, y1 = math.ceil(height * window[2]), math.ceil(height * window[3])
             if x1 > x0 and y1 > y0 and (x0, y0, x1, y1) != (0, 0, width, height):
                 crop = (x0, y0, x1 - x0, y1 - y0)
+        exposure = self.exposure(film)
         self.unused(film)
-        return RenderSettings(width=width, height=height, crop=crop)
+        return RenderSettings(width=width, height=height, crop=crop, exposure=exposure)
+
+    def exposure(self, film: Directive | None) -> float:
+        """pbrt-v4's imaging ratio, shutter time x iso / 100, which scales the values its film
+        records, as Lantern's display exposure in EV (Lantern's EXR keeps radiance). White balance
+        and camera sensors other than cie1931 (which white-balance to 6500 K) are one warning."""
+        cam = self.option("Camera")
+        shutter = (cam.params.float("shutterclose", 1.0) - cam.params.float("shutteropen", 0.0)) if cam else 1.0
+        iso = film.params.float("iso", 100.0) if film is not None else 100.0
+        ratio = shutter * iso / 100.0
+        if not ratio > 0.0:
+            raise (film or cam).error(f"shutter time x iso / 100 is {ratio:g}: the film records no light")
+        exposure = math.log2(ratio)
+        if not -126.0 <= exposure <= 127.0:
+            raise (film or cam).error(f"shutter time x iso / 100 = {ratio:g} is beyond 2^-126 .. 2^127")
+        if film is None:
+            return exposure
+        sensor, balance = film.params.string("sensor", "cie1931"), film.params.float("whitebalance", 0.0)
+        if sensor != "cie1931" or balance != 0.0:
+            warn(film, f"the sensor '{sensor}' and white balance are not supported: the image is the cie1931 "
+                       "sensor's, not white-balanced")
+        return exposure
 
     def sampler(self, render: RenderSettings) -> RenderSettings:
         sampler = self.option("Sampler")

@@ -86,8 +86,23 @@ def test_triangle_filter_and_unsupported_filter(tmp_path):
 
 
 def test_unused_option_parameter_warns_once(tmp_path):
-    _, messages = load(tmp_path, MARKED, options='Film "rgb" "float iso" 100\n', expect_warnings=1)
-    assert messages[0].endswith("line 1: Film \"rgb\": parameter 'float iso' is not supported and was ignored")
+    _, messages = load(tmp_path, MARKED, options='Film "rgb" "float maxcomponentvalue" 10\n', expect_warnings=1)
+    assert messages[0].endswith("line 1: Film \"rgb\": parameter 'float maxcomponentvalue' is not supported and "
+                                "was ignored")
+
+
+def test_iso_and_shutter_time_are_the_display_exposure(tmp_path):
+    """pbrt-v4's imaging ratio, shutter time x iso / 100: 0.5 s at iso 400 is twice the light, 1 EV."""
+    options = 'Camera "perspective" "float shutteropen" 0.25 "float shutterclose" 0.75\nFilm "rgb" "float iso" 400\n'
+    assert load(tmp_path, MARKED, options=options)[0].render.exposure == pytest.approx(1.0)
+    assert load(tmp_path, MARKED, options='Camera "perspective" "float shutterclose" 0.25\n')[0].render.exposure == -2.0
+    assert load(tmp_path, MARKED, options="")[0].render.exposure == 0.0
+    _, messages = load(tmp_path, MARKED, options='Film "rgb" "float whitebalance" 5000\n', expect_warnings=1)
+    assert "not white-balanced" in messages[0]
+    _, messages = load(tmp_path, MARKED, options='Film "rgb" "string sensor" "canon_eos_100d"\n', expect_warnings=1)
+    assert "canon_eos_100d" in messages[0]
+    with pytest.raises(SceneError, match="line 1: .*the film records no light"):
+        load(tmp_path, MARKED, options='Film "rgb" "float iso" 0\n')
 
 
 def test_nothing_to_render_is_one_error(tmp_path):
