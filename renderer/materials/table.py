@@ -77,6 +77,9 @@ class MaterialRows:
         self.rows = []
         self.medium_ids = {name: i for i, name in enumerate(medium_names)}
         self.plastic_tables: list[np.ndarray] = []  # renderer/materials/plastic_tables.py, one per rough plastic
+        # The rows of mixes' parts wait until every material has its row: primitives name a
+        # material by its place in the scene's list, which must be its row (_place_mix_parts).
+        self._mix_parts: list[tuple] = []  # (mix row, parts, their texture slots by role)
 
     def add_spec(self, spec, texture_slots: dict | None = None) -> int:
         """A scene file's material; texture_slots: the texture-table index of each of its textures
@@ -109,11 +112,19 @@ class MaterialRows:
         self.rows.append(row)
         index = len(self.rows) - 1
         if spec.mix is not None:
-            parts = [self.add_spec(part, {role.split(".", 1)[1]: slot for role, slot in slots.items()
-                                          if role.startswith(f"mix{i}.")}) for i, part in enumerate(spec.mix)]
-            row["mix"] = (parts[0], parts[1], slots.get("mix_weight", NO_TEXTURE), NO_TEXTURE)
-            row["kind"] = self.rows[parts[0]]["kind"]  # a mix row is never shaded as itself
+            part_slots = [{role.split(".", 1)[1]: slot for role, slot in slots.items() if role.startswith(f"mix{i}.")}
+                          for i in range(len(spec.mix))]
+            self._mix_parts.append((index, spec.mix, part_slots, slots.get("mix_weight", NO_TEXTURE)))
         return index
+
+    def _place_mix_parts(self) -> None:
+        """The rows of the mixes' parts, after all the others (parts of parts after those)."""
+        while self._mix_parts:
+            pending, self._mix_parts = self._mix_parts, []
+            for index, parts, part_slots, weight in pending:
+                ids = [self.add_spec(part, slots) for part, slots in zip(parts, part_slots)]
+                self.rows[index]["mix"] = (ids[0], ids[1], weight, NO_TEXTURE)
+                self.rows[index]["kind"] = self.rows[ids[0]]["kind"]  # a mix row is never shaded as itself
 
     def add_medium(self, name: str) -> int:
         """Registers a medium that the scene's own list does not name (a model file's volume)."""
@@ -152,6 +163,7 @@ class MaterialRows:
 
     def arrays(self) -> dict:
         """One array per MaterialRecord member, its dtype and width read off the record."""
+        self._place_mix_parts()
         out = {}
         for name, member in MaterialRecord.members.items():
             width = getattr(member, "n", None)
@@ -163,6 +175,7 @@ class MaterialRows:
     def uses(self) -> dict:
         """What the rows call for (for Features): the names of the kinds and layers they use,
         texture use, and the rest of features_from's material_uses."""
+        self._place_mix_parts()
         rows = self.rows
         slots = [any(r["textures"][i] != NO_TEXTURE for r in rows) for i in range(4)]
         layer_textures = any(t != NO_TEXTURE for r in rows for t in (*r["layer_textures"], *r["layer_textures2"]))

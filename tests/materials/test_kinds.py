@@ -84,6 +84,23 @@ def test_table_rows_and_uses():
     assert smooth.uses()["rough"] is False and smooth.uses()["layers"] == {"clearcoat", "specular"}
 
 
+def test_every_material_row_is_its_place_in_the_scene_list_with_mixes_among_them():
+    """Primitives name a material by its place in the scene's list: a mix's parts take rows after
+    every material's (here a material after a mix, which took row 5 when parts followed their mix)."""
+    from renderer.materials.table import MaterialRows
+
+    a, b = MaterialSpec("a", kind="diffuse", base_color=(1, 0, 0)), MaterialSpec("b", kind="conductor")
+    inner = MaterialSpec("inner", kind="diffuse", mix=(a, b))
+    specs = [a, MaterialSpec("m", kind="diffuse", mix=(inner, b), mix_weight=0.25), MaterialSpec("c", kind="dielectric")]
+    rows = MaterialRows()
+    assert [rows.add_spec(s) for s in specs] == [0, 1, 2]
+    arrays = rows.arrays()
+    assert arrays["kind"][:3].tolist() == [KIND_IDS["diffuse"], KIND_IDS["diffuse"], KIND_IDS["dielectric"]]
+    first, second = arrays["mix"][1][:2]
+    assert first >= 3 and arrays["kind"][second] == KIND_IDS["conductor"] and arrays["mix"][first][0] >= 3
+    assert arrays["base_color"][arrays["mix"][first][0]].tolist() == [1, 0, 0]  # the inner mix's first part
+
+
 def test_features_hold_kind_and_layer_sets():
     uses = {"kinds": {"diffuse", "principled"}, "layers": {"clearcoat"}, "textures": False, "normal_maps": False,
             "emission": False, "rough": False}
