@@ -9,7 +9,7 @@ medium is numbered after the scene's own media.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -29,6 +29,10 @@ class MeshScene:
     atlas: TextureAtlas | None
     texture_slots: list  # (rect, wrap_s, wrap_t, uv_set, matrix[, nearest]) per texture slot
     volume_media: tuple = ()  # MediumSpec of model files' volumes, numbered after the scene's media
+    # The assembly's materials (the scene's, then model files' own) and which image each texture of
+    # a scene material reads: what material_rows needs to make the rows again after an edit.
+    materials: tuple = ()
+    spec_images: dict = field(default_factory=dict)
 
     def material_uses(self) -> dict:
         return self.rows.uses()
@@ -51,15 +55,27 @@ def prepare_mesh_scene(scene: Scene, instancing: bool = True) -> MeshScene:
     """The scene assembled (instancing False flattens every instance into world triangles), its
     materials as device rows and its model files' textures as slots over packed pages."""
     assembly = assemble(scene, instancing)
+    rows, slots = material_rows(scene, assembly.materials, assembly.spec_images)
+    atlas, texture_slots = None, []
+    if slots:
+        atlas = pack_atlas(assembly.images)
+        texture_slots = [(atlas.rects[slot[0]], *slot[1:]) for slot in slots]
+    return MeshScene(assembly.data, rows, atlas, texture_slots, assembly.volume_media, assembly.materials,
+                     assembly.spec_images)
+
+
+def material_rows(scene: Scene, materials: tuple, spec_images: dict) -> tuple[MaterialRows, list]:
+    """The device rows of an assembly's materials, in order, and the texture slots they read
+    ((image index, wrap_s, wrap_t, uv_set, matrix[, nearest]) each, numbered as the rows use them)."""
     rows = MaterialRows(scene.medium_names())
-    slots: list = []  # (image index, wrap_s, wrap_t, uv_set, matrix[, nearest])
-    for index, material in enumerate(assembly.materials):
+    slots: list = []
+    for index, material in enumerate(materials):
         if not isinstance(material, ModelMaterial):
             texture_slots = {}
             for role, texture in material.textures.items():
                 wrap = WRAP_CODES[texture.wrap]
-                slots.append((assembly.spec_images[(index, role)], wrap, wrap, 0,
-                              np.array(texture.transform, np.float32), texture.nearest))
+                slots.append((spec_images[(index, role)], wrap, wrap, 0, np.array(texture.transform, np.float32),
+                              texture.nearest))
                 texture_slots[role] = len(slots) - 1
             rows.add_spec(material, texture_slots)
             continue
@@ -71,8 +87,4 @@ def prepare_mesh_scene(scene: Scene, instancing: bool = True) -> MeshScene:
 
         medium = NO_MEDIUM if material.medium is None else rows.add_medium(material.medium.name)
         rows.add_pbr(material.pbr, texture_id, medium)
-    atlas, texture_slots = None, []
-    if slots:
-        atlas = pack_atlas(assembly.images)
-        texture_slots = [(atlas.rects[slot[0]], *slot[1:]) for slot in slots]
-    return MeshScene(assembly.data, rows, atlas, texture_slots, assembly.volume_media)
+    return rows, slots

@@ -156,3 +156,24 @@ class RenderProgram:
             ray = Ray(o=o, d=d, cone_width=0.0, cone_spread=0.0)
             hit = self.geometry.intersect(ray, INF)
             out[None] = hit.t * d.dot(forward) if hit.hit == 1 else -1.0
+
+    @ti.kernel
+    def pick(self, u: ti.f32, v: ti.f32, width: ti.i32, height: ti.i32, origin: ti.math.vec3,
+             forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32,
+             floats: ti.template(), ints: ti.template()):
+        """What the camera ray through (u, v) in [0,1]^2 (y up) meets: ints = (hit, material, prim,
+        instance, front face), floats = (distance along the ray, point, shading normal, uv)."""
+        for _ in range(1):  # a parallel loop of one, as probe's
+            o, d = pinhole_ray(2.0 * u - 1.0, 2.0 * v - 1.0, width / height, origin, forward, right, up,
+                               half_height, self.features.orthographic)
+            ray = Ray(o=o, d=d, cone_width=0.0, cone_spread=0.0)
+            hit = self.geometry.intersect(ray, INF)
+            ints[0] = hit.hit
+            if hit.hit == 1:
+                s = self.geometry.surface(ray, hit)
+                ints[1], ints[2], ints[3], ints[4] = s.material, s.prim, hit.instance, s.front_face
+                floats[0] = hit.t
+                for k in ti.static(range(3)):
+                    floats[1 + k] = s.p[k]
+                    floats[4 + k] = s.n_shading[k]
+                floats[7], floats[8] = s.uv[0], s.uv[1]

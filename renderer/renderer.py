@@ -21,7 +21,7 @@ from renderer.film.accumulation import Film, FilmState
 from renderer.output.image_io import read_environment
 from renderer.integrators import make_integrator
 from renderer.lights.environment import Environment
-from renderer.materials.table import MaterialTable
+from renderer.materials.table import MaterialRows, MaterialTable
 from renderer.materials.texture_sampler import TextureTable
 from renderer.media.table import MediaTable
 from renderer.film.pixel_fields import pixel_vector, row_sums
@@ -91,12 +91,13 @@ def leaf_layout(leaves: str, data) -> str:
 
 
 def build_world(scene: Scene, mesh_options: MeshOptions):
-    """(geometry, material table, Features with the scene camera's lens) for any scene kind."""
+    """(geometry, material table, Features with the scene camera's lens, the mesh scene's assembly
+    or None) for any scene kind."""
     if scene.geometry == "sdf":
         from shaders_sdf.geometry import SdfGeometry
 
         return (SdfGeometry(scene, scene.material_index), MaterialTable.from_specs(scene.materials, scene.medium_names()),
-                scene_features(scene))
+                scene_features(scene), None)
     if scene.geometry == "mesh":
         from renderer.geometry.instance_bvh import build_scene_bvh
         from renderer.geometry.mesh_geometry import MeshGeometry
@@ -110,8 +111,25 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
         # The geometry tests alpha coverage during traversal: it reads the material table.
         geometry = MeshGeometry(mesh.data, bvh, mesh_options.traversal, mesh_options.triangle_test, materials,
                                 layout)
-        return geometry, materials, mesh.features(scene)
+        return geometry, materials, mesh.features(scene), mesh
     raise ValueError(f"unknown geometry kind '{scene.geometry}'")
+
+
+@dataclass(frozen=True)
+class SurfaceHit:
+    """The first surface along a camera ray (Renderer.pick): distance along the unit ray, the point,
+    its shading normal and texture coordinates, its material row (a place in the scene's material
+    list, then model files' materials), the primitive (a global id on meshes, a node of the SDF
+    tree), the mesh instance (-1: none) and whether the ray met the front face."""
+
+    distance: float
+    point: tuple
+    normal: tuple
+    uv: tuple
+    material: int
+    primitive: int
+    instance: int
+    front_face: bool
 
 
 @dataclass(frozen=True)
@@ -147,7 +165,7 @@ class Renderer:
         image = (read_environment(scene.environment.file, scene.model_files.options.budget)
                  if scene.environment.kind == "map" else None)
         self.environment = Environment(scene.environment, image)
-        self.geometry, self.materials, self._features = build_world(scene, mesh_options)
+        self.geometry, self.materials, self._features, self._mesh = build_world(scene, mesh_options)
         self.media = MediaTable(scene, self.materials.volume_media)
         self._env_image = image
         self._lights = None
@@ -164,6 +182,7 @@ class Renderer:
         self.work = pixel_vector(3, ti.f32, allocated)
         self.bands = BandTable(allocated[1])
         self._probe_out = ti.field(ti.f32, shape=())
+        self._pick_out = None  # pick()'s output fields, made on first use
         self._programs: dict[tuple, RenderProgram] = {}  # by _program_key
         # Per-integrator knobs that are data, not compile-time (e.g. "sppm": SppmOptions), and
         # device state that integrators with their own programs share between them (shared()).
@@ -246,6 +265,53 @@ class Renderer:
     def is_compiled(self, integrator: str, features: Features, sampler: str = "independent") -> bool:
         """False until the combination has run once in this process (its first call compiles)."""
         return self._program_key(integrator, features, sampler) in self._launched
+
+    # --- editing -------------------------------------------------------------------------------
+    def edit_materials(self, scene: Scene) -> bool:
+        """Adopt `scene`: this renderer's scene with its materials edited (the same names in the
+        same order, the rest unchanged). The material rows are uploaded again in place and the
+        film is reset; the Features follow the materials, so a kind or effect the edit brings in
+        compiles on the next render and one it drops leaves the kernel, while an edit of values
+        compiles nothing. Lights are rebuilt where emission changed (their selection weighs it).
+        Returns False, changing nothing, where the edit needs the world built again (a texture
+        added, removed or changed; a different number of rows, media or rough-plastic tables):
+        make a new Renderer of `scene` then."""
+        old = self.scene
+        if [m.name for m in scene.materials] != [m.name for m in old.materials]:
+            raise ValueError("an edit keeps the scene's materials and their order")
+        if any(a.textures != b.textures for a, b in zip(scene.materials, old.materials)):
+            return False
+        if self._mesh is not None:
+            from renderer.mesh_world import material_rows
+
+            materials = tuple(scene.materials) + tuple(self._mesh.materials[len(old.materials):])
+            rows, _ = material_rows(scene, materials, self._mesh.spec_images)
+            mesh = replace(self._mesh, rows=rows, materials=materials)
+            features = mesh.features(scene)
+        else:
+            rows, mesh = MaterialRows(scene.medium_names()), None
+            for spec in scene.materials:
+                rows.add_spec(spec)
+            features = scene_features(scene)
+        fits = getattr(self.geometry, "fits_materials", None)  # mesh traversal compiles material flags in
+        if scene.medium_names() != old.medium_names() or (fits is not None and not fits(rows.arrays())):
+            return False
+        if not self.materials.update(rows):
+            return False
+        before = self.materials.previous_arrays
+        emission_changed = any(not np.array_equal(before[k], self.materials.arrays[k])
+                               for k in ("emission", "two_sided_emission"))
+        self.scene, self._mesh = scene, mesh
+        self._features = replace(features, depth_of_field=self._features.depth_of_field,
+                                 orthographic=self._features.orthographic)
+        if self.aovs is not None:
+            self.scene_feature_boost = scene_feature_boost(self._features)
+            self.feature_boost = self.scene_feature_boost
+        if emission_changed and self._lights is not None:
+            self._lights = None
+            self._programs.clear()  # they hold the lights; rebuilt (from the kernel cache) on use
+        self.reset()
+        return True
 
     # --- rendering -----------------------------------------------------------------------------
     def reset(self, width: int | None = None, height: int | None = None) -> None:
@@ -405,6 +471,21 @@ class Renderer:
         program.probe(u, v, window.full_width, window.full_height, *args[:5], self._probe_out)
         distance = float(self._probe_out[None])
         return distance if distance > 0 else None
+
+    def pick(self, camera: CameraFrame, u: float, v: float, integrator: str | None = None) -> SurfaceHit | None:
+        """What the camera ray through (u, v) in [0,1]^2 of the film (y up) meets first, or None."""
+        program = self.program(integrator or self.scene.render.integrator, self.features(camera))
+        window = self.film_window()
+        u, v = window.image_uv(u, v, self.film.width, self.film.height)
+        if self._pick_out is None:
+            self._pick_out = (ti.field(ti.f32, shape=9), ti.field(ti.i32, shape=5))
+        floats, ints = self._pick_out
+        program.pick(u, v, window.full_width, window.full_height, *camera.kernel_args()[:5], floats, ints)
+        i, f = ints.to_numpy(), floats.to_numpy().astype(float)
+        if i[0] != 1:
+            return None
+        return SurfaceHit(distance=float(f[0]), point=tuple(f[1:4]), normal=tuple(f[4:7]), uv=tuple(f[7:9]),
+                          material=int(i[1]), primitive=int(i[2]), instance=int(i[3]), front_face=bool(i[4]))
 
     def work_stats(self) -> dict:
         """Mean geometry work per ray (march steps on SDF scenes, BVH node visits on mesh scenes),

@@ -41,10 +41,15 @@ class SdfGeometry:
 
     def __init__(self, scene, material_index):
         self.program = SdfProgram(scene.sdf_objects, material_index)
+        self._node_objects = self.program.node_objects(scene.sdf_objects)
         # march settings are data, so benchmarks sweep them without recompiling
         self.march_f = ti.field(ti.f32, shape=4)  # hit_threshold, min_threshold, max_distance, omega
         self.march_i = ti.field(ti.i32, shape=2)  # max_steps, adaptive (1) or fixed (0) relaxation
         self.set_march(scene.render.march)
+
+    def object_of(self, prim: int) -> int:
+        """The top-level object (Scene.sdf_objects index) whose tree holds node `prim`; -1 unknown."""
+        return int(self._node_objects[prim]) if 0 <= prim < len(self._node_objects) else -1
 
     def set_march(self, march):
         upload_fields([(self.march_f, np.array([march.hit_threshold, march.min_threshold, march.max_distance,

@@ -85,6 +85,17 @@ class NodeTable:
                 self.shape_keys.append(key)
             self.shape[row] = ids[key]
 
+    def node_objects(self, objects) -> np.ndarray:
+        """Per row, the index in `objects` (the scene's top-level nodes) of the tree it belongs to."""
+        top = {id(node): i for i, node in enumerate(objects)}
+        out = np.full(len(self.order), -1, np.int32)
+        for row, node in enumerate(self.order):  # parents come before their children
+            if out[row] < 0:
+                out[row] = top.get(id(node), -1)
+            first, end = self.children[row]
+            out[first:end] = out[row]
+        return out
+
     def shapes_of(self, rows) -> tuple[int, ...]:
         return tuple(sorted({self.shape[r] for r in rows}))
 
@@ -115,6 +126,9 @@ class SdfProgram:
         self.distance = self._scene_func(with_material=False)  # p -> d
         self.distance_material = self._scene_func(with_material=True)  # p -> (d, material id, node id)
         self.order = order  # node table order: node id -> SdfNode
+
+    def node_objects(self, objects) -> np.ndarray:
+        return self._table.node_objects(objects)
 
     def _upload(self, table: NodeTable, material_index):
         order = table.order

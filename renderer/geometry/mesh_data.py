@@ -64,6 +64,10 @@ class MeshData:
     instanced_meshes: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int32))
     instance_mesh: np.ndarray = field(default_factory=_i32)
     instance_to_world: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 4)))
+    # Host only (picking): the scene object each primitive came from, an index into
+    # Scene.mesh_objects, in global id order (an instanced mesh's triangles: its object's); empty
+    # where the data was not assembled from a scene.
+    prim_object: np.ndarray = field(default_factory=_i32)
 
     @property
     def counts(self) -> dict[str, int]:

@@ -73,10 +73,8 @@ class MeshGeometry:
         self.has_colors = data.tri_colors is not None and len(data.tri_vertices) > 0
         self.materials = materials
         # Coverage is tested in traversal for alpha (glTF MASK / BLEND, Mitsuba's mask) and back-face culling.
-        self.has_alpha = materials is not None and bool(np.any(materials.arrays["alpha_mode"] != ALPHA_OPAQUE)
-                                                        or np.any(materials.arrays["sidedness"] == BACK_CULLED))
-        # Hits carry dp/du and dp/dv only where a material shades in their frame (Mitsuba's maps).
-        self.has_uv_partials = materials is not None and needs_uv_partials(materials.arrays)
+        self.has_alpha, self.has_uv_partials = self._material_flags(materials.arrays if materials is not None
+                                                                    else None)
         self.has_instances = data.has_instances
         # Spheres or quads with their normals turned over (Mitsuba's flip_normals): a sign per
         # analytic primitive, compiled in only where one is.
@@ -609,6 +607,25 @@ class MeshGeometry:
     # --- direct lighting ---------------------------------------------------------------------------
     def primitive_count(self) -> int:
         return self.data.primitive_count
+
+    @staticmethod
+    def _material_flags(arrays) -> tuple[bool, bool]:
+        """What traversal compiles in for the material rows: coverage tests (alpha: glTF MASK and
+        BLEND, Mitsuba's mask; back-face culling), and dp/du, dp/dv on hits (where a material shades
+        in their frame, Mitsuba's maps)."""
+        if arrays is None:
+            return False, False
+        alpha = bool(np.any(arrays["alpha_mode"] != ALPHA_OPAQUE) or np.any(arrays["sidedness"] == BACK_CULLED))
+        return alpha, bool(needs_uv_partials(arrays))
+
+    def fits_materials(self, arrays) -> bool:
+        """Whether edited material rows need nothing traversal was built without (or with)."""
+        return self.materials is not None and self._material_flags(arrays) == (self.has_alpha, self.has_uv_partials)
+
+    def object_of(self, prim: int) -> int:
+        """The scene object (Scene.mesh_objects index) primitive `prim` came from; -1 unknown."""
+        owners = self.data.prim_object
+        return int(owners[prim]) if 0 <= prim < len(owners) else -1
 
     def emitter_info(self) -> dict:
         """Every primitive with its material, area, bounds and emission cone (for light selection):

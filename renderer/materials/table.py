@@ -229,6 +229,7 @@ class MaterialTable:
         # table numbers them after the scene's own.
         self.volume_media = tuple(volume_media)
         self.arrays = arrays  # kept: direct lighting reads emission per material
+        self.previous_arrays = arrays  # the rows before the last update()
         self.count = len(arrays["kind"])
         self.table = MaterialRecord.field(shape=max(1, self.count))
         if self.count:
@@ -244,6 +245,21 @@ class MaterialTable:
         self._ggx_albedo = None
         self._dielectric_albedo = None
         self._sheen_albedo = None
+
+    def update(self, rows: MaterialRows) -> bool:
+        """Upload edited rows in place: True where they fit the table as built (as many rows and
+        rough-plastic tables); False, changing nothing, where they do not. previous_arrays keeps
+        the rows replaced."""
+        arrays = rows.arrays()
+        if len(arrays["kind"]) != self.count or len(rows.plastic_tables) != (
+                0 if self.plastic_transmittance is None else self.plastic_transmittance.shape[0]):
+            return False
+        if self.count:
+            upload_fields([(self.table, arrays)])
+        if rows.plastic_tables:
+            self.plastic_transmittance.from_numpy(np.stack(rows.plastic_tables).astype(np.float32))
+        self.previous_arrays, self.arrays = self.arrays, arrays
+        return True
 
     @property
     def ggx_albedo(self):

@@ -129,10 +129,33 @@ class _Assembler:
         # (scene material index, texture role) -> the image that texture reads
         self.spec_images: dict[tuple[int, str], int] = {}
         self.attribute_colors = AttributeColoring(scene.model_files.ledger)
+        # the scene object of each primitive added, by where it went (world and object-space
+        # triangles, spheres, quads, discs, Bezier objects)
+        self.owners: dict[str, list] = {key: [] for key in self._tallies()}
         for index, material in enumerate(scene.materials):
             for role, texture in material.textures.items():
                 self.images.append(texture_image(texture, scene.model_files.ledger))
                 self.spec_images[(index, role)] = len(self.images) - 1
+
+    def _tallies(self) -> dict[str, int]:
+        return {"world": self.world.count, "object": self.object.count, "spheres": len(self.parts["spheres"]),
+                "quads": len(self.parts["quads"]), "discs": len(self.parts["discs"]), "beziers": len(self.beziers)}
+
+    def add_owned(self, obj, index):
+        """add_object, noting `index` as the owner of every primitive it adds."""
+        before = self._tallies()
+        self.add_object(obj, index)
+        for key, count in self._tallies().items():
+            self.owners[key] += [index] * (count - before[key])
+
+    def prim_objects(self, data: MeshData) -> np.ndarray:
+        """The owner of each primitive in global id order (MeshData.prim_object)."""
+        o = self.owners
+        bezier = np.asarray(o["beziers"], np.int32)
+        patches = (bezier[data.bezier_curve_object[data.bezier_patch_curve]] if len(data.bezier_patches)
+                   else np.zeros(0, np.int32))
+        return np.concatenate([np.asarray(o[k], np.int32) for k in ("world", "object", "spheres", "quads", "discs")]
+                              + [patches]).astype(np.int32)
 
     def material(self, name, where):
         if name not in self.material_ids:
@@ -279,8 +302,9 @@ def assemble(scene: Scene, instancing: bool = True) -> MeshAssembly:
     triangles."""
     assembler = _Assembler(scene, instancing)
     for i, obj in enumerate(scene.mesh_objects):
-        assembler.add_object(obj, i)
+        assembler.add_owned(obj, i)
     result = assembler.result()
+    result.data.prim_object = assembler.prim_objects(result.data)
     if result.data.primitive_count == 0:
         raise SceneError(scene.path, "the scene has no primitives")
     return result

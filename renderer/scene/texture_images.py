@@ -18,6 +18,7 @@ from renderer.scene.mesh_model import TextureImage
 from renderer.scene.model_formats.builder import decode_failure
 from renderer.scene.model_formats.image_decoding import DECODE_PEAK, DECODED, IMAGE_COPIES, decode_image, image_header
 from renderer.scene.references import missing_file_problem
+from renderer.scene.texture_mixing import mixed_image
 
 
 
@@ -25,9 +26,7 @@ def texture_image(spec: TextureSpec, ledger: MemoryLedger) -> TextureImage:
     if spec.kind == "checkerboard":
         return checkerboard_image(spec.color0, spec.color1)
     if spec.kind in ("mix", "product"):
-        from renderer.scene.texture_mixing import mixed_image  # it reads its operands through here
-
-        return mixed_image(spec, ledger)
+        return mixed_image(spec, ledger, texture_image)
     if spec.kind != "bitmap":
         raise ValueError(f"unknown texture kind '{spec.kind}'")
     return _bitmap(spec, ledger)

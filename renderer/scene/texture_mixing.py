@@ -16,11 +16,10 @@ from renderer.scene.limits import MemoryLedger
 from renderer.scene.mesh_model import TextureImage
 
 
-def mixed_image(spec: TextureSpec, ledger: MemoryLedger) -> TextureImage:
+def mixed_image(spec: TextureSpec, ledger: MemoryLedger, texture_image) -> TextureImage:
+    """The baked image; `texture_image(spec, ledger)` reads an operand's (texture_images.py's)."""
     if spec.kind not in ("mix", "product") or len(spec.operands) != 2:
         raise ValueError(f"a {spec.kind} texture with {len(spec.operands)} operands cannot be baked")
-    from renderer.scene.texture_images import texture_image
-
     textures = [texture for _, texture in spec.operands]
     if spec.kind == "mix":
         textures.append(spec.amount[1])

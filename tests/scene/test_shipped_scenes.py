@@ -36,6 +36,7 @@ def test_cornell_box_matches_mitsuba_dictionary():
     assert (scene.environment.kind, scene.environment.color) == ("constant", (0.0, 0.0, 0.0))
     colours = {m.name: m.base_color for m in scene.materials}
     assert colours["white"] == (0.885809, 0.698859, 0.666422)
+    assert colours["short_box"] == colours["tall_box"] == colours["white"]  # their own, for editing one
     assert colours["green"] == (0.105421, 0.37798, 0.076425)
     assert colours["red"] == (0.570068, 0.0430135, 0.0443706)
     assert all(m.kind == "diffuse" for m in scene.materials)
@@ -73,13 +74,13 @@ def test_cornell_box_matches_mitsuba_dictionary():
     # map to a face of that box, facing out.
     boxes = {"small": ((0.335, -0.7, 0.38), -17.0, (0.3, 0.3, 0.3)),
              "large": ((-0.33, -0.4, -0.28), 18.25, (0.3, 0.61, 0.3))}
-    faces = [o for o in by_material["white"] if o.size != (2.0, 2.0)]
-    assert len(faces) == 12
+    faces = by_material["short_box"] + by_material["tall_box"]
+    assert len(faces) == 12 and not [o for o in by_material["white"] if o.size != (2.0, 2.0)]
     for name, (t, angle, s) in boxes.items():
         box = MeshObject("quad", translate=t, rotate=(0.0, angle, 0.0), scale=s).matrix()
         inverse = np.linalg.inv(box)
         mine = [o for o in faces if np.all(np.abs((inverse @ (*o.translate, 1.0))[:3]) <= 1 + 1e-6)]
-        assert len(mine) == 6, name
+        assert len(mine) == 6 and {o.material for o in mine} == {"short_box" if name == "small" else "tall_box"}, name
         seen = set()
         for obj in mine:
             local = np.array([inverse @ (*c, 1.0) for c in corners(obj)])[:, :3]

@@ -1,0 +1,124 @@
+"""Editing a scene's materials while it renders: an edit replaces one material of the scene by
+name, its values kept within the ranges the scene format allows, and a history undoes and redoes
+edits. The Renderer adopts the edited scene in place (Renderer.edit_materials).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Optional
+
+from renderer.scene.description import MaterialSpec, Scene
+from renderer.scene.schema import MATERIAL
+
+
+@dataclass(frozen=True)
+class MaterialEdit:
+    """One material of a scene, before and after an edit."""
+
+    before: MaterialSpec
+    after: MaterialSpec
+
+    @property
+    def name(self) -> str:
+        return self.after.name
+
+
+def with_material(scene: Scene, spec: MaterialSpec) -> Scene:
+    """The scene with its material of that name replaced by `spec`."""
+    names = [m.name for m in scene.materials]
+    if spec.name not in names:
+        raise KeyError(f"the scene has no material '{spec.name}'")
+    return replace(scene, materials=tuple(spec if m.name == spec.name else m for m in scene.materials))
+
+
+def material_named(scene: Scene, name: str) -> MaterialSpec:
+    for spec in scene.materials:
+        if spec.name == name:
+            return spec
+    raise KeyError(f"the scene has no material '{name}'")
+
+
+def allowed_range(name: str):
+    """The scene format's range of a material field (renderer/scene/schema.py), or None."""
+    for f in MATERIAL.fields:
+        if f.model_attr == name or f.name == name:
+            return f.range
+    return None
+
+
+def clamped(spec: MaterialSpec) -> tuple[MaterialSpec, list[str]]:
+    """`spec` with every numeric field brought within its range in the scene format, and a line per
+    value changed ("roughness 1.5 -> 1 (allowed [0, 1])")."""
+    changes, notes = {}, []
+    for f in MATERIAL.fields:
+        if f.range is None or not f.in_model or not hasattr(spec, f.model_attr):
+            continue
+        value = getattr(spec, f.model_attr)
+        if isinstance(value, bool) or value is None:
+            continue
+        if isinstance(value, (int, float)):
+            fixed = _within(float(value), f.range)
+            if fixed != value:
+                changes[f.model_attr] = type(value)(fixed) if isinstance(value, int) else fixed
+        elif isinstance(value, tuple) and all(isinstance(c, (int, float)) for c in value):
+            fixed = tuple(_within(float(c), f.range) for c in value)
+            if fixed != tuple(float(c) for c in value):
+                changes[f.model_attr] = fixed
+        else:
+            continue
+        if f.model_attr in changes:
+            notes.append(f"{f.name} {_text(value)} -> {_text(changes[f.model_attr])} (allowed {f.range})")
+    return (replace(spec, **changes) if changes else spec), notes
+
+
+def _within(x: float, r) -> float:
+    if not math.isfinite(x):
+        x = r.lo if r.lo is not None else 0.0
+    if x in r.also:
+        return x
+    if r.lo is not None and (x < r.lo or (r.lo_open and x <= r.lo)):
+        x = math.nextafter(r.lo, math.inf) if r.lo_open else r.lo
+    if r.hi is not None and (x > r.hi or (r.hi_open and x >= r.hi)):
+        x = math.nextafter(r.hi, -math.inf) if r.hi_open else r.hi
+    return x
+
+
+def _text(value) -> str:
+    if isinstance(value, tuple):
+        return "(" + ", ".join(f"{c:g}" for c in value) + ")"
+    return f"{value:g}"
+
+
+@dataclass
+class EditHistory:
+    """Edits in the order made; undo walks back, redo forward again, a new edit drops what was
+    undone. `original` keeps each material as the scene file had it (reset)."""
+
+    done: list[MaterialEdit] = field(default_factory=list)
+    undone: list[MaterialEdit] = field(default_factory=list)
+    original: dict[str, MaterialSpec] = field(default_factory=dict)
+
+    def record(self, edit: MaterialEdit) -> None:
+        self.original.setdefault(edit.name, edit.before)
+        self.done.append(edit)
+        self.undone.clear()
+
+    def undo(self) -> Optional[MaterialSpec]:
+        """The material to restore, or None with nothing to undo."""
+        if not self.done:
+            return None
+        edit = self.done.pop()
+        self.undone.append(edit)
+        return edit.before
+
+    def redo(self) -> Optional[MaterialSpec]:
+        if not self.undone:
+            return None
+        edit = self.undone.pop()
+        self.done.append(edit)
+        return edit.after
+
+    def as_loaded(self, name: str) -> Optional[MaterialSpec]:
+        """The material as the scene file had it, or None where it was never edited."""
+        return self.original.get(name)

@@ -1,0 +1,93 @@
+"""Editing materials while rendering (Renderer.edit_materials): an edit then a render gives, bit
+for bit, the image of a renderer built on the edited scene; an edit of values compiles nothing,
+an edit of kind compiles that kind once and undoing it compiles nothing; what needs the world
+built again is refused without a change."""
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from renderer.camera import CameraFrame
+from renderer.editing import material_named, with_material
+from renderer.program import RenderProgram
+from renderer.renderer import Renderer
+from renderer.scene import load_scene
+from renderer.scene.description import TextureSpec
+
+REPO = Path(__file__).resolve().parents[2]
+SIZE = (16, 16)
+GOLD = (1.0, 0.766, 0.336)
+
+
+def kernels_compiled() -> int:
+    """Render kernels instantiated in this process (one per program and launch signature)."""
+    return len(RenderProgram._render._primal.compiled_kernels)
+
+
+def image(renderer, scene, spp=2):
+    renderer.render(CameraFrame.from_spec(scene.camera), spp, "mis", seed=7)
+    return renderer.image()
+
+
+@pytest.fixture(scope="module")
+def cornell():
+    return load_scene(REPO / "assets" / "scenes" / "cornell_box.toml")
+
+
+def fresh(scene):
+    return image(Renderer(scene, max_size=SIZE), scene)
+
+
+def test_a_colour_edit_is_the_edited_scenes_image_and_compiles_nothing(cornell):
+    renderer = Renderer(cornell, max_size=SIZE)
+    before = image(renderer, cornell)
+    compiled = kernels_compiled()
+    edited = with_material(cornell, replace(material_named(cornell, "tall_box"), base_color=GOLD))
+    assert renderer.edit_materials(edited)
+    after = image(renderer, edited)
+    assert kernels_compiled() == compiled and renderer.scene is edited
+    assert not np.array_equal(before, after)
+    np.testing.assert_array_equal(after, fresh(edited))
+
+
+def test_a_kind_edit_compiles_the_kind_once_and_undoing_it_compiles_nothing(cornell):
+    renderer = Renderer(cornell, max_size=SIZE)
+    original = image(renderer, cornell)
+    gold = with_material(cornell, replace(material_named(cornell, "tall_box"), kind="conductor", metal="Au",
+                                          roughness=0.3))
+    compiled = kernels_compiled()
+    assert renderer.edit_materials(gold)
+    assert "conductor" in renderer.features().material_kinds
+    np.testing.assert_array_equal(image(renderer, gold), fresh(gold))
+    assert renderer.edit_materials(cornell)  # undone: the diffuse-only kernel again
+    assert "conductor" not in renderer.features().material_kinds
+    compiled_after_kind = kernels_compiled()
+    assert compiled_after_kind > compiled
+    np.testing.assert_array_equal(image(renderer, cornell), original)
+    # back to gold (its kernel is built), then an edit of roughness: nothing compiles
+    rougher = with_material(gold, replace(material_named(gold, "tall_box"), roughness=0.6))
+    assert renderer.edit_materials(gold) and renderer.edit_materials(rougher)
+    edited = image(renderer, rougher)
+    assert kernels_compiled() == compiled_after_kind
+    np.testing.assert_array_equal(edited, fresh(rougher))
+
+
+def test_an_emission_edit_relights(cornell):
+    renderer = Renderer(cornell, max_size=SIZE)
+    image(renderer, cornell)
+    light = material_named(cornell, "light")
+    brighter = with_material(cornell, replace(light, emission=tuple(2 * c for c in light.emission)))
+    assert renderer.edit_materials(brighter)
+    np.testing.assert_array_equal(image(renderer, brighter), fresh(brighter))
+
+
+def test_an_edit_that_needs_the_world_built_again_changes_nothing(cornell, tmp_path):
+    renderer = Renderer(cornell, max_size=SIZE)
+    checks = TextureSpec("checkerboard", color0=(1, 1, 1), color1=(0, 0, 0), nearest=True)
+    textured = with_material(cornell, replace(material_named(cornell, "tall_box"), base_color_texture=checks))
+    assert not renderer.edit_materials(textured) and renderer.scene is cornell
+    with pytest.raises(ValueError, match="keeps the scene's materials"):
+        renderer.edit_materials(replace(cornell, materials=cornell.materials[1:]))

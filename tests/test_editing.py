@@ -1,0 +1,42 @@
+"""renderer/editing.py: values kept within the scene format's ranges with a line per change, a
+material replaced by name, and the history of edits undone, redone and reset."""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from renderer.editing import EditHistory, MaterialEdit, allowed_range, clamped, material_named, with_material
+from renderer.scene.description import CameraSpec, EnvironmentSpec, MaterialSpec, RenderSettings, Scene
+
+
+def test_values_outside_the_format_are_brought_within_it_and_said():
+    spec, notes = clamped(MaterialSpec("m", kind="dielectric", roughness=1.5, ior=0.5, base_color=(2.0, -1.0, 0.5)))
+    assert spec.roughness == 1.0 and spec.base_color == (1.0, 0.0, 0.5)
+    assert spec.ior > 1.0 and spec.ior == math.nextafter(1.0, 2.0)  # the index's range is open at 1
+    assert "roughness 1.5 -> 1 (allowed [0, 1])" in notes and any(n.startswith("ior 0.5 -> 1") for n in notes)
+    assert any(n.startswith("base_color (2, -1, 0.5) -> (1, 0, 0.5)") for n in notes) and len(notes) == 3
+    same, none = clamped(MaterialSpec("m", roughness=0.3))
+    assert same == MaterialSpec("m", roughness=0.3) and none == []
+    assert str(allowed_range("roughness")) == "[0, 1]" and allowed_range("no such field") is None
+
+
+def test_a_material_is_replaced_by_name():
+    scene = Scene(name="s", path=None, geometry="mesh", camera=CameraSpec(), render=RenderSettings(),
+                  environment=EnvironmentSpec(), materials=(MaterialSpec("a"), MaterialSpec("b")))
+    edited = with_material(scene, MaterialSpec("b", kind="conductor"))
+    assert [m.kind for m in edited.materials] == ["diffuse", "conductor"] and material_named(edited, "a").kind == "diffuse"
+    with pytest.raises(KeyError, match="no material 'c'"):
+        with_material(scene, MaterialSpec("c"))
+
+
+def test_undo_redo_and_the_material_as_loaded():
+    a0, a1, a2 = (MaterialSpec("a", roughness=r) for r in (0.1, 0.2, 0.3))
+    history = EditHistory()
+    assert history.undo() is None and history.redo() is None
+    history.record(MaterialEdit(a0, a1))
+    history.record(MaterialEdit(a1, a2))
+    assert history.undo() == a1 and history.undo() == a0 and history.undo() is None
+    assert history.redo() == a1
+    history.record(MaterialEdit(a1, MaterialSpec("a", roughness=0.9)))  # a new edit drops the redo
+    assert history.redo() is None and history.as_loaded("a") == a0 and history.as_loaded("b") is None
