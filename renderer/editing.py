@@ -39,6 +39,19 @@ def material_named(scene: Scene, name: str) -> MaterialSpec:
     raise KeyError(f"the scene has no material '{name}'")
 
 
+def canonical(spec: MaterialSpec) -> MaterialSpec:
+    """`spec` as the scene format writes it: a conductor's Fresnel from one description (a named
+    metal, else eta and k, else base_color with edge_tint), the others at their defaults, so that
+    a saved edit reads back as the same material (they would not shade it anyway)."""
+    if spec.kind != "conductor" or not (spec.metal or spec.eta is not None):
+        return spec
+    plain = MaterialSpec(spec.name)
+    kept = {"base_color": plain.base_color, "edge_tint": plain.edge_tint}
+    if spec.metal:
+        kept.update(eta=None, k=None)
+    return replace(spec, **kept)
+
+
 def allowed_range(name: str):
     """The scene format's range of a material field (renderer/scene/schema.py), or None."""
     for f in MATERIAL.fields:

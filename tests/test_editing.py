@@ -6,7 +6,8 @@ import math
 
 import pytest
 
-from renderer.editing import EditHistory, MaterialEdit, allowed_range, clamped, material_named, with_material
+from renderer.editing import (EditHistory, MaterialEdit, allowed_range, canonical, clamped, material_named,
+                              with_material)
 from renderer.scene.description import CameraSpec, EnvironmentSpec, MaterialSpec, RenderSettings, Scene
 
 
@@ -40,3 +41,13 @@ def test_undo_redo_and_the_material_as_loaded():
     assert history.redo() == a1
     history.record(MaterialEdit(a1, MaterialSpec("a", roughness=0.9)))  # a new edit drops the redo
     assert history.redo() is None and history.as_loaded("a") == a0 and history.as_loaded("b") is None
+
+
+def test_a_conductor_keeps_one_fresnel_description():
+    gold = canonical(MaterialSpec("m", kind="conductor", metal="Au", base_color=(0.1, 0.2, 0.3), eta=(1, 1, 1),
+                                  k=(2, 2, 2)))
+    assert gold.base_color == MaterialSpec("x").base_color and gold.eta is None and gold.metal == "Au"
+    indexed = canonical(MaterialSpec("m", kind="conductor", eta=(1, 1, 1), k=(2, 2, 2), edge_tint=(0.5, 0.5, 0.5)))
+    assert indexed.eta == (1, 1, 1) and indexed.edge_tint == (1.0, 1.0, 1.0)
+    tinted = MaterialSpec("m", kind="conductor", base_color=(0.1, 0.2, 0.3))
+    assert canonical(tinted) is tinted
