@@ -5,7 +5,7 @@ edits. The Renderer adopts the edited scene in place (Renderer.edit_materials).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Optional
 
 from renderer.scene.description import MaterialSpec, Scene
@@ -22,6 +22,9 @@ class MaterialEdit:
     @property
     def name(self) -> str:
         return self.after.name
+
+    def fields_changed(self) -> frozenset:
+        return frozenset(f.name for f in fields(MaterialSpec) if getattr(self.before, f.name) != getattr(self.after, f.name))
 
 
 def with_material(scene: Scene, spec: MaterialSpec) -> Scene:
@@ -112,9 +115,17 @@ class EditHistory:
     undone: list[MaterialEdit] = field(default_factory=list)
     original: dict[str, MaterialSpec] = field(default_factory=dict)
 
-    def record(self, edit: MaterialEdit) -> None:
+    def record(self, edit: MaterialEdit, merge: bool = False) -> None:
+        """Add an edit; with `merge`, one that goes on changing the same fields of the material
+        the last edit changed (a slider being dragged) extends that edit instead, so one undo
+        takes back the whole gesture."""
         self.original.setdefault(edit.name, edit.before)
-        self.done.append(edit)
+        last = self.done[-1] if self.done else None
+        if (merge and last is not None and last.after == edit.before
+                and last.fields_changed() == edit.fields_changed()):
+            self.done[-1] = MaterialEdit(last.before, edit.after)
+        else:
+            self.done.append(edit)
         self.undone.clear()
 
     def undo(self) -> Optional[MaterialSpec]:

@@ -47,6 +47,7 @@ def build_hotkeys(integrator_names: list[str], integrator_letters: dict[str, str
         Hotkey("p", "screenshot", "save screenshot"),
         Hotkey("x", "toggle_denoise", "toggle the denoised view (Open Image Denoise, when still)"),
         Hotkey("f", "focus_at_cursor", "focus at the cursor"),
+        Hotkey("l", "pick_at_cursor", "pick what is under the cursor (or click it): its material panel"),
         Hotkey("h", "toggle_hud", "toggle HUD"),
         Hotkey("tab", "help", "toggle this help"),
         Hotkey("/", "help", "toggle this help"),
@@ -81,5 +82,6 @@ class KeyMap:
             group = (h.action or h.key, h.description)
             rows.setdefault(group, []).append(h.key)
         lines = [(" ".join(keys), desc) for (_, desc), keys in rows.items()]
+        lines += [("ctrl+z ctrl+y", "undo / redo a material edit"), ("ctrl+s", "save the edited scene beside its file")]
         width = max(len(k) for k, _ in lines)
         return "\n".join(f"{k:<{width}}  {desc}" for k, desc in lines)

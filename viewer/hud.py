@@ -138,18 +138,18 @@ def hud_lines(s: HudStats) -> list[str]:
 # --- drawing ------------------------------------------------------------------------------------
 
 
-def _same_f32(a: float, b: float) -> bool:
+def same_f32(a: float, b: float) -> bool:
     return np.float32(a) == np.float32(b)
 
 
-def _slider_float(gui, label: str, value: float, lo: float, hi: float) -> float:
+def slider_float(gui, label: str, value: float, lo: float, hi: float) -> float:
     """A float slider that returns `value` itself (not its float32 copy) when untouched, so an
     untouched slider never looks like a change."""
     new = gui.slider_float(label, value, min(lo, value), max(hi, value))
-    return value if _same_f32(new, value) else float(new)
+    return value if same_f32(new, value) else float(new)
 
 
-def _text(gui, line: str, color=None) -> None:
+def text_line(gui, line: str, color=None) -> None:
     gui.text(line, color) if color is not None else gui.text(line)
 
 
@@ -161,26 +161,26 @@ def draw_hud(gui, window_size: tuple[int, int], stats: HudStats, controls: Contr
     actions: list[str] = []
     with gui.sub_window("Lantern", r.x, r.y, r.width, r.height) as g:
         for line in hud_lines(stats):
-            _text(g, line)
+            text_line(g, line)
         if error:
-            _text(g, error, ERROR_COLOR)
+            text_line(g, error, ERROR_COLOR)
         if message:
-            _text(g, message, MESSAGE_COLOR)
-        exposure = _slider_float(g, "exposure EV", controls.exposure, *EXPOSURE_RANGE)
+            text_line(g, message, MESSAGE_COLOR)
+        exposure = slider_float(g, "exposure EV", controls.exposure, *EXPOSURE_RANGE)
         if forced_tonemapper:
-            _text(g, f"tone mapper {forced_tonemapper} (set by {stats.integrator})")
+            text_line(g, f"tone mapper {forced_tonemapper} (set by {stats.integrator})")
         elif g.button(f"tone mapper: {controls.tonemapper}"):
             actions.append("cycle_tonemapper")
         lo, hi = MAX_DEPTH_RANGE
         depth = int(g.slider_int("max depth", controls.max_depth, lo, max(hi, controls.max_depth)))
-        fov = _slider_float(g, "field of view", controls.fov, *FOV_RANGE)
-        aperture = _slider_float(g, "aperture (m)", controls.aperture, 0.0, APERTURE_PER_SCALE * scale)
-        focus = _slider_float(g, "focus (m)", controls.focus_distance, MIN_FOCUS, FOCUS_PER_SCALE * scale)
+        fov = slider_float(g, "field of view", controls.fov, *FOV_RANGE)
+        aperture = slider_float(g, "aperture (m)", controls.aperture, 0.0, APERTURE_PER_SCALE * scale)
+        focus = slider_float(g, "focus (m)", controls.focus_distance, MIN_FOCUS, FOCUS_PER_SCALE * scale)
         focus = max(focus, MIN_FOCUS)
-        threshold = _slider_float(g, "adaptive noise (0 = off)", controls.noise_threshold, 0.0, MAX_NOISE_THRESHOLD)
+        threshold = slider_float(g, "adaptive noise (0 = off)", controls.noise_threshold, 0.0, MAX_NOISE_THRESHOLD)
         speed = controls.move_speed
         if speed is not None:
-            speed = _slider_float(g, "move speed (m/s)", speed, MIN_SPEED, SPEED_PER_SCALE * scale)
+            speed = slider_float(g, "move speed (m/s)", speed, MIN_SPEED, SPEED_PER_SCALE * scale)
         for label, action in ((f"integrator: {stats.integrator}  [i]", "next_integrator"),
                               ("next scene  [n]", "next_scene"),
                               ("reset view  [r]", "reset"),
@@ -189,7 +189,7 @@ def draw_hud(gui, window_size: tuple[int, int], stats: HudStats, controls: Contr
                               ("help: all keys", "help")):
             if g.button(label):
                 actions.append(action)
-        _text(g, "max depth -1: no limit.  h hides this panel")
+        text_line(g, "max depth -1: no limit.  h hides this panel")
     edited = replace(controls, exposure=exposure, max_depth=depth, fov=fov, aperture=aperture, focus_distance=focus,
                      move_speed=speed, noise_threshold=threshold)
     return edited, actions
@@ -200,11 +200,11 @@ def draw_help(gui, window_size: tuple[int, int], help_text: str) -> None:
     r = help_rect(window_size, len(lines) + 2)
     with gui.sub_window("Keys", r.x, r.y, r.width, r.height) as g:
         for line in lines:
-            _text(g, line)
-        _text(g, "drag (left/right button)  look around")
+            text_line(g, line)
+        text_line(g, "drag (left/right button)  look around")
 
 
 def draw_notice(gui, window_size: tuple[int, int], text: str) -> None:
     r = notice_rect(window_size)
     with gui.sub_window("Please wait", r.x, r.y, r.width, r.height) as g:
-        _text(g, text, NOTICE_COLOR)
+        text_line(g, text, NOTICE_COLOR)

@@ -50,6 +50,8 @@ from viewer.camera_state import CameraState
 from viewer.denoise_worker import BackgroundDenoiser
 from viewer.display import DenoisedDisplay, DisplayImages, DisplaySettings, show_on_canvas
 from viewer.hotkeys import KeyMap
+from viewer.material_panel import draw_material_panel, panel_rect
+from viewer.scene_editor import SceneEditor
 from viewer.session import (DEFAULT_TARGET_SECONDS, MAX_PRESENT_INTERVAL, MOVING_PROBE_SLICES, SETTLE_SECONDS,
                             STATS_INTERVAL, Every, RateMeter, ViewerSession, scene_scale, screenshot_dir,
                             screenshot_paths)
@@ -58,6 +60,8 @@ TITLE = "Lantern"
 DEFAULT_SIZE = (960, 540)
 MOVEMENT_KEYS = ("w", "a", "s", "d", "q", "e")
 MAX_QUEUED_KEYS = 32
+CTRL_ACTIONS = {"z": "undo_edit", "y": "redo_edit", "s": "save_scene"}
+CLICK_TOLERANCE = 0.004  # how far (window fractions) a press may move and still be a click, not a drag
 
 
 @dataclass(frozen=True)
@@ -74,6 +78,7 @@ class FrameInput:
     held: frozenset = frozenset()
     cursor: Optional[tuple[float, float]] = None
     buttons: frozenset = frozenset()
+    ctrl: bool = False  # Control held: z, y and s undo, redo and save edits
 
 
 def poll_input(window) -> FrameInput:
@@ -84,7 +89,7 @@ def poll_input(window) -> FrameInput:
         held.add("shift")
     buttons = frozenset(b for b in (ti.ui.LMB, ti.ui.RMB) if window.is_pressed(b))
     x, y = window.get_cursor_pos()
-    return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons)
+    return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons, bool(window.is_pressed(ti.ui.CTRL)))
 
 
 def camera_frame(state: CameraState) -> CameraFrame:
@@ -124,6 +129,9 @@ class ViewerApp:
         self.screenshot_folder = screenshot_dir(screenshot_folder)
         self.keymap = KeyMap(integrator_names(), {name: cls.hotkey for name, cls in INTEGRATORS.items()})
         self.renderers: dict[Path, Renderer] = {}
+        self.editors: dict[Path, SceneEditor] = {}  # the edits of each scene visited (made on first edit)
+        self._press_cursor = None  # where the left button went down, for telling a click from a drag
+        self.last_saved: Optional[Path] = None
 
         path = Path(scene_path).resolve()
         scene_list = [Path(p).resolve() for p in (scenes if scenes is not None else scene_files())]
@@ -231,6 +239,54 @@ class ViewerApp:
             self._pending_cycle = (step, False)
             self.notice = f"loading {target.stem}..."
 
+    @property
+    def editor(self) -> SceneEditor:
+        path = self.session.scene_path
+        if path not in self.editors:
+            self.editors[path] = SceneEditor(self.renderer.scene, self._rebuilt)
+        return self.editors[path]
+
+    def _rebuilt(self, scene) -> Renderer:
+        """A Renderer for an edited scene the one on screen cannot take in place."""
+        renderer = Renderer(scene, max_size=self.size, aovs=True)
+        renderer.bands_after_first_round = True
+        self.renderers[self.session.scene_path] = renderer
+        return renderer
+
+    def pick_at(self, cursor, now: float):
+        """Pick what is under `cursor` (GGUI's [0,1]^2, y up): the panel opens on its material."""
+        if cursor is None:
+            return None
+        u, v = (min(max(float(c), 0.0), 1.0) for c in cursor)
+        try:
+            picked = self.editor.pick(self.renderer, self._camera_frame(), u, v, self.session.integrator)
+        except Exception as error:  # e.g. the pick kernel failing to compile: report, go on
+            self.session.error = f"pick failed: {_one_line(error)}"
+            return None
+        self._announce(picked.describe() if picked is not None else "nothing under the cursor", now)
+        return picked
+
+    def edit(self, change: Callable[[Renderer], Renderer], now: float) -> None:
+        """Run an edit (a SceneEditor call taking and returning the renderer) and restart the image."""
+        try:
+            change(self.renderer)
+        except Exception as error:  # a bad edit must not end the session
+            self.session.error = f"edit failed: {_one_line(error)}"
+            return
+        self.session.request_reset()
+        if self.editor.notes:
+            self.session.notify("; ".join(self.editor.notes), now)
+
+    def save_edits(self, now: float) -> Optional[Path]:
+        try:
+            path = self.editor.save(self.renderer.scene)
+        except Exception as error:
+            self.session.error = f"save failed: {_one_line(error)}"
+            return None
+        self.last_saved = path
+        self._announce(f"saved {path}", now)
+        return path
+
     def _announce(self, text: str, now: float) -> None:
         self.session.notify(text, now)
         print(text, file=sys.stderr)
@@ -258,6 +314,18 @@ class ViewerApp:
             self.save_screenshot(now)
         elif action == "focus_at_cursor":
             self.focus_at_cursor(inp.cursor, now)
+        elif action == "pick_at_cursor":
+            self.pick_at(inp.cursor, now)
+        elif action == "undo_edit":
+            self.edit(self.editor.undo, now)
+        elif action == "redo_edit":
+            self.edit(self.editor.redo, now)
+        elif action == "reset_material":
+            self.edit(self.editor.reset_material, now)
+        elif action == "save_scene":
+            self.save_edits(now)
+        elif action == "close_panel":
+            self.editor.picked = None
         elif action == "toggle_hud":
             s.hud_visible = not s.hud_visible
         elif action == "help":
@@ -327,7 +395,7 @@ class ViewerApp:
             if self._awaiting_render:
                 self._queued_keys = keys[i:][:MAX_QUEUED_KEYS]
                 return
-            action = self.keymap.action_for(key)
+            action = CTRL_ACTIONS.get(key.lower()) if inp.ctrl else self.keymap.action_for(key)
             before = (self.session.scene_index, self.session.integrator)
             self.dispatch(action, inp, now)
             if (self.session.scene_index, self.session.integrator) != before or self._pending_cycle:
@@ -335,14 +403,22 @@ class ViewerApp:
             if not self.running:
                 return
 
-    def _drag(self, inp: FrameInput) -> bool:
-        """Looking drags with either button; a left drag that starts on the HUD is the HUD's."""
+    def _drag(self, inp: FrameInput, now: float) -> bool:
+        """Looking drags with either button; a left drag that starts on the HUD or the material
+        panel is theirs. A left press and release in one place (a click) picks what is there."""
         lmb, rmb = ti.ui.LMB in inp.buttons, ti.ui.RMB in inp.buttons
         if lmb and ti.ui.LMB not in self._buttons_before:
             self._drag_blocked = False
             if self.session.hud_visible and inp.cursor is not None:
                 u, v = inp.cursor
-                self._drag_blocked = hud.hud_rect(self.size).contains(u, 1.0 - v)
+                panels = [hud.hud_rect(self.size)] + ([panel_rect(self.size)] if self.editor.picked else [])
+                self._drag_blocked = any(r.contains(u, 1.0 - v) for r in panels)
+            self._press_cursor = None if self._drag_blocked else inp.cursor
+        elif not lmb and ti.ui.LMB in self._buttons_before and self._press_cursor is not None:
+            if inp.cursor is not None and max(abs(a - b) for a, b in zip(inp.cursor, self._press_cursor)) \
+                    <= CLICK_TOLERANCE:
+                self.pick_at(inp.cursor, now)
+            self._press_cursor = None
         self._buttons_before = inp.buttons
         return rmb or (lmb and not self._drag_blocked)
 
@@ -363,7 +439,7 @@ class ViewerApp:
 
         w, h = self.size
         cursor_px = None if inp.cursor is None else (inp.cursor[0] * w, (1.0 - inp.cursor[1]) * h)
-        s.update_camera(dt, set(inp.held), cursor_px, self._drag(inp))
+        s.update_camera(dt, set(inp.held) if not inp.ctrl else set(), cursor_px, self._drag(inp, now))
 
         self._features = None
         if self._pending_cycle is not None:
@@ -605,6 +681,14 @@ class ViewerApp:
             s.apply_controls(controls)
             for action in actions:
                 self.dispatch(action, FrameInput(), now)
+            editor = self.editor
+            if editor.picked is not None:
+                spec = editor.picked_material(self.renderer.scene)
+                edited, actions = draw_material_panel(self.gui, self.size, editor.picked, spec, editor.notes)
+                if edited is not None and edited is not spec:
+                    self.edit(lambda renderer: editor.apply(renderer, edited, merge=True), now)
+                for action in actions:
+                    self.dispatch(action, FrameInput(), now)
         if s.help_visible:
             hud.draw_help(self.gui, self.size, self.keymap.help_text())
         if self.notice:

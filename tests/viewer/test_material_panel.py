@@ -1,0 +1,74 @@
+"""The material panel with a stand-in for GGUI's imgui: the controls are the kind's fields of the
+scene format, with the format's ranges in their labels; untouched controls change nothing; a
+colour, a slider, a choice and the kind button edit the material; buttons are actions."""
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+from renderer.picking import Pick
+from renderer.renderer import SurfaceHit
+from renderer.scene.description import MaterialSpec
+from viewer.material_panel import draw_material_panel, panel_fields
+
+HIT = SurfaceHit(distance=4.0, point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0), uv=(0.0, 0.0), material=0,
+                 primitive=0, instance=-1, front_face=True)
+
+
+class FakeGui:
+    """Records the widgets drawn; answers with `values` (by label prefix) and `clicks`."""
+
+    def __init__(self, values=None, clicks=()):
+        self.values, self.clicks, self.drawn = dict(values or {}), set(clicks), []
+
+    @contextmanager
+    def sub_window(self, name, x, y, width, height):
+        assert 0 <= x <= 1 and 0 <= y <= 1 and width > 0 and height > 0
+        yield self
+
+    def _answer(self, label, value):
+        self.drawn.append(label)
+        return next((v for k, v in self.values.items() if label.startswith(k)), value)
+
+    def text(self, line, color=None):
+        self.drawn.append(line)
+
+    def button(self, label):
+        self.drawn.append(label)
+        return any(label.startswith(c) for c in self.clicks)
+
+    slider_float = slider_int = lambda self, label, value, lo, hi: self._answer(label, value)
+    color_edit_3 = checkbox = lambda self, label, value: self._answer(label, value)
+
+
+def panel(spec, **gui):
+    g = FakeGui(**gui)
+    pick = Pick(HIT, 3, "objects[3] (quad)", 0, spec.name, spec.kind)
+    edited, actions = draw_material_panel(g, (960, 540), pick, spec)
+    return edited, actions, g.drawn
+
+
+def test_untouched_controls_change_nothing_and_show_the_kinds_fields():
+    spec = MaterialSpec("m", kind="principled", base_color=(0.2, 0.3, 0.4), roughness=0.35, metallic=0.5)
+    edited, actions, drawn = panel(spec)
+    assert edited is spec and actions == []
+    assert "roughness [0, 1]" in drawn and "metallic [0, 1]" in drawn and "base_color" in drawn
+    assert any(line.startswith("ior (1, 4]") for line in drawn)  # the range the format allows
+    assert "edge_tint" not in drawn  # a conductor's
+    assert {f.name for f in panel_fields("diffuse")} >= {"base_color", "roughness", "emission", "opacity"}
+
+
+def test_a_colour_a_slider_and_the_kind():
+    spec = MaterialSpec("m", kind="diffuse", base_color=(0.8, 0.8, 0.8))
+    edited, _, _ = panel(spec, values={"base_color": (1.0, 0.766, 0.336), "roughness": 0.25})
+    assert edited.base_color == (1.0, 0.766, 0.336) and edited.roughness == 0.25 and edited.kind == "diffuse"
+    edited, _, _ = panel(spec, clicks={"kind: diffuse"})
+    assert edited.kind != "diffuse"
+    gold, _, _ = panel(MaterialSpec("g", kind="conductor"), clicks={"metal:"})
+    assert gold.metal != ""
+
+
+def test_emission_is_a_colour_times_a_strength_and_buttons_are_actions():
+    spec = MaterialSpec("light", emission=(10.0, 5.0, 0.0))
+    edited, actions, drawn = panel(spec, values={"emission strength": 20.0}, clicks={"undo", "save scene"})
+    assert edited.emission == (20.0, 10.0, 0.0) and actions == ["undo_edit", "save_scene"]
+    assert "emission colour" in drawn

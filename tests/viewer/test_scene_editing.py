@@ -1,0 +1,94 @@
+"""Editing in the viewer, headless: a click on the Cornell box's tall box opens its material, an
+edit shows at once (the same Renderer, nothing rebuilt), undo and redo walk the history, a texture
+change builds a Renderer anew, and ctrl+s saves the edited scene beside its file, which renders
+as the viewer showed it."""
+from __future__ import annotations
+
+import math
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from renderer.camera import CameraFrame
+from renderer.editing import material_named
+from renderer.renderer import Renderer
+from renderer.scene import load_scene
+from renderer.scene.description import TextureSpec
+from viewer.scene_editor import SceneEditor
+from viewer.window import FrameInput, ViewerApp
+
+REPO = Path(__file__).resolve().parents[2]
+SIZE = (64, 64)
+GOLD = dict(kind="conductor", metal="Au", roughness=0.2)
+
+
+def tall_box_cursor(scene):
+    """Where the window shows the tall box's front (GGUI's cursor: [0,1]^2, y up)."""
+    half = math.tan(math.radians(scene.camera.fov) / 2) * scene.camera.position[2]
+    return 0.5 - 0.33 / (2 * half), 0.5 - 0.4 / (2 * half)
+
+
+@pytest.fixture
+def cornell(tmp_path):
+    path = tmp_path / "cornell_box.toml"
+    shutil.copy(REPO / "assets" / "scenes" / "cornell_box.toml", path)
+    return path
+
+
+def test_the_editor_applies_undoes_redoes_resets_and_rebuilds(cornell):
+    scene = load_scene(cornell)
+    renderer = Renderer(scene, max_size=(16, 16))
+    built = []
+    editor = SceneEditor(scene, lambda s: built.append(Renderer(s, max_size=(16, 16))) or built[-1])
+    picked = editor.pick(renderer, CameraFrame.from_spec(scene.camera), *tall_box_cursor(scene))
+    assert picked.material_name == "tall_box"
+    box = editor.picked_material(renderer.scene)
+    assert editor.apply(renderer, replace(box, **GOLD)) is renderer and not editor.recompiled
+    assert material_named(renderer.scene, "tall_box").metal == "Au"
+    editor.apply(renderer, replace(material_named(renderer.scene, "tall_box"), roughness=7.0))
+    assert material_named(renderer.scene, "tall_box").roughness == 1.0 and "allowed [0, 1]" in editor.notes[0]
+    editor.undo(renderer)
+    assert material_named(renderer.scene, "tall_box").roughness == 0.2
+    editor.undo(renderer)
+    assert material_named(renderer.scene, "tall_box") == box
+    editor.redo(renderer)
+    assert material_named(renderer.scene, "tall_box").metal == "Au"
+    editor.reset_material(renderer)
+    assert material_named(renderer.scene, "tall_box") == box and editor.history.undo() is not None
+    checks = TextureSpec("checkerboard", color0=(1, 1, 1), color1=(0, 0, 0), nearest=True)
+    rebuilt = editor.apply(renderer, replace(box, base_color_texture=checks))
+    assert rebuilt is built[0] and editor.recompiled and rebuilt.scene.materials != renderer.scene.materials
+
+
+def test_click_edit_undo_and_save_in_the_window(cornell):
+    app = ViewerApp(cornell, size=SIZE, show_window=False, scenes=[cornell], settle_seconds=0.0,
+                    still_present_interval=0.0)
+    app.session.hud_visible = False  # at 64x64 the HUD would cover the box (a click there is the HUD's)
+    for _ in range(3):
+        app.step()
+    cursor = tall_box_cursor(app.renderer.scene)
+    app.step(FrameInput(cursor=cursor, buttons=frozenset({"LMB"})))
+    app.step(FrameInput(cursor=cursor))  # released where pressed: a click
+    assert app.editor.picked is not None and app.editor.picked.material_name == "tall_box"
+    renderer = app.renderer
+    box = app.editor.picked_material(renderer.scene)
+    app.edit(lambda r: app.editor.apply(r, replace(box, **GOLD)), 0.0)
+    for _ in range(40):  # the conductor's kernel compiles (a notice first), then the image converges again
+        app.step()
+        if renderer.samples_done >= 2:
+            break
+    assert app.renderer is renderer and material_named(renderer.scene, "tall_box").metal == "Au"
+    assert renderer.samples_done >= 2 and "conductor" in renderer.features().material_kinds
+    app.step(FrameInput(pressed=("z",), ctrl=True))
+    assert material_named(app.renderer.scene, "tall_box") == box
+    app.step(FrameInput(pressed=("y",), ctrl=True))
+    app.step(FrameInput(pressed=("s",), ctrl=True))
+    saved = cornell.with_name("cornell_box_edited.toml")
+    assert app.last_saved == saved and load_scene(saved).materials == app.renderer.scene.materials
+    assert app.renderer.scene.camera == load_scene(saved).camera
+    app.session.hud_visible = True  # the material panel drawn by GGUI itself, beside the HUD
+    app.step()
+    assert app.session.error is None and app.editor.picked is not None

@@ -1,0 +1,124 @@
+"""The material panel: the controls of the picked material's kind, drawn with GGUI's imgui, as
+the scene format describes them (renderer/scene/schema.py, MATERIAL): a colour picker for each
+colour, a slider for each number over the range the format allows (shown in its label), a box
+for each switch, a button that steps through each choice. Textures are listed and kept.
+
+draw_material_panel returns the edited material (the same object when nothing changed) and the
+actions of the buttons clicked; the window applies them (viewer/scene_editor.py).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Optional
+
+from renderer.materials.metals import metal_names
+from renderer.picking import Pick
+from renderer.scene.description import MATERIAL_KINDS, MaterialSpec
+from renderer.scene.schema import MATERIAL
+from viewer.hud import ERROR_COLOR, MARGIN_PX, Rect, same_f32, slider_float, text_line
+
+PANEL_WIDTH_PX = 350
+PANEL_HEIGHT_PX = 640
+# Slider ends for numbers whose range in the format is open (the format's own bound is kept by
+# the editor's clamping; the slider only offers a useful span).
+OPEN_RANGE_ENDS = {"abbe": 100.0, "coat_thickness": 1.0, "bump_scale": 4.0, "coat_maxdepth": 100,
+                   "coat_nsamples": 16}
+EMISSION_STRENGTH_MAX = 100.0
+# Fields the panel shows as text only: indices given per channel, and names of other tables.
+NOT_SLIDERS = ("type", "eta", "k", "medium", "outside_medium", "glass", "normal_map", "bump_map", "roughness_v")
+ACTIONS = (("undo  [ctrl+z]", "undo_edit"), ("redo  [ctrl+y]", "redo_edit"), ("reset to the file's", "reset_material"),
+           ("save scene  [ctrl+s]", "save_scene"), ("close", "close_panel"))
+
+
+def panel_rect(window_size: tuple[int, int]) -> Rect:
+    w, h = window_size
+    width = min(PANEL_WIDTH_PX / w, 0.45)
+    return Rect(1 - width - MARGIN_PX / w, MARGIN_PX / h, width, min(PANEL_HEIGHT_PX / h, 1 - 2 * MARGIN_PX / h))
+
+
+def panel_fields(kind: str) -> list:
+    """The scene format's fields of a material kind that the panel edits, in the format's order."""
+    return [f for f in MATERIAL.fields if f.in_model and f.applies_to(kind) and f.name not in NOT_SLIDERS]
+
+
+def _step(options: tuple, value) -> object:
+    return options[(options.index(value) + 1) % len(options)] if value in options else options[0]
+
+
+def _span(f) -> tuple[float, float]:
+    r = f.range
+    lo = r.lo if r is not None and r.lo is not None else 0.0
+    hi = r.hi if r is not None and r.hi is not None else OPEN_RANGE_ENDS.get(f.name, 10.0)
+    return lo, hi
+
+
+def _colour(g, label: str, value: tuple) -> tuple:
+    new = tuple(float(c) for c in g.color_edit_3(label, tuple(value)))
+    return tuple(value) if all(same_f32(a, b) for a, b in zip(new, value)) else new
+
+
+def _emission(g, value: tuple) -> tuple:
+    """Emission as a colour of largest channel 1 times a strength."""
+    strength = max(value)
+    colour = tuple(c / strength for c in value) if strength > 0 else (1.0, 1.0, 1.0)
+    new_colour = _colour(g, "emission colour", colour)
+    new_strength = slider_float(g, f"emission strength [0, {EMISSION_STRENGTH_MAX:g}]", strength, 0.0,
+                                 EMISSION_STRENGTH_MAX)
+    if new_colour == colour and new_strength == strength:
+        return value
+    return tuple(c * new_strength for c in new_colour)
+
+
+def _field(g, f, value):
+    if f.name == "emission":
+        return _emission(g, value)
+    if f.name == "metal":
+        chosen = g.button(f"metal: {value or '(from the colour)'}")
+        return _step(("",) + tuple(metal_names()), value) if chosen else value
+    if f.choices:
+        return _step(tuple(f.choices), value) if g.button(f"{f.name}: {value}") else value
+    if f.kind == "vec3":
+        return _colour(g, f.name, value)
+    if f.kind == "bool":
+        return bool(g.checkbox(f.name, bool(value)))
+    lo, hi = _span(f)
+    label = f"{f.name} {f.range}" if f.range is not None else f.name
+    if f.kind == "int":
+        return int(g.slider_int(label, int(value), int(lo), int(max(hi, value))))
+    return slider_float(g, label, float(value), lo, hi)
+
+
+def draw_material_panel(gui, window_size: tuple[int, int], picked: Pick, spec: Optional[MaterialSpec],
+                        notes: list[str] = ()) -> tuple[Optional[MaterialSpec], list[str]]:
+    """Draw the panel of the picked material; returns (the material as edited, actions)."""
+    r = panel_rect(window_size)
+    actions: list[str] = []
+    with gui.sub_window("Material", r.x, r.y, r.width, r.height) as g:
+        text_line(g, picked.object_label)
+        if spec is None:  # a model file's own material
+            text_line(g, f"{picked.material_name} (a model file's material, not edited here)")
+            if g.button("close"):
+                actions.append("close_panel")
+            return None, actions
+        text_line(g, f"material '{spec.name}'")
+        kind = spec.kind
+        if g.button(f"kind: {kind}  (next)"):
+            kind = _step(tuple(MATERIAL_KINDS), kind)
+        changes = {}
+        for f in panel_fields(spec.kind):
+            value = getattr(spec, f.model_attr)
+            if value is None:
+                continue
+            new = _field(g, f, value)
+            if new != value:
+                changes[f.model_attr] = new
+        for role in spec.textures:
+            text_line(g, f"texture on {role} (kept)")
+        for line in notes:
+            text_line(g, line, ERROR_COLOR)
+        for label, action in ACTIONS:
+            if g.button(label):
+                actions.append(action)
+    if kind != spec.kind:
+        changes["kind"] = kind
+    return (replace(spec, **changes) if changes else spec), actions

@@ -1,0 +1,85 @@
+"""The viewer's edits of the scene on screen: what was picked, each edit applied to its Renderer at
+once (in place where it can be, renderer/renderer.py edit_materials; else on a Renderer built for
+the edited scene), undo and redo, the material as the file had it, and saving.
+
+It holds no window: the window (viewer/window.py) calls it on a click, a key or a panel change,
+and headless tests drive it the same way.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable, Optional
+
+from renderer.camera import CameraFrame
+from renderer.editing import EditHistory, MaterialEdit, canonical, clamped, material_named, with_material
+from renderer.picking import Pick, pick
+from renderer.renderer import Renderer
+from renderer.scene.description import MaterialSpec, Scene
+from renderer.scene.material_saving import save_materials
+
+
+class SceneEditor:
+    def __init__(self, loaded: Scene, rebuild: Callable[[Scene], Renderer]):
+        """loaded: the scene as its file gave it; rebuild(scene): a Renderer for an edited scene
+        where the one on screen cannot take the edit in place (a texture's change)."""
+        self.loaded = loaded
+        self.rebuild = rebuild
+        self.history = EditHistory()
+        self.picked: Optional[Pick] = None
+        self.notes: list[str] = []  # what the last edit clamped, one line each
+        self.recompiled = False  # whether the last edit built a new Renderer
+
+    # --- picking ------------------------------------------------------------------------------
+    def pick(self, renderer: Renderer, camera: CameraFrame, u: float, v: float,
+             integrator: Optional[str] = None) -> Optional[Pick]:
+        self.picked = pick(renderer, camera, u, v, integrator)
+        self.notes = []
+        return self.picked
+
+    def picked_material(self, scene: Scene) -> Optional[MaterialSpec]:
+        """The picked material as it is now (None: nothing picked, or a model file's own)."""
+        if self.picked is None or not self.picked.editable:
+            return None
+        return material_named(scene, self.picked.material_name)
+
+    # --- edits --------------------------------------------------------------------------------
+    def apply(self, renderer: Renderer, spec: MaterialSpec, record: bool = True, merge: bool = False) -> Renderer:
+        """Show `spec` (a material of the scene, by name), its values brought within the scene
+        format's ranges; returns the Renderer that shows it (this one, or one built anew).
+        `merge`: a step of the same change as the last edit (a slider dragged) is one edit."""
+        spec, self.notes = clamped(spec)
+        spec = canonical(spec)
+        before = material_named(renderer.scene, spec.name)
+        self.recompiled = False
+        if spec == before:
+            return renderer
+        scene = with_material(renderer.scene, spec)
+        if not renderer.edit_materials(scene):
+            renderer = self.rebuild(scene)
+            self.recompiled = True
+        if record:
+            self.history.record(MaterialEdit(before, spec), merge)
+        return renderer
+
+    def undo(self, renderer: Renderer) -> Renderer:
+        spec = self.history.undo()
+        return renderer if spec is None else self.apply(renderer, spec, record=False)
+
+    def redo(self, renderer: Renderer) -> Renderer:
+        spec = self.history.redo()
+        return renderer if spec is None else self.apply(renderer, spec, record=False)
+
+    def reset_material(self, renderer: Renderer) -> Renderer:
+        """The picked material back to the file's (an edit itself: undo brings the change back)."""
+        if self.picked is None or not self.picked.editable:
+            return renderer
+        return self.apply(renderer, material_named(self.loaded, self.picked.material_name))
+
+    # --- saving -------------------------------------------------------------------------------
+    @property
+    def edited(self) -> bool:
+        return bool(self.history.done)
+
+    def save(self, scene: Scene, path: Optional[Path] = None, overwrite: bool = False) -> Path:
+        """Write the edited scene beside its file (renderer/scene/material_saving.py)."""
+        return save_materials(scene, self.loaded, path, overwrite)
