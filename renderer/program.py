@@ -158,6 +158,20 @@ class RenderProgram:
             out[None] = hit.t * d.dot(forward) if hit.hit == 1 else -1.0
 
     @ti.kernel
+    def hit_primitives(self, full_width: ti.i32, full_height: ti.i32, window_x: ti.i32, window_y: ti.i32,
+                       origin: ti.math.vec3, forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3,
+                       half_height: ti.f32, out: ti.types.ndarray(dtype=ti.i32, ndim=2)):
+        """The primitive the ray through each film pixel's centre meets first (-1: none), out[x, y]
+        with y up, the film lying on the image as its window says (picking's highlight)."""
+        for x, y in ti.ndrange(out.shape[0], out.shape[1]):
+            u = (x + window_x + 0.5) / full_width
+            v = (y + window_y + 0.5) / full_height
+            o, d = pinhole_ray(2.0 * u - 1.0, 2.0 * v - 1.0, full_width / full_height, origin, forward, right, up,
+                               half_height, self.features.orthographic)
+            hit = self.geometry.intersect(Ray(o=o, d=d, cone_width=0.0, cone_spread=0.0), INF)
+            out[x, y] = hit.prim if hit.hit == 1 else -1
+
+    @ti.kernel
     def pick(self, u: ti.f32, v: ti.f32, width: ti.i32, height: ti.i32, origin: ti.math.vec3,
              forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32,
              floats: ti.template(), ints: ti.template()):

@@ -487,6 +487,13 @@ class Renderer:
         return SurfaceHit(distance=float(f[0]), point=tuple(f[1:4]), normal=tuple(f[4:7]), uv=tuple(f[7:9]),
                           material=int(i[1]), primitive=int(i[2]), instance=int(i[3]), front_face=bool(i[4]))
 
+    def object_ids(self, camera: CameraFrame, integrator: str | None = None) -> np.ndarray:
+        """The scene object each film pixel's centre shows (int32 (width, height), y up; -1: none)."""
+        program = self.program(integrator or self.scene.render.integrator, self.features(camera))
+        prims = np.empty((self.film.width, self.film.height), np.int32)
+        program.hit_primitives(*self.film_window().kernel_args, *camera.kernel_args()[:5], prims)
+        return self.geometry.objects_of(prims)
+
     def work_stats(self) -> dict:
         """Mean geometry work per ray (march steps on SDF scenes, BVH node visits on mesh scenes),
         primitive tests per ray (mesh scenes), and rays per sample."""

@@ -14,7 +14,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.geometry import emitter_shapes
-from renderer.geometry.interface import INF, Hit, Ray, Surface
+from renderer.geometry.interface import INF, Hit, Ray, Surface, owners_of
 from renderer.runtime.upload import upload_fields
 from shaders_sdf.scene_sdf import SdfProgram
 
@@ -49,7 +49,10 @@ class SdfGeometry:
 
     def object_of(self, prim: int) -> int:
         """The top-level object (Scene.sdf_objects index) whose tree holds node `prim`; -1 unknown."""
-        return int(self._node_objects[prim]) if 0 <= prim < len(self._node_objects) else -1
+        return int(self.objects_of(np.array([prim]))[0])
+
+    def objects_of(self, prims: np.ndarray) -> np.ndarray:
+        return owners_of(prims, self._node_objects)
 
     def set_march(self, march):
         upload_fields([(self.march_f, np.array([march.hit_threshold, march.min_threshold, march.max_distance,

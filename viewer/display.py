@@ -161,3 +161,16 @@ class DenoisedDisplay:
 
 
 __all__ = ["DenoisedDisplay", "pack_rgba8_array", "DisplayImages", "DisplaySettings", "UPDATE_FULL", "UPDATE_NONE", "UPDATE_SLICES", "show_on_canvas"]
+
+
+HIGHLIGHT_COLOUR = (255, 170, 0)  # the picked object's tint, half over its pixels
+
+
+def tinted(packed: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """A copy of a packed RGBA8 image (uint32 (width, height), y up) with the pixels of `mask` (bool,
+    the same shape) halfway to HIGHLIGHT_COLOUR: the picked object, shown for a moment."""
+    out = np.array(packed, dtype=np.uint32, copy=True)
+    channels = out.view(np.uint8).reshape(*out.shape, 4)
+    colour = np.array(HIGHLIGHT_COLOUR, np.uint16)
+    channels[mask, :3] = ((channels[mask, :3].astype(np.uint16) + colour) // 2).astype(np.uint8)
+    return out

@@ -17,7 +17,7 @@ from renderer.scene.description import MATERIAL_KINDS, MaterialSpec
 from renderer.scene.schema import MATERIAL
 from viewer.hud import ERROR_COLOR, MARGIN_PX, Rect, same_f32, slider_float, text_line
 
-PANEL_WIDTH_PX = 350
+PANEL_WIDTH_PX = 440  # imgui gives labels a third of it: "roughness [0, 1]" must fit
 PANEL_HEIGHT_PX = 640
 # Slider ends for numbers whose range in the format is open (the format's own bound is kept by
 # the editor's clamping; the slider only offers a useful span).
@@ -26,6 +26,8 @@ OPEN_RANGE_ENDS = {"abbe": 100.0, "coat_thickness": 1.0, "bump_scale": 4.0, "coa
 EMISSION_STRENGTH_MAX = 100.0
 # Fields the panel shows as text only: indices given per channel, and names of other tables.
 NOT_SLIDERS = ("type", "eta", "k", "medium", "outside_medium", "glass", "normal_map", "bump_map", "roughness_v")
+# One click to a metal (the kind becomes a conductor of that metal's measured index).
+METAL_PRESETS = (("gold", "Au"), ("silver", "Ag"), ("copper", "Cu"), ("aluminium", "Al"))
 ACTIONS = (("undo  [ctrl+z]", "undo_edit"), ("redo  [ctrl+y]", "redo_edit"), ("reset to the file's", "reset_material"),
            ("save scene  [ctrl+s]", "save_scene"), ("close", "close_panel"))
 
@@ -36,9 +38,15 @@ def panel_rect(window_size: tuple[int, int]) -> Rect:
     return Rect(1 - width - MARGIN_PX / w, MARGIN_PX / h, width, min(PANEL_HEIGHT_PX / h, 1 - 2 * MARGIN_PX / h))
 
 
-def panel_fields(kind: str) -> list:
-    """The scene format's fields of a material kind that the panel edits, in the format's order."""
-    return [f for f in MATERIAL.fields if f.in_model and f.applies_to(kind) and f.name not in NOT_SLIDERS]
+# Fields that mean something only with another: shown where that one is set.
+NEEDS = {"bump_scale": lambda spec: spec.bump_map is not None,
+         "two_sided_emission": lambda spec: max(spec.emission) > 0.0}
+
+
+def panel_fields(spec: MaterialSpec) -> list:
+    """The scene format's fields of a material's kind that the panel edits, in the format's order."""
+    return [f for f in MATERIAL.fields if f.in_model and f.applies_to(spec.kind) and f.name not in NOT_SLIDERS
+            and NEEDS.get(f.name, lambda _: True)(spec)]
 
 
 def _step(options: tuple, value) -> object:
@@ -72,9 +80,11 @@ def _emission(g, value: tuple) -> tuple:
 def _field(g, f, value):
     if f.name == "emission":
         return _emission(g, value)
-    if f.name == "metal":
-        chosen = g.button(f"metal: {value or '(from the colour)'}")
-        return _step(("",) + tuple(metal_names()), value) if chosen else value
+    if f.name == "metal":  # a slider over the named metals, 0: the Fresnel from base_color
+        names = ("",) + tuple(metal_names())
+        index = names.index(value) if value in names else 0
+        chosen = int(g.slider_int(f"metal: {value or '(from the colour)'}", index, 0, len(names) - 1))
+        return names[chosen] if 0 <= chosen < len(names) else value
     if f.choices:
         return _step(tuple(f.choices), value) if g.button(f"{f.name}: {value}") else value
     if f.kind == "vec3":
@@ -101,16 +111,19 @@ def draw_material_panel(gui, window_size: tuple[int, int], picked: Pick, spec: O
                 actions.append("close_panel")
             return None, actions
         text_line(g, f"material '{spec.name}'")
+        changes = {}
+        for name, metal in METAL_PRESETS:
+            if g.button(f"make it {name}"):
+                changes.update(kind="conductor", metal=metal)
         kind = spec.kind
         if g.button(f"kind: {kind}  (next)"):
             kind = _step(tuple(MATERIAL_KINDS), kind)
-        changes = {}
-        for f in panel_fields(spec.kind):
+        for f in panel_fields(spec):
             value = getattr(spec, f.model_attr)
             if value is None:
                 continue
             new = _field(g, f, value)
-            if new != value:
+            if new != value and f.model_attr not in changes:
                 changes[f.model_attr] = new
         for role in spec.textures:
             text_line(g, f"texture on {role} (kept)")
@@ -119,6 +132,6 @@ def draw_material_panel(gui, window_size: tuple[int, int], picked: Pick, spec: O
         for label, action in ACTIONS:
             if g.button(label):
                 actions.append(action)
-    if kind != spec.kind:
+    if kind != spec.kind and "kind" not in changes:
         changes["kind"] = kind
     return (replace(spec, **changes) if changes else spec), actions

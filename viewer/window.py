@@ -48,7 +48,7 @@ from renderer.output.tonemap import TONEMAPPERS, quantize
 from viewer import hud
 from viewer.camera_state import CameraState
 from viewer.denoise_worker import BackgroundDenoiser
-from viewer.display import DenoisedDisplay, DisplayImages, DisplaySettings, show_on_canvas
+from viewer.display import DenoisedDisplay, DisplayImages, DisplaySettings, show_on_canvas, tinted
 from viewer.hotkeys import KeyMap
 from viewer.material_panel import draw_material_panel, panel_rect
 from viewer.scene_editor import SceneEditor
@@ -61,6 +61,7 @@ DEFAULT_SIZE = (960, 540)
 MOVEMENT_KEYS = ("w", "a", "s", "d", "q", "e")
 MAX_QUEUED_KEYS = 32
 CTRL_ACTIONS = {"z": "undo_edit", "y": "redo_edit", "s": "save_scene"}
+HIGHLIGHT_SECONDS = 1.0  # how long a picked object stays tinted
 CLICK_TOLERANCE = 0.004  # how far (window fractions) a press may move and still be a click, not a drag
 
 
@@ -79,17 +80,19 @@ class FrameInput:
     cursor: Optional[tuple[float, float]] = None
     buttons: frozenset = frozenset()
     ctrl: bool = False  # Control held: z, y and s undo, redo and save edits
+    released: tuple[str, ...] = ()  # keys and buttons released since the last frame ('LMB': a click ends)
 
 
 def poll_input(window) -> FrameInput:
     pressed = tuple(e.key for e in window.get_events(ti.ui.PRESS))
-    window.get_events(ti.ui.RELEASE)  # drained, or GGUI keeps every release event queued
+    released = tuple(e.key for e in window.get_events(ti.ui.RELEASE))  # read, or GGUI keeps them queued
     held = {k for k in MOVEMENT_KEYS if window.is_pressed(k)}
     if window.is_pressed(ti.ui.SHIFT):
         held.add("shift")
     buttons = frozenset(b for b in (ti.ui.LMB, ti.ui.RMB) if window.is_pressed(b))
     x, y = window.get_cursor_pos()
-    return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons, bool(window.is_pressed(ti.ui.CTRL)))
+    return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons, bool(window.is_pressed(ti.ui.CTRL)),
+                      released)
 
 
 def camera_frame(state: CameraState) -> CameraFrame:
@@ -132,6 +135,7 @@ class ViewerApp:
         self.editors: dict[Path, SceneEditor] = {}  # the edits of each scene visited (made on first edit)
         self._press_cursor = None  # where the left button went down, for telling a click from a drag
         self.last_saved: Optional[Path] = None
+        self.highlight: Optional[tuple] = None  # (mask of the picked object's pixels, until when)
 
         path = Path(scene_path).resolve()
         scene_list = [Path(p).resolve() for p in (scenes if scenes is not None else scene_files())]
@@ -264,6 +268,10 @@ class ViewerApp:
             self.session.error = f"pick failed: {_one_line(error)}"
             return None
         self._announce(picked.describe() if picked is not None else "nothing under the cursor", now)
+        self.highlight = None
+        if picked is not None and picked.object_index >= 0:
+            ids = self.renderer.object_ids(self._camera_frame(), self.session.integrator)
+            self.highlight = (ids == picked.object_index, now + HIGHLIGHT_SECONDS)
         return picked
 
     def edit(self, change: Callable[[Renderer], Renderer], now: float) -> None:
@@ -407,14 +415,18 @@ class ViewerApp:
         """Looking drags with either button; a left drag that starts on the HUD or the material
         panel is theirs. A left press and release in one place (a click) picks what is there."""
         lmb, rmb = ti.ui.LMB in inp.buttons, ti.ui.RMB in inp.buttons
-        if lmb and ti.ui.LMB not in self._buttons_before:
+        pressed = ti.ui.LMB in inp.pressed or (lmb and ti.ui.LMB not in self._buttons_before)
+        if pressed:
             self._drag_blocked = False
-            if self.session.hud_visible and inp.cursor is not None:
+            if inp.cursor is not None:
                 u, v = inp.cursor
-                panels = [hud.hud_rect(self.size)] + ([panel_rect(self.size)] if self.editor.picked else [])
+                panels = (([hud.hud_rect(self.size)] if self.session.hud_visible else [])
+                          + ([panel_rect(self.size)] if self.editor.picked else []))
                 self._drag_blocked = any(r.contains(u, 1.0 - v) for r in panels)
             self._press_cursor = None if self._drag_blocked else inp.cursor
-        elif not lmb and ti.ui.LMB in self._buttons_before and self._press_cursor is not None:
+        # a release (as an event: a quick click is down and up within one frame) where it went down
+        if (ti.ui.LMB in inp.released or (not lmb and ti.ui.LMB in self._buttons_before)) \
+                and self._press_cursor is not None:
             if inp.cursor is not None and max(abs(a - b) for a, b in zip(inp.cursor, self._press_cursor)) \
                     <= CLICK_TOLERANCE:
                 self.pick_at(inp.cursor, now)
@@ -564,7 +576,7 @@ class ViewerApp:
         """What the window says besides the image: a change presents at once."""
         s = self.session
         return (s.hud_visible, s.help_visible, self.notice, s.error, s.current_message(now), self.image_label,
-                self._display_settings())
+                self._display_settings(), self.highlight is not None and now <= self.highlight[1])
 
     def _choose_image(self, renderer: Renderer, integrator: str, plan) -> None:
         """The raw film, or in the denoised view the newest denoised image of this accumulation
@@ -672,7 +684,14 @@ class ViewerApp:
         s = self.session
         self.presents += 1
         self._present_due.mark(now)
-        show_on_canvas(self.canvas, self.display.shown if self._shown is None else self._shown)
+        shown = self.display.shown if self._shown is None else self._shown
+        if self.highlight is not None:
+            mask, until = self.highlight
+            if now > until:
+                self.highlight = None
+            elif mask.shape == shown.shape:  # (not while moving, at a smaller size)
+                shown = tinted(shown, mask)
+        show_on_canvas(self.canvas, shown)
         if s.hud_visible:
             forced = INTEGRATORS[s.integrator].display_tonemapper
             controls, actions = hud.draw_hud(self.gui, self.size, self.hud_stats(), s.controls(),
@@ -681,14 +700,14 @@ class ViewerApp:
             s.apply_controls(controls)
             for action in actions:
                 self.dispatch(action, FrameInput(), now)
-            editor = self.editor
-            if editor.picked is not None:
-                spec = editor.picked_material(self.renderer.scene)
-                edited, actions = draw_material_panel(self.gui, self.size, editor.picked, spec, editor.notes)
-                if edited is not None and edited is not spec:
-                    self.edit(lambda renderer: editor.apply(renderer, edited, merge=True), now)
-                for action in actions:
-                    self.dispatch(action, FrameInput(), now)
+        editor = self.editors.get(s.scene_path)
+        if editor is not None and editor.picked is not None:  # the material panel, with or without the HUD
+            spec = editor.picked_material(self.renderer.scene)
+            edited, actions = draw_material_panel(self.gui, self.size, editor.picked, spec, editor.notes)
+            if edited is not None and edited is not spec:
+                self.edit(lambda renderer: editor.apply(renderer, edited, merge=True), now)
+            for action in actions:
+                self.dispatch(action, FrameInput(), now)
         if s.help_visible:
             hud.draw_help(self.gui, self.size, self.keymap.help_text())
         if self.notice:

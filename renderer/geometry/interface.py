@@ -16,10 +16,13 @@ A geometry object provides these Taichi funcs:
   sample_emitter(prim, ref, u2) -> EmitterPoint        a point on emissive primitive `prim`
   emitter_pdf(prim, ref, p, n) -> f32   the solid-angle density sample_emitter gives point p
 Integrators, materials, lights, camera and film never know which kind they run on.
+On the host, both kinds say which object of the scene file a primitive belongs to (picking):
+  object_of(prim) -> int, objects_of(prims) -> array    -1 for a miss (prim -1)
 
 Rays carry a cone (width at the origin, spread per metre) so that the SDF marcher can grow its
 hit threshold with the pixel footprint; mesh geometry ignores it.
 """
+import numpy as np
 import taichi as ti
 
 vec3 = ti.math.vec3
@@ -56,3 +59,12 @@ INF = 1e30  # "no hit yet"; far beyond any scene extent and still finite in f32
 # Surface.eps of a point inside a medium, not on any surface: next_segment starts rays exactly
 # there (a surface's spawn offset would be wrong where there is no surface to leave).
 MEDIUM_POINT = -1.0
+
+
+def owners_of(ids, owners) -> np.ndarray:
+    """owners[id] for each id (an array of any shape), -1 where an id is out of range (a miss)."""
+    ids = np.asarray(ids)
+    inside = (ids >= 0) & (ids < len(owners))
+    out = np.full(ids.shape, -1, np.int32)
+    out[inside] = np.asarray(owners, np.int32)[ids[inside]]
+    return out

@@ -26,7 +26,7 @@ from renderer.geometry import emitter_shapes as shapes
 from renderer.geometry import intersect as isect
 from renderer.geometry.instance_bvh import INSTANCE_NODE, InstancedBVH
 from renderer.geometry.instances import InstanceTable
-from renderer.geometry.interface import INF, EmitterPoint, Hit, Ray, Surface
+from renderer.geometry.interface import INF, EmitterPoint, Hit, Ray, Surface, owners_of
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.shading import consistent_shading_normal
 from renderer.geometry.triangle_packets import TrianglePackets, build_packets, nearest_lane, permuted_origin
@@ -624,8 +624,10 @@ class MeshGeometry:
 
     def object_of(self, prim: int) -> int:
         """The scene object (Scene.mesh_objects index) primitive `prim` came from; -1 unknown."""
-        owners = self.data.prim_object
-        return int(owners[prim]) if 0 <= prim < len(owners) else -1
+        return int(self.objects_of(np.array([prim]))[0])
+
+    def objects_of(self, prims: np.ndarray) -> np.ndarray:
+        return owners_of(prims, self.data.prim_object)
 
     def emitter_info(self) -> dict:
         """Every primitive with its material, area, bounds and emission cone (for light selection):

@@ -54,7 +54,9 @@ def test_untouched_controls_change_nothing_and_show_the_kinds_fields():
     assert "roughness [0, 1]" in drawn and "metallic [0, 1]" in drawn and "base_color" in drawn
     assert any(line.startswith("ior (1, 4]") for line in drawn)  # the range the format allows
     assert "edge_tint" not in drawn  # a conductor's
-    assert {f.name for f in panel_fields("diffuse")} >= {"base_color", "roughness", "emission", "opacity"}
+    names = {f.name for f in panel_fields(MaterialSpec("d"))}
+    assert names >= {"base_color", "roughness", "emission", "opacity"} and "bump_scale" not in names
+    assert "two_sided_emission" in {f.name for f in panel_fields(MaterialSpec("e", emission=(1.0, 1.0, 1.0)))}
 
 
 def test_a_colour_a_slider_and_the_kind():
@@ -63,8 +65,10 @@ def test_a_colour_a_slider_and_the_kind():
     assert edited.base_color == (1.0, 0.766, 0.336) and edited.roughness == 0.25 and edited.kind == "diffuse"
     edited, _, _ = panel(spec, clicks={"kind: diffuse"})
     assert edited.kind != "diffuse"
-    gold, _, _ = panel(MaterialSpec("g", kind="conductor"), clicks={"metal:"})
-    assert gold.metal != ""
+    silver, _, drawn = panel(MaterialSpec("g", kind="conductor"), values={"metal:": 2})
+    assert silver.metal == "Ag" and "metal: (from the colour)" in drawn  # index 0: from base_color
+    gold, _, _ = panel(spec, clicks={"make it gold"})
+    assert (gold.kind, gold.metal) == ("conductor", "Au")
 
 
 def test_emission_is_a_colour_times_a_strength_and_buttons_are_actions():

@@ -70,9 +70,11 @@ def test_click_edit_undo_and_save_in_the_window(cornell):
     for _ in range(3):
         app.step()
     cursor = tall_box_cursor(app.renderer.scene)
-    app.step(FrameInput(cursor=cursor, buttons=frozenset({"LMB"})))
-    app.step(FrameInput(cursor=cursor))  # released where pressed: a click
+    app.step(FrameInput(cursor=cursor, pressed=("LMB",), released=("LMB",)))  # a click within one frame
     assert app.editor.picked is not None and app.editor.picked.material_name == "tall_box"
+    mask, _ = app.highlight  # the picked quad's pixels, tinted for a moment
+    w, h = mask.shape
+    assert mask[int(cursor[0] * w), int(cursor[1] * h)] and 0 < mask.sum() < 0.1 * mask.size
     renderer = app.renderer
     box = app.editor.picked_material(renderer.scene)
     app.edit(lambda r: app.editor.apply(r, replace(box, **GOLD)), 0.0)
@@ -92,3 +94,15 @@ def test_click_edit_undo_and_save_in_the_window(cornell):
     app.session.hud_visible = True  # the material panel drawn by GGUI itself, beside the HUD
     app.step()
     assert app.session.error is None and app.editor.picked is not None
+
+
+def test_a_tint_goes_halfway_to_the_highlight_colour_on_the_mask_only():
+    from viewer.display import HIGHLIGHT_COLOUR, tinted
+
+    packed = np.full((3, 2), 0xFF000000 | (200 << 16) | (100 << 8) | 50, np.uint32)  # R 50, G 100, B 200
+    mask = np.zeros((3, 2), bool)
+    mask[1, 0] = True
+    out = tinted(packed, mask)
+    channels = out.view(np.uint8).reshape(3, 2, 4)
+    assert tuple(channels[1, 0, :3]) == tuple((np.array([50, 100, 200]) + HIGHLIGHT_COLOUR) // 2)
+    assert (out[~mask] == packed[~mask]).all() and (packed[1, 0] != out[1, 0])
