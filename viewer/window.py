@@ -91,8 +91,9 @@ def poll_input(window) -> FrameInput:
         held.add("shift")
     buttons = frozenset(b for b in (ti.ui.LMB, ti.ui.RMB) if window.is_pressed(b))
     x, y = window.get_cursor_pos()
-    return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons, bool(window.is_pressed(ti.ui.CTRL)),
-                      released)
+    # Control held now, or pressed with the key this frame (a quick ctrl+s is down and up within one)
+    ctrl = bool(window.is_pressed(ti.ui.CTRL)) or ti.ui.CTRL in pressed
+    return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons, ctrl, released)
 
 
 def camera_frame(state: CameraState) -> CameraFrame:

@@ -465,8 +465,15 @@ class Bsdf:
 
     @ti.func
     def albedo(self, mat):
-        """A display albedo for the debug view (not an integral of the BSDF)."""
-        return mat.base_color
+        """A display albedo (the albedo view, the denoiser's guide; not an integral of the BSDF): the
+        base colour, or for a conductor given by its complex index (a named metal, eta and k), which
+        ignores its base colour, its reflectance head-on: a gold box looks gold."""
+        value = mat.base_color
+        if ti.static(self.features.has_kind("conductor") or self.features.has_kind("coated")):
+            if mat.complex_ior == 1:
+                e, k = mat.eta, mat.k
+                value = ((e - 1.0) ** 2 + k * k) / ((e + 1.0) ** 2 + k * k)
+        return value
 
 
 @ti.func

@@ -91,3 +91,22 @@ def test_an_edit_that_needs_the_world_built_again_changes_nothing(cornell, tmp_p
     assert not renderer.edit_materials(textured) and renderer.scene is cornell
     with pytest.raises(ValueError, match="keeps the scene's materials"):
         renderer.edit_materials(replace(cornell, materials=cornell.materials[1:]))
+
+
+def test_the_albedo_view_shows_a_named_metal_by_its_head_on_reflectance(cornell):
+    """A conductor given by a named metal ignores its base colour: the albedo view (and the
+    denoiser's guide) shows its reflectance at normal incidence, ((eta-1)^2 + k^2) / ((eta+1)^2 + k^2)."""
+    from renderer.editing import canonical
+    from renderer.materials.conductor_ior import conductor_ior_row
+    from tests.render.test_picking import screen_uv
+
+    gold = canonical(replace(material_named(cornell, "tall_box"), kind="conductor", metal="Au"))
+    scene = with_material(cornell, gold)
+    renderer = Renderer(scene, max_size=(64, 64))
+    renderer.render(CameraFrame.from_spec(scene.camera), 1, "albedo")
+    u, v = screen_uv(scene, (-0.33, -0.4, 0.0))
+    pixel = renderer.image()[int((1 - v) * 64), int(u * 64)]
+    row = conductor_ior_row(gold)
+    eta, k = np.array(row["eta"]), np.array(row["k"])
+    np.testing.assert_allclose(pixel, ((eta - 1) ** 2 + k ** 2) / ((eta + 1) ** 2 + k ** 2), rtol=1e-5)
+    assert pixel[0] > pixel[1] > pixel[2]  # gold
