@@ -60,7 +60,7 @@ TITLE = "Lantern"
 DEFAULT_SIZE = (960, 540)
 MOVEMENT_KEYS = ("w", "a", "s", "d", "q", "e")
 MAX_QUEUED_KEYS = 32
-CTRL_ACTIONS = {"z": "undo_edit", "y": "redo_edit", "s": "save_scene"}
+CTRL_ACTIONS = {"ctrl+z": "undo_edit", "ctrl+y": "redo_edit", "ctrl+s": "save_scene"}
 HIGHLIGHT_SECONDS = 1.0  # how long a picked object stays tinted
 CLICK_TOLERANCE = 0.004  # how far (window fractions) a press may move and still be a click, not a drag
 
@@ -79,20 +79,24 @@ class FrameInput:
     held: frozenset = frozenset()
     cursor: Optional[tuple[float, float]] = None
     buttons: frozenset = frozenset()
-    ctrl: bool = False  # Control held: z, y and s undo, redo and save edits
+    ctrl: bool = False  # Control down at the end of the frame (keys pressed with it come as "ctrl+z")
     released: tuple[str, ...] = ()  # keys and buttons released since the last frame ('LMB': a click ends)
 
 
-def poll_input(window) -> FrameInput:
-    pressed = tuple(e.key for e in window.get_events(ti.ui.PRESS))
+def poll_input(window, ctrl_before: bool = False) -> FrameInput:
+    """This frame's input. A key pressed in a frame in which Control was down (down at the end of
+    the last frame, `ctrl_before`, or pressed in this one) arrives as "ctrl+<key>": GGUI's events
+    carry no order between presses and releases, and a quick ctrl+s may end in the next frame."""
+    presses = [e.key for e in window.get_events(ti.ui.PRESS)]
     released = tuple(e.key for e in window.get_events(ti.ui.RELEASE))  # read, or GGUI keeps them queued
+    ctrl_down = ctrl_before or ti.ui.CTRL in presses
+    pressed = tuple(f"ctrl+{key}" if ctrl_down else key for key in presses if key != ti.ui.CTRL)
+    ctrl = bool(window.is_pressed(ti.ui.CTRL))  # (not from events: a release may not arrive as one)
     held = {k for k in MOVEMENT_KEYS if window.is_pressed(k)}
     if window.is_pressed(ti.ui.SHIFT):
         held.add("shift")
     buttons = frozenset(b for b in (ti.ui.LMB, ti.ui.RMB) if window.is_pressed(b))
     x, y = window.get_cursor_pos()
-    # Control held now, or pressed with the key this frame (a quick ctrl+s is down and up within one)
-    ctrl = bool(window.is_pressed(ti.ui.CTRL)) or ti.ui.CTRL in pressed
     return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons, ctrl, released)
 
 
@@ -137,6 +141,7 @@ class ViewerApp:
         self._press_cursor = None  # where the left button went down, for telling a click from a drag
         self.last_saved: Optional[Path] = None
         self.highlight: Optional[tuple] = None  # (mask of the picked object's pixels, until when)
+        self._ctrl = False  # Control down at the end of the last frame's events
 
         path = Path(scene_path).resolve()
         scene_list = [Path(p).resolve() for p in (scenes if scenes is not None else scene_files())]
@@ -404,7 +409,7 @@ class ViewerApp:
             if self._awaiting_render:
                 self._queued_keys = keys[i:][:MAX_QUEUED_KEYS]
                 return
-            action = CTRL_ACTIONS.get(key.lower()) if inp.ctrl else self.keymap.action_for(key)
+            action = CTRL_ACTIONS.get(key.lower()) if key.startswith("ctrl+") else self.keymap.action_for(key)
             before = (self.session.scene_index, self.session.integrator)
             self.dispatch(action, inp, now)
             if (self.session.scene_index, self.session.integrator) != before or self._pending_cycle:
@@ -724,7 +729,9 @@ class ViewerApp:
     # --- the loop -----------------------------------------------------------------------------
     def run(self, max_frames: Optional[int] = None) -> int:
         while self.running and self.window.running and (max_frames is None or self.frames < max_frames):
-            self.step(poll_input(self.window) if self.show_window else FrameInput())
+            inp = poll_input(self.window, self._ctrl) if self.show_window else FrameInput()
+            self._ctrl = inp.ctrl
+            self.step(inp)
         return 0
 
 

@@ -84,10 +84,10 @@ def test_click_edit_undo_and_save_in_the_window(cornell):
             break
     assert app.renderer is renderer and material_named(renderer.scene, "tall_box").metal == "Au"
     assert renderer.samples_done >= 2 and "conductor" in renderer.features().material_kinds
-    app.step(FrameInput(pressed=("z",), ctrl=True))
+    app.step(FrameInput(pressed=("ctrl+z",)))
     assert material_named(app.renderer.scene, "tall_box") == box
-    app.step(FrameInput(pressed=("y",), ctrl=True))
-    app.step(FrameInput(pressed=("s",), ctrl=True))
+    app.step(FrameInput(pressed=("ctrl+y",)))
+    app.step(FrameInput(pressed=("ctrl+s",)))
     saved = cornell.with_name("cornell_box_edited.toml")
     assert app.last_saved == saved and load_scene(saved).materials == app.renderer.scene.materials
     assert app.renderer.scene.camera == load_scene(saved).camera
