@@ -23,7 +23,9 @@ pytestmark = pytest.mark.display
 
 ROOT = Path(__file__).resolve().parents[2]
 SIZE = (640, 480)
-TIMEOUT = 240  # seconds; cold kernel compiles (the albedo view, then with a conductor) dominate
+# Seconds. Warm, the whole test takes ~8 s; on a clean machine under load, the kernel compiles (the
+# albedo view, picking, then the view with a conductor) dominate.
+TIMEOUT = 420
 BUTTON = (43, 76, 116)  # imgui's button colour over the panel, 8-bit RGB as Xvfb shows it
 
 
@@ -116,7 +118,7 @@ def test_click_the_tall_box_make_it_gold_save_and_render(xserver, tmp_path):
             time.sleep(0.3)
             xdo(env, "mousemove", "--window", window, 20, 20)  # off the panel and the box
             try:
-                gold = wait_for(gold_now, viewer, log_path, min(deadline, time.monotonic() + 30), "a gold box")
+                gold = wait_for(gold_now, viewer, log_path, min(deadline, time.monotonic() + 90), "a gold box")
                 break
             except AssertionError:
                 if attempt == 2 or time.monotonic() > deadline:
@@ -153,6 +155,6 @@ def test_click_the_tall_box_make_it_gold_save_and_render(xserver, tmp_path):
     assert shown.shape == again.shape == (SIZE[1], SIZE[0], 3)
     patch = (slice(y - 3, y + 4), slice(x - 3, x + 4))  # inside the box's face: no edge in either image
     np.testing.assert_allclose(np.median(shown[patch], axis=(0, 1)), np.median(again[patch], axis=(0, 1)),
-                               rtol=1e-5)
+                               rtol=1e-5, err_msg="the viewer's box against `render` of the saved file")
     linear = np.median(again[patch], axis=(0, 1))
     assert linear[0] > linear[1] > 2 * linear[2]  # gold's reflectance, (1.0, 0.78, 0.34) or so
