@@ -39,8 +39,14 @@ def panel_rect(window_size: tuple[int, int]) -> Rect:
 
 
 # Fields that mean something only with another: shown where that one is set.
+def _fresnel_from_colour(spec: MaterialSpec) -> bool:
+    """A conductor's base_color and edge_tint shade it only where no metal or index is named."""
+    return not (spec.kind == "conductor" and (spec.metal or spec.eta is not None))
+
+
 NEEDS = {"bump_scale": lambda spec: spec.bump_map is not None,
-         "two_sided_emission": lambda spec: max(spec.emission) > 0.0}
+         "two_sided_emission": lambda spec: max(spec.emission) > 0.0,
+         "base_color": _fresnel_from_colour, "edge_tint": _fresnel_from_colour}
 
 
 def panel_fields(spec: MaterialSpec) -> list:

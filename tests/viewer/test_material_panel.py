@@ -69,6 +69,8 @@ def test_a_colour_a_slider_and_the_kind():
     assert silver.metal == "Ag" and "metal: (from the colour)" in drawn  # index 0: from base_color
     gold, _, _ = panel(spec, clicks={"make it gold"})
     assert (gold.kind, gold.metal) == ("conductor", "Au")
+    _, _, drawn = panel(gold)
+    assert "base_color" not in drawn and "edge_tint" not in drawn and "metal: Au" in drawn  # the metal's own Fresnel
 
 
 def test_emission_is_a_colour_times_a_strength_and_buttons_are_actions():
