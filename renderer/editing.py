@@ -8,8 +8,10 @@ import math
 from dataclasses import dataclass, field, fields, replace
 from typing import Optional
 
-from renderer.scene.description import MaterialSpec, Scene
-from renderer.scene.schema import MATERIAL
+from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene
+from renderer.scene.schema import ENVIRONMENT as ENVIRONMENT_SECTION, MATERIAL
+
+ENVIRONMENT = "environment"  # the history's name for the environment's edits
 
 
 @dataclass(frozen=True)
@@ -24,7 +26,20 @@ class MaterialEdit:
         return self.after.name
 
     def fields_changed(self) -> frozenset:
-        return frozenset(f.name for f in fields(MaterialSpec) if getattr(self.before, f.name) != getattr(self.after, f.name))
+        return frozenset(f.name for f in fields(type(self.before))
+                         if getattr(self.before, f.name) != getattr(self.after, f.name))
+
+
+@dataclass(frozen=True)
+class EnvironmentEdit(MaterialEdit):
+    """The scene's environment, before and after an edit (in the same history as materials')."""
+
+    before: EnvironmentSpec
+    after: EnvironmentSpec
+
+    @property
+    def name(self) -> str:
+        return ENVIRONMENT
 
 
 def with_material(scene: Scene, spec: MaterialSpec) -> Scene:
@@ -63,11 +78,12 @@ def allowed_range(name: str):
     return None
 
 
-def clamped(spec: MaterialSpec) -> tuple[MaterialSpec, list[str]]:
-    """`spec` with every numeric field brought within its range in the scene format, and a line per
-    value changed ("roughness 1.5 -> 1 (allowed [0, 1])")."""
+def clamped(spec):
+    """`spec` (a MaterialSpec or an EnvironmentSpec) with every numeric field brought within its
+    range in the scene format, and a line per value changed ("roughness 1.5 -> 1 (allowed [0, 1])")."""
     changes, notes = {}, []
-    for f in MATERIAL.fields:
+    section = ENVIRONMENT_SECTION if isinstance(spec, EnvironmentSpec) else MATERIAL
+    for f in section.fields:
         if f.range is None or not f.in_model or not hasattr(spec, f.model_attr):
             continue
         value = getattr(spec, f.model_attr)
@@ -113,7 +129,7 @@ class EditHistory:
 
     done: list[MaterialEdit] = field(default_factory=list)
     undone: list[MaterialEdit] = field(default_factory=list)
-    original: dict[str, MaterialSpec] = field(default_factory=dict)
+    original: dict = field(default_factory=dict)
 
     def record(self, edit: MaterialEdit, merge: bool = False) -> None:
         """Add an edit; with `merge`, one that goes on changing the same fields of the material
@@ -128,21 +144,22 @@ class EditHistory:
             self.done.append(edit)
         self.undone.clear()
 
-    def undo(self) -> Optional[MaterialSpec]:
-        """The material to restore, or None with nothing to undo."""
+    def undo(self):
+        """The material (or environment) to restore, or None with nothing to undo."""
         if not self.done:
             return None
         edit = self.done.pop()
         self.undone.append(edit)
         return edit.before
 
-    def redo(self) -> Optional[MaterialSpec]:
+    def redo(self):
         if not self.undone:
             return None
         edit = self.undone.pop()
         self.done.append(edit)
         return edit.after
 
-    def as_loaded(self, name: str) -> Optional[MaterialSpec]:
-        """The material as the scene file had it, or None where it was never edited."""
+    def as_loaded(self, name: str):
+        """The material (or, by ENVIRONMENT, the environment) as the scene file had it, or None
+        where it was never edited."""
         return self.original.get(name)

@@ -313,6 +313,24 @@ class Renderer:
         self.reset()
         return True
 
+    def edit_environment(self, spec) -> bool:
+        """Adopt an edited environment of the same kind and image (intensity, orientation about
+        the axis it was built for, colours): data uploaded in place, the film reset, nothing
+        compiled; lights rebuilt where it starts or stops emitting. False, changing nothing,
+        where the edit needs it built again (another kind or file, a turn off the +y axis)."""
+        old = self.scene.environment
+        if (spec.kind, spec.file) != (old.kind, old.file) or spec.needs_matrix != old.needs_matrix:
+            return False
+        from renderer.lights.lights import environment_emits
+
+        self.environment.set_spec(spec)
+        if environment_emits(spec) != environment_emits(old) and self._lights is not None:
+            self._lights = None
+            self._programs.clear()
+        self.scene = replace(self.scene, environment=spec)
+        self.reset()
+        return True
+
     # --- rendering -----------------------------------------------------------------------------
     def reset(self, width: int | None = None, height: int | None = None) -> None:
         self.film.reset(width or self.film.width, height or self.film.height)

@@ -13,8 +13,8 @@ from typing import Optional
 
 from renderer.materials.metals import metal_names
 from renderer.picking import Pick
-from renderer.scene.description import MATERIAL_KINDS, MaterialSpec
-from renderer.scene.schema import MATERIAL
+from renderer.scene.description import MATERIAL_KINDS, EnvironmentSpec, MaterialSpec
+from renderer.scene.schema import ENVIRONMENT, MATERIAL
 from viewer.hud import ERROR_COLOR, MARGIN_PX, Rect, same_f32, slider_float, text_line
 
 PANEL_WIDTH_PX = 440  # imgui gives labels a third of it: "roughness [0, 1]" must fit
@@ -22,7 +22,10 @@ PANEL_HEIGHT_PX = 640
 # Slider ends for numbers whose range in the format is open (the format's own bound is kept by
 # the editor's clamping; the slider only offers a useful span).
 OPEN_RANGE_ENDS = {"abbe": 100.0, "coat_thickness": 1.0, "bump_scale": 4.0, "coat_maxdepth": 100,
-                   "coat_nsamples": 16}
+                   "coat_nsamples": 16, "intensity": 10.0}
+# The environment's fields per kind (its file and axis are kept; rotation turns about the axis)
+ENVIRONMENT_FIELDS = {"map": ("intensity", "rotation"), "constant": ("intensity", "color"),
+                      "sky": ("intensity", "rotation", "zenith", "horizon", "ground")}
 EMISSION_STRENGTH_MAX = 100.0
 # Fields the panel shows as text only: indices given per channel, and names of other tables.
 NOT_SLIDERS = ("type", "eta", "k", "medium", "outside_medium", "glass", "normal_map", "bump_map", "roughness_v")
@@ -61,6 +64,8 @@ def _step(options: tuple, value) -> object:
 
 def _span(f) -> tuple[float, float]:
     r = f.range
+    if f.name == "rotation":
+        return -180.0, 180.0
     lo = r.lo if r is not None and r.lo is not None else 0.0
     hi = r.hi if r is not None and r.hi is not None else OPEN_RANGE_ENDS.get(f.name, 10.0)
     return lo, hi
@@ -71,13 +76,13 @@ def _colour(g, label: str, value: tuple) -> tuple:
     return tuple(value) if all(same_f32(a, b) for a, b in zip(new, value)) else new
 
 
-def _emission(g, value: tuple) -> tuple:
-    """Emission as a colour of largest channel 1 times a strength."""
+def _emission(g, value: tuple, name: str = "emission") -> tuple:
+    """A radiance as a colour of largest channel 1 times a strength."""
     strength = max(value)
     colour = tuple(c / strength for c in value) if strength > 0 else (1.0, 1.0, 1.0)
-    new_colour = _colour(g, "emission colour", colour)
-    new_strength = slider_float(g, f"emission strength [0, {EMISSION_STRENGTH_MAX:g}]", strength, 0.0,
-                                 EMISSION_STRENGTH_MAX)
+    new_colour = _colour(g, f"{name} colour", colour)
+    new_strength = slider_float(g, f"{name} strength [0, {EMISSION_STRENGTH_MAX:g}]", strength, 0.0,
+                                EMISSION_STRENGTH_MAX)
     if new_colour == colour and new_strength == strength:
         return value
     return tuple(c * new_strength for c in new_colour)
@@ -140,4 +145,33 @@ def draw_material_panel(gui, window_size: tuple[int, int], picked: Pick, spec: O
                 actions.append(action)
     if kind != spec.kind and "kind" not in changes:
         changes["kind"] = kind
+    return (replace(spec, **changes) if changes else spec), actions
+
+
+def draw_environment_panel(gui, window_size: tuple[int, int], spec: EnvironmentSpec,
+                           notes: list[str] = ()) -> tuple[EnvironmentSpec, list[str]]:
+    """The environment's panel (a click on nothing opens it): its intensity, its turn about its
+    axis and its colours, as the scene format has them; returns (the environment as edited, actions)."""
+    r = panel_rect(window_size)
+    actions: list[str] = []
+    changes = {}
+    with gui.sub_window("Environment", r.x, r.y, r.width, r.height) as g:
+        text_line(g, f"environment: {spec.kind}" + (f" {spec.file.name}" if spec.file is not None else ""))
+        for f in ENVIRONMENT.fields:
+            if f.name not in ENVIRONMENT_FIELDS.get(spec.kind, ()):
+                continue
+            value = getattr(spec, f.model_attr)
+            if f.kind == "vec3" and f.range is not None and f.range.hi is None:  # radiance: any brightness
+                new = _emission(g, value, f.name)
+            else:
+                new = _field(g, f, value)
+            if new != value:
+                changes[f.model_attr] = new
+        for line in notes:
+            text_line(g, line, ERROR_COLOR)
+        for label, action in ACTIONS:
+            if g.button(label):
+                actions.append(action)
+    if "rotation" in changes and spec.to_world is not None:
+        changes["to_world"] = None  # a turn set here replaces a file's matrix about the same axis
     return (replace(spec, **changes) if changes else spec), actions

@@ -7,15 +7,17 @@ and headless tests drive it the same way.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Callable, Optional
 
 from renderer.camera import CameraFrame
-from renderer.editing import EditHistory, MaterialEdit, canonical, clamped, material_named, with_material
+from renderer.editing import (EditHistory, EnvironmentEdit, MaterialEdit, canonical, clamped, material_named,
+                              with_material)
 from renderer.picking import Pick, pick
 from renderer.renderer import Renderer
-from renderer.scene.description import MaterialSpec, Scene
-from renderer.scene.material_saving import save_materials
+from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene
+from renderer.scene.edit_saving import save_edits
 
 
 class SceneEditor:
@@ -28,11 +30,13 @@ class SceneEditor:
         self.picked: Optional[Pick] = None
         self.notes: list[str] = []  # what the last edit clamped, one line each
         self.recompiled = False  # whether the last edit built a new Renderer
+        self.environment_open = False  # the environment's panel (a click on nothing opens it)
 
     # --- picking ------------------------------------------------------------------------------
     def pick(self, renderer: Renderer, camera: CameraFrame, u: float, v: float,
              integrator: Optional[str] = None) -> Optional[Pick]:
         self.picked = pick(renderer, camera, u, v, integrator)
+        self.environment_open = self.picked is None
         self.notes = []
         return self.picked
 
@@ -43,22 +47,31 @@ class SceneEditor:
         return material_named(scene, self.picked.material_name)
 
     # --- edits --------------------------------------------------------------------------------
-    def apply(self, renderer: Renderer, spec: MaterialSpec, record: bool = True, merge: bool = False) -> Renderer:
-        """Show `spec` (a material of the scene, by name), its values brought within the scene
-        format's ranges; returns the Renderer that shows it (this one, or one built anew).
-        `merge`: a step of the same change as the last edit (a slider dragged) is one edit."""
+    def apply(self, renderer: Renderer, spec, record: bool = True, merge: bool = False) -> Renderer:
+        """Show `spec` (a material of the scene, by name, or its environment), its values brought
+        within the scene format's ranges; returns the Renderer that shows it (this one, or one
+        built anew). `merge`: a step of the same change as the last edit (a slider dragged) is one
+        edit."""
         spec, self.notes = clamped(spec)
-        spec = canonical(spec)
-        before = material_named(renderer.scene, spec.name)
         self.recompiled = False
-        if spec == before:
-            return renderer
-        scene = with_material(renderer.scene, spec)
-        if not renderer.edit_materials(scene):
+        if isinstance(spec, EnvironmentSpec):
+            before, edit = renderer.scene.environment, EnvironmentEdit
+            if spec == before:
+                return renderer
+            in_place = renderer.edit_environment(spec)
+            scene = replace(renderer.scene, environment=spec)
+        else:
+            spec = canonical(spec)
+            before, edit = material_named(renderer.scene, spec.name), MaterialEdit
+            if spec == before:
+                return renderer
+            scene = with_material(renderer.scene, spec)
+            in_place = renderer.edit_materials(scene)
+        if not in_place:
             renderer = self.rebuild(scene)
             self.recompiled = True
         if record:
-            self.history.record(MaterialEdit(before, spec), merge)
+            self.history.record(edit(before, spec), merge)
         return renderer
 
     def undo(self, renderer: Renderer) -> Renderer:
@@ -70,7 +83,10 @@ class SceneEditor:
         return renderer if spec is None else self.apply(renderer, spec, record=False)
 
     def reset_material(self, renderer: Renderer) -> Renderer:
-        """The picked material back to the file's (an edit itself: undo brings the change back)."""
+        """The picked material (or the open environment) back to the file's (an edit itself: undo
+        brings the change back)."""
+        if self.environment_open:
+            return self.apply(renderer, self.loaded.environment)
         if self.picked is None or not self.picked.editable:
             return renderer
         return self.apply(renderer, material_named(self.loaded, self.picked.material_name))
@@ -81,5 +97,5 @@ class SceneEditor:
         return bool(self.history.done)
 
     def save(self, scene: Scene, path: Optional[Path] = None, overwrite: bool = False) -> Path:
-        """Write the edited scene beside its file (renderer/scene/material_saving.py)."""
-        return save_materials(scene, self.loaded, path, overwrite)
+        """Write the edited scene beside its file (renderer.scene.edit_saving.py)."""
+        return save_edits(scene, self.loaded, path, overwrite)

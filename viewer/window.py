@@ -50,7 +50,7 @@ from viewer.camera_state import CameraState
 from viewer.denoise_worker import BackgroundDenoiser
 from viewer.display import DenoisedDisplay, DisplayImages, DisplaySettings, show_on_canvas, tinted
 from viewer.hotkeys import KeyMap
-from viewer.material_panel import draw_material_panel, panel_rect
+from viewer.material_panel import draw_environment_panel, draw_material_panel, panel_rect
 from viewer.scene_editor import SceneEditor
 from viewer.session import (DEFAULT_TARGET_SECONDS, MAX_PRESENT_INTERVAL, MOVING_PROBE_SLICES, SETTLE_SECONDS,
                             STATS_INTERVAL, Every, RateMeter, ViewerSession, scene_scale, screenshot_dir,
@@ -273,7 +273,7 @@ class ViewerApp:
         except Exception as error:  # e.g. the pick kernel failing to compile: report, go on
             self.session.error = f"pick failed: {_one_line(error)}"
             return None
-        self._announce(picked.describe() if picked is not None else "nothing under the cursor", now)
+        self._announce(picked.describe() if picked is not None else "the environment (nothing under the cursor)", now)
         self.highlight = None
         if picked is not None and picked.object_index >= 0:
             ids = self.renderer.object_ids(self._camera_frame(), self.session.integrator)
@@ -339,7 +339,7 @@ class ViewerApp:
         elif action == "save_scene":
             self.save_edits(now)
         elif action == "close_panel":
-            self.editor.picked = None
+            self.editor.picked, self.editor.environment_open = None, False
         elif action == "toggle_hud":
             s.hud_visible = not s.hud_visible
         elif action == "help":
@@ -427,7 +427,7 @@ class ViewerApp:
             if inp.cursor is not None:
                 u, v = inp.cursor
                 panels = (([hud.hud_rect(self.size)] if self.session.hud_visible else [])
-                          + ([panel_rect(self.size)] if self.editor.picked else []))
+                          + ([panel_rect(self.size)] if self.editor.picked or self.editor.environment_open else []))
                 self._drag_blocked = any(r.contains(u, 1.0 - v) for r in panels)
             self._press_cursor = None if self._drag_blocked else inp.cursor
         # a release (as an event: a quick click is down and up within one frame) where it went down
@@ -707,9 +707,14 @@ class ViewerApp:
             for action in actions:
                 self.dispatch(action, FrameInput(), now)
         editor = self.editors.get(s.scene_path)
-        if editor is not None and editor.picked is not None:  # the material panel, with or without the HUD
-            spec = editor.picked_material(self.renderer.scene)
-            edited, actions = draw_material_panel(self.gui, self.size, editor.picked, spec, editor.notes)
+        if editor is not None and (editor.picked is not None or editor.environment_open):
+            # the material's (or the environment's) panel, with or without the HUD
+            if editor.picked is not None:
+                spec = editor.picked_material(self.renderer.scene)
+                edited, actions = draw_material_panel(self.gui, self.size, editor.picked, spec, editor.notes)
+            else:
+                spec = self.renderer.scene.environment
+                edited, actions = draw_environment_panel(self.gui, self.size, spec, editor.notes)
             if edited is not None and edited is not spec:
                 self.edit(lambda renderer: editor.apply(renderer, edited, merge=True), now)
             for action in actions:

@@ -110,3 +110,43 @@ def test_the_albedo_view_shows_a_named_metal_by_its_head_on_reflectance(cornell)
     eta, k = np.array(row["eta"]), np.array(row["k"])
     np.testing.assert_allclose(pixel, ((eta - 1) ** 2 + k ** 2) / ((eta + 1) ** 2 + k ** 2), rtol=1e-5)
     assert pixel[0] > pixel[1] > pixel[2]  # gold
+
+
+SKY_SCENE = """[scene]
+geometry = "sdf"
+
+[camera]
+position = [0, 0, 5]
+look_at = [0, 0, 0]
+fov = 40
+
+[render]
+width = 16
+height = 16
+
+[environment]
+type = "sky"
+
+[materials.ball]
+
+[[objects]]
+type = "sphere"
+material = "ball"
+radius = 0.5
+"""
+
+
+def test_an_environment_edit_is_the_edited_scenes_image_and_compiles_nothing(tmp_path):
+    path = tmp_path / "sky.toml"
+    path.write_text(SKY_SCENE)
+    scene = load_scene(path)
+    renderer = Renderer(scene)
+    image(renderer, scene)
+    compiled = kernels_compiled()
+    brighter = replace(scene, environment=replace(scene.environment, intensity=2.5, rotation=30.0))
+    assert renderer.edit_environment(brighter.environment)
+    edited = image(renderer, brighter)
+    assert kernels_compiled() == compiled and renderer.scene.environment == brighter.environment
+    np.testing.assert_array_equal(edited, fresh(brighter))
+    assert not renderer.edit_environment(replace(scene.environment, kind="constant"))
+    assert renderer.scene.environment == brighter.environment

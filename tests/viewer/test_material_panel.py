@@ -78,3 +78,16 @@ def test_emission_is_a_colour_times_a_strength_and_buttons_are_actions():
     edited, actions, drawn = panel(spec, values={"emission strength": 20.0}, clicks={"undo", "save scene"})
     assert edited.emission == (20.0, 10.0, 0.0) and actions == ["undo_edit", "save_scene"]
     assert "emission colour" in drawn
+
+
+def test_the_environment_panel_turns_and_scales_it():
+    from renderer.scene.description import EnvironmentSpec
+    from viewer.material_panel import draw_environment_panel
+
+    sky = EnvironmentSpec(kind="sky")
+    g = FakeGui(values={"intensity": 2.0, "rotation": 45.0})
+    edited, actions = draw_environment_panel(g, (960, 540), sky)
+    assert (edited.intensity, edited.rotation, edited.kind) == (2.0, 45.0, "sky") and actions == []
+    assert "zenith colour" in g.drawn and "intensity >= 0" in g.drawn
+    same, _ = draw_environment_panel(FakeGui(), (960, 540), sky)
+    assert same is sky

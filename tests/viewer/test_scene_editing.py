@@ -106,3 +106,26 @@ def test_a_tint_goes_halfway_to_the_highlight_colour_on_the_mask_only():
     channels = out.view(np.uint8).reshape(3, 2, 4)
     assert tuple(channels[1, 0, :3]) == tuple((np.array([50, 100, 200]) + HIGHLIGHT_COLOUR) // 2)
     assert (out[~mask] == packed[~mask]).all() and (packed[1, 0] != out[1, 0])
+
+
+def test_a_click_on_nothing_opens_the_environment_whose_edits_save(tmp_path):
+    from tests.render.test_material_edits import SKY_SCENE
+
+    path = tmp_path / "sky.toml"
+    path.write_text(SKY_SCENE + "# the end of the file, kept\n")
+    scene = load_scene(path)
+    renderer = Renderer(scene)
+    editor = SceneEditor(scene, lambda s: pytest.fail("an environment's intensity needs no new renderer"))
+    assert editor.pick(renderer, CameraFrame.from_spec(scene.camera), 0.02, 0.98) is None
+    assert editor.environment_open
+    editor.apply(renderer, replace(scene.environment, intensity=3.0, rotation=400.0))
+    assert renderer.scene.environment.intensity == 3.0
+    editor.apply(renderer, replace(renderer.scene.environment, intensity=-1.0))
+    assert renderer.scene.environment.intensity == 0.0 and "intensity -1 -> 0" in editor.notes[0]
+    editor.undo(renderer)
+    saved = editor.save(renderer.scene)
+    again = load_scene(saved)
+    assert again.environment == renderer.scene.environment and again.environment.intensity == 3.0
+    assert "# the end of the file, kept" in saved.read_text()
+    editor.reset_material(renderer)  # the environment panel is open: back to the file's
+    assert renderer.scene.environment == scene.environment

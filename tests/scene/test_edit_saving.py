@@ -12,7 +12,7 @@ import pytest
 
 from renderer.scene import SceneError, load_scene
 from renderer.scene.description import MaterialSpec, TextureSpec
-from renderer.scene.material_saving import edited_path, material_table, save_materials
+from renderer.scene.edit_saving import edited_path, material_table, save_edits
 
 REPO = Path(__file__).resolve().parents[2]
 SCENES = sorted(p for p in (REPO / "assets" / "scenes").glob("*.toml") if "[materials." in p.read_text())
@@ -54,7 +54,7 @@ def test_an_edited_cornell_box_is_saved_beside_it_and_renders_as_edited(tmp_path
     loaded = load_scene(original)
     gold = canonical(replace(material_named(loaded, "tall_box"), kind="conductor", metal="Au", roughness=0.25))
     edited = with_material(loaded, gold)
-    saved = save_materials(edited, loaded)
+    saved = save_edits(edited, loaded)
     assert saved == tmp_path / "cornell_box_edited.toml" == edited_path(original)
     text = saved.read_text()
     assert "# The Cornell box of Mitsuba 3's" in text and 'metal = "Au"' in text  # the rest kept as written
@@ -70,7 +70,7 @@ def test_an_edited_cornell_box_is_saved_beside_it_and_renders_as_edited(tmp_path
     assert live.edit_materials(edited)
     live.render(CameraFrame.from_spec(edited.camera), 2, "mis", seed=3)
     np.testing.assert_array_equal(live.image(), render(again))
-    assert save_materials(edited, loaded) == saved  # saving again replaces the edited file
+    assert save_edits(edited, loaded) == saved  # saving again replaces the edited file
 
 
 def test_what_may_not_be_saved_is_one_line(tmp_path):
@@ -78,11 +78,11 @@ def test_what_may_not_be_saved_is_one_line(tmp_path):
     shutil.copy(REPO / "assets" / "scenes" / "cornell_box.toml", original)
     loaded = load_scene(original)
     with pytest.raises(SceneError, match="saving over it must be asked for"):
-        save_materials(loaded, loaded, path=original)
-    assert save_materials(loaded, loaded, path=original, overwrite=True) == original
+        save_edits(loaded, loaded, path=original)
+    assert save_edits(loaded, loaded, path=original, overwrite=True) == original
     (tmp_path / "elsewhere").mkdir()
     with pytest.raises(SceneError, match="in its original's folder"):
-        save_materials(loaded, loaded, path=tmp_path / "elsewhere" / "x.toml")
+        save_edits(loaded, loaded, path=tmp_path / "elsewhere" / "x.toml")
     textured = replace(loaded.materials[0], base_color_texture=TextureSpec("checkerboard"))
     with pytest.raises(SceneError, match="material 'white': its base_color_texture cannot be written"):
         material_table(textured, tmp_path)

@@ -1,7 +1,7 @@
-"""Edited materials written back to a TOML scene file: the inverse of the loader's
-[materials.<name>] tables (renderer/scene/toml_loader.py), put into the file the scene came from,
-whose other tables, comments and layout stay as they were. The result goes beside the original
-(`<name>_edited.toml`) unless the caller asks to write over it.
+"""Edits written back to a TOML scene file: materials as the inverse of the loader's
+[materials.<name>] tables (renderer/scene/toml_loader.py) and the environment's changed values,
+put into the file the scene came from, whose other tables, comments and layout stay as they were.
+The result goes beside the original (`<name>_edited.toml`) unless the caller asks to write over it.
 
 A material table holds the fields of the scene format (renderer/scene/schema.py, MATERIAL) that
 apply to the material's kind and differ from their defaults; roughness is always written (its
@@ -19,7 +19,7 @@ import tomlkit
 
 from renderer.scene.description import MaterialSpec, Scene
 from renderer.scene.errors import SceneError
-from renderer.scene.schema import MATERIAL
+from renderer.scene.schema import ENVIRONMENT, MATERIAL
 
 EDITED_SUFFIX = "_edited"
 
@@ -56,10 +56,11 @@ def material_table(spec: MaterialSpec, directory: Path) -> dict:
     return table
 
 
-def save_materials(scene: Scene, loaded: Scene, path: Optional[Path] = None, overwrite: bool = False) -> Path:
-    """Write `scene`, the TOML scene `loaded` with materials edited, to `path` (default:
-    edited_path of the original): the original file's text with each changed material's table
-    replaced. Writing over the original needs `overwrite`. Returns the path written."""
+def save_edits(scene: Scene, loaded: Scene, path: Optional[Path] = None, overwrite: bool = False) -> Path:
+    """Write `scene`, the TOML scene `loaded` with materials or the environment edited, to `path`
+    (default: edited_path of the original): the original file's text with each changed material's
+    table replaced and the environment's changed values set. Writing over the original needs
+    `overwrite`. Returns the path written."""
     original = Path(loaded.path)
     if original.suffix.lower() != ".toml":
         raise SceneError(original, "only scenes read from TOML files are saved with their edits so far")
@@ -79,11 +80,29 @@ def save_materials(scene: Scene, loaded: Scene, path: Optional[Path] = None, ove
         for key, value in material_table(spec, target.parent).items():
             table.add(key, value)
         document["materials"][spec.name] = table
+    if scene.environment != loaded.environment:
+        _environment_into(document, scene.environment, loaded.environment)
     try:
         target.write_text(tomlkit.dumps(document), encoding="utf-8")
     except OSError as error:
         raise SceneError(target, f"cannot be written ({error.strerror or error})") from None
     return target
+
+
+def _environment_into(document, spec, was) -> None:
+    """The environment's values that changed (its kind and image stay: edits keep them)."""
+    if (spec.kind, spec.file) != (was.kind, was.file):
+        raise SceneError(Path(was.file or "."), "an edit of the environment keeps its kind and image")
+    if "environment" not in document:
+        document["environment"] = tomlkit.table()
+        document["environment"]["type"] = spec.kind
+    table = document["environment"]
+    for f in ENVIRONMENT.fields:
+        if not f.in_model or f.name in ("type", "file") or not hasattr(spec, f.model_attr):
+            continue
+        value = getattr(spec, f.model_attr)
+        if value != getattr(was, f.model_attr):
+            table[f.name] = list(value) if isinstance(value, tuple) else value
 
 
 def _relative(file: Path, directory: Path) -> str:
