@@ -24,12 +24,15 @@ class Pick:
         """Whether the material is one of the scene's (a model file's own is not edited here)."""
         return self.material_index >= 0
 
-    def describe(self) -> str:
-        """One line for the HUD."""
+    def where(self) -> str:
+        """The hit: "at (x, y, z), 3.88 m, uv (u, v)"."""
         h = self.hit
         point = ", ".join(f"{c:.3g}" for c in h.point)
-        return (f"{self.object_label}: material '{self.material_name}' ({self.material_kind}), "
-                f"at ({point}), {h.distance:.3g} m, uv ({h.uv[0]:.3g}, {h.uv[1]:.3g})")
+        return f"at ({point}), {h.distance:.3g} m, uv ({h.uv[0]:.3g}, {h.uv[1]:.3g})"
+
+    def describe(self) -> str:
+        """One line for the HUD."""
+        return f"{self.object_label}: material '{self.material_name}' ({self.material_kind}), {self.where()}"
 
 
 def pick(renderer: Renderer, camera: CameraFrame, u: float, v: float,

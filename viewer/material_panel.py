@@ -116,6 +116,7 @@ def draw_material_panel(gui, window_size: tuple[int, int], picked: Pick, spec: O
     actions: list[str] = []
     with gui.sub_window("Material", r.x, r.y, r.width, r.height) as g:
         text_line(g, picked.object_label)
+        text_line(g, picked.where())
         if spec is None:  # a model file's own material
             text_line(g, f"{picked.material_name} (a model file's material, not edited here)")
             if g.button("close"):
