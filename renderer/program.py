@@ -143,19 +143,14 @@ class RenderProgram:
         else:
             return self.integrator.li(self, ray, state, max_depth)
 
-    @ti.kernel
-    def probe(self, u: ti.f32, v: ti.f32, width: ti.i32, height: ti.i32, origin: ti.math.vec3,
-              forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32,
-              out: ti.template()):
-        """Distance along `forward` to the surface under (u, v) in [0,1]^2 (y up); -1 on a miss."""
-        for _ in range(1):  # a parallel loop of one: the march's `break` may not sit in the outermost scope
-            o, d = pinhole_ray(2.0 * u - 1.0, 2.0 * v - 1.0, width / height, origin, forward, right, up,
-                               half_height, self.features.orthographic)
-            # A ray without a cone: the SDF march stops within its finest threshold of the surface.
-            # (A pixel's cone stops it some % short at a grazing floor.)
-            ray = Ray(o=o, d=d, cone_width=0.0, cone_spread=0.0)
-            hit = self.geometry.intersect(ray, INF)
-            out[None] = hit.t * d.dot(forward) if hit.hit == 1 else -1.0
+    @ti.func
+    def _camera_ray(self, u, v, width, height, origin, forward, right, up, half_height):
+        """The camera ray through (u, v) in [0,1]^2 of a width x height image (y up), without a
+        cone: the SDF march stops within its finest threshold of the surface (a pixel's cone stops
+        it some % short at a grazing floor)."""
+        o, d = pinhole_ray(2.0 * u - 1.0, 2.0 * v - 1.0, width / height, origin, forward, right, up, half_height,
+                           self.features.orthographic)
+        return Ray(o=o, d=d, cone_width=0.0, cone_spread=0.0)
 
     @ti.kernel
     def hit_primitives(self, full_width: ti.i32, full_height: ti.i32, window_x: ti.i32, window_y: ti.i32,
@@ -164,11 +159,9 @@ class RenderProgram:
         """The primitive the ray through each film pixel's centre meets first (-1: none), out[x, y]
         with y up, the film lying on the image as its window says (picking's highlight)."""
         for x, y in ti.ndrange(out.shape[0], out.shape[1]):
-            u = (x + window_x + 0.5) / full_width
-            v = (y + window_y + 0.5) / full_height
-            o, d = pinhole_ray(2.0 * u - 1.0, 2.0 * v - 1.0, full_width / full_height, origin, forward, right, up,
-                               half_height, self.features.orthographic)
-            hit = self.geometry.intersect(Ray(o=o, d=d, cone_width=0.0, cone_spread=0.0), INF)
+            ray = self._camera_ray((x + window_x + 0.5) / full_width, (y + window_y + 0.5) / full_height,
+                                   full_width, full_height, origin, forward, right, up, half_height)
+            hit = self.geometry.intersect(ray, INF)
             out[x, y] = hit.prim if hit.hit == 1 else -1
 
     @ti.kernel
@@ -176,11 +169,10 @@ class RenderProgram:
              forward: ti.math.vec3, right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32,
              floats: ti.template(), ints: ti.template()):
         """What the camera ray through (u, v) in [0,1]^2 (y up) meets: ints = (hit, material, prim,
-        instance, front face), floats = (distance along the ray, point, shading normal, uv)."""
-        for _ in range(1):  # a parallel loop of one, as probe's
-            o, d = pinhole_ray(2.0 * u - 1.0, 2.0 * v - 1.0, width / height, origin, forward, right, up,
-                               half_height, self.features.orthographic)
-            ray = Ray(o=o, d=d, cone_width=0.0, cone_spread=0.0)
+        instance, front face), floats = (distance along the ray, point, shading normal, uv, distance
+        along `forward`: the lens's focus)."""
+        for _ in range(1):  # a parallel loop of one: the march's `break` may not sit in the outermost scope
+            ray = self._camera_ray(u, v, width, height, origin, forward, right, up, half_height)
             hit = self.geometry.intersect(ray, INF)
             ints[0] = hit.hit
             if hit.hit == 1:
@@ -191,3 +183,4 @@ class RenderProgram:
                     floats[1 + k] = s.p[k]
                     floats[4 + k] = s.n_shading[k]
                 floats[7], floats[8] = s.uv[0], s.uv[1]
+                floats[9] = hit.t * ray.d.dot(forward)

@@ -118,14 +118,16 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
 @dataclass(frozen=True)
 class SurfaceHit:
     """The first surface along a camera ray (Renderer.pick): distance along the unit ray, the point,
-    its shading normal and texture coordinates, its material row (a place in the scene's material
-    list, then model files' materials), the primitive (a global id on meshes, a node of the SDF
-    tree), the mesh instance (-1: none) and whether the ray met the front face."""
+    its shading normal and texture coordinates, the distance along the view direction (depth: what
+    the lens focuses on), its material row (a place in the scene's material list, then model
+    files' materials), the primitive (a global id on meshes, a node of the SDF tree), the mesh
+    instance (-1: none) and whether the ray met the front face."""
 
     distance: float
     point: tuple
     normal: tuple
     uv: tuple
+    depth: float
     material: int
     primitive: int
     instance: int
@@ -181,8 +183,7 @@ class Renderer:
         self.pixels_active = width * height  # pixels adaptive sampling has not stopped
         self.work = pixel_vector(3, ti.f32, allocated)
         self.bands = BandTable(allocated[1])
-        self._probe_out = ti.field(ti.f32, shape=())
-        self._pick_out = None  # pick()'s output fields, made on first use
+        self._pick_out = (ti.field(ti.f32, shape=10), ti.field(ti.i32, shape=5))  # pick()'s (floats, ints)
         self._programs: dict[tuple, RenderProgram] = {}  # by _program_key
         # Per-integrator knobs that are data, not compile-time (e.g. "sppm": SppmOptions), and
         # device state that integrators with their own programs share between them (shared()).
@@ -482,28 +483,22 @@ class Renderer:
 
     def focus_distance_at(self, camera: CameraFrame, u: float, v: float, integrator: str | None = None) -> float | None:
         """Distance along the view direction to the surface under (u, v) in [0,1]^2 (y up)."""
-        program = self.program(integrator or self.scene.render.integrator, self.features(camera))
-        args = camera.kernel_args()
-        window = self.film_window()  # (u, v) of the film, probed where it lies on the camera's image
-        u, v = window.image_uv(u, v, self.film.width, self.film.height)
-        program.probe(u, v, window.full_width, window.full_height, *args[:5], self._probe_out)
-        distance = float(self._probe_out[None])
-        return distance if distance > 0 else None
+        hit = self.pick(camera, u, v, integrator)
+        return hit.depth if hit is not None and hit.depth > 0 else None
 
     def pick(self, camera: CameraFrame, u: float, v: float, integrator: str | None = None) -> SurfaceHit | None:
         """What the camera ray through (u, v) in [0,1]^2 of the film (y up) meets first, or None."""
         program = self.program(integrator or self.scene.render.integrator, self.features(camera))
-        window = self.film_window()
+        window = self.film_window()  # (u, v) of the film, cast where it lies on the camera's image
         u, v = window.image_uv(u, v, self.film.width, self.film.height)
-        if self._pick_out is None:
-            self._pick_out = (ti.field(ti.f32, shape=9), ti.field(ti.i32, shape=5))
         floats, ints = self._pick_out
         program.pick(u, v, window.full_width, window.full_height, *camera.kernel_args()[:5], floats, ints)
         i, f = ints.to_numpy(), floats.to_numpy().astype(float)
         if i[0] != 1:
             return None
         return SurfaceHit(distance=float(f[0]), point=tuple(f[1:4]), normal=tuple(f[4:7]), uv=tuple(f[7:9]),
-                          material=int(i[1]), primitive=int(i[2]), instance=int(i[3]), front_face=bool(i[4]))
+                          depth=float(f[9]), material=int(i[1]), primitive=int(i[2]), instance=int(i[3]),
+                          front_face=bool(i[4]))
 
     def object_ids(self, camera: CameraFrame, integrator: str | None = None) -> np.ndarray:
         """The scene object each film pixel's centre shows (int32 (width, height), y up; -1: none)."""

@@ -10,7 +10,7 @@ from renderer.renderer import SurfaceHit
 from renderer.scene.description import MaterialSpec
 from viewer.material_panel import draw_material_panel, panel_fields
 
-HIT = SurfaceHit(distance=4.0, point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0), uv=(0.0, 0.0), material=0,
+HIT = SurfaceHit(distance=4.0, point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0), uv=(0.0, 0.0), depth=4.0, material=0,
                  primitive=0, instance=-1, front_face=True)
 
 
