@@ -6,6 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Optional
 
+import numpy as np
+
 from renderer.camera import CameraFrame
 from renderer.renderer import Renderer, SurfaceHit
 
@@ -42,7 +44,7 @@ def pick(renderer: Renderer, camera: CameraFrame, u: float, v: float,
     if hit is None:
         return None
     scene = renderer.scene
-    index = renderer.geometry.object_of(hit.primitive)
+    index = int(renderer.geometry.objects_of(np.array([hit.primitive]))[0])
     objects = scene.mesh_objects if scene.geometry == "mesh" else scene.sdf_objects
     label = f"objects[{index}] ({_object_kind(objects[index])})" if 0 <= index < len(objects) else "an object"
     if 0 <= hit.material < len(scene.materials):

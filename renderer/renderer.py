@@ -290,27 +290,20 @@ class Renderer:
             mesh = replace(self._mesh, rows=rows, materials=materials)
             features = mesh.features(scene)
         else:
-            rows, mesh = MaterialRows(scene.medium_names()), None
-            for spec in scene.materials:
-                rows.add_spec(spec)
+            rows, mesh = MaterialRows.of_specs(scene.materials, scene.medium_names()), None
             features = scene_features(scene)
+        arrays, before = rows.arrays(), self.materials.arrays
         fits = getattr(self.geometry, "fits_materials", None)  # mesh traversal compiles material flags in
-        if scene.medium_names() != old.medium_names() or (fits is not None and not fits(rows.arrays())):
+        if scene.medium_names() != old.medium_names() or (fits is not None and not fits(arrays)):
             return False
-        if not self.materials.update(rows):
+        if not self.materials.update(rows, arrays):
             return False
-        before = self.materials.previous_arrays
-        emission_changed = any(not np.array_equal(before[k], self.materials.arrays[k])
-                               for k in ("emission", "two_sided_emission"))
-        self.scene, self._mesh = scene, mesh
-        self._features = replace(features, depth_of_field=self._features.depth_of_field,
-                                 orthographic=self._features.orthographic)
+        self.scene, self._mesh, self._features = scene, mesh, features
         if self.aovs is not None:
-            self.scene_feature_boost = scene_feature_boost(self._features)
+            self.scene_feature_boost = scene_feature_boost(features)
             self.feature_boost = self.scene_feature_boost
-        if emission_changed and self._lights is not None:
-            self._lights = None
-            self._programs.clear()  # they hold the lights; rebuilt (from the kernel cache) on use
+        if any(not np.array_equal(before[k], arrays[k]) for k in ("emission", "two_sided_emission")):
+            self._drop_lights()
         self.reset()
         return True
 
@@ -325,12 +318,18 @@ class Renderer:
         from renderer.lights.lights import environment_emits
 
         self.environment.set_spec(spec)
-        if environment_emits(spec) != environment_emits(old) and self._lights is not None:
-            self._lights = None
-            self._programs.clear()
+        if environment_emits(spec) != environment_emits(old):
+            self._drop_lights()
         self.scene = replace(self.scene, environment=spec)
         self.reset()
         return True
+
+    def _drop_lights(self) -> None:
+        """The light structures weigh emitters by their power: an edit that changes it rebuilds
+        them on next use, and the programs that hold them (compiled again, from Taichi's cache)."""
+        if self._lights is not None:
+            self._lights = None
+            self._programs.clear()
 
     # --- rendering -----------------------------------------------------------------------------
     def reset(self, width: int | None = None, height: int | None = None) -> None:

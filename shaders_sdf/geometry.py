@@ -47,11 +47,8 @@ class SdfGeometry:
         self.march_i = ti.field(ti.i32, shape=2)  # max_steps, adaptive (1) or fixed (0) relaxation
         self.set_march(scene.render.march)
 
-    def object_of(self, prim: int) -> int:
-        """The top-level object (Scene.sdf_objects index) whose tree holds node `prim`; -1 unknown."""
-        return int(self.objects_of(np.array([prim]))[0])
-
     def objects_of(self, prims: np.ndarray) -> np.ndarray:
+        """The top-level object (Scene.sdf_objects index) whose tree holds each node; -1 unknown."""
         return owners_of(prims, self._node_objects)
 
     def set_march(self, march):

@@ -17,7 +17,7 @@ A geometry object provides these Taichi funcs:
   emitter_pdf(prim, ref, p, n) -> f32   the solid-angle density sample_emitter gives point p
 Integrators, materials, lights, camera and film never know which kind they run on.
 On the host, both kinds say which object of the scene file a primitive belongs to (picking):
-  object_of(prim) -> int, objects_of(prims) -> array    -1 for a miss (prim -1)
+  objects_of(prims) -> array            the scene object of each primitive id, -1 for a miss (-1)
 
 Rays carry a cone (width at the origin, spread per metre) so that the SDF marcher can grow its
 hit threshold with the pixel footprint; mesh geometry ignores it.

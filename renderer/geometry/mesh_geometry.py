@@ -622,11 +622,8 @@ class MeshGeometry:
         """Whether edited material rows need nothing traversal was built without (or with)."""
         return self.materials is not None and self._material_flags(arrays) == (self.has_alpha, self.has_uv_partials)
 
-    def object_of(self, prim: int) -> int:
-        """The scene object (Scene.mesh_objects index) primitive `prim` came from; -1 unknown."""
-        return int(self.objects_of(np.array([prim]))[0])
-
     def objects_of(self, prims: np.ndarray) -> np.ndarray:
+        """The scene object (Scene.mesh_objects index) each primitive came from; -1 unknown."""
         return owners_of(prims, self.data.prim_object)
 
     def emitter_info(self) -> dict:

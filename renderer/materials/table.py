@@ -81,6 +81,14 @@ class MaterialRows:
         # material by its place in the scene's list, which must be its row (_place_mix_parts).
         self._mix_parts: list[tuple] = []  # (mix row, parts, their texture slots by role)
 
+    @classmethod
+    def of_specs(cls, specs, medium_names: tuple[str, ...] = ()) -> "MaterialRows":
+        """The rows of scene materials without textures (an SDF scene's)."""
+        rows = cls(medium_names)
+        for spec in specs:
+            rows.add_spec(spec)
+        return rows
+
     def add_spec(self, spec, texture_slots: dict | None = None) -> int:
         """A scene file's material; texture_slots: the texture-table index of each of its textures
         by role (MaterialSpec.textures)."""
@@ -229,7 +237,6 @@ class MaterialTable:
         # table numbers them after the scene's own.
         self.volume_media = tuple(volume_media)
         self.arrays = arrays  # kept: direct lighting reads emission per material
-        self.previous_arrays = arrays  # the rows before the last update()
         self.count = len(arrays["kind"])
         self.table = MaterialRecord.field(shape=max(1, self.count))
         if self.count:
@@ -246,11 +253,9 @@ class MaterialTable:
         self._dielectric_albedo = None
         self._sheen_albedo = None
 
-    def update(self, rows: MaterialRows) -> bool:
-        """Upload edited rows in place: True where they fit the table as built (as many rows and
-        rough-plastic tables); False, changing nothing, where they do not. previous_arrays keeps
-        the rows replaced."""
-        arrays = rows.arrays()
+    def update(self, rows: MaterialRows, arrays: dict) -> bool:
+        """Upload edited rows (`arrays`: rows.arrays()) in place: True where they fit the table as
+        built (as many rows and rough-plastic tables); False, changing nothing, where they do not."""
         if len(arrays["kind"]) != self.count or len(rows.plastic_tables) != (
                 0 if self.plastic_transmittance is None else self.plastic_transmittance.shape[0]):
             return False
@@ -258,7 +263,7 @@ class MaterialTable:
             upload_fields([(self.table, arrays)])
         if rows.plastic_tables:
             self.plastic_transmittance.from_numpy(np.stack(rows.plastic_tables).astype(np.float32))
-        self.previous_arrays, self.arrays = self.arrays, arrays
+        self.arrays = arrays
         return True
 
     @property
@@ -292,7 +297,4 @@ class MaterialTable:
 
     @classmethod
     def from_specs(cls, specs, medium_names: tuple[str, ...] = ()):
-        rows = MaterialRows(medium_names)
-        for spec in specs:
-            rows.add_spec(spec)
-        return cls(rows)
+        return cls(MaterialRows.of_specs(specs, medium_names))

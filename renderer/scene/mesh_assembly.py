@@ -129,8 +129,8 @@ class _Assembler:
         # (scene material index, texture role) -> the image that texture reads
         self.spec_images: dict[tuple[int, str], int] = {}
         self.attribute_colors = AttributeColoring(scene.model_files.ledger)
-        # the scene object of each primitive added, by where it went (world and object-space
-        # triangles, spheres, quads, discs, Bezier objects)
+        # the scene object of the primitives added, by where they went (world and object-space
+        # triangles, spheres, quads, discs, Bezier objects): (object index, how many) runs
         self.owners: dict[str, list] = {key: [] for key in self._tallies()}
         for index, material in enumerate(scene.materials):
             for role, texture in material.textures.items():
@@ -146,16 +146,18 @@ class _Assembler:
         before = self._tallies()
         self.add_object(obj, index)
         for key, count in self._tallies().items():
-            self.owners[key] += [index] * (count - before[key])
+            self.owners[key].append((index, count - before[key]))
 
     def prim_objects(self, data: MeshData) -> np.ndarray:
         """The owner of each primitive in global id order (MeshData.prim_object)."""
-        o = self.owners
-        bezier = np.asarray(o["beziers"], np.int32)
+        def owners(key: str) -> np.ndarray:
+            runs = np.array(self.owners[key], np.int64).reshape(-1, 2)
+            return np.repeat(runs[:, 0], runs[:, 1]).astype(np.int32)
+
+        bezier = owners("beziers")
         patches = (bezier[data.bezier_curve_object[data.bezier_patch_curve]] if len(data.bezier_patches)
                    else np.zeros(0, np.int32))
-        return np.concatenate([np.asarray(o[k], np.int32) for k in ("world", "object", "spheres", "quads", "discs")]
-                              + [patches]).astype(np.int32)
+        return np.concatenate([owners(k) for k in ("world", "object", "spheres", "quads", "discs")] + [patches])
 
     def material(self, name, where):
         if name not in self.material_ids:
