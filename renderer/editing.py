@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields, replace
-from typing import Optional
 
 from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene
 from renderer.scene.schema import ENVIRONMENT as ENVIRONMENT_SECTION, MATERIAL
@@ -15,31 +14,20 @@ ENVIRONMENT = "environment"  # the history's name for the environment's edits
 
 
 @dataclass(frozen=True)
-class MaterialEdit:
-    """One material of a scene, before and after an edit."""
+class Edit:
+    """One material of a scene, or its environment, before and after an edit."""
 
-    before: MaterialSpec
-    after: MaterialSpec
+    before: object  # MaterialSpec or EnvironmentSpec
+    after: object
 
     @property
     def name(self) -> str:
-        return self.after.name
+        """The material's name, or ENVIRONMENT."""
+        return ENVIRONMENT if isinstance(self.after, EnvironmentSpec) else self.after.name
 
     def fields_changed(self) -> frozenset:
         return frozenset(f.name for f in fields(type(self.before))
                          if getattr(self.before, f.name) != getattr(self.after, f.name))
-
-
-@dataclass(frozen=True)
-class EnvironmentEdit(MaterialEdit):
-    """The scene's environment, before and after an edit (in the same history as materials')."""
-
-    before: EnvironmentSpec
-    after: EnvironmentSpec
-
-    @property
-    def name(self) -> str:
-        return ENVIRONMENT
 
 
 def with_material(scene: Scene, spec: MaterialSpec) -> Scene:
@@ -51,10 +39,7 @@ def with_material(scene: Scene, spec: MaterialSpec) -> Scene:
 
 
 def material_named(scene: Scene, name: str) -> MaterialSpec:
-    for spec in scene.materials:
-        if spec.name == name:
-            return spec
-    raise KeyError(f"the scene has no material '{name}'")
+    return scene.materials[scene.material_index(name)]
 
 
 def canonical(spec: MaterialSpec) -> MaterialSpec:
@@ -127,19 +112,19 @@ class EditHistory:
     """Edits in the order made; undo walks back, redo forward again, a new edit drops what was
     undone. `original` keeps each material as the scene file had it (reset)."""
 
-    done: list[MaterialEdit] = field(default_factory=list)
-    undone: list[MaterialEdit] = field(default_factory=list)
+    done: list[Edit] = field(default_factory=list)
+    undone: list[Edit] = field(default_factory=list)
     original: dict = field(default_factory=dict)
 
-    def record(self, edit: MaterialEdit, merge: bool = False) -> None:
+    def record(self, edit: Edit, merge: bool = False) -> None:
         """Add an edit; with `merge`, one that goes on changing the same fields of the material
         the last edit changed (a slider being dragged) extends that edit instead, so one undo
         takes back the whole gesture."""
         self.original.setdefault(edit.name, edit.before)
         last = self.done[-1] if self.done else None
-        if (merge and last is not None and last.after == edit.before
+        if (merge and last is not None and last.name == edit.name and last.after == edit.before
                 and last.fields_changed() == edit.fields_changed()):
-            self.done[-1] = MaterialEdit(last.before, edit.after)
+            self.done[-1] = Edit(last.before, edit.after)
         else:
             self.done.append(edit)
         self.undone.clear()

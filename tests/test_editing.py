@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from renderer.editing import (EditHistory, MaterialEdit, allowed_range, canonical, clamped, material_named,
+from renderer.editing import (Edit, EditHistory, allowed_range, canonical, clamped, material_named,
                               with_material)
 from renderer.scene.description import CameraSpec, EnvironmentSpec, MaterialSpec, RenderSettings, Scene
 
@@ -35,11 +35,11 @@ def test_undo_redo_and_the_material_as_loaded():
     a0, a1, a2 = (MaterialSpec("a", roughness=r) for r in (0.1, 0.2, 0.3))
     history = EditHistory()
     assert history.undo() is None and history.redo() is None
-    history.record(MaterialEdit(a0, a1))
-    history.record(MaterialEdit(a1, a2))
+    history.record(Edit(a0, a1))
+    history.record(Edit(a1, a2))
     assert history.undo() == a1 and history.undo() == a0 and history.undo() is None
     assert history.redo() == a1
-    history.record(MaterialEdit(a1, MaterialSpec("a", roughness=0.9)))  # a new edit drops the redo
+    history.record(Edit(a1, MaterialSpec("a", roughness=0.9)))  # a new edit drops the redo
     assert history.redo() is None and history.as_loaded("a") == a0 and history.as_loaded("b") is None
 
 
@@ -51,3 +51,14 @@ def test_a_conductor_keeps_one_fresnel_description():
     assert indexed.eta == (1, 1, 1) and indexed.edge_tint == (1.0, 1.0, 1.0)
     tinted = MaterialSpec("m", kind="conductor", base_color=(0.1, 0.2, 0.3))
     assert canonical(tinted) is tinted
+
+
+def test_a_dragged_slider_is_one_edit_for_a_material_and_for_the_environment():
+    history = EditHistory()
+    a = [MaterialSpec("a", roughness=r) for r in (0.1, 0.2, 0.3)]
+    sky = [EnvironmentSpec(kind="sky", intensity=i) for i in (1.0, 1.5, 2.0)]
+    for edits in (a, sky):
+        history.record(Edit(edits[0], edits[1]), merge=True)
+        history.record(Edit(edits[1], edits[2]), merge=True)
+    assert len(history.done) == 2 and history.done[1].name == "environment"
+    assert history.undo() == sky[0] and history.undo() == a[0]

@@ -12,8 +12,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from renderer.camera import CameraFrame
-from renderer.editing import (EditHistory, EnvironmentEdit, MaterialEdit, canonical, clamped, material_named,
-                              with_material)
+from renderer.editing import Edit, EditHistory, canonical, clamped, material_named, with_material
 from renderer.picking import Pick, pick
 from renderer.renderer import Renderer
 from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene
@@ -55,14 +54,14 @@ class SceneEditor:
         spec, self.notes = clamped(spec)
         self.recompiled = False
         if isinstance(spec, EnvironmentSpec):
-            before, edit = renderer.scene.environment, EnvironmentEdit
+            before = renderer.scene.environment
             if spec == before:
                 return renderer
             in_place = renderer.edit_environment(spec)
             scene = replace(renderer.scene, environment=spec)
         else:
             spec = canonical(spec)
-            before, edit = material_named(renderer.scene, spec.name), MaterialEdit
+            before = material_named(renderer.scene, spec.name)
             if spec == before:
                 return renderer
             scene = with_material(renderer.scene, spec)
@@ -71,7 +70,7 @@ class SceneEditor:
             renderer = self.rebuild(scene)
             self.recompiled = True
         if record:
-            self.history.record(edit(before, spec), merge)
+            self.history.record(Edit(before, spec), merge)
         return renderer
 
     def undo(self, renderer: Renderer) -> Renderer:

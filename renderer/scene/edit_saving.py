@@ -17,6 +17,7 @@ from typing import Optional
 
 import tomlkit
 
+from renderer.editing import canonical
 from renderer.scene.description import MaterialSpec, Scene
 from renderer.scene.errors import SceneError
 from renderer.scene.schema import ENVIRONMENT, MATERIAL
@@ -32,6 +33,7 @@ def edited_path(original: Path) -> Path:
 
 def material_table(spec: MaterialSpec, directory: Path) -> dict:
     """The [materials.<name>] table of `spec`, its file paths relative to `directory`."""
+    spec = canonical(spec)  # the format's one Fresnel description of a conductor
     table: dict = {}
     covered = {"name"}
     for f in MATERIAL.fields:
@@ -46,9 +48,6 @@ def material_table(spec: MaterialSpec, directory: Path) -> dict:
         if value is None or (f.name not in ("type", "roughness") and value == f.default_for(spec.kind)):
             continue
         table[f.name] = list(value) if isinstance(value, tuple) else value
-    if spec.kind == "conductor" and (spec.metal or spec.eta is not None):  # one Fresnel description
-        for name in ("base_color", "edge_tint") + (("eta", "k") if spec.metal else ()):
-            table.pop(name, None)
     default = MaterialSpec(spec.name, spec.kind)
     for f in fields(MaterialSpec):
         if f.name not in covered and getattr(spec, f.name) != getattr(default, f.name):
@@ -81,7 +80,7 @@ def save_edits(scene: Scene, loaded: Scene, path: Optional[Path] = None, overwri
             table.add(key, value)
         document["materials"][spec.name] = table
     if scene.environment != loaded.environment:
-        _environment_into(document, scene.environment, loaded.environment)
+        _environment_into(document, scene.environment, loaded.environment, original)
     try:
         target.write_text(tomlkit.dumps(document), encoding="utf-8")
     except OSError as error:
@@ -89,10 +88,10 @@ def save_edits(scene: Scene, loaded: Scene, path: Optional[Path] = None, overwri
     return target
 
 
-def _environment_into(document, spec, was) -> None:
+def _environment_into(document, spec, was, original: Path) -> None:
     """The environment's values that changed (its kind and image stay: edits keep them)."""
     if (spec.kind, spec.file) != (was.kind, was.file):
-        raise SceneError(Path(was.file or "."), "an edit of the environment keeps its kind and image")
+        raise SceneError(original, "an edit of the environment keeps its kind and image")
     if "environment" not in document:
         document["environment"] = tomlkit.table()
         document["environment"]["type"] = spec.kind
