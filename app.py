@@ -36,7 +36,9 @@ def _size(text: str) -> tuple[int, int]:
 # What the kernels take: sample indices and depths are i32 arguments, seeds u32.
 I32_MAX = 2**31 - 1
 U32_MAX = 2**32 - 1
-# --exposure scales by 2^EV in float32: beyond this range the scale is 0 or infinite.
+# --exposure scales by 2^EV in float32: beyond this range the scale is 0 or infinite (a scene's
+# render.exposure has the same bounds, renderer/scene/schema_types.py EXPOSURE_EV; not imported
+# here, where the options are checked before anything of the renderer loads).
 EXPOSURE_EV_RANGE = (-126.0, 127.0)
 
 

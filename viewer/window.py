@@ -281,13 +281,16 @@ class ViewerApp:
         return picked
 
     def edit(self, change: Callable[[Renderer], Renderer], now: float) -> None:
-        """Run an edit (a SceneEditor call taking and returning the renderer) and restart the image."""
+        """Run an edit (a SceneEditor call taking and returning the renderer) and restart the image
+        where it changed the scene (an undo with nothing to undo does not)."""
+        before = self.renderer.scene
         try:
             change(self.renderer)
         except Exception as error:  # a bad edit must not end the session
             self.session.error = f"edit failed: {_one_line(error)}"
             return
-        self.session.request_reset()
+        if self.renderer.scene is not before:
+            self.session.request_reset()
         if self.editor.notes:
             self.session.notify("; ".join(self.editor.notes), now)
 

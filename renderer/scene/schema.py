@@ -45,6 +45,7 @@ from .schema_checks import (
 )
 from .schema_types import (
     AT_LEAST_ONE,
+    EXPOSURE_EV,
     NON_NEGATIVE,
     POSITIVE,
     REQUIRED,
@@ -165,7 +166,7 @@ RENDER = Section(
               "viewer scale radiance by 2^exposure before tone mapping; EXR output keeps radiance. `render "
               "--exposure` and the viewer's slider override it. A pbrt-v4 film's `iso` and the camera's "
               "shutter time set it (log2 of shutter time x iso / 100, pbrt-v4's imaging ratio).",
-              Range(-126.0, 127.0)),
+              EXPOSURE_EV),
         Field("energy_compensation", "bool", True, "Give rough metals and rough glass back the light "
               "that single-scattering microfacet models lose between microfacets (Kulla and Conty 2017): "
               "without it a white metal of roughness 1 reflects 31% head-on, and a white glass ball of "

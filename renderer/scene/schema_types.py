@@ -86,6 +86,9 @@ POSITIVE = Range(0.0, lo_open=True)
 NON_NEGATIVE = Range(0.0)
 UNIT = Range(0.0, 1.0)
 AT_LEAST_ONE = Range(1)
+# An exposure in EV scales by 2^EV in float32: beyond this the scale is 0 or infinite (app.py's
+# --exposure checks the same bounds before it imports anything of the renderer).
+EXPOSURE_EV = Range(-126.0, 127.0)
 
 
 @dataclass(frozen=True)

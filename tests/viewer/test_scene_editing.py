@@ -87,6 +87,9 @@ def test_click_edit_undo_and_save_in_the_window(cornell):
     app.step(FrameInput(pressed=("ctrl+z",)))
     assert material_named(app.renderer.scene, "tall_box") == box
     app.step(FrameInput(pressed=("ctrl+y",)))
+    resets = app.session.resets
+    app.step(FrameInput(pressed=("ctrl+y",)))  # nothing left to redo: the image goes on converging
+    assert app.session.resets == resets
     app.step(FrameInput(pressed=("ctrl+s",)))
     saved = cornell.with_name("cornell_box_edited.toml")
     assert app.last_saved == saved and load_scene(saved).materials == app.renderer.scene.materials

@@ -18,6 +18,7 @@ import numpy as np
 
 from renderer.scene.description import CameraSpec, FogSpec, RenderSettings, Scene
 from renderer.scene.errors import SceneError
+from renderer.scene.schema_types import EXPOSURE_EV
 from renderer.scene.pbrt.directives import Directive, ParsedScene
 from renderer.scene.pbrt.lights import area_emission, image_environment, read_lights
 from renderer.scene.pbrt.materials import MaterialReader
@@ -224,7 +225,7 @@ class _Builder:
         if not ratio > 0.0:
             raise (film or cam).error(f"shutter time x iso / 100 is {ratio:g}: the film records no light")
         exposure = math.log2(ratio)
-        if not -126.0 <= exposure <= 127.0:
+        if exposure not in EXPOSURE_EV:
             raise (film or cam).error(f"shutter time x iso / 100 = {ratio:g} is beyond 2^-126 .. 2^127")
         if film is None:
             return exposure
