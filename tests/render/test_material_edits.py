@@ -16,6 +16,7 @@ from renderer.program import RenderProgram
 from renderer.renderer import Renderer
 from renderer.scene import load_scene
 from renderer.scene.description import TextureSpec
+from tests.render.test_picking import BALL, sdf_scene
 
 REPO = Path(__file__).resolve().parents[2]
 SIZE = (16, 16)
@@ -112,28 +113,7 @@ def test_the_albedo_view_shows_a_named_metal_by_its_head_on_reflectance(cornell)
     assert pixel[0] > pixel[1] > pixel[2]  # gold
 
 
-SKY_SCENE = """[scene]
-geometry = "sdf"
-
-[camera]
-position = [0, 0, 5]
-look_at = [0, 0, 0]
-fov = 40
-
-[render]
-width = 16
-height = 16
-
-[environment]
-type = "sky"
-
-[materials.ball]
-
-[[objects]]
-type = "sphere"
-material = "ball"
-radius = 0.5
-"""
+SKY_SCENE = sdf_scene(16, 'type = "sky"', BALL)
 
 
 def test_an_environment_edit_is_the_edited_scenes_image_and_compiles_nothing(tmp_path):

@@ -14,30 +14,17 @@ from renderer.scene import load_scene
 
 REPO = Path(__file__).resolve().parents[2]
 
-SDF_SCENE = """[scene]
-geometry = "sdf"
 
-[camera]
-position = [0, 0, 5]
-look_at = [0, 0, 0]
-fov = 40
+def sdf_scene(size: int, environment: str, objects: str) -> str:
+    """A small SDF scene's TOML, its camera 5 m out on +z looking at the origin."""
+    return (f'[scene]\ngeometry = "sdf"\n\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\n\n'
+            f"[render]\nwidth = {size}\nheight = {size}\n\n[environment]\n{environment}\n\n{objects}")
 
-[render]
-width = 32
-height = 32
 
-[environment]
-type = "constant"
-color = [0, 0, 0]
-
-[materials.ball]
+BALL = '[materials.ball]\n\n[[objects]]\ntype = "sphere"\nmaterial = "ball"\nradius = 0.5\n'
+SDF_SCENE = sdf_scene(32, 'type = "constant"\ncolor = [0, 0, 0]', BALL + """
 [materials.block]
 type = "conductor"
-
-[[objects]]
-type = "sphere"
-material = "ball"
-radius = 0.5
 
 [[objects]]
 type = "union"
@@ -50,7 +37,7 @@ size = [0.3, 0.3, 0.3]
 type = "sphere"
 radius = 0.2
 translate = [0, 0.4, 0]
-"""
+""")
 
 
 def screen_uv(scene, point):
