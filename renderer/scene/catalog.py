@@ -24,26 +24,14 @@ def scene_names() -> list[str]:
 
 
 def load_any(path, options: LoadOptions | None = None):
-    """A scene file (Lantern's .toml, Mitsuba 3's .xml, pbrt-v4's .pbrt) or a model file (glTF/GLB, OBJ, PLY, STL) as a
+    """A scene file (Lantern's .toml, a TOML scene of edits of another file, Mitsuba 3's .xml, pbrt-v4's .pbrt) or a model file (glTF/GLB, OBJ, PLY, STL) as a
     Scene, read under `options` (memory budget, files outside a model's folder, -D parameters;
     default LoadOptions())."""
-    from renderer.scene.model_formats import MESH_EXTENSIONS
+    from renderer.scene.edits_file import load_toml_scene
+    from renderer.scene.foreign_formats import is_foreign, load_foreign
 
-    if Path(path).suffix.lower() == ".xml":
-        from renderer.scene.mitsuba import load_mitsuba_scene
-
-        return load_mitsuba_scene(path, options)
-    if Path(path).name.lower().endswith((".pbrt", ".pbrt.gz")):
-        from renderer.scene.pbrt import load_pbrt_scene
-
-        return load_pbrt_scene(path, options)
-    if Path(path).suffix.lower() in MESH_EXTENSIONS:
-        from renderer.scene.model_scene import scene_for_model
-
-        return scene_for_model(path, options)
-    from renderer.scene.toml_loader import load_scene
-
-    return load_scene(path, options)
+    options = options or LoadOptions()
+    return load_foreign(path, options) if is_foreign(path) else load_toml_scene(path, options)
 
 
 def resolve_scene(argument: str) -> Path:

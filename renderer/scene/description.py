@@ -523,6 +523,9 @@ class Scene:
     # The parameters a reader substituted from the command line (a Mitsuba scene's -D NAME=VALUE): the
     # same files with other parameters are another scene, to a checkpoint's fingerprint too.
     parameters: tuple[tuple[str, str], ...] = ()
+    # A scene read from a TOML scene of edits (renderer/scene/edits_file.py): the scene of the file
+    # it edits, as that file gives it; saving edits again writes what differs from it.
+    edited_from: Optional["Scene"] = field(default=None, compare=False, repr=False)
 
     def medium_names(self) -> tuple[str, ...]:
         return tuple(m.name for m in self.media)

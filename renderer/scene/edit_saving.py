@@ -3,6 +3,11 @@
 put into the file the scene came from, whose other tables, comments and layout stay as they were.
 The result goes beside the original (`<name>_edited.toml`) unless the caller asks to write over it.
 
+A scene of another format (Mitsuba, pbrt, a model file) is saved as a TOML scene of edits
+(renderer/scene/edits_file.py): the file it came from, referenced, and the values that differ from
+it. Before a file is written, what it says is read back in memory and compared with the edited
+scene; a value the format cannot carry is an error, never a file that renders otherwise.
+
 A material table holds the fields of the scene format (renderer/scene/schema.py, MATERIAL) that
 apply to the material's kind and differ from their defaults; roughness is always written (its
 default depends on the kind). What the format cannot say (a texture on a colour, a mix) is one
@@ -10,7 +15,6 @@ SceneError naming the material and the field, never a file that renders otherwis
 """
 from __future__ import annotations
 
-import os
 from dataclasses import fields
 from pathlib import Path
 from typing import Optional
@@ -18,8 +22,10 @@ from typing import Optional
 import tomlkit
 
 from renderer.editing import canonical
-from renderer.scene.description import MaterialSpec, Scene
+from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene, TextureSpec
+from renderer.scene.edits_file import FRESNEL_DESCRIPTIONS, edited_environment, edited_material, relative_reference
 from renderer.scene.errors import SceneError
+from renderer.scene.foreign_formats import is_foreign
 from renderer.scene.schema import ENVIRONMENT, MATERIAL
 
 EDITED_SUFFIX = "_edited"
@@ -27,7 +33,10 @@ EDITED_SUFFIX = "_edited"
 
 def edited_path(original: Path) -> Path:
     """Where an edited scene is saved by default: beside the original, `<stem>_edited.toml`."""
-    stem = original.stem if not original.stem.endswith(EDITED_SUFFIX) else original.stem[: -len(EDITED_SUFFIX)]
+    stem = original.name
+    for suffix in (".gz", ".pbrt", original.suffix):
+        stem = stem[: -len(suffix)] if suffix and stem.lower().endswith(suffix) else stem
+    stem = stem[: -len(EDITED_SUFFIX)] if stem.endswith(EDITED_SUFFIX) else stem
     return original.with_name(f"{stem}{EDITED_SUFFIX}.toml")
 
 
@@ -61,11 +70,12 @@ def save_edits(scene: Scene, loaded: Scene, path: Optional[Path] = None, overwri
     table replaced and the environment's changed values set. Writing over the original needs
     `overwrite`. Returns the path written."""
     original = Path(loaded.path)
-    if original.suffix.lower() != ".toml":
-        raise SceneError(original, "only scenes read from TOML files are saved with their edits so far")
     target = Path(path) if path is not None else edited_path(original)
     if target.resolve() == original.resolve() and not overwrite:
         raise SceneError(target, "is the scene's own file: saving over it must be asked for")
+    base = loaded.edited_from or (loaded if is_foreign(original) else None)
+    if base is not None:
+        return _write(target, edits_document(scene, base, target))
     if target.parent.resolve() != original.parent.resolve():
         raise SceneError(target, "an edited scene is saved in its original's folder, where its files resolve")
     document = tomlkit.parse(original.read_text(encoding="utf-8"))
@@ -81,11 +91,97 @@ def save_edits(scene: Scene, loaded: Scene, path: Optional[Path] = None, overwri
         document["materials"][spec.name] = table
     if scene.environment != loaded.environment:
         _environment_into(document, scene.environment, loaded.environment, original)
+    return _write(target, tomlkit.dumps(document))
+
+
+def _write(target: Path, text: str) -> Path:
     try:
-        target.write_text(tomlkit.dumps(document), encoding="utf-8")
+        target.write_text(text, encoding="utf-8")
     except OSError as error:
         raise SceneError(target, f"cannot be written ({error.strerror or error})") from None
     return target
+
+
+def edits_document(scene: Scene, base: Scene, target: Path) -> str:
+    """The TOML scene of edits, saved as `target`, that turns `base` (a scene of another format, as
+    its file gives it) into `scene`."""
+    document = tomlkit.document()
+    document.add(tomlkit.comment(f"Edits of {Path(base.path).name}: the values below replace that file's; "
+                                 "everything else is read from it."))
+    header = tomlkit.table()
+    header.add("edits", relative_reference(Path(base.path), target.parent))
+    if scene.description != base.description:
+        header.add("description", scene.description)
+    document.add("scene", header)
+    materials = tomlkit.table(is_super_table=True)
+    for was, spec in zip(base.materials, scene.materials):
+        if was.name != spec.name:
+            raise SceneError(base.path, "the edited scene's materials are not the file's (a scene of edits keeps them)")
+        if was != spec:
+            materials.add(spec.name, _changes_table(spec, was, target, scene.geometry))
+    if len(materials):
+        document.add("materials", materials)
+    if scene.environment != base.environment:
+        document.add("environment", _environment_changes(scene.environment, base.environment, target, scene.geometry))
+    if _other_changes(scene, base):
+        raise SceneError(base.path, f"a scene of edits holds materials and the environment; its {_other_changes(scene, base)} "
+                                    "changed too")
+    return tomlkit.dumps(document)
+
+
+def _other_changes(scene: Scene, base: Scene) -> str:
+    kept = {"path", "materials", "environment", "description", "source_files", "edited_from"}
+    return ", ".join(f.name for f in fields(Scene) if f.compare and f.name not in kept
+                     and getattr(scene, f.name) != getattr(base, f.name))
+
+
+def _changed_fields(spec, was, section, kind: str, directory: Path) -> dict:
+    """The section's fields whose values differ between `was` and `spec`, as TOML values."""
+    table = {}
+    for f in section.fields:
+        if not f.in_model or f.name == "type" or not f.applies_to(kind) or not hasattr(spec, f.model_attr):
+            continue
+        value = getattr(spec, f.model_attr)
+        if value == getattr(was, f.model_attr) or value is None:
+            continue  # None: dropped with another description written (edits_file.py)
+        if isinstance(value, TextureSpec):
+            if f.name not in ("normal_map", "bump_map"):
+                continue  # the read-back comparison names it
+            value = _relative(value.file, directory)
+        table[f.name] = list(value) if isinstance(value, tuple) else value
+    return table
+
+
+def _changes_table(spec: MaterialSpec, was: MaterialSpec, target: Path, geometry: str):
+    spec = canonical(spec)
+    values = ({"type": spec.kind} if spec.kind != was.kind else {}) | _changed_fields(spec, was, MATERIAL, spec.kind, target.parent)
+    if spec.kind == "conductor":  # the one Fresnel description written drops the file's others
+        used = "metal" if spec.metal else "eta" if spec.eta is not None else "base_color"
+        implied = [name for d in FRESNEL_DESCRIPTIONS if used not in d for name in d]
+        values = {key: value for key, value in values.items() if key not in implied}
+    _check_read_back(edited_material(was, values, target, geometry), spec, f"material '{spec.name}'", target)
+    return _toml_table(values)
+
+
+def _environment_changes(spec: EnvironmentSpec, was: EnvironmentSpec, target: Path, geometry: str):
+    if (spec.kind, spec.file) != (was.kind, was.file):
+        raise SceneError(target, "an edit of the environment keeps its kind and image")
+    values = _changed_fields(spec, was, ENVIRONMENT, spec.kind, target.parent)
+    _check_read_back(edited_environment(was, values, target, geometry), spec, "the environment", target)
+    return _toml_table(values)
+
+
+def _check_read_back(read, spec, what: str, target: Path) -> None:
+    differ = [f.name for f in fields(spec) if getattr(read, f.name) != getattr(spec, f.name)]
+    if differ:
+        raise SceneError(target, f"{what}: its {', '.join(differ)} cannot be written in a scene of edits")
+
+
+def _toml_table(values: dict):
+    table = tomlkit.table()
+    for key, value in values.items():
+        table.add(key, value)
+    return table
 
 
 def _environment_into(document, spec, was, original: Path) -> None:
@@ -105,4 +201,4 @@ def _environment_into(document, spec, was, original: Path) -> None:
 
 
 def _relative(file: Path, directory: Path) -> str:
-    return Path(os.path.relpath(file, directory)).as_posix()
+    return relative_reference(file, directory)

@@ -85,6 +85,12 @@ SCENE = Section(
               "fields in `[[objects]]`. `mesh`: triangle meshes (model files and generated meshes), "
               "analytic spheres, discs and quads, and Bezier surfaces of revolution in `[[objects]]`.",
               choices=GEOMETRY_KINDS),
+        Field("edits", "string", None, "Makes the file a scene of edits: a Mitsuba 3 (`.xml`), pbrt-v4 "
+              "(`.pbrt`) or model file, relative to this one, read as it is; the file then holds only "
+              "`[scene]` (`edits`, `description`), and `[materials.<name>]` and `[environment]` tables "
+              "with the values that change (a material by its name in that file; fields not written keep "
+              "the file's). The viewer saves its edits of such scenes this way.", in_model=False,
+              default_doc="none"),
     ),
 )
 

@@ -57,11 +57,44 @@ def load_scene(path: str | os.PathLike, options: Optional[LoadOptions] = None) -
     """Read and validate a scene file. Raises SceneError (one line) on any problem.
     `options`: the memory budget and rules its model files are read under (default LoadOptions())."""
     options = options or LoadOptions()
-    data = _read_toml(path, options)
+    return scene_from_toml(read_toml(path, options), path, options)
+
+
+def scene_from_toml(data: dict, path: str | os.PathLike, options: LoadOptions) -> Scene:
+    """The scene of a parsed TOML scene file (not a scene of edits: renderer/scene/edits_file.py)."""
     try:
+        if "edits" in data.get("scene", {}):
+            raise _Invalid("scene.edits", "a scene of edits is opened with renderer.scene.catalog.load_any")
         return _build_scene(data, Path(path), ModelFiles(options))
     except _Invalid as problem:
         raise SceneError(path, problem.text()) from None
+
+
+def is_scene_of_edits(data: dict) -> bool:
+    """Whether a parsed TOML scene file changes a scene of another format ([scene] edits = FILE)."""
+    return isinstance(data.get("scene"), dict) and "edits" in data["scene"]
+
+
+def read_changes(table: object, section: Section, where: str, kind: Optional[str], scene_path: Path,
+                 geometry: str, base: dict) -> dict:
+    """The fields a table of a scene of edits writes, converted and checked as in a full table, by
+    field name; `base`: the edited values by field name, which the section's rules see beneath the
+    written ones (a conductor's Fresnel is then still described once). Raises SceneError."""
+    try:
+        table = _table(table, where)
+        _check_keys(table, section.fields, where, kind)
+        _check_geometry(table, section, where, geometry)
+        by_name = {f.name: f for f in section.fields if f.applies_to(kind)}
+        changes = {}
+        for key, raw in table.items():
+            if key in ("normal_map", "bump_map"):
+                changes[key] = _map_image(_string(raw, f"{where}.{key}"), scene_path, f"{where}.{key}")
+            else:
+                changes[key] = _convert(by_name[key], raw, f"{where}.{key}")
+        _apply_rules(section.rules, {**base, **changes, "type": kind, WRITTEN: frozenset(table)}, where)
+        return changes
+    except _Invalid as problem:
+        raise SceneError(scene_path, problem.text()) from None
 
 
 # --- the file itself -------------------------------------------------------------------------
@@ -71,7 +104,8 @@ def _extension_text(suffix: str) -> str:
     return f"extension '{suffix}'" if suffix else "file without an extension"
 
 
-def _read_toml(path: str | os.PathLike, options: LoadOptions) -> dict:
+def read_toml(path: str | os.PathLike, options: LoadOptions) -> dict:
+    """The parsed TOML of a scene file, its size checked against the memory budget first."""
     file = Path(path)
     if not file.exists():
         raise SceneError(path, missing_file_problem(file))

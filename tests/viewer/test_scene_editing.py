@@ -132,3 +132,32 @@ def test_a_click_on_nothing_opens_the_environment_whose_edits_save(tmp_path):
     assert "# the end of the file, kept" in saved.read_text()
     editor.reset_material(renderer)  # the environment panel is open: back to the file's
     assert renderer.scene.environment == scene.environment
+
+
+def test_a_mitsuba_scenes_edits_save_as_a_scene_of_edits_that_renders_as_shown(tmp_path):
+    from renderer.scene.catalog import load_any
+
+    for file in (REPO / "tests" / "data" / "mitsuba").iterdir():
+        if file.is_file():
+            shutil.copy(file, tmp_path / file.name)
+    xml = tmp_path / "cornell_box.xml"
+    app = ViewerApp(xml, size=SIZE, show_window=False, scenes=[xml], settle_seconds=0.0, still_present_interval=0.0)
+    app.session.hud_visible = False
+    app.step()
+    app.step(FrameInput(cursor=tall_box_cursor(app.renderer.scene), pressed=("LMB",), released=("LMB",)))
+    assert app.editor.picked.material_name == "white"  # the Mitsuba file's boxes share the walls' BSDF
+    white = app.editor.picked_material(app.renderer.scene)
+    app.edit(lambda r: app.editor.apply(r, replace(white, base_color=(0.2, 0.3, 0.9))), 0.0)
+    app.step(FrameInput(pressed=("ctrl+s",)))
+    saved = tmp_path / "cornell_box_edited.toml"
+    assert app.last_saved == saved and app.session.error is None
+    again = load_any(saved)
+    assert again.materials == app.renderer.scene.materials and again.edited_from.path == xml
+
+    def image(renderer):
+        renderer.render(CameraFrame.from_spec(renderer.scene.camera), 2, "mis", seed=9)
+        return renderer.image()
+
+    shown = Renderer(load_any(xml), max_size=(16, 16))
+    assert shown.edit_materials(app.renderer.scene)
+    np.testing.assert_array_equal(image(shown), image(Renderer(again, max_size=(16, 16))))

@@ -1,0 +1,142 @@
+"""A scene of edits: a TOML file that names a scene of another format (Mitsuba 3, pbrt-v4, a model
+file) and changes some of its materials and its environment, the way a viewer's edits of that scene
+are kept (renderer/scene/edit_saving.py writes it):
+
+    [scene]
+    edits = "cornell-box.xml"        # relative to this file; read as it is, every time
+
+    [materials.tall_box]             # a material of the edited scene, by its name there
+    type = "conductor"               # only the fields written change; the rest stay the file's
+    metal = "Au"
+
+    [environment]
+    intensity = 2.0
+
+The edited file and its models are referenced, never copied, so the scene of edits renders what the
+edited file does with those values changed, bit for bit as the viewer showed it. A table's fields
+are those of the TOML format's [materials.<name>] and [environment] (renderer/scene/schema.py),
+checked the same way. A conductor's Fresnel written in the table replaces the file's own description
+of it (a `metal` drops the file's eta and k).
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import replace
+from pathlib import Path
+
+from renderer.scene import schema
+from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene
+from renderer.scene.errors import SceneError
+from renderer.scene.foreign_formats import is_foreign, load_foreign
+from renderer.scene.load_options import LoadOptions
+from renderer.scene.references import missing_file_problem
+from renderer.scene.toml_loader import is_scene_of_edits, read_changes, read_toml, scene_from_toml
+
+SECTIONS = ("scene", "materials", "environment")
+HEADER_FIELDS = ("edits", "description")
+# The fields that describe a conductor's Fresnel, each set replacing the others (schema rule).
+FRESNEL_DESCRIPTIONS = (("metal",), ("eta", "k"), ("base_color", "edge_tint"))
+
+
+def load_toml_scene(path, options: LoadOptions) -> Scene:
+    """A TOML scene file: Lantern's own scene, or a scene of edits of another file."""
+    data = read_toml(path, options)
+    if not is_scene_of_edits(data):
+        return scene_from_toml(data, path, options)
+    return _edited_scene(data, Path(path), options)
+
+
+def _edited_scene(data: dict, path: Path, options: LoadOptions) -> Scene:
+    for key in data:
+        if key not in SECTIONS:
+            raise SceneError(path, f"section '{key}' is not part of a scene of edits (allowed: {', '.join(SECTIONS)}); "
+                                   "the edited file gives the rest")
+    header = data["scene"]
+    for key in header:
+        if key not in HEADER_FIELDS:
+            raise SceneError(path, f"scene.{key}: not part of a scene of edits (allowed: {', '.join(HEADER_FIELDS)})")
+    base = load_foreign(_edited_file(header["edits"], path), options)
+    materials = data.get("materials", {})
+    if not isinstance(materials, dict):
+        raise SceneError(path, "materials: expected a table of materials by name")
+    known = {m.name for m in base.materials}
+    for name in materials:
+        if name not in known:
+            raise SceneError(path, f"materials.{name}: the edited scene has no material '{name}' "
+                                   f"(its materials: {', '.join(sorted(known)) or 'none'})")
+    edited = tuple(edited_material(m, materials[m.name], path, base.geometry) if m.name in materials else m
+                   for m in base.materials)
+    environment = base.environment
+    if "environment" in data:
+        environment = edited_environment(base.environment, data["environment"], path, base.geometry)
+    description = header.get("description", base.description)
+    if not isinstance(description, str):
+        raise SceneError(path, "scene.description: expected a string")
+    return replace(base, path=path, materials=edited, environment=environment, description=description,
+                   source_files=(*base.source_files, Path(base.path)), edited_from=base)
+
+
+def _edited_file(raw: object, path: Path) -> Path:
+    if not isinstance(raw, str) or not raw:
+        raise SceneError(path, "scene.edits: expected the edited scene's file name (a string)")
+    file = (path.parent / raw).resolve()
+    if not is_foreign(file):
+        raise SceneError(path, f"scene.edits: {raw} is not a Mitsuba (.xml), pbrt (.pbrt) or model file "
+                               "(a TOML scene's edits are saved in a copy of it)")
+    if not file.is_file():
+        raise SceneError(path, f"scene.edits: {raw}: {missing_file_problem(file)}")
+    return file
+
+
+def _values(spec, section: schema.Section) -> dict:
+    """A spec's values by the section's field names (what its rules read)."""
+    values = {f.name: getattr(spec, f.model_attr) for f in section.fields if f.in_model and hasattr(spec, f.model_attr)}
+    return {**{f.name: f.default for f in section.fields if f.name not in values}, **values}
+
+
+def edited_material(base: MaterialSpec, table: object, path: Path, geometry: str) -> MaterialSpec:
+    """`base` with the fields a scene of edits' [materials.<name>] table writes."""
+    where = f"materials.{base.name}"
+    kind, values = base.kind, _values(base, schema.MATERIAL)
+    if isinstance(table, dict) and "type" in table:  # the type decides which fields the table may hold
+        kind = read_changes({"type": table["type"]}, schema.MATERIAL, where, None, path, geometry, values)["type"]
+    changes = read_changes(table, schema.MATERIAL, where, kind, path, geometry, values)
+    strength = changes.pop("emission_strength", 1.0)
+    emission = tuple(c * strength for c in changes.get("emission", base.emission))
+    if not all(c <= schema.F32_MAX for c in emission):
+        raise SceneError(path, f"{where}: emission * emission_strength is beyond the 32-bit float range")
+    changes["emission"] = emission
+    attrs = {schema.MATERIAL.field(name).model_attr: value for name, value in changes.items()}
+    attrs["kind"] = kind
+    if kind == "conductor":
+        for description in FRESNEL_DESCRIPTIONS:
+            if any(name in changes for name in description):
+                _drop_other_descriptions(attrs, description)
+    return replace(base, **attrs)
+
+
+def _drop_other_descriptions(attrs: dict, kept: tuple) -> None:
+    plain = MaterialSpec("plain")
+    for description in FRESNEL_DESCRIPTIONS:
+        if description == kept:
+            continue
+        for name in description:
+            attrs.setdefault(name, getattr(plain, name))
+
+
+def edited_environment(base: EnvironmentSpec, table: object, path: Path, geometry: str) -> EnvironmentSpec:
+    """`base` with the values a scene of edits' [environment] table writes (its type and image
+    stay the edited file's)."""
+    if isinstance(table, dict):
+        for key in ("type", "file"):
+            if key in table:
+                raise SceneError(path, f"environment.{key}: a scene of edits keeps the environment's {key} "
+                                       "(edit the scene's own file to change it)")
+    changes = read_changes(table, schema.ENVIRONMENT, "environment", base.kind, path, geometry,
+                           _values(base, schema.ENVIRONMENT))
+    return replace(base, **{schema.ENVIRONMENT.field(name).model_attr: value for name, value in changes.items()})
+
+
+def relative_reference(file: Path, directory: Path) -> str:
+    """How a scene of edits in `directory` names `file`."""
+    return Path(os.path.relpath(file, directory)).as_posix()
