@@ -303,7 +303,7 @@ class Renderer:
             self.scene_feature_boost = scene_feature_boost(features)
             self.feature_boost = self.scene_feature_boost
         if any(not np.array_equal(before[k], arrays[k]) for k in ("emission", "two_sided_emission")):
-            self._drop_lights()
+            self._refit_lights()
         self.reset()
         return True
 
@@ -318,15 +318,36 @@ class Renderer:
         from renderer.lights.lights import environment_emits
 
         self.environment.set_spec(spec)
+        self.scene = replace(self.scene, environment=spec)
         if environment_emits(spec) != environment_emits(old):
             self._drop_lights()
-        self.scene = replace(self.scene, environment=spec)
+        else:
+            self._refit_photons()
         self.reset()
         return True
 
+    def _refit_lights(self) -> None:
+        """Emission edited: the light structures weigh emitters by their power. The same emitters
+        with other powers are taken in place (nothing compiles); where others emit now, the
+        structures are built again on next use."""
+        if self._lights is None:
+            return
+        from renderer.lights.lights import emitter_table
+
+        if self._lights.refit(emitter_table(self.geometry, self.materials.arrays)):
+            self._refit_photons()
+        else:
+            self._drop_lights()
+
+    def _refit_photons(self) -> None:
+        emission = self._shared.get("photon_emission")
+        if emission is not None and not emission.refit(self.scene.environment):
+            self._drop_lights()
+
     def _drop_lights(self) -> None:
-        """The light structures weigh emitters by their power: an edit that changes it rebuilds
-        them on next use, and the programs that hold them (compiled again, from Taichi's cache)."""
+        """Lights built again on next use, with the programs that hold them (compiled again, from
+        Taichi's cache) and the photon emission that weighs them."""
+        self._shared.pop("photon_emission", None)
         if self._lights is not None:
             self._lights = None
             self._programs.clear()

@@ -1,6 +1,6 @@
 """What a viewer edit costs, measured in one process: the Cornell box at 256x256 under `mis`, a
 colour edit (20 of them; median), a kind edit and the render that compiles its kernel, and an
-emission edit (the light structures and the programs that hold them rebuilt).
+emission edit (the light selection reweighed in place, nothing compiled).
 
     python scripts/edit_latency.py
 """
@@ -55,7 +55,7 @@ def main() -> int:
     print(f"colour edit: median {1000 * statistics.median(colour):.2f} ms over 20; the next 1 spp {1000 * after_colour:.0f} ms")
     print(f"kind edit (diffuse -> gold conductor): {1000 * kind:.1f} ms; the first 1 spp after it {first_gold:.2f} s "
           f"(compiles), the next {1000 * next_gold:.0f} ms")
-    print(f"emission edit and 1 spp (lights and programs rebuilt): {emission:.2f} s")
+    print(f"emission edit and 1 spp (lights reweighed in place): {emission * 1e3:.0f} ms")
     return 0
 
 

@@ -9,6 +9,10 @@ can take any of them:
 ``pmf(p, n, emitter) -> f32``
     that probability for a given emitter (for MIS, when a BSDF sample hits an emitter).
 
+and, on the host, ``refit(emitters) -> bool``: the same emitters with other powers (an emission
+edit) taken in place, into the same fields, so the kernels that hold the selector need no compile;
+False where the selector's sizes would change (a light tree of another shape): build it anew then.
+
 Kinds
 -----
 ``"uniform"`` (``UniformSelector``)
@@ -59,6 +63,9 @@ class SingleEmitterSelector:
             raise ValueError(f"a single-emitter selector needs exactly one emitter, not {n}")
         self.num_emitters = 1
 
+    def refit(self, emitters: EmitterBounds) -> bool:
+        return len(emitters) == 1
+
     @ti.func
     def select(self, p, n, u):
         return 0, 1.0
@@ -81,6 +88,9 @@ class UniformSelector:
         self.num_emitters = n
         self.count = ti.field(ti.i32, shape=())
         self.count[None] = n
+
+    def refit(self, emitters: EmitterBounds) -> bool:
+        return len(emitters) == self.num_emitters
 
     @ti.func
     def select(self, p, n, u):
@@ -143,6 +153,13 @@ class PowerSelector:
         self.alias = ti.field(ti.i32, shape=n)
         self.table_pmf = ti.field(ti.f32, shape=n)
         upload_fields([(self.q, q), (self.alias, alias), (self.table_pmf, pmf)])
+
+    def refit(self, emitters: EmitterBounds) -> bool:
+        if len(emitters) != self.num_emitters:
+            return False
+        q, alias, pmf = alias_table(np.asarray(emitters.power, np.float64))
+        upload_fields([(self.q, q), (self.alias, alias), (self.table_pmf, pmf)])
+        return True
 
     @ti.func
     def select(self, p, n, u):

@@ -104,8 +104,8 @@ class LightTree:
 
     def __init__(self, emitters: EmitterBounds, *, max_leaf_size: int = 1, bins: int = 12,
                  small_node: int = SMALL_NODE):
-        self.data = build_light_tree(emitters, max_leaf_size=max_leaf_size, bins=bins,
-                                     small_node=small_node)
+        self.options = dict(max_leaf_size=max_leaf_size, bins=bins, small_node=small_node)
+        self.data = build_light_tree(emitters, **self.options)
         d = self.data
         m, n = d.num_nodes, d.num_emitters
         self.num_emitters = n
@@ -118,10 +118,24 @@ class LightTree:
         self.order = ti.field(ti.i32, shape=n)
         self.rank = ti.field(ti.i32, shape=n)
         self.leaf_power = ti.field(ti.f32, shape=n)  # power in leaf order
+        self._upload()
+
+    def _upload(self) -> None:
+        d = self.data
         upload_fields([(self.node_lo, d.node_lo), (self.node_hi, d.node_hi), (self.node_axis, d.node_axis),
                        (self.node_scalars, np.stack([d.node_power, d.node_theta_o, d.node_theta_e], 1)),
                        (self.node_links, np.stack([d.node_right, d.node_first, d.node_count], 1)),
                        (self.order, d.order), (self.rank, d.rank), (self.leaf_power, d.emitter_power[d.order])])
+
+    def refit(self, emitters: EmitterBounds) -> bool:
+        """The tree built again for the emitters' new powers, into the same fields where it has as
+        many nodes (else False, nothing changed)."""
+        data = build_light_tree(emitters, **self.options)
+        if (data.num_nodes, data.num_emitters) != (self.data.num_nodes, self.data.num_emitters):
+            return False
+        self.data = data
+        self._upload()
+        return True
 
     @ti.func
     def importance(self, p, n, node):

@@ -134,11 +134,8 @@ class Lights:
             # sr, a Lambertian emitter of power P at most P / pi. Weighing powers instead would give
             # a point light four times its share of what reaches a point, and starve the surfaces
             # (their rare samples then come with large weights: fireflies).
-            delta_intensity = float(delta.intensity.sum())
-            area_intensity = float(np.sum(emitters["power"])) / math.pi if self.has_area else 0.0
             self.delta_share = ti.field(ti.f32, shape=())
-            self.delta_share[None] = (delta_intensity / (delta_intensity + area_intensity) if area_intensity > 0.0
-                                      else 1.0)
+            self._set_delta_share()
         # Emitters that shine from both faces: compiled in only where the scene has one (a lookup
         # per light sample otherwise paid by every scene).
         self.has_two_sided = self.has_area and bool(np.any(emitters.get("two_sided", ())))
@@ -158,6 +155,31 @@ class Lights:
                       + ([(self.emitter_prim, np.asarray(emitters["prim"], np.int32))] if self.has_area else []))
         if self.has_env and self.env_is_map:
             self.env_sampler = EnvironmentSampler(env_image, environment)
+
+    def _set_delta_share(self) -> None:
+        delta_intensity = float(self.delta.intensity.sum())
+        area_intensity = float(np.sum(self.emitters["power"])) / math.pi if self.has_area else 0.0
+        self.delta_share[None] = (delta_intensity / (delta_intensity + area_intensity) if area_intensity > 0.0
+                                  else 1.0)
+
+    def refit(self, emitters: dict) -> bool:
+        """Take `emitter_table`'s rows for the same emissive primitives with other radiance (an
+        emission edit) in place: the selector's weights and the share of the lights without a
+        surface, in the same fields, so no kernel compiles. False, nothing changed, where the
+        primitives that emit, or their sides, differ: build the Lights anew then."""
+        same = (np.array_equal(emitters["prim"], self.emitters["prim"])
+                and np.array_equal(emitters["two_sided"], self.emitters["two_sided"]))
+        if not same:
+            return False
+        if self.has_area:
+            bounds = EmitterBounds(lo=emitters["lo"], hi=emitters["hi"], power=emitters["power"], axis=emitters["axis"],
+                                   theta_o=emitters["theta_o"], theta_e=emitters["theta_e"])
+            if not self.selector.refit(bounds):
+                return False
+        self.emitters = emitters
+        if self.has_delta:
+            self._set_delta_share()
+        return True
 
     @ti.func
     def sample(self, ctx, ref, ref_n, u_select, u_point):

@@ -132,15 +132,34 @@ class Emission:
             # Flat shapes: one diagonal (plus a margin for degenerate boxes) in front of the plane;
             # spheres: their centre.
             anchor = np.where(all_round[:, None], centre, centre + axis * (diagonal + 1e-3))
-            cdf = np.concatenate([[0.0], np.cumsum(power)]) / power.sum()
-            cdf[-1] = 1.0
-            upload_fields([(self.prim, prims), (self.area, area), (self.anchor, anchor), (self.cdf, cdf),
+            upload_fields([(self.prim, prims), (self.area, area), (self.anchor, anchor),
                            (self.two_sided, two_sided.astype(np.int32)),
                            (self.eps, np.maximum(MIN_EMIT_EPS, EMIT_EPS_FRACTION * np.sqrt(area)))])
-        upload_fields([(self.powers, np.array([self.area_power, self.env_integral], np.float32))])
+        self._upload_powers(power)
         self.bounds_per_pass = scene_bounds is None
         if scene_bounds is not None:
             self.set_bounds(*scene_bounds)
+
+    def _upload_powers(self, power) -> None:
+        if self.has_area:
+            cdf = np.concatenate([[0.0], np.cumsum(power)]) / power.sum()
+            cdf[-1] = 1.0
+            upload_fields([(self.cdf, cdf)])
+        upload_fields([(self.powers, np.array([self.area_power, self.env_integral], np.float32))])
+
+    def refit(self, env_spec) -> bool:
+        """The emitters' powers and the environment's integral taken again from the Lights (after
+        Lights.refit, or an environment edit of the same kind) into the same fields: no compile.
+        False where which emitters or sides emit changed: build it anew then."""
+        table = self.lights.emitters
+        power = np.asarray(table["power"], np.float64)
+        if len(power) != self.count or (self.count > 0 and float(power.sum()) > 0.0) != self.has_area \
+                or self.lights.has_env != self.has_env:
+            return False
+        self.area_power = float(power.sum()) if self.has_area else 0.0
+        self.env_integral = environment_integral(env_spec, getattr(self.lights, "env_sampler", None))
+        self._upload_powers(power)
+        return True
 
     @property
     def emits(self) -> bool:

@@ -594,3 +594,22 @@ def test_alias_table_gives_the_pmf():
         assert np.all(pmf[w > 0] > 0) and np.all(implied[w == 0] < 1e-7)
     with pytest.raises(ValueError):
         alias_table(np.zeros(3))
+
+
+@pytest.mark.parametrize("kind", ["power", "tree"])
+def test_a_refit_for_new_powers_is_the_selector_built_for_them(kind):
+    """An emission edit reweighs the selector in place (renderer/lights/light_select.py refit): its
+    probabilities are then those of a selector built for the new powers, in the same fields."""
+    from dataclasses import replace
+
+    emitters = mixed_emitters(11, 40)
+    selector = make_light_selector(kind, emitters)
+    fields_before = [id(f) for f in vars(selector).values() if hasattr(f, "shape")]
+    rng = np.random.default_rng(12)
+    reweighed = replace(emitters, power=emitters.power * rng.lognormal(0.0, 1.0, 40))
+    assert selector.refit(reweighed)
+    assert [id(f) for f in vars(selector).values() if hasattr(f, "shape")] == fields_before
+    points, normals = random_points(13, 16)
+    np.testing.assert_array_equal(pmf_table(selector, points, normals),
+                                  pmf_table(make_light_selector(kind, reweighed), points, normals))
+    assert not selector.refit(mixed_emitters(11, 39))  # other emitters: built anew

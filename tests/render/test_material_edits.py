@@ -76,13 +76,77 @@ def test_a_kind_edit_compiles_the_kind_once_and_undoing_it_compiles_nothing(corn
     np.testing.assert_array_equal(edited, fresh(rougher))
 
 
-def test_an_emission_edit_relights(cornell):
+def test_an_emission_edit_relights_and_compiles_nothing(cornell):
     renderer = Renderer(cornell, max_size=SIZE)
     image(renderer, cornell)
+    compiled, programs = kernels_compiled(), dict(renderer._programs)
     light = material_named(cornell, "light")
     brighter = with_material(cornell, replace(light, emission=tuple(2 * c for c in light.emission)))
     assert renderer.edit_materials(brighter)
-    np.testing.assert_array_equal(image(renderer, brighter), fresh(brighter))
+    edited = image(renderer, brighter)
+    assert kernels_compiled() == compiled and renderer._programs == programs  # the same programs, in place
+    np.testing.assert_array_equal(edited, fresh(brighter))
+
+
+TWO_LAMPS = """
+[scene]
+geometry = "mesh"
+[camera]
+position = [0, 1, 4]
+look_at = [0, 0.5, 0]
+fov = 50
+[environment]
+type = "constant"
+color = [0.05, 0.05, 0.05]
+[materials.floor]
+base_color = [0.7, 0.7, 0.7]
+[materials.warm]
+emission = [4, 3, 2]
+[materials.cool]
+emission = [1, 2, 4]
+[[objects]]
+type = "quad"
+material = "floor"
+size = [6, 6]
+[[objects]]
+type = "sphere"
+material = "warm"
+translate = [-0.8, 0.6, 0]
+radius = 0.25
+[[objects]]
+type = "sphere"
+material = "cool"
+translate = [0.8, 0.6, 0]
+radius = 0.25
+"""
+
+
+@pytest.mark.parametrize("integrator", ["mis", "sppm"])
+def test_an_emission_edit_reweighs_the_lights_in_place(tmp_path, integrator):
+    """Two lamps (a power-weighted selector, and SPPM's photon emission): one made brighter is
+    the edited scene's image, bit for bit, from the same programs; one turned off builds the lights
+    again, and is still the edited scene's image."""
+    path = tmp_path / "lamps.toml"
+    path.write_text(TWO_LAMPS)
+    scene = load_scene(path)
+
+    def render(r, s):
+        r.render(CameraFrame.from_spec(s.camera), 2, integrator, seed=5)
+        return r.image()
+
+    renderer = Renderer(scene, max_size=SIZE)
+    render(renderer, scene)
+    assert renderer.lights().selector.kind == "power"
+    programs = dict(renderer._programs)
+    warm = material_named(scene, "warm")
+    brighter = with_material(scene, replace(warm, emission=(40.0, 30.0, 20.0)))
+    assert renderer.edit_materials(brighter)
+    np.testing.assert_array_equal(render(renderer, brighter), render(Renderer(brighter, max_size=SIZE), brighter))
+    assert renderer._programs == programs
+    dark = with_material(scene, replace(warm, emission=(0.0, 0.0, 0.0)))
+    assert renderer.edit_materials(dark)
+    np.testing.assert_array_equal(render(renderer, dark), render(Renderer(dark, max_size=SIZE), dark))
+    assert renderer.lights().count == 1
 
 
 def test_an_edit_that_needs_the_world_built_again_changes_nothing(cornell, tmp_path):
