@@ -7,10 +7,28 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, fields, replace
 
-from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene
-from renderer.scene.schema import ENVIRONMENT as ENVIRONMENT_SECTION, MATERIAL
+from renderer.scene.description import EnvironmentSpec, LightSpec, MaterialSpec, Scene
+from renderer.scene.schema import ENVIRONMENT as ENVIRONMENT_SECTION, LIGHT, MATERIAL
 
 ENVIRONMENT = "environment"  # the history's name for the environment's edits
+
+
+@dataclass(frozen=True)
+class SceneLight:
+    """One of the scene's point, spot, directional or projector lights, by its place in the list."""
+
+    index: int
+    spec: LightSpec
+
+    @property
+    def name(self) -> str:
+        return f"lights[{self.index}]"
+
+
+def with_light(scene: Scene, light: SceneLight) -> Scene:
+    lights = list(scene.lights)
+    lights[light.index] = light.spec
+    return replace(scene, lights=tuple(lights))
 
 
 @dataclass(frozen=True)
@@ -22,12 +40,14 @@ class Edit:
 
     @property
     def name(self) -> str:
-        """The material's name, or ENVIRONMENT."""
+        """The material's name, ENVIRONMENT, or a light's `lights[i]`."""
         return ENVIRONMENT if isinstance(self.after, EnvironmentSpec) else self.after.name
 
     def fields_changed(self) -> frozenset:
-        return frozenset(f.name for f in fields(type(self.before))
-                         if getattr(self.before, f.name) != getattr(self.after, f.name))
+        before, after = self.before, self.after
+        if isinstance(after, SceneLight):
+            before, after = before.spec, after.spec
+        return frozenset(f.name for f in fields(type(before)) if getattr(before, f.name) != getattr(after, f.name))
 
 
 def with_material(scene: Scene, spec: MaterialSpec) -> Scene:
@@ -64,10 +84,16 @@ def allowed_range(name: str):
 
 
 def clamped(spec):
-    """`spec` (a MaterialSpec or an EnvironmentSpec) with every numeric field brought within its
-    range in the scene format, and a line per value changed ("roughness 1.5 -> 1 (allowed [0, 1])")."""
+    """`spec` (a MaterialSpec, an EnvironmentSpec or a SceneLight) with every numeric field brought
+    within its range in the scene format, and a line per value changed ("roughness 1.5 -> 1
+    (allowed [0, 1])")."""
+    if isinstance(spec, SceneLight):
+        light, notes = clamped(spec.spec)
+        light, more = clamped_light(light)
+        return replace(spec, spec=light), notes + more
     changes, notes = {}, []
-    section = ENVIRONMENT_SECTION if isinstance(spec, EnvironmentSpec) else MATERIAL
+    section = (ENVIRONMENT_SECTION if isinstance(spec, EnvironmentSpec) else LIGHT if isinstance(spec, LightSpec)
+               else MATERIAL)
     for f in section.fields:
         if f.range is None or not f.in_model or not hasattr(spec, f.model_attr):
             continue
@@ -87,6 +113,22 @@ def clamped(spec):
         if f.model_attr in changes:
             notes.append(f"{f.name} {_text(value)} -> {_text(changes[f.model_attr])} (allowed {f.range})")
     return (replace(spec, **changes) if changes else spec), notes
+
+
+def clamped_light(light: LightSpec) -> tuple:
+    """A light's cone and direction made valid: beam_width at most cutoff_angle, the direction of
+    unit length (a zero one pointing down); with a line per change of meaning."""
+    notes, changes = [], {}
+    if light.beam_width is not None and light.beam_width > light.cutoff_angle:
+        changes["beam_width"] = light.cutoff_angle
+        notes.append(f"beam_width {light.beam_width:g} -> {light.cutoff_angle:g} (at most cutoff_angle)")
+    length = math.hypot(*light.direction)
+    if not length > 0.0 or not math.isfinite(length):
+        changes["direction"] = (0.0, -1.0, 0.0)
+        notes.append(f"direction {_text(light.direction)} -> (0, -1, 0) (a direction needs a finite length)")
+    elif abs(length - 1.0) > 1e-12:  # unit length as the scene format reads it (one already is: kept)
+        changes["direction"] = tuple(c / length for c in light.direction)
+    return (replace(light, **changes) if changes else light), notes
 
 
 def _within(x: float, r) -> float:

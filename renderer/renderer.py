@@ -171,6 +171,7 @@ class Renderer:
         self.media = MediaTable(scene, self.materials.volume_media)
         self._env_image = image
         self._lights = None
+        self._scene_radius: float | None = None
         allocated = allocation_size(width, height)  # shared compiled programs across nearby sizes
         self.film = Film(*allocated)
         self.aovs = AovFilm(*allocated) if aovs else None
@@ -248,13 +249,17 @@ class Renderer:
     def scene_radius(self) -> float:
         """The radius of a sphere about the scene (a directional light's power is what crosses it):
         a mesh scene's bounding sphere; an SDF scene has no finite bounds (planes, repetition), so
-        the distance from its camera to the point it looks at stands in."""
-        data = getattr(self.geometry, "data", None)
-        if self.scene.geometry == "mesh" and data is not None and data.primitive_count:
-            lo, hi = data.scene_bounds()
-            return max(0.5 * float(np.linalg.norm(np.asarray(hi) - np.asarray(lo))), 1e-3)
-        camera = self.scene.camera
-        return max(float(np.linalg.norm(np.subtract(camera.look_at, camera.position))), 1e-3)
+        the distance from its camera to the point it looks at stands in. Computed once (edits keep
+        the geometry and the camera)."""
+        if self._scene_radius is None:
+            data = getattr(self.geometry, "data", None)
+            if self.scene.geometry == "mesh" and data is not None and data.primitive_count:
+                lo, hi = data.scene_bounds()
+                self._scene_radius = max(0.5 * float(np.linalg.norm(np.asarray(hi) - np.asarray(lo))), 1e-3)
+            else:
+                camera = self.scene.camera
+                self._scene_radius = max(float(np.linalg.norm(np.subtract(camera.look_at, camera.position))), 1e-3)
+        return self._scene_radius
 
     def shared(self, name: str, build):
         """A device object built once per Renderer by `build()` and shared by the programs that ask
@@ -323,6 +328,28 @@ class Renderer:
             self._drop_lights()
         else:
             self._refit_photons()
+        self.reset()
+        return True
+
+    def edit_lights(self, lights) -> bool:
+        """Adopt edited point, spot, directional and projector lights (`lights`: the scene's, in
+        the same order and kinds, with other values, places, directions or cones): data uploaded
+        in place, the film reset, nothing compiled. False, changing nothing, where the edit needs
+        the lights built again (another kind or image, a light turned on or off)."""
+        old = self.scene.lights
+        if [(a.kind, a.texture) for a in lights] != [(b.kind, b.texture) for b in old]:
+            return False
+        scene = replace(self.scene, lights=tuple(lights))
+        features = self._mesh.features(scene) if self._mesh is not None else scene_features(scene)
+        if features != self._features:
+            return False
+        if self._lights is not None:
+            delta = self._lights.delta
+            if delta is None or not delta.refit(scene.lights, self.scene_radius()):
+                return False
+            if self._lights.has_delta:
+                self._lights.refit_delta()
+        self.scene = scene
         self.reset()
         return True
 

@@ -76,7 +76,7 @@ def _colour(g, label: str, value: tuple) -> tuple:
     return tuple(value) if all(same_f32(a, b) for a, b in zip(new, value)) else new
 
 
-def _emission(g, value: tuple, name: str = "emission") -> tuple:
+def emission_control(g, value: tuple, name: str = "emission") -> tuple:
     """A radiance as a colour of largest channel 1 times a strength."""
     strength = max(value)
     colour = tuple(c / strength for c in value) if strength > 0 else (1.0, 1.0, 1.0)
@@ -88,9 +88,9 @@ def _emission(g, value: tuple, name: str = "emission") -> tuple:
     return tuple(c * new_strength for c in new_colour)
 
 
-def _field(g, f, value):
+def field_control(g, f, value):
     if f.name == "emission":
-        return _emission(g, value)
+        return emission_control(g, value)
     if f.name == "metal":  # a slider over the named metals, 0: the Fresnel from base_color
         names = ("",) + tuple(metal_names())
         index = names.index(value) if value in names else 0
@@ -134,7 +134,7 @@ def draw_material_panel(gui, window_size: tuple[int, int], picked: Pick, spec: O
             value = getattr(spec, f.model_attr)
             if value is None:
                 continue
-            new = _field(g, f, value)
+            new = field_control(g, f, value)
             if new != value and f.model_attr not in changes:
                 changes[f.model_attr] = new
         for role in spec.textures:
@@ -150,9 +150,10 @@ def draw_material_panel(gui, window_size: tuple[int, int], picked: Pick, spec: O
 
 
 def draw_environment_panel(gui, window_size: tuple[int, int], spec: EnvironmentSpec,
-                           notes: list[str] = ()) -> tuple[EnvironmentSpec, list[str]]:
+                           notes: list[str] = (), lights: tuple = ()) -> tuple[EnvironmentSpec, list[str]]:
     """The environment's panel (a click on nothing opens it): its intensity, its turn about its
-    axis and its colours, as the scene format has them; returns (the environment as edited, actions)."""
+    axis and its colours, as the scene format has them, and a button per light without a surface
+    (`lights`: the scene's), which no click can pick; returns (the environment as edited, actions)."""
     r = panel_rect(window_size)
     actions: list[str] = []
     changes = {}
@@ -163,11 +164,14 @@ def draw_environment_panel(gui, window_size: tuple[int, int], spec: EnvironmentS
                 continue
             value = getattr(spec, f.model_attr)
             if f.kind == "vec3" and f.range is not None and f.range.hi is None:  # radiance: any brightness
-                new = _emission(g, value, f.name)
+                new = emission_control(g, value, f.name)
             else:
-                new = _field(g, f, value)
+                new = field_control(g, f, value)
             if new != value:
                 changes[f.model_attr] = new
+        for i, light in enumerate(lights):
+            if g.button(f"lights[{i}]: {light.kind}  (edit)"):
+                actions.append(f"open_light:{i}")
         for line in notes:
             text_line(g, line, ERROR_COLOR)
         for label, action in ACTIONS:

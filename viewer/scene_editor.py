@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from renderer.camera import CameraFrame
-from renderer.editing import Edit, EditHistory, canonical, clamped, material_named, with_material
+from renderer.editing import Edit, EditHistory, SceneLight, canonical, clamped, material_named, with_light, with_material
 from renderer.picking import Pick, pick
 from renderer.renderer import Renderer
 from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene
@@ -30,14 +30,28 @@ class SceneEditor:
         self.notes: list[str] = []  # what the last edit clamped, one line each
         self.recompiled = False  # whether the last edit built a new Renderer
         self.environment_open = False  # the environment's panel (a click on nothing opens it)
+        self.light_open: Optional[int] = None  # the panel of scene.lights[i] (from the environment's)
 
     # --- picking ------------------------------------------------------------------------------
     def pick(self, renderer: Renderer, camera: CameraFrame, u: float, v: float,
              integrator: Optional[str] = None) -> Optional[Pick]:
         self.picked = pick(renderer, camera, u, v, integrator)
         self.environment_open = self.picked is None
+        self.light_open = None
         self.notes = []
         return self.picked
+
+    def open_light(self, index: int) -> None:
+        """The panel of the scene's point, spot, directional or projector light `index` (no ray
+        can hit them: the environment's panel lists them)."""
+        self.picked, self.environment_open, self.light_open, self.notes = None, False, index, []
+
+    @property
+    def panel_open(self) -> bool:
+        return self.picked is not None or self.environment_open or self.light_open is not None
+
+    def close(self) -> None:
+        self.picked, self.environment_open, self.light_open = None, False, None
 
     def picked_material(self, scene: Scene) -> Optional[MaterialSpec]:
         """The picked material as it is now (None: nothing picked, or a model file's own)."""
@@ -53,7 +67,13 @@ class SceneEditor:
         edit."""
         spec, self.notes = clamped(spec)
         self.recompiled = False
-        if isinstance(spec, EnvironmentSpec):
+        if isinstance(spec, SceneLight):
+            before = SceneLight(spec.index, renderer.scene.lights[spec.index])
+            if spec == before:
+                return renderer
+            scene = with_light(renderer.scene, spec)
+            in_place = renderer.edit_lights(scene.lights)
+        elif isinstance(spec, EnvironmentSpec):
             before = renderer.scene.environment
             if spec == before:
                 return renderer
@@ -82,8 +102,10 @@ class SceneEditor:
         return renderer if spec is None else self.apply(renderer, spec, record=False)
 
     def reset_material(self, renderer: Renderer) -> Renderer:
-        """The picked material (or the open environment) back to the file's (an edit itself: undo
-        brings the change back)."""
+        """The picked material (or the open environment or light) back to the file's (an edit
+        itself: undo brings the change back)."""
+        if self.light_open is not None:
+            return self.apply(renderer, SceneLight(self.light_open, self.loaded.lights[self.light_open]))
         if self.environment_open:
             return self.apply(renderer, self.loaded.environment)
         if self.picked is None or not self.picked.editable:

@@ -38,6 +38,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.camera import CameraFrame
+from renderer.editing import SceneLight
 from renderer.output.denoise import DenoiseInput, Denoiser, unavailable_reason
 from renderer.output.image_io import write_exr, write_png
 from renderer.integrators import INTEGRATORS, integrator_names
@@ -50,6 +51,7 @@ from viewer.camera_state import CameraState
 from viewer.denoise_worker import BackgroundDenoiser
 from viewer.display import DenoisedDisplay, DisplayImages, DisplaySettings, show_on_canvas, tinted
 from viewer.hotkeys import KeyMap
+from viewer.light_panel import draw_light_panel
 from viewer.material_panel import draw_environment_panel, draw_material_panel, panel_rect
 from viewer.scene_editor import SceneEditor
 from viewer.session import (DEFAULT_TARGET_SECONDS, MAX_PRESENT_INTERVAL, MOVING_PROBE_SLICES, SETTLE_SECONDS,
@@ -342,7 +344,9 @@ class ViewerApp:
         elif action == "save_scene":
             self.save_edits(now)
         elif action == "close_panel":
-            self.editor.picked, self.editor.environment_open = None, False
+            self.editor.close()
+        elif action.startswith("open_light:"):
+            self.editor.open_light(int(action.split(":", 1)[1]))
         elif action == "toggle_hud":
             s.hud_visible = not s.hud_visible
         elif action == "help":
@@ -430,7 +434,7 @@ class ViewerApp:
             if inp.cursor is not None:
                 u, v = inp.cursor
                 panels = (([hud.hud_rect(self.size)] if self.session.hud_visible else [])
-                          + ([panel_rect(self.size)] if self.editor.picked or self.editor.environment_open else []))
+                          + ([panel_rect(self.size)] if self.editor.panel_open else []))
                 self._drag_blocked = any(r.contains(u, 1.0 - v) for r in panels)
             self._press_cursor = None if self._drag_blocked else inp.cursor
         # a release (as an event: a quick click is down and up within one frame) where it went down
@@ -710,14 +714,19 @@ class ViewerApp:
             for action in actions:
                 self.dispatch(action, FrameInput(), now)
         editor = self.editors.get(s.scene_path)
-        if editor is not None and (editor.picked is not None or editor.environment_open):
-            # the material's (or the environment's) panel, with or without the HUD
+        if editor is not None and editor.panel_open:
+            # the material's (or the environment's, or a light's) panel, with or without the HUD
+            scene = self.renderer.scene
             if editor.picked is not None:
-                spec = editor.picked_material(self.renderer.scene)
+                spec = editor.picked_material(scene)
                 edited, actions = draw_material_panel(self.gui, self.size, editor.picked, spec, editor.notes)
+            elif editor.light_open is not None:
+                spec = SceneLight(editor.light_open, scene.lights[editor.light_open])
+                edited, actions = draw_light_panel(self.gui, self.size, spec, self.renderer.scene_radius(),
+                                                   editor.notes)
             else:
-                spec = self.renderer.scene.environment
-                edited, actions = draw_environment_panel(self.gui, self.size, spec, editor.notes)
+                spec = scene.environment
+                edited, actions = draw_environment_panel(self.gui, self.size, spec, editor.notes, scene.lights)
             if edited is not None and edited is not spec:
                 self.edit(lambda renderer: editor.apply(renderer, edited, merge=True), now)
             for action in actions:

@@ -168,31 +168,54 @@ class DeltaLights:
         if slots:
             atlas = pack_atlas(images)
             self.textures = TextureTable(atlas, [(atlas.rects[slot[0]], *slot[1:]) for slot in slots])
+        self.specs, self.image_of = specs, image_of
         if self.count:
-            cone = np.zeros((n, 4))
-            frames = np.tile(np.eye(3), (n, 1, 1))
-            projection = np.zeros((n, 2))
-            for i, s in enumerate(specs):
-                if s.kind == "spot":
-                    c, b = math.radians(s.cutoff_angle), math.radians(s.beam)
-                    cone[i] = (math.cos(c), math.cos(b), c, 1.0 / (c - b) if c > b else 0.0)
-                if s.kind in ("spot", "projector"):
-                    frames[i] = light_frame(s)
-                    projection[i] = projection_scale(s, image_aspect(image_of[i]))
-            direction = np.array([s.direction for s in specs], np.float64)
-            direction /= np.linalg.norm(direction, axis=1, keepdims=True)
-            upload_fields([(self.kind, np.array([KIND_CODES[s.kind] for s in specs], np.int32)),
-                           (self.position, np.array([s.position for s in specs], np.float32)),
-                           (self.direction, direction.astype(np.float32)),
-                           (self.value, np.array([s.irradiance if s.kind in ("directional", "projector")
-                                                  else s.intensity for s in specs], np.float32)),
-                           (self.cone, cone.astype(np.float32)),
-                           (self.frame, frames.astype(np.float32)),
-                           (self.projection, projection.astype(np.float32)),
-                           (self.image, np.array(slot_of, np.int32))])
+            self._upload(np.array(slot_of, np.int32))
             self.selector = make_delta_selector(selector_kind, self.power)
         # Compiled in: whether choose() weighs every light at the shading point.
         self.local = selector_kind == "auto" and 1 < self.count <= LOCAL_MAX
+
+    def _upload(self, slots=None) -> None:
+        specs, n = self.specs, self.count
+        cone = np.zeros((n, 4))
+        frames = np.tile(np.eye(3), (n, 1, 1))
+        projection = np.zeros((n, 2))
+        for i, s in enumerate(specs):
+            if s.kind == "spot":
+                c, b = math.radians(s.cutoff_angle), math.radians(s.beam)
+                cone[i] = (math.cos(c), math.cos(b), c, 1.0 / (c - b) if c > b else 0.0)
+            if s.kind in ("spot", "projector"):
+                frames[i] = light_frame(s)
+                projection[i] = projection_scale(s, image_aspect(self.image_of[i]))
+        direction = np.array([s.direction for s in specs], np.float64)
+        direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+        upload_fields([(self.kind, np.array([KIND_CODES[s.kind] for s in specs], np.int32)),
+                       (self.position, np.array([s.position for s in specs], np.float32)),
+                       (self.direction, direction.astype(np.float32)),
+                       (self.value, np.array([s.irradiance if s.kind in ("directional", "projector")
+                                              else s.intensity for s in specs], np.float32)),
+                       (self.cone, cone.astype(np.float32)),
+                       (self.frame, frames.astype(np.float32)),
+                       (self.projection, projection.astype(np.float32))]
+                      + ([(self.image, slots)] if slots is not None else []))
+
+    def refit(self, specs, scene_radius: float) -> bool:
+        """Take edited lights (values, places, directions, cones) in place, into the same fields:
+        no kernel compiles. False, nothing changed, where the lights that emit, their kinds or
+        their images differ: build them anew then."""
+        specs = [s for s in specs if emits(s)]
+        if [(s.kind, s.texture) for s in specs] != [(s.kind, s.texture) for s in self.specs]:
+            return False
+        power = np.array([light_power(s, scene_radius, im) for s, im in zip(specs, self.image_of)], np.float64)
+        if self.count > 1 and not self.selector.refit(EmitterBounds(
+                lo=np.zeros((self.count, 3)), hi=np.zeros((self.count, 3)), power=power,
+                axis=np.zeros((self.count, 3)), theta_o=np.zeros(self.count), theta_e=np.zeros(self.count))):
+            return False
+        self.specs, self.power = specs, power
+        self.intensity = np.array([peak_intensity(s, p) for s, p in zip(specs, power)], np.float64)
+        if self.count:
+            self._upload()
+        return True
 
     @ti.func
     def choose(self, features: ti.template(), ref, ref_n, u):

@@ -162,6 +162,11 @@ class Lights:
         self.delta_share[None] = (delta_intensity / (delta_intensity + area_intensity) if area_intensity > 0.0
                                   else 1.0)
 
+    def refit_delta(self) -> None:
+        """The lights without a surface were edited in place (DeltaLights.refit): their share of
+        the samples follows their new intensities."""
+        self._set_delta_share()
+
     def refit(self, emitters: dict) -> bool:
         """Take `emitter_table`'s rows for the same emissive primitives with other radiance (an
         emission edit) in place: the selector's weights and the share of the lights without a

@@ -15,6 +15,7 @@ SceneError naming the material and the field, never a file that renders otherwis
 """
 from __future__ import annotations
 
+import math
 from dataclasses import fields
 from pathlib import Path
 from typing import Optional
@@ -22,11 +23,11 @@ from typing import Optional
 import tomlkit
 
 from renderer.editing import canonical
-from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene, TextureSpec
-from renderer.scene.edits_file import FRESNEL_DESCRIPTIONS, edited_environment, edited_material, relative_reference
+from renderer.scene.description import EnvironmentSpec, LightSpec, MaterialSpec, Scene, TextureSpec
+from renderer.scene.edits_file import FRESNEL_DESCRIPTIONS, edited_environment, edited_lights, edited_material, relative_reference
 from renderer.scene.errors import SceneError
 from renderer.scene.foreign_formats import is_foreign
-from renderer.scene.schema import ENVIRONMENT, MATERIAL
+from renderer.scene.schema import ENVIRONMENT, LIGHT, MATERIAL
 
 EDITED_SUFFIX = "_edited"
 
@@ -91,6 +92,10 @@ def save_edits(scene: Scene, loaded: Scene, path: Optional[Path] = None, overwri
         document["materials"][spec.name] = table
     if scene.environment != loaded.environment:
         _environment_into(document, scene.environment, loaded.environment, original)
+    for i, (spec, was_light) in enumerate(zip(scene.lights, loaded.lights)):
+        if spec != was_light:  # the changed values set in the light's own [[lights]] table
+            for key, value in _light_changes(spec, was_light, target).items():
+                document["lights"][i][key] = value
     return _write(target, tomlkit.dumps(document))
 
 
@@ -123,6 +128,15 @@ def edits_document(scene: Scene, base: Scene, target: Path) -> str:
         document.add("materials", materials)
     if scene.environment != base.environment:
         document.add("environment", _environment_changes(scene.environment, base.environment, target, scene.geometry))
+    lights = tomlkit.table(is_super_table=True)
+    for i, (spec, was) in enumerate(zip(scene.lights, base.lights)):
+        if spec != was:
+            values = _light_changes(spec, was, target)
+            _check_read_back(edited_lights((was,), {"0": values}, target, scene.geometry)[0], spec,
+                             f"lights[{i}]", target)
+            lights.add(str(i), _toml_table(values))
+    if len(lights):
+        document.add("lights", lights)
     if _other_changes(scene, base):
         raise SceneError(base.path, f"a scene of edits holds materials and the environment; its {_other_changes(scene, base)} "
                                     "changed too")
@@ -130,7 +144,7 @@ def edits_document(scene: Scene, base: Scene, target: Path) -> str:
 
 
 def _other_changes(scene: Scene, base: Scene) -> str:
-    kept = {"path", "materials", "environment", "description", "source_files", "edited_from"}
+    kept = {"path", "materials", "environment", "lights", "description", "source_files", "edited_from"}
     return ", ".join(f.name for f in fields(Scene) if f.compare and f.name not in kept
                      and getattr(scene, f.name) != getattr(base, f.name))
 
@@ -171,8 +185,17 @@ def _environment_changes(spec: EnvironmentSpec, was: EnvironmentSpec, target: Pa
     return _toml_table(values)
 
 
+def _light_changes(spec: LightSpec, was: LightSpec, target: Path) -> dict:
+    if (spec.kind, spec.texture) != (was.kind, was.texture):
+        raise SceneError(target, "an edit of a light keeps its type and image")
+    return _changed_fields(spec, was, LIGHT, spec.kind, target.parent)
+
+
 def _check_read_back(read, spec, what: str, target: Path) -> None:
-    differ = [f.name for f in fields(spec) if getattr(read, f.name) != getattr(spec, f.name)]
+    # A direction is normalised on reading: one normalisation more may move its last bit (its
+    # float32 copy on the device stays the same)
+    differ = [f.name for f in fields(spec) if getattr(read, f.name) != getattr(spec, f.name)
+              and not (f.name == "direction" and math.dist(read.direction, spec.direction) < 1e-12)]
     if differ:
         raise SceneError(target, f"{what}: its {', '.join(differ)} cannot be written in a scene of edits")
 

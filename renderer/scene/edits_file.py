@@ -12,10 +12,13 @@ are kept (renderer/scene/edit_saving.py writes it):
     [environment]
     intensity = 2.0
 
+    [lights.0]                       # the file's first point, spot, directional or projector light
+    intensity = [50, 40, 30]
+
 The edited file and its models are referenced, never copied, so the scene of edits renders what the
 edited file does with those values changed, bit for bit as the viewer showed it. A table's fields
-are those of the TOML format's [materials.<name>] and [environment] (renderer/scene/schema.py),
-checked the same way. A conductor's Fresnel written in the table replaces the file's own description
+are those of the TOML format's [materials.<name>], [environment] and [[lights]]
+(renderer/scene/schema.py), checked the same way; a light keeps its type and image. A conductor's Fresnel written in the table replaces the file's own description
 of it (a `metal` drops the file's eta and k).
 """
 from __future__ import annotations
@@ -32,7 +35,7 @@ from renderer.scene.load_options import LoadOptions
 from renderer.scene.references import missing_file_problem
 from renderer.scene.toml_loader import is_scene_of_edits, read_changes, read_toml, scene_from_toml
 
-SECTIONS = ("scene", "materials", "environment")
+SECTIONS = ("scene", "materials", "environment", "lights")
 HEADER_FIELDS = ("edits", "description")
 # The fields that describe a conductor's Fresnel, each set replacing the others (schema rule).
 FRESNEL_DESCRIPTIONS = (("metal",), ("eta", "k"), ("base_color", "edge_tint"))
@@ -69,10 +72,13 @@ def _edited_scene(data: dict, path: Path, options: LoadOptions) -> Scene:
     environment = base.environment
     if "environment" in data:
         environment = edited_environment(base.environment, data["environment"], path, base.geometry)
+    lights = base.lights
+    if "lights" in data:
+        lights = edited_lights(base.lights, data["lights"], path, base.geometry)
     description = header.get("description", base.description)
     if not isinstance(description, str):
         raise SceneError(path, "scene.description: expected a string")
-    return replace(base, path=path, materials=edited, environment=environment, description=description,
+    return replace(base, path=path, materials=edited, environment=environment, lights=lights, description=description,
                    source_files=(*base.source_files, Path(base.path)), edited_from=base)
 
 
@@ -135,6 +141,26 @@ def edited_environment(base: EnvironmentSpec, table: object, path: Path, geometr
     changes = read_changes(table, schema.ENVIRONMENT, "environment", base.kind, path, geometry,
                            _values(base, schema.ENVIRONMENT))
     return replace(base, **{schema.ENVIRONMENT.field(name).model_attr: value for name, value in changes.items()})
+
+
+def edited_lights(base: tuple, table: object, path: Path, geometry: str) -> tuple:
+    """`base` (the edited file's lights) with the values a scene of edits' [lights.<i>] tables
+    write (i: the light's 0-based place in the file; its type and image stay the file's)."""
+    if not isinstance(table, dict):
+        raise SceneError(path, "lights: expected tables by the light's place, e.g. [lights.0]")
+    lights = list(base)
+    for key, body in table.items():
+        if not key.isdigit() or int(key) >= len(base):
+            raise SceneError(path, f"lights.{key}: the edited scene has {len(base)} lights (lights.0 to "
+                                   f"lights.{len(base) - 1})" if base else f"lights.{key}: the edited scene has no lights")
+        i = int(key)
+        for fixed in ("type", "texture"):
+            if isinstance(body, dict) and fixed in body:
+                raise SceneError(path, f"lights.{key}.{fixed}: a scene of edits keeps the light's {fixed}")
+        changes = read_changes(body, schema.LIGHT, f"lights.{key}", base[i].kind, path, geometry,
+                               _values(base[i], schema.LIGHT))
+        lights[i] = replace(base[i], **{schema.LIGHT.field(name).model_attr: value for name, value in changes.items()})
+    return tuple(lights)
 
 
 def relative_reference(file: Path, directory: Path) -> str:

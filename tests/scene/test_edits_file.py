@@ -131,6 +131,7 @@ def test_what_a_scene_of_edits_cannot_say_is_one_line(cornell, tmp_path):
     ('[scene]\nedits = "cornell_box.xml"\n[materials.red]\ntype = "conductor"\nmetal = "Au"\nbase_color = [1, 0, 0]\n',
      "cannot be combined"),
     ('[scene]\nedits = "cornell_box.xml"\n[environment]\ntype = "sky"\n', "environment.type: a scene of edits keeps"),
+    ('[scene]\nedits = "cornell_box.xml"\n[lights.0]\nintensity = [1, 1, 1]\n', "lights.0: the edited scene has no lights"),
 ])
 def test_a_bad_scene_of_edits_is_one_line_naming_it(cornell, tmp_path, text, problem):
     (tmp_path / "other.toml").write_text('[scene]\ngeometry = "mesh"\n')
@@ -149,3 +150,24 @@ def test_the_plain_toml_reader_points_a_scene_of_edits_to_the_catalog(cornell, t
     assert load_any(path).materials == cornell.materials
     with pytest.raises(SceneError, match="opened with renderer.scene.catalog.load_any"):
         load_scene(path)
+
+
+def test_a_pbrt_scenes_light_edits_and_bad_light_tables(tmp_path):
+    from renderer.editing import SceneLight, clamped, with_light
+
+    path = write(tmp_path, CAMERA + 'WorldBegin\nLightSource "spot" "point3 from" [0 2 0] "point3 to" [0 0 0] '
+                 '"float coneangle" [30] "blackbody I" [3000]\nLightSource "point" "point3 from" [1 1 1]\n'
+                 + 'Shape "sphere" "float radius" [0.5]\n', name="lamps.pbrt")
+    loaded = load_any(path)
+    spot, _ = clamped(SceneLight(0, replace(loaded.lights[0], cutoff_angle=40.0, position=(0.0, 3.0, 0.5))))
+    edited = with_light(loaded, spot)
+    saved = save_edits(edited, loaded)
+    assert load_any(saved).lights == edited.lights and "[lights.1]" not in saved.read_text()
+    for table, problem in (("[lights.2]\nintensity = [1, 1, 1]", r"lights.2: the edited scene has 2 lights \(lights.0 to lights.1\)"),
+                           ('[lights.0]\ntype = "point"', "lights.0.type: a scene of edits keeps the light's type"),
+                           ("[lights.1]\ncutoff_angle = 10", "lights.1.cutoff_angle: only allowed with type 'spot'"),
+                           ("[lights.0]\nbeam_width = 50", "beam_width")):
+        bad = tmp_path / "bad.toml"
+        bad.write_text('[scene]\nedits = "lamps.pbrt"\n' + table + "\n")
+        with pytest.raises(SceneError, match=problem):
+            load_any(bad)

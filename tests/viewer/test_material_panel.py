@@ -91,3 +91,34 @@ def test_the_environment_panel_turns_and_scales_it():
     assert "zenith colour" in g.drawn and "intensity >= 0" in g.drawn
     same, _ = draw_environment_panel(FakeGui(), (960, 540), sky)
     assert same is sky
+
+
+def test_the_light_panel_has_its_kinds_controls_and_the_environment_panel_lists_lights():
+    import math
+
+    from renderer.editing import SceneLight
+    from renderer.scene.description import EnvironmentSpec, LightSpec
+    from viewer.light_panel import angles_direction, direction_angles, draw_light_panel
+    from viewer.material_panel import draw_environment_panel
+
+    spot = SceneLight(2, LightSpec("spot", position=(0.0, 3.0, 0.0), direction=(0.0, -1.0, 0.0), intensity=(8.0, 4.0, 2.0)))
+    g = FakeGui()
+    same, actions = draw_light_panel(g, (960, 540), spot, extent=5.0)
+    assert same is spot and actions == [] and "lights[2]: spot light" in g.drawn
+    assert {"intensity colour", "position y", "direction elevation [-90, 90]", "beam_width [0, 20]"} <= set(g.drawn)
+    assert any(label.startswith("cutoff_angle (0, 180)") for label in g.drawn)
+    edited, _ = draw_light_panel(FakeGui(values={"intensity strength": 16.0, "position x": 1.0,
+                                                 "direction elevation": -45.0}), (960, 540), spot, 5.0)
+    assert edited.spec.intensity == (16.0, 8.0, 4.0) and edited.spec.position == (1.0, 3.0, 0.0)
+    assert math.isclose(edited.spec.direction[1], -math.sqrt(0.5)) and edited.index == 2
+    sun = SceneLight(0, LightSpec("directional", direction=(0.0, -1.0, 0.0)))
+    g = FakeGui()
+    draw_light_panel(g, (960, 540), sun, 5.0)
+    assert "irradiance colour" in g.drawn and not any(label.startswith("position") for label in g.drawn)
+    for d in [(0.3, -0.8, 0.52), (0.0, 1.0, 0.0), (-1.0, 0.0, 0.0)]:
+        unit = tuple(c / math.hypot(*d) for c in d)
+        assert all(math.isclose(a, b, abs_tol=1e-12) for a, b in zip(angles_direction(*direction_angles(d)), unit))
+    g = FakeGui(clicks={"lights[1]"})
+    _, actions = draw_environment_panel(g, (960, 540), EnvironmentSpec(kind="constant"),
+                                        lights=(sun.spec, spot.spec))
+    assert actions == ["open_light:1"] and "lights[0]: directional  (edit)" in g.drawn

@@ -31,6 +31,25 @@ def tall_box_cursor(scene):
     return 0.5 - 0.33 / (2 * half), 0.5 - 0.4 / (2 * half)
 
 
+@pytest.fixture(scope="module")
+def viewer(tmp_path_factory):
+    """One window for the module (GGUI keeps each window's device objects for the process): each
+    test shows its own scene file in it (ViewerApp.select_scene)."""
+    first = tmp_path_factory.mktemp("viewer") / "cornell_box.toml"
+    shutil.copy(REPO / "assets" / "scenes" / "cornell_box.toml", first)
+    return ViewerApp(first, size=SIZE, show_window=False, scenes=[first], settle_seconds=0.0,
+                     still_present_interval=0.0)
+
+
+def showing(viewer, path):
+    """The viewer showing `path`, its HUD hidden (at 64x64 it would cover the box, and a click there
+    is the HUD's)."""
+    viewer.select_scene(path)
+    viewer.session.hud_visible = False
+    viewer.step()
+    return viewer
+
+
 @pytest.fixture
 def cornell(tmp_path):
     path = tmp_path / "cornell_box.toml"
@@ -63,11 +82,9 @@ def test_the_editor_applies_undoes_redoes_resets_and_rebuilds(cornell):
     assert rebuilt is built[0] and editor.recompiled and rebuilt.scene.materials != renderer.scene.materials
 
 
-def test_click_edit_undo_and_save_in_the_window(cornell):
-    app = ViewerApp(cornell, size=SIZE, show_window=False, scenes=[cornell], settle_seconds=0.0,
-                    still_present_interval=0.0)
-    app.session.hud_visible = False  # at 64x64 the HUD would cover the box (a click there is the HUD's)
-    for _ in range(3):
+def test_click_edit_undo_and_save_in_the_window(viewer, cornell):
+    app = showing(viewer, cornell)
+    for _ in range(2):
         app.step()
     cursor = tall_box_cursor(app.renderer.scene)
     app.step(FrameInput(cursor=cursor, pressed=("LMB",), released=("LMB",)))  # a click within one frame
@@ -134,16 +151,14 @@ def test_a_click_on_nothing_opens_the_environment_whose_edits_save(tmp_path):
     assert renderer.scene.environment == scene.environment
 
 
-def test_a_mitsuba_scenes_edits_save_as_a_scene_of_edits_that_renders_as_shown(tmp_path):
+def test_a_mitsuba_scenes_edits_save_as_a_scene_of_edits_that_renders_as_shown(viewer, tmp_path):
     from renderer.scene.catalog import load_any
 
     for file in (REPO / "tests" / "data" / "mitsuba").iterdir():
         if file.is_file():
             shutil.copy(file, tmp_path / file.name)
     xml = tmp_path / "cornell_box.xml"
-    app = ViewerApp(xml, size=SIZE, show_window=False, scenes=[xml], settle_seconds=0.0, still_present_interval=0.0)
-    app.session.hud_visible = False
-    app.step()
+    app = showing(viewer, xml)
     app.step(FrameInput(cursor=tall_box_cursor(app.renderer.scene), pressed=("LMB",), released=("LMB",)))
     assert app.editor.picked.material_name == "white"  # the Mitsuba file's boxes share the walls' BSDF
     white = app.editor.picked_material(app.renderer.scene)
@@ -161,3 +176,82 @@ def test_a_mitsuba_scenes_edits_save_as_a_scene_of_edits_that_renders_as_shown(t
     shown = Renderer(load_any(xml), max_size=(16, 16))
     assert shown.edit_materials(app.renderer.scene)
     np.testing.assert_array_equal(image(shown), image(Renderer(again, max_size=(16, 16))))
+
+
+def test_a_light_edited_from_the_environments_panel_undoes_resets_and_saves(tmp_path):
+    from renderer.editing import SceneLight
+    from tests.render.test_light_edits import LAMPS
+
+    path = tmp_path / "lamps.toml"
+    path.write_text(LAMPS + "# the end of the file, kept\n")
+    scene = load_scene(path)
+    renderer = Renderer(scene, max_size=(16, 16))
+    editor = SceneEditor(scene, lambda s: pytest.fail("a light's values need no new renderer"))
+    editor.open_light(1)
+    assert editor.panel_open and editor.light_open == 1 and editor.picked is None
+    spot = SceneLight(1, scene.lights[1])
+    editor.apply(renderer, replace(spot, spec=replace(spot.spec, cutoff_angle=400.0, beam_width=500.0)))
+    assert renderer.scene.lights[1].cutoff_angle < 180.0 and renderer.scene.lights[1].beam_width == renderer.scene.lights[1].cutoff_angle
+    assert any("cutoff_angle 400" in n for n in editor.notes) and any("at most cutoff_angle" in n for n in editor.notes)
+    editor.undo(renderer)
+    assert renderer.scene.lights == scene.lights
+    brighter = replace(spot, spec=replace(spot.spec, intensity=(40.0, 36.0, 30.0), position=(-0.5, 2.5, 0.5)))
+    editor.apply(renderer, brighter)
+    saved = editor.save(renderer.scene)
+    again = load_scene(saved)
+    assert again.lights == renderer.scene.lights and "# the end of the file, kept" in saved.read_text()
+    editor.reset_material(renderer)  # the light's panel is open: back to the file's
+    assert renderer.scene.lights == scene.lights
+
+
+def test_a_mitsuba_scenes_light_edits_save_as_a_scene_of_edits(tmp_path):
+    from renderer.editing import SceneLight
+    from renderer.scene.catalog import load_any
+
+    xml = tmp_path / "spot.xml"
+    xml.write_text('''<scene version="3.0.0">
+    <sensor type="perspective"><float name="fov" value="45"/>
+        <transform name="to_world"><lookat origin="0, 2, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
+    </sensor>
+    <emitter type="spot"><rgb name="intensity" value="10"/><float name="cutoff_angle" value="25"/>
+        <transform name="to_world"><lookat origin="0, 3, 0" target="0, 0, 0" up="0, 0, 1"/></transform>
+    </emitter>
+    <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/><scale value="3"/></transform></shape>
+</scene>''')
+    loaded = load_any(xml)
+    renderer = Renderer(loaded, max_size=(16, 16))
+    editor = SceneEditor(loaded, lambda s: pytest.fail("in place"))
+    spot = SceneLight(0, loaded.lights[0])
+    editor.apply(renderer, replace(spot, spec=replace(spot.spec, intensity=(5.0, 10.0, 20.0), cutoff_angle=35.0,
+                                                      direction=(0.1, -1.0, 0.0))))
+    saved = editor.save(renderer.scene)
+    assert "[lights.0]" in saved.read_text() and "type" not in saved.read_text().split("[lights.0]")[1]
+    again = load_any(saved)
+    assert again.lights[0].intensity == (5.0, 10.0, 20.0) and again.lights[0].cutoff_angle == 35.0
+
+    def image(r):
+        r.render(CameraFrame.from_spec(r.scene.camera), 2, "mis", seed=2)
+        return r.image()
+
+    np.testing.assert_array_equal(image(renderer), image(Renderer(again, max_size=(16, 16))))
+
+
+def test_the_light_panel_in_the_window(viewer, tmp_path):
+    from renderer.editing import SceneLight
+    from tests.render.test_light_edits import LAMPS
+
+    path = tmp_path / "lamps.toml"
+    path.write_text(LAMPS)
+    app = showing(viewer, path)
+    app.session.hud_visible = True
+    app.dispatch("open_light:1", FrameInput(), 0.0)
+    app.step()  # GGUI draws the light's panel
+    renderer = app.renderer
+    spot = SceneLight(1, renderer.scene.lights[1])
+    app.edit(lambda r: app.editor.apply(r, replace(spot, spec=replace(spot.spec, intensity=(60.0, 50.0, 40.0)))), 0.0)
+    app.step()
+    assert app.renderer is renderer and renderer.scene.lights[1].intensity == (60.0, 50.0, 40.0)
+    assert app.session.error is None and app.editor.light_open == 1
+    app.dispatch("close_panel", FrameInput(), 0.0)
+    assert not app.editor.panel_open
