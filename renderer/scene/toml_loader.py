@@ -63,7 +63,7 @@ def load_scene(path: str | os.PathLike, options: Optional[LoadOptions] = None) -
 def scene_from_toml(data: dict, path: str | os.PathLike, options: LoadOptions) -> Scene:
     """The scene of a parsed TOML scene file (not a scene of edits: renderer/scene/edits_file.py)."""
     try:
-        if "edits" in data.get("scene", {}):
+        if is_scene_of_edits(data):
             raise _Invalid("scene.edits", "a scene of edits is opened with renderer.scene.catalog.load_any")
         return _build_scene(data, Path(path), ModelFiles(options))
     except _Invalid as problem:

@@ -349,7 +349,7 @@ BAD_SCENES = {
     "unknown geometry": (scene_text(header='[scene]\ngeometry = "voxels"\n'),
                          "scene.geometry: unknown value 'voxels' (allowed: sdf, mesh)"),
     "unknown scene field": (scene_text(header='[scene]\ngeometry = "sdf"\ntitle = "x"\n'),
-                            "scene: unknown field 'title' (allowed: name, description, geometry)"),
+                            "scene: unknown field 'title' (allowed: name, description, geometry, edits)"),
     "name not a string": (scene_text(header='[scene]\ngeometry = "sdf"\nname = 3\n'),
                           "scene.name: expected a string, got integer 3"),
     # camera: types, vectors, ranges, non-finite numbers
