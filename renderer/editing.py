@@ -8,7 +8,7 @@ import math
 from dataclasses import dataclass, field, fields, replace
 
 from renderer.scene.description import EnvironmentSpec, LightSpec, MaterialSpec, Scene
-from renderer.scene.schema import ENVIRONMENT as ENVIRONMENT_SECTION, LIGHT, MATERIAL
+from renderer.scene.schema import ENVIRONMENT as ENVIRONMENT_SECTION, LIGHT, MATERIAL, MODEL_MATERIAL
 
 ENVIRONMENT = "environment"  # the history's name for the environment's edits
 
@@ -23,6 +23,31 @@ class SceneLight:
     @property
     def name(self) -> str:
         return f"lights[{self.index}]"
+
+
+@dataclass(frozen=True)
+class ModelMaterialEdit:
+    """A model file's own material as the scene edits it: its number among the model materials
+    and the factors set ((PbrMaterial attribute, value) pairs, sorted; none: the file's)."""
+
+    index: int
+    changes: tuple = ()
+
+    @property
+    def name(self) -> str:
+        return f"model material {self.index}"
+
+
+def model_material_edit(scene: Scene, index: int) -> ModelMaterialEdit:
+    """The scene's edit of model material `index` (no changes where it has none)."""
+    return ModelMaterialEdit(index, dict(scene.model_material_edits).get(index, ()))
+
+
+def with_model_material(scene: Scene, edit: ModelMaterialEdit) -> Scene:
+    edits = {i: changes for i, changes in scene.model_material_edits if i != edit.index}
+    if edit.changes:
+        edits[edit.index] = tuple(sorted(edit.changes))
+    return replace(scene, model_material_edits=tuple(sorted(edits.items())))
 
 
 def with_light(scene: Scene, light: SceneLight) -> Scene:
@@ -45,6 +70,9 @@ class Edit:
 
     def fields_changed(self) -> frozenset:
         before, after = self.before, self.after
+        if isinstance(after, ModelMaterialEdit):
+            was, now = dict(before.changes), dict(after.changes)
+            return frozenset(k for k in {*was, *now} if was.get(k) != now.get(k))
         if isinstance(after, SceneLight):
             before, after = before.spec, after.spec
         return frozenset(f.name for f in fields(type(before)) if getattr(before, f.name) != getattr(after, f.name))
@@ -87,6 +115,8 @@ def clamped(spec):
     """`spec` (a MaterialSpec, an EnvironmentSpec or a SceneLight) with every numeric field brought
     within its range in the scene format, and a line per value changed ("roughness 1.5 -> 1
     (allowed [0, 1])")."""
+    if isinstance(spec, ModelMaterialEdit):
+        return _clamped_model_material(spec)
     if isinstance(spec, SceneLight):
         light, notes = clamped(spec.spec)
         light, more = clamped_light(light)
@@ -113,6 +143,19 @@ def clamped(spec):
         if f.model_attr in changes:
             notes.append(f"{f.name} {_text(value)} -> {_text(changes[f.model_attr])} (allowed {f.range})")
     return (replace(spec, **changes) if changes else spec), notes
+
+
+def _clamped_model_material(edit: ModelMaterialEdit) -> tuple:
+    fields_by_attr = {f.model_attr: f for f in MODEL_MATERIAL.fields}
+    changes, notes = [], []
+    for attr, value in edit.changes:
+        f = fields_by_attr[attr]
+        fixed = (tuple(_within(float(c), f.range) for c in value) if isinstance(value, tuple)
+                 else _within(float(value), f.range))
+        if fixed != value:
+            notes.append(f"{f.name} {_text(value)} -> {_text(fixed)} (allowed {f.range})")
+        changes.append((attr, fixed))
+    return ModelMaterialEdit(edit.index, tuple(sorted(changes))), notes
 
 
 def clamped_light(light: LightSpec) -> tuple:

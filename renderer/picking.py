@@ -20,10 +20,11 @@ class Pick:
     material_index: int  # in Scene.materials; -1 for a model file's own material
     material_name: str
     material_kind: str
+    model_material: int = -1  # a model file's own material: its number among them (model_materials.<i>)
 
     @property
     def editable(self) -> bool:
-        """Whether the material is one of the scene's (a model file's own is not edited here)."""
+        """Whether the material is one of the scene's (a model file's own has its own panel)."""
         return self.material_index >= 0
 
     def where(self) -> str:
@@ -51,7 +52,8 @@ def pick(renderer: Renderer, camera: CameraFrame, u: float, v: float,
         spec = scene.materials[hit.material]
         return Pick(hit, index, label, hit.material, spec.name, spec.kind)
     # a model file's own material (glTF's are shaded as principled), numbered after the scene's
-    return Pick(hit, index, label, -1, f"model material {hit.material - len(scene.materials)}", "principled")
+    number = hit.material - len(scene.materials)
+    return Pick(hit, index, label, -1, f"model material {number}", "principled", model_material=number)
 
 
 def _object_kind(obj) -> str:

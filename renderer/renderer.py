@@ -279,18 +279,21 @@ class Renderer:
         film is reset; the Features follow the materials, so a kind or effect the edit brings in
         compiles on the next render and one it drops leaves the kernel, while an edit of values
         compiles nothing. Lights are rebuilt where emission changed (their selection weighs it).
-        Returns False, changing nothing, where the edit needs the world built again (a texture
-        added, removed or changed; a different number of rows, media or rough-plastic tables):
-        make a new Renderer of `scene` then."""
+        Model files' own materials follow scene.model_material_edits. Returns False, changing
+        nothing, where the edit needs the world built again (a texture added, removed or changed; a
+        different number of rows, media or rough-plastic tables; an instanced mesh's material
+        starting or stopping to emit): make a new Renderer of `scene` then."""
         old = self.scene
         if [m.name for m in scene.materials] != [m.name for m in old.materials]:
             raise ValueError("an edit keeps the scene's materials and their order")
         if any(a.textures != b.textures for a, b in zip(scene.materials, old.materials)):
             return False
         if self._mesh is not None:
-            from renderer.mesh_world import material_rows
+            from renderer.mesh_world import emits, material_rows, with_model_edits
 
-            materials = tuple(scene.materials) + tuple(self._mesh.materials[len(old.materials):])
+            materials = tuple(scene.materials) + with_model_edits(self._mesh.materials[len(old.materials):], scene)
+            if self._mesh.data.has_instances and any(emits(a) != emits(b) for a, b in zip(materials, self._mesh.materials)):
+                return False  # an emitter's instances were flattened into world triangles at assembly
             rows, _ = material_rows(scene, materials, self._mesh.spec_images)
             mesh = replace(self._mesh, rows=rows, materials=materials)
             features = mesh.features(scene)
@@ -311,6 +314,14 @@ class Renderer:
             self._refit_lights()
         self.reset()
         return True
+
+    def model_material(self, index: int):
+        """A model file's own material as shown (a ModelMaterial: `pbr`, and `file_pbr` where the
+        scene edits it), by its number among the model materials; None where there is none."""
+        k = len(self.scene.materials) + index
+        if self._mesh is None or index < 0 or k >= len(self._mesh.materials):
+            return None
+        return self._mesh.materials[k]
 
     def edit_environment(self, spec) -> bool:
         """Adopt an edited environment of the same kind and image (intensity, orientation about

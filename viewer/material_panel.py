@@ -9,7 +9,6 @@ actions of the buttons clicked; the window applies them (viewer/scene_editor.py)
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Optional
 
 from renderer.materials.metals import metal_names
 from renderer.picking import Pick
@@ -109,19 +108,15 @@ def field_control(g, f, value):
     return slider_float(g, label, float(value), lo, hi)
 
 
-def draw_material_panel(gui, window_size: tuple[int, int], picked: Pick, spec: Optional[MaterialSpec],
-                        notes: list[str] = ()) -> tuple[Optional[MaterialSpec], list[str]]:
-    """Draw the panel of the picked material; returns (the material as edited, actions)."""
+def draw_material_panel(gui, window_size: tuple[int, int], picked: Pick, spec: MaterialSpec,
+                        notes: list[str] = ()) -> tuple[MaterialSpec, list[str]]:
+    """Draw the panel of the picked material (one of the scene's: a model file's own has
+    viewer/model_material_panel.py); returns (the material as edited, actions)."""
     r = panel_rect(window_size)
     actions: list[str] = []
     with gui.sub_window("Material", r.x, r.y, r.width, r.height) as g:
         text_line(g, picked.object_label)
         text_line(g, picked.where())
-        if spec is None:  # a model file's own material
-            text_line(g, f"{picked.material_name} (a model file's material, not edited here)")
-            if g.button("close"):
-                actions.append("close_panel")
-            return None, actions
         text_line(g, f"material '{spec.name}'")
         changes = {}
         for name, metal in METAL_PRESETS:

@@ -12,7 +12,8 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from renderer.camera import CameraFrame
-from renderer.editing import Edit, EditHistory, SceneLight, canonical, clamped, material_named, with_light, with_material
+from renderer.editing import (Edit, EditHistory, ModelMaterialEdit, SceneLight, canonical, clamped, material_named,
+                              model_material_edit, with_light, with_material, with_model_material)
 from renderer.picking import Pick, pick
 from renderer.renderer import Renderer
 from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene
@@ -67,7 +68,13 @@ class SceneEditor:
         edit."""
         spec, self.notes = clamped(spec)
         self.recompiled = False
-        if isinstance(spec, SceneLight):
+        if isinstance(spec, ModelMaterialEdit):
+            before = model_material_edit(renderer.scene, spec.index)
+            if spec == before:
+                return renderer
+            scene = with_model_material(renderer.scene, spec)
+            in_place = renderer.edit_materials(scene)
+        elif isinstance(spec, SceneLight):
             before = SceneLight(spec.index, renderer.scene.lights[spec.index])
             if spec == before:
                 return renderer
@@ -108,6 +115,8 @@ class SceneEditor:
             return self.apply(renderer, SceneLight(self.light_open, self.loaded.lights[self.light_open]))
         if self.environment_open:
             return self.apply(renderer, self.loaded.environment)
+        if self.picked is not None and self.picked.model_material >= 0:
+            return self.apply(renderer, model_material_edit(self.loaded, self.picked.model_material))
         if self.picked is None or not self.picked.editable:
             return renderer
         return self.apply(renderer, material_named(self.loaded, self.picked.material_name))

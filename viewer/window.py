@@ -53,6 +53,7 @@ from viewer.display import DenoisedDisplay, DisplayImages, DisplaySettings, show
 from viewer.hotkeys import KeyMap
 from viewer.light_panel import draw_light_panel
 from viewer.material_panel import draw_environment_panel, draw_material_panel, panel_rect
+from viewer.model_material_panel import draw_model_material_panel
 from viewer.scene_editor import SceneEditor
 from viewer.session import (DEFAULT_TARGET_SECONDS, MAX_PRESENT_INTERVAL, MOVING_PROBE_SLICES, SETTLE_SECONDS,
                             STATS_INTERVAL, Every, RateMeter, ViewerSession, scene_scale, screenshot_dir,
@@ -717,7 +718,11 @@ class ViewerApp:
         if editor is not None and editor.panel_open:
             # the material's (or the environment's, or a light's) panel, with or without the HUD
             scene = self.renderer.scene
-            if editor.picked is not None:
+            if editor.picked is not None and editor.picked.model_material >= 0:
+                spec = None  # the panel returns an edit only where a factor changed
+                model = self.renderer.model_material(editor.picked.model_material)
+                edited, actions = draw_model_material_panel(self.gui, self.size, editor.picked, model, editor.notes)
+            elif editor.picked is not None:
                 spec = editor.picked_material(scene)
                 edited, actions = draw_material_panel(self.gui, self.size, editor.picked, spec, editor.notes)
             elif editor.light_open is not None:

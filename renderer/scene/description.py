@@ -523,6 +523,9 @@ class Scene:
     # The parameters a reader substituted from the command line (a Mitsuba scene's -D NAME=VALUE): the
     # same files with other parameters are another scene, to a checkpoint's fingerprint too.
     parameters: tuple[tuple[str, str], ...] = ()
+    # Edits of model files' own materials ([model_materials.<i>]): (i, ((PbrMaterial attribute, value),
+    # ...)) per edited material, i counting the model materials in the order the objects read them.
+    model_material_edits: tuple = ()
     # A scene read from a TOML scene of edits (renderer/scene/edits_file.py): the scene of the file
     # it edits, as that file gives it; saving edits again writes what differs from it.
     edited_from: Optional["Scene"] = field(default=None, compare=False, repr=False)

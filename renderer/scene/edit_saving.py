@@ -27,7 +27,7 @@ from renderer.scene.description import EnvironmentSpec, LightSpec, MaterialSpec,
 from renderer.scene.edits_file import FRESNEL_DESCRIPTIONS, edited_environment, edited_lights, edited_material, relative_reference
 from renderer.scene.errors import SceneError
 from renderer.scene.foreign_formats import is_foreign
-from renderer.scene.schema import ENVIRONMENT, LIGHT, MATERIAL
+from renderer.scene.schema import ENVIRONMENT, LIGHT, MATERIAL, MODEL_MATERIAL
 
 EDITED_SUFFIX = "_edited"
 
@@ -96,7 +96,22 @@ def save_edits(scene: Scene, loaded: Scene, path: Optional[Path] = None, overwri
         if spec != was_light:  # the changed values set in the light's own [[lights]] table
             for key, value in _light_changes(spec, was_light, target).items():
                 document["lights"][i][key] = value
+    if scene.model_material_edits != loaded.model_material_edits:
+        if "model_materials" in document:
+            del document["model_materials"]
+        if scene.model_material_edits:
+            document.add("model_materials", model_materials_table(scene.model_material_edits))
     return _write(target, tomlkit.dumps(document))
+
+
+def model_materials_table(edits: tuple):
+    """[model_materials.<i>] tables of Scene.model_material_edits."""
+    names = {f.model_attr: f.name for f in MODEL_MATERIAL.fields}
+    table = tomlkit.table(is_super_table=True)
+    for index, changes in edits:
+        table.add(str(index), _toml_table({names[attr]: list(value) if isinstance(value, tuple) else value
+                                           for attr, value in changes}))
+    return table
 
 
 def _write(target: Path, text: str) -> Path:
@@ -137,6 +152,8 @@ def edits_document(scene: Scene, base: Scene, target: Path) -> str:
             lights.add(str(i), _toml_table(values))
     if len(lights):
         document.add("lights", lights)
+    if scene.model_material_edits:
+        document.add("model_materials", model_materials_table(scene.model_material_edits))
     if _other_changes(scene, base):
         raise SceneError(base.path, f"a scene of edits holds materials and the environment; its {_other_changes(scene, base)} "
                                     "changed too")
@@ -144,7 +161,8 @@ def edits_document(scene: Scene, base: Scene, target: Path) -> str:
 
 
 def _other_changes(scene: Scene, base: Scene) -> str:
-    kept = {"path", "materials", "environment", "lights", "description", "source_files", "edited_from"}
+    kept = {"path", "materials", "environment", "lights", "model_material_edits", "description", "source_files",
+            "edited_from"}
     return ", ".join(f.name for f in fields(Scene) if f.compare and f.name not in kept
                      and getattr(scene, f.name) != getattr(base, f.name))
 

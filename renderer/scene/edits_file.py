@@ -18,7 +18,8 @@ are kept (renderer/scene/edit_saving.py writes it):
 The edited file and its models are referenced, never copied, so the scene of edits renders what the
 edited file does with those values changed, bit for bit as the viewer showed it. A table's fields
 are those of the TOML format's [materials.<name>], [environment] and [[lights]]
-(renderer/scene/schema.py), checked the same way; a light keeps its type and image. A conductor's Fresnel written in the table replaces the file's own description
+(renderer/scene/schema.py), checked the same way; a light keeps its type and image. A model
+file's own materials are edited by [model_materials.<i>], as in any TOML scene. A conductor's Fresnel written in the table replaces the file's own description
 of it (a `metal` drops the file's eta and k).
 """
 from __future__ import annotations
@@ -33,9 +34,10 @@ from renderer.scene.errors import SceneError
 from renderer.scene.foreign_formats import is_foreign, load_foreign
 from renderer.scene.load_options import LoadOptions
 from renderer.scene.references import missing_file_problem
-from renderer.scene.toml_loader import is_scene_of_edits, read_changes, read_toml, scene_from_toml
+from renderer.scene.toml_loader import (is_scene_of_edits, read_changes, read_model_material_edits, read_toml,
+                                       scene_from_toml)
 
-SECTIONS = ("scene", "materials", "environment", "lights")
+SECTIONS = ("scene", "materials", "environment", "lights", "model_materials")
 HEADER_FIELDS = ("edits", "description")
 # The fields that describe a conductor's Fresnel, each set replacing the others (schema rule).
 FRESNEL_DESCRIPTIONS = (("metal",), ("eta", "k"), ("base_color", "edge_tint"))
@@ -78,7 +80,9 @@ def _edited_scene(data: dict, path: Path, options: LoadOptions) -> Scene:
     description = header.get("description", base.description)
     if not isinstance(description, str):
         raise SceneError(path, "scene.description: expected a string")
-    return replace(base, path=path, materials=edited, environment=environment, lights=lights, description=description,
+    model_edits = read_model_material_edits(data.get("model_materials"), path)
+    return replace(base, path=path, materials=edited, environment=environment, lights=lights,
+                   model_material_edits=model_edits or base.model_material_edits, description=description,
                    source_files=(*base.source_files, Path(base.path)), edited_from=base)
 
 

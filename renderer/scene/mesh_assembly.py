@@ -26,6 +26,7 @@ from renderer.scene.generators import generated_mesh
 from renderer.scene.mesh_adjustments import adjusted, selected_meshes
 from renderer.scene.mesh_attributes import AttributeColoring
 from renderer.scene.mesh_model import PbrMaterial, TextureImage, TriangleMesh, place_mesh
+from renderer.scene.model_material_edits import edited_pbr, edits_by_index
 from renderer.scene.model_formats import MeshWarning
 from renderer.scene.orientation import rewind_to_normals
 from renderer.scene.texture_images import texture_image
@@ -47,6 +48,8 @@ class ModelMaterial:
     pbr: PbrMaterial
     first_image: int
     medium: Optional[MediumSpec] = None
+    # the material as the file gives it, where the scene edits it (Scene.model_material_edits)
+    file_pbr: Optional[PbrMaterial] = None
 
 
 @dataclass
@@ -118,6 +121,7 @@ class _Assembler:
         self.instancing = instancing
         self.materials: list = list(scene.materials)
         self.material_ids = {m.name: i for i, m in enumerate(scene.materials)}
+        self.model_edits = edits_by_index(scene)
         self.images: list[TextureImage] = []
         self.parts: dict[str, list] = {"spheres": [], "sphere_mat": [], "sphere_frames": [], "sphere_flip": [],
                                        "quads": [], "quad_mat": [], "quad_flip": [], "discs": [], "disc_mat": []}
@@ -179,7 +183,11 @@ class _Assembler:
             self.images.extend(asset.images)
             mats = []
             for m in asset.materials:
-                self.materials.append(ModelMaterial(m, first_image, volume_medium(m, obj.file)))
+                changes = self.model_edits.get(len(self.materials) - len(self.scene.materials))
+                material = ModelMaterial(m, first_image, volume_medium(m, obj.file))
+                if changes:
+                    material = replace(material, pbr=edited_pbr(m, changes), file_pbr=m)
+                self.materials.append(material)
                 mats.append(len(self.materials) - 1)
         matrix = obj.matrix()
         turned = 0
@@ -296,6 +304,11 @@ class _Assembler:
             instance_to_world=(np.concatenate([m for _, m in self.instances]) if self.instances
                                else np.zeros((0, 3, 4))),
             **bezier_fields(self.beziers))
+        model_count = len(self.materials) - len(self.scene.materials)
+        beyond = [i for i in self.model_edits if i >= model_count]
+        if beyond:
+            raise SceneError(self.scene.path, f"model_materials.{beyond[0]}: the scene's model files bring "
+                                              f"{model_count} materials" + (f" (0 to {model_count - 1})" if model_count else ""))
         return MeshAssembly(data, tuple(self.materials), self.images, self.spec_images)
 
 

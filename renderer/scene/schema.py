@@ -43,6 +43,7 @@ from .schema_checks import (
     check_water_waves,
     water_fields_check,
 )
+from .schema_model_materials import MODEL_MATERIAL
 from .schema_types import (
     AT_LEAST_ONE,
     EXPOSURE_EV,
@@ -87,9 +88,10 @@ SCENE = Section(
               choices=GEOMETRY_KINDS),
         Field("edits", "string", None, "Makes the file a scene of edits: a Mitsuba 3 (`.xml`), pbrt-v4 "
               "(`.pbrt`) or model file, relative to this one, read as it is; the file then holds only "
-              "`[scene]` (`edits`, `description`), and `[materials.<name>]` and `[environment]` tables "
-              "with the values that change (a material by its name in that file; fields not written keep "
-              "the file's). The viewer saves its edits of such scenes this way.", in_model=False,
+              "`[scene]` (`edits`, `description`), and `[materials.<name>]`, `[environment]`, "
+              "`[lights.<i>]` and `[model_materials.<i>]` tables with the values that change (a material by its name in that file, a "
+              "light by its 0-based place; fields not written keep the file's; a light keeps its type "
+              "and image). The viewer saves its edits of such scenes this way.", in_model=False,
               default_doc="none"),
     ),
 )
@@ -766,8 +768,9 @@ GENERATORS = (
 GENERATORS_BY_NAME = {g.name: g for g in GENERATORS}
 
 # Top-level sections, in the order the documentation presents them.
-TOP_LEVEL = ("scene", "camera", "render", "environment", "lights", "materials", "media", "fog", "objects")
-SECTIONS = (SCENE, CAMERA, RENDER, MARCH, ENVIRONMENT, LIGHT, MATERIAL, MEDIUM, FOG)
+TOP_LEVEL = ("scene", "camera", "render", "environment", "lights", "materials", "model_materials", "media", "fog",
+             "objects")
+SECTIONS = (SCENE, CAMERA, RENDER, MARCH, ENVIRONMENT, LIGHT, MATERIAL, MODEL_MATERIAL, MEDIUM, FOG)
 
 ENV_MAP_EXTENSIONS = (".exr", ".hdr")
 SCENE_EXTENSIONS = (".toml",)

@@ -70,6 +70,29 @@ def scene_from_toml(data: dict, path: str | os.PathLike, options: LoadOptions) -
         raise SceneError(path, problem.text()) from None
 
 
+def read_model_material_edits(raw: object, scene_path: Path) -> tuple:
+    """A file's [model_materials.<i>] tables as Scene.model_material_edits. Raises SceneError."""
+    try:
+        return _read_model_materials(raw)
+    except _Invalid as problem:
+        raise SceneError(scene_path, problem.text()) from None
+
+
+def _read_model_materials(raw: object) -> tuple:
+    """(i, ((PbrMaterial attribute, value), ...)) per [model_materials.<i>] table, by i."""
+    edits = []
+    by_name = {f.name: f for f in schema.MODEL_MATERIAL.fields}
+    for key, body in ({} if raw is None else _table(raw, "model_materials")).items():
+        where = f"model_materials.{key}"
+        if not key.isdigit():
+            raise _Invalid(where, "expected a model material's number (0-based), e.g. [model_materials.0]")
+        body = _table(body, where)
+        _check_keys(body, schema.MODEL_MATERIAL.fields, where, None)
+        edits.append((int(key), tuple(sorted((by_name[k].model_attr, _convert(by_name[k], v, f"{where}.{k}"))
+                                             for k, v in body.items()))))
+    return tuple(sorted(edits))
+
+
 def is_scene_of_edits(data: dict) -> bool:
     """Whether a parsed TOML scene file changes a scene of another format ([scene] edits = FILE)."""
     return isinstance(data.get("scene"), dict) and "edits" in data["scene"]
@@ -704,6 +727,9 @@ def _build_scene(data: dict, path: Path, model_files: ModelFiles) -> Scene:
         _check_medium_name(m.outside_medium, media, f"materials.{m.name}.outside_medium")
     fog = _read_fog(data.get("fog"), media)
     geometry = _GEOMETRY_READERS[header["geometry"]](data.get("objects"), materials, path)
+    model_material_edits = _read_model_materials(data.get("model_materials"))
+    if model_material_edits and header["geometry"] != "mesh":
+        raise _Invalid("model_materials", "only a mesh scene reads model files")
     return Scene(
         name=header["name"] if header["name"] is not None else path.stem,
         path=path,
@@ -717,5 +743,6 @@ def _build_scene(data: dict, path: Path, model_files: ModelFiles) -> Scene:
         lights=lights,
         description=header["description"],
         model_files=model_files,
+        model_material_edits=model_material_edits,
         **geometry,
     )

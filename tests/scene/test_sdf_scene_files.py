@@ -342,7 +342,7 @@ OBJ = '[[objects]]\nmaterial = "m"\n'
 BAD_SCENES = {
     # sections and the [scene] header
     "unknown section": (scene_text(extra="[camra]\nfov = 3\n"),
-                        "unknown section 'camra' (allowed: scene, camera, render, environment, lights, materials, media, fog, objects)"),
+                        "unknown section 'camra' (allowed: scene, camera, render, environment, lights, materials, model_materials, media, fog, objects)"),
     "no scene section": ("[materials.m]\n" + SPHERE, "missing [scene] section"),
     "scene not a table": ("scene = 3\n" + MATERIAL + SPHERE, "scene: expected a table, got integer 3"),
     "no geometry": (scene_text(header='[scene]\nname = "x"\n'), "scene: missing required field 'geometry'"),

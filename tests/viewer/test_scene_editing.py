@@ -255,3 +255,23 @@ def test_the_light_panel_in_the_window(viewer, tmp_path):
     assert app.session.error is None and app.editor.light_open == 1
     app.dispatch("close_panel", FrameInput(), 0.0)
     assert not app.editor.panel_open
+
+
+def test_a_model_files_material_in_the_window(viewer, tmp_path):
+    from renderer.editing import ModelMaterialEdit
+
+    path = tmp_path / "colored_quads.gltf"
+    shutil.copy(REPO / "tests" / "data" / "colored_quads.gltf", path)
+    app = showing(viewer, path)
+    app.step(FrameInput(cursor=(0.5, 0.5), pressed=("LMB",), released=("LMB",)))
+    picked = app.editor.picked
+    assert picked is not None and picked.model_material >= 0
+    app.step()  # GGUI draws the model material's panel
+    renderer = app.renderer
+    edit = ModelMaterialEdit(picked.model_material, (("roughness_factor", 0.1),))
+    app.edit(lambda r: app.editor.apply(r, edit), 0.0)
+    app.step()
+    assert app.renderer is renderer and renderer.model_material(picked.model_material).pbr.roughness_factor == 0.1
+    assert app.session.error is None
+    app.step(FrameInput(pressed=("ctrl+s",)))
+    assert app.last_saved == tmp_path / "colored_quads_edited.toml"
