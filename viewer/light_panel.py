@@ -41,8 +41,8 @@ def _position(g, value: tuple, extent: float) -> tuple:
 
 def _direction(g, value: tuple) -> tuple:
     azimuth, elevation = direction_angles(value)
-    new_azimuth = slider_float(g, "direction azimuth [-180, 180]", azimuth, -180.0, 180.0)
-    new_elevation = slider_float(g, "direction elevation [-90, 90]", elevation, -90.0, 90.0)
+    new_azimuth = slider_float(g, "azimuth [-180, 180]", azimuth, -180.0, 180.0)
+    new_elevation = slider_float(g, "elevation [-90, 90]", elevation, -90.0, 90.0)
     if (new_azimuth, new_elevation) == (azimuth, elevation):
         return value
     return angles_direction(new_azimuth, new_elevation)

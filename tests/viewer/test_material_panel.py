@@ -105,10 +105,10 @@ def test_the_light_panel_has_its_kinds_controls_and_the_environment_panel_lists_
     g = FakeGui()
     same, actions = draw_light_panel(g, (960, 540), spot, extent=5.0)
     assert same is spot and actions == [] and "lights[2]: spot light" in g.drawn
-    assert {"intensity colour", "position y", "direction elevation [-90, 90]", "beam_width [0, 20]"} <= set(g.drawn)
+    assert {"intensity colour", "position y", "elevation [-90, 90]", "beam_width [0, 20]"} <= set(g.drawn)
     assert any(label.startswith("cutoff_angle (0, 180)") for label in g.drawn)
     edited, _ = draw_light_panel(FakeGui(values={"intensity strength": 16.0, "position x": 1.0,
-                                                 "direction elevation": -45.0}), (960, 540), spot, 5.0)
+                                                 "elevation": -45.0}), (960, 540), spot, 5.0)
     assert edited.spec.intensity == (16.0, 8.0, 4.0) and edited.spec.position == (1.0, 3.0, 0.0)
     assert math.isclose(edited.spec.direction[1], -math.sqrt(0.5)) and edited.index == 2
     sun = SceneLight(0, LightSpec("directional", direction=(0.0, -1.0, 0.0)))
