@@ -6,12 +6,16 @@ comparison (renderer/bench/whole_process.py).
 
 Imports Mitsuba (and nothing of Lantern's that starts Taichi), loads `mi.cornell_box()` with a box
 filter (renderer.bench.mitsuba_side.cornell_box_dict), renders once and saves the linear RGB image
-(float32, row 0 = top) as .npy. Exit status 3, with a one-line message, where Mitsuba is unusable.
+(float32, row 0 = top) as .npy. It prints "(N spp in T s)" for the render call, as Lantern's
+`render` does, so the comparison can read the render apart from start-up (imports, scene loading,
+JIT kernels from the cache) and the rest. Exit status 3, with a one-line message, where Mitsuba is
+unusable.
 """
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 
 import numpy as np
 
@@ -34,7 +38,11 @@ def main(argv=None) -> int:
     except ms.MitsubaUnavailable as error:
         print(f"mitsuba_process: {error}", file=sys.stderr)
         return 3
-    np.save(args.out, ms.render_scene(scene, args.spp, seed=args.seed))
+    start = time.perf_counter()
+    image = ms.render_scene(scene, args.spp, seed=args.seed)  # np.array() waits for the JIT's work
+    seconds = time.perf_counter() - start
+    np.save(args.out, image)
+    print(f"{args.out}  ({args.spp} spp in {seconds:.2f} s)")
     return 0
 
 

@@ -233,7 +233,11 @@ def integrators_section(report: dict) -> Section:
         section.findings.append(
             f"As whole processes (Cornell box {whole['size']}x{whole['size']}, {whole['spp']} spp), Lantern's render "
             f"command takes {num(whole['lantern']['median_s'])} s against Mitsuba's {num(whole['mitsuba']['median_s'])} s: "
-            f"{times(whole['ratio'])} (target at most {times(whole['target_ratio'])}: {verdict(whole['passed'])}).")
+            f"{times(whole['ratio'])} (target at most {times(whole['target_ratio'])}: {verdict(whole['passed'])})."
+            + (f" Of that, the render alone takes {num(whole['lantern']['render_median_s'])} s against "
+               f"{num(whole['mitsuba']['render_median_s'])} s ({times(whole['render_ratio'])}), start-up and the rest "
+               f"{num(whole['lantern']['outside_render_median_s'])} s against "
+               f"{num(whole['mitsuba']['outside_render_median_s'])} s." if whole.get("render_ratio") else ""))
     mesh = report.get("mesh_heavy") or {}
     if mesh.get("available"):
         section.findings.append(

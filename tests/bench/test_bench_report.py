@@ -92,6 +92,9 @@ def test_tables_are_rendered_from_the_json(reports, tmp_path):
     assert cells["median s"] == num(whole["lantern"]["median_s"]) and cells["RMSE"] == num(whole["lantern"]["rmse"])
     assert cells["time vs Mitsuba"] == f"{whole['ratio']:.2f}x"
     assert f"Lantern's render command takes {num(whole['lantern']['median_s'])} s" in text["integrators"]
+    assert (f"the render alone takes {num(whole['lantern']['render_median_s'])} s against "
+            f"{num(whole['mitsuba']['render_median_s'])} s ({times(whole['render_ratio'])})") in text["integrators"]
+    assert row(text["integrators"], "Mitsuba (process)")["start-up and the rest s"] == num(0.5)
     mesh = data["integrators"]["mesh_heavy"]
     cells = row(text["integrators"], "Lantern mis/sobol")
     assert cells["seconds to target"] == num(mesh["rows"]["Lantern mis/sobol"]["seconds_to_target"])

@@ -23,20 +23,23 @@ def _writer(value: float, suffix: str, seconds_line: str = ""):
             code = ("import sys, numpy as np; from renderer.output.image_io import write_exr; "
                     f"write_exr(sys.argv[1], np.full((4, 4, 3), {value}, np.float32)); print('{seconds_line}')")
         else:
-            code = f"import sys, numpy as np; np.save(sys.argv[1], np.full((4, 4, 3), {value}, np.float32))"
+            code = (f"import sys, numpy as np; np.save(sys.argv[1], np.full((4, 4, 3), {value}, np.float32)); "
+                    f"print('{seconds_line}')")
         return [sys.executable, "-c", code, str(out)]
     return command
 
 
 def test_compare_times_both_sides_and_reads_their_error(monkeypatch):
     monkeypatch.setattr(wp, "lantern_command", _writer(0.75, ".exr", "(4 spp in 0.01 s)"))
-    monkeypatch.setattr(wp, "mitsuba_command", _writer(0.25, ".npy"))
+    monkeypatch.setattr(wp, "mitsuba_command", _writer(0.25, ".npy", "(4 spp in 0.04 s)"))
     reference = np.full((4, 4, 3), 0.5)
     result = wp.compare(wp.WholeProcessConfig(size=4, spp=4, runs=2), reference, reference_spp=64)
     for side in ("lantern", "mitsuba"):
         assert len(result[side]["seconds"]) == 2 and result[side]["median_s"] > 0.0
         assert result[side]["rmse"] == pytest.approx(0.25)
-    assert result["lantern"]["render_median_s"] == 0.01
+    assert result["lantern"]["render_median_s"] == 0.01 and result["mitsuba"]["render_median_s"] == 0.04
+    assert result["render_ratio"] == pytest.approx(0.25)
+    assert result["mitsuba"]["outside_render_median_s"] == pytest.approx(result["mitsuba"]["median_s"] - 0.04)
     assert result["ratio"] == pytest.approx(result["lantern"]["median_s"] / result["mitsuba"]["median_s"])
     assert result["passed"] == (result["ratio"] <= wp.WHOLE_PROCESS_TARGET)
     rows = wp.summary_rows(result)
@@ -68,7 +71,7 @@ def test_the_verdict_follows_the_timed_ratio(monkeypatch, tmp_path, lantern_s, m
     result = wp.compare(wp.WholeProcessConfig(size=4, spp=4, runs=3), np.full((4, 4, 3), 0.5), reference_spp=64)
     assert result["lantern"]["seconds"] == [lantern_s] * 3 and result["mitsuba"]["seconds"] == [mitsuba_s] * 3
     assert result["ratio"] == pytest.approx(lantern_s / mitsuba_s)
-    assert result["passed"] is passed
+    assert result["passed"] is passed and result["render_ratio"] is None  # no render line from Mitsuba here
     assert f"{'PASS' if passed else 'FAIL'} ({lantern_s / mitsuba_s:.2f}x)" in wp.caption(result)
     assert wp.summary_rows(result)[1][-1] == f"{lantern_s / mitsuba_s:.2f}x"
 
@@ -77,3 +80,16 @@ def test_a_failing_process_is_a_note_not_a_crash(monkeypatch):
     monkeypatch.setattr(wp, "lantern_command", lambda config, seed, out: [sys.executable, "-c", "raise SystemExit(2)"])
     result = wp.compare_or_note(wp.WholeProcessConfig(size=4, spp=4, runs=1), np.zeros((4, 4, 3)), 64)
     assert result["available"] is False and "lantern exited with 2" in result["note"]
+
+
+def test_the_mitsuba_process_prints_its_render_time(tmp_path):
+    """The real process (when Mitsuba is installed): its "(N spp in T s)" line is what compare reads."""
+    from renderer.bench import mitsuba_side
+
+    if not mitsuba_side.is_available():
+        pytest.skip("Mitsuba 3 is not installed")
+    out = tmp_path / "m.npy"
+    done = subprocess.run(wp.mitsuba_command(wp.WholeProcessConfig(size=8, spp=2, max_depth=2), 0, out),
+                          cwd=wp.REPO_ROOT, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert wp.render_seconds(done.stdout) is not None and np.load(out).shape == (8, 8, 3)
