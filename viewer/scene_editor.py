@@ -17,7 +17,7 @@ from renderer.editing import (Edit, EditHistory, ModelMaterialEdit, SceneLight, 
 from renderer.picking import Pick, pick
 from renderer.renderer import Renderer
 from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene
-from renderer.scene.edit_saving import save_edits
+from renderer.scene.edit_saving import edited_path, save_edits
 
 
 class SceneEditor:
@@ -125,6 +125,15 @@ class SceneEditor:
     @property
     def edited(self) -> bool:
         return bool(self.history.done)
+
+    def save_path(self) -> Path:
+        """Where save() writes by default (renderer/scene/edit_saving.py edited_path)."""
+        return edited_path(Path(self.loaded.path))
+
+    @property
+    def saves_over_its_file(self) -> bool:
+        """Whether the default save is the scene's own file (a saved `_edited.toml` opened again)."""
+        return self.save_path().resolve() == Path(self.loaded.path).resolve()
 
     def save(self, scene: Scene, path: Optional[Path] = None, overwrite: bool = False) -> Path:
         """Write the edited scene beside its file (renderer.scene.edit_saving.py)."""

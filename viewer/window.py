@@ -65,6 +65,7 @@ MOVEMENT_KEYS = ("w", "a", "s", "d", "q", "e")
 MAX_QUEUED_KEYS = 32
 CTRL_ACTIONS = {"ctrl+z": "undo_edit", "ctrl+y": "redo_edit", "ctrl+s": "save_scene"}
 HIGHLIGHT_SECONDS = 1.0  # how long a picked object stays tinted
+SAVE_OVER_SECONDS = 5.0  # a second ctrl+s within this saves over the scene's own file
 CLICK_TOLERANCE = 0.004  # how far (window fractions) a press may move and still be a click, not a drag
 
 
@@ -143,6 +144,7 @@ class ViewerApp:
         self.editors: dict[Path, SceneEditor] = {}  # the edits of each scene visited (made on first edit)
         self._press_cursor = None  # where the left button went down, for telling a click from a drag
         self.last_saved: Optional[Path] = None
+        self._save_over_until = -1.0  # until when a ctrl+s saves over the scene's own file (asked once)
         self.highlight: Optional[tuple] = None  # (mask of the picked object's pixels, until when)
         self._ctrl = False  # Control down at the end of the last frame's events
 
@@ -298,8 +300,18 @@ class ViewerApp:
             self.session.notify("; ".join(self.editor.notes), now)
 
     def save_edits(self, now: float) -> Optional[Path]:
+        """ctrl+s: the edited scene beside its file. Where that is the file itself (a saved
+        `_edited.toml` opened again), the first press asks and a second within SAVE_OVER_SECONDS
+        saves over it."""
+        over = self.editor.saves_over_its_file
+        if over and now > self._save_over_until:
+            self._save_over_until = now + SAVE_OVER_SECONDS
+            self._announce(f"{self.editor.save_path().name} is this scene's own file: ctrl+s again to save over it",
+                           now)
+            return None
+        self._save_over_until = -1.0
         try:
-            path = self.editor.save(self.renderer.scene)
+            path = self.editor.save(self.renderer.scene, overwrite=over)
         except Exception as error:
             self.session.error = f"save failed: {_one_line(error)}"
             return None

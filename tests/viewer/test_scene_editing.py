@@ -275,3 +275,17 @@ def test_a_model_files_material_in_the_window(viewer, tmp_path):
     assert app.session.error is None
     app.step(FrameInput(pressed=("ctrl+s",)))
     assert app.last_saved == tmp_path / "colored_quads_edited.toml"
+
+
+def test_a_saved_scene_opened_again_is_saved_over_on_a_second_ctrl_s(viewer, cornell):
+    first = load_scene(cornell)
+    saved = SceneEditor(first, None).save(first)  # cornell_box_edited.toml, as a first session saves it
+    app = showing(viewer, saved)
+    assert app.editor.saves_over_its_file
+    box = material_named(app.renderer.scene, "tall_box")
+    app.edit(lambda r: app.editor.apply(r, replace(box, base_color=(0.1, 0.2, 0.9))), 0.0)
+    text = saved.read_text()
+    assert app.save_edits(100.0) is None and saved.read_text() == text  # asked first
+    assert "ctrl+s again to save over it" in app.session.current_message(100.0)
+    assert app.save_edits(102.0) == saved and material_named(load_scene(saved), "tall_box").base_color == (0.1, 0.2, 0.9)
+    assert app.save_edits(110.0) is None  # a later press asks again
