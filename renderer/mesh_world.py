@@ -9,7 +9,7 @@ medium is numbered after the scene's own media.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -19,7 +19,6 @@ from renderer.scene.description import Scene
 from renderer.scene.features import (Features, features_from, scene_grid_media, scene_light_kinds,
                                      scene_light_textures, scene_pixel_filter)
 from renderer.scene.mesh_assembly import ModelMaterial, assemble
-from renderer.scene.model_material_edits import edited_pbr, edits_by_index
 from renderer.scene.textures import WRAP_CODES, TextureAtlas, pack_atlas
 
 
@@ -68,18 +67,8 @@ def prepare_mesh_scene(scene: Scene, instancing: bool = True) -> MeshScene:
 def with_model_edits(model_materials: tuple, scene: Scene) -> tuple:
     """An assembly's model materials with the scene's edits of them (Scene.model_material_edits)
     made anew from the files' own."""
-    edits = edits_by_index(scene)
-    out = []
-    for i, material in enumerate(model_materials):
-        file_pbr = material.file_pbr or material.pbr
-        changes = edits.get(i)
-        out.append(replace(material, pbr=edited_pbr(file_pbr, changes), file_pbr=file_pbr) if changes
-                   else replace(material, pbr=file_pbr, file_pbr=None))
-    return tuple(out)
-
-
-def emits(material) -> bool:
-    return max(material.pbr.emissive_factor if isinstance(material, ModelMaterial) else material.emission) > 0.0
+    edits = dict(scene.model_material_edits)
+    return tuple(material.edited(edits.get(i)) for i, material in enumerate(model_materials))
 
 
 def material_rows(scene: Scene, materials: tuple, spec_images: dict) -> tuple[MaterialRows, list]:

@@ -289,7 +289,8 @@ class Renderer:
         if any(a.textures != b.textures for a, b in zip(scene.materials, old.materials)):
             return False
         if self._mesh is not None:
-            from renderer.mesh_world import emits, material_rows, with_model_edits
+            from renderer.mesh_world import material_rows, with_model_edits
+            from renderer.scene.mesh_assembly import emits
 
             materials = tuple(scene.materials) + with_model_edits(self._mesh.materials[len(old.materials):], scene)
             if self._mesh.data.has_instances and any(emits(a) != emits(b) for a, b in zip(materials, self._mesh.materials)):

@@ -26,7 +26,7 @@ from renderer.scene.generators import generated_mesh
 from renderer.scene.mesh_adjustments import adjusted, selected_meshes
 from renderer.scene.mesh_attributes import AttributeColoring
 from renderer.scene.mesh_model import PbrMaterial, TextureImage, TriangleMesh, place_mesh
-from renderer.scene.model_material_edits import edited_pbr, edits_by_index
+from renderer.scene.model_material_edits import edited_pbr
 from renderer.scene.model_formats import MeshWarning
 from renderer.scene.orientation import rewind_to_normals
 from renderer.scene.texture_images import texture_image
@@ -50,6 +50,14 @@ class ModelMaterial:
     medium: Optional[MediumSpec] = None
     # the material as the file gives it, where the scene edits it (Scene.model_material_edits)
     file_pbr: Optional[PbrMaterial] = None
+
+    def edited(self, changes) -> "ModelMaterial":
+        """This material with the file's factors replaced by `changes` ((PbrMaterial attribute,
+        value) pairs; none: the file's own material)."""
+        file_pbr = self.file_pbr or self.pbr
+        if not changes:
+            return self if self.file_pbr is None else replace(self, pbr=file_pbr, file_pbr=None)
+        return replace(self, pbr=edited_pbr(file_pbr, changes), file_pbr=file_pbr)
 
 
 @dataclass
@@ -83,7 +91,7 @@ def volume_medium(material: PbrMaterial, file) -> Optional[MediumSpec]:
     return MediumSpec(f"{os.fspath(file)}#{material.name}", sigma_a=sigma_a, sigma_s=(0.0, 0.0, 0.0), g=0.0)
 
 
-def _emissive(material: Union[MaterialSpec, ModelMaterial]) -> bool:
+def emits(material: Union[MaterialSpec, ModelMaterial]) -> bool:
     emission = material.pbr.emissive_factor if isinstance(material, ModelMaterial) else material.emission
     return max(emission) > 0.0
 
@@ -121,7 +129,7 @@ class _Assembler:
         self.instancing = instancing
         self.materials: list = list(scene.materials)
         self.material_ids = {m.name: i for i, m in enumerate(scene.materials)}
-        self.model_edits = edits_by_index(scene)
+        self.model_edits = dict(scene.model_material_edits)
         self.images: list[TextureImage] = []
         self.parts: dict[str, list] = {"spheres": [], "sphere_mat": [], "sphere_frames": [], "sphere_flip": [],
                                        "quads": [], "quad_mat": [], "quad_flip": [], "discs": [], "disc_mat": []}
@@ -184,10 +192,7 @@ class _Assembler:
             mats = []
             for m in asset.materials:
                 changes = self.model_edits.get(len(self.materials) - len(self.scene.materials))
-                material = ModelMaterial(m, first_image, volume_medium(m, obj.file))
-                if changes:
-                    material = replace(material, pbr=edited_pbr(m, changes), file_pbr=m)
-                self.materials.append(material)
+                self.materials.append(ModelMaterial(m, first_image, volume_medium(m, obj.file)).edited(changes))
                 mats.append(len(self.materials) - 1)
         matrix = obj.matrix()
         turned = 0
@@ -206,7 +211,7 @@ class _Assembler:
             material = mats[inst.mesh.material]
             matrices = matrix @ inst.matrices  # the scene object's placement, then the file's
             flat = _singular(matrices)
-            if not self.instancing or _emissive(self.materials[material]) or np.count_nonzero(~flat) < 2:
+            if not self.instancing or emits(self.materials[material]) or np.count_nonzero(~flat) < 2:
                 flat[:] = True  # emitters stay where light sampling finds them; one placement is a world mesh
             for k in np.flatnonzero(flat):
                 turned += self.add_mesh(self.world, inst.placed(k), matrix, material)

@@ -25,7 +25,3 @@ def changes_between(file_pbr: PbrMaterial, pbr: PbrMaterial, attributes) -> tupl
         if value != getattr(file_pbr, name):
             changes.append((name, tuple(value[:3]) if name == "base_color_factor" else value))
     return tuple(sorted(changes))
-
-
-def edits_by_index(scene) -> dict:
-    return {index: changes for index, changes in scene.model_material_edits}
