@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, fields, replace
 
+from renderer.scene.conductor_fresnel import canonical  # noqa: F401 (the editors' name for it)
 from renderer.scene.description import EnvironmentSpec, LightSpec, MaterialSpec, Scene
 from renderer.scene.schema import ENVIRONMENT as ENVIRONMENT_SECTION, LIGHT, MATERIAL, MODEL_MATERIAL
 
@@ -88,19 +89,6 @@ def with_material(scene: Scene, spec: MaterialSpec) -> Scene:
 
 def material_named(scene: Scene, name: str) -> MaterialSpec:
     return scene.materials[scene.material_index(name)]
-
-
-def canonical(spec: MaterialSpec) -> MaterialSpec:
-    """`spec` as the scene format writes it: a conductor's Fresnel from one description (a named
-    metal, else eta and k, else base_color with edge_tint), the others at their defaults, so that
-    a saved edit reads back as the same material (they would not shade it anyway)."""
-    if spec.kind != "conductor" or not (spec.metal or spec.eta is not None):
-        return spec
-    plain = MaterialSpec(spec.name)
-    kept = {"base_color": plain.base_color, "edge_tint": plain.edge_tint}
-    if spec.metal:
-        kept.update(eta=None, k=None)
-    return replace(spec, **kept)
 
 
 def allowed_range(name: str):

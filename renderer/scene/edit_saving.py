@@ -22,9 +22,9 @@ from typing import Optional
 
 import tomlkit
 
-from renderer.editing import canonical
+from renderer.scene.conductor_fresnel import canonical, description_of, other_fields
 from renderer.scene.description import EnvironmentSpec, LightSpec, MaterialSpec, Scene, TextureSpec
-from renderer.scene.edits_file import FRESNEL_DESCRIPTIONS, edited_environment, edited_lights, edited_material, relative_reference
+from renderer.scene.edits_file import edited_environment, edited_lights, edited_material, relative_reference
 from renderer.scene.errors import SceneError
 from renderer.scene.foreign_formats import is_foreign
 from renderer.scene.schema import ENVIRONMENT, LIGHT, MATERIAL, MODEL_MATERIAL
@@ -188,8 +188,7 @@ def _changes_table(spec: MaterialSpec, was: MaterialSpec, target: Path, geometry
     spec = canonical(spec)
     values = ({"type": spec.kind} if spec.kind != was.kind else {}) | _changed_fields(spec, was, MATERIAL, spec.kind, target.parent)
     if spec.kind == "conductor":  # the one Fresnel description written drops the file's others
-        used = "metal" if spec.metal else "eta" if spec.eta is not None else "base_color"
-        implied = [name for d in FRESNEL_DESCRIPTIONS if used not in d for name in d]
+        implied = other_fields(description_of(spec))
         values = {key: value for key, value in values.items() if key not in implied}
     _check_read_back(edited_material(was, values, target, geometry), spec, f"material '{spec.name}'", target)
     return _toml_table(values)

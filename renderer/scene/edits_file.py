@@ -29,6 +29,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from renderer.scene import schema
+from renderer.scene.conductor_fresnel import FRESNEL_DESCRIPTIONS, canonical
 from renderer.scene.description import EnvironmentSpec, MaterialSpec, Scene
 from renderer.scene.errors import SceneError
 from renderer.scene.foreign_formats import is_foreign, load_foreign
@@ -39,8 +40,6 @@ from renderer.scene.toml_loader import (is_scene_of_edits, read_changes, read_mo
 
 SECTIONS = ("scene", "materials", "environment", "lights", "model_materials")
 HEADER_FIELDS = ("edits", "description")
-# The fields that describe a conductor's Fresnel, each set replacing the others (schema rule).
-FRESNEL_DESCRIPTIONS = (("metal",), ("eta", "k"), ("base_color", "edge_tint"))
 
 
 def load_toml_scene(path, options: LoadOptions) -> Scene:
@@ -117,21 +116,9 @@ def edited_material(base: MaterialSpec, table: object, path: Path, geometry: str
         raise SceneError(path, f"{where}: emission * emission_strength is beyond the 32-bit float range")
     changes["emission"] = emission
     attrs = {schema.MATERIAL.field(name).model_attr: value for name, value in changes.items()}
-    attrs["kind"] = kind
-    if kind == "conductor":
-        for description in FRESNEL_DESCRIPTIONS:
-            if any(name in changes for name in description):
-                _drop_other_descriptions(attrs, description)
-    return replace(base, **attrs)
-
-
-def _drop_other_descriptions(attrs: dict, kept: tuple) -> None:
-    plain = MaterialSpec("plain")
-    for description in FRESNEL_DESCRIPTIONS:
-        if description == kept:
-            continue
-        for name in description:
-            attrs.setdefault(name, getattr(plain, name))
+    spec = replace(base, **{**attrs, "kind": kind})
+    written = next((d for d in FRESNEL_DESCRIPTIONS if any(name in changes for name in d)), None)
+    return canonical(spec, written) if written is not None else spec
 
 
 def edited_environment(base: EnvironmentSpec, table: object, path: Path, geometry: str) -> EnvironmentSpec:

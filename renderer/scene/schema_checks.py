@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from typing import Callable, Optional
 
+from .conductor_fresnel import FRESNEL_DESCRIPTIONS
 from .schema_types import WRITTEN, Field, format_number
 
 
@@ -98,9 +99,7 @@ def check_conductor_fresnel(v: dict) -> Optional[str]:
     if (v["eta"] is None) != (v["k"] is None):
         given, missing = ("eta", "k") if v["k"] is None else ("k", "eta")
         return f"`{given}` needs `{missing}` (the complex index eta + i k)"
-    descriptions = (("`metal`", ("metal",)), ("`eta`/`k`", ("eta", "k")),
-                    ("`base_color`/`edge_tint`", ("base_color", "edge_tint")))
-    given = [name for name, fields in descriptions if v[WRITTEN] & set(fields)]
+    given = ["/".join(f"`{name}`" for name in d) for d in FRESNEL_DESCRIPTIONS if v[WRITTEN] & set(d)]
     if len(given) > 1:
         return (f"{', '.join(given[:-1])} and {given[-1]} cannot be combined: each describes the "
                 "conductor's Fresnel (keep `metal`, or `eta` with `k`, or `base_color` with `edge_tint`)")
