@@ -14,8 +14,8 @@ from dataclasses import replace
 
 from renderer.editing import SceneLight
 from renderer.scene.schema import LIGHT
-from viewer.hud import ERROR_COLOR, slider_float, text_line
-from viewer.material_panel import ACTIONS, emission_control, field_control, panel_rect
+from viewer.hud import slider_float, text_line
+from viewer.material_panel import emission_control, field_control, notes_and_actions, panel_rect
 
 # Fields drawn as sliders of their own (the value, place and direction have the controls below).
 SLIDERS = ("cutoff_angle", "fov", "fov_axis")
@@ -82,9 +82,5 @@ def draw_light_panel(gui, window_size: tuple[int, int], light: SceneLight, exten
                 changes["beam_width"] = beam
         if spec.texture is not None:
             text_line(g, f"image {spec.texture.file.name if spec.texture.file else spec.texture.kind} (kept)")
-        for line in notes:
-            text_line(g, line, ERROR_COLOR)
-        for label, action in ACTIONS:
-            if g.button(label):
-                actions.append(action)
+        actions += notes_and_actions(g, notes)
     return (replace(light, spec=replace(spec, **changes)) if changes else light), actions

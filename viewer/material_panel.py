@@ -34,6 +34,14 @@ ACTIONS = (("undo  [ctrl+z]", "undo_edit"), ("redo  [ctrl+y]", "redo_edit"), ("r
            ("save scene  [ctrl+s]", "save_scene"), ("close", "close_panel"))
 
 
+def notes_and_actions(g, notes) -> list[str]:
+    """The end of every editing panel: what the last edit clamped (a line each, in the error
+    colour), then the buttons of ACTIONS; returns the actions clicked."""
+    for line in notes:
+        text_line(g, line, ERROR_COLOR)
+    return [action for label, action in ACTIONS if g.button(label)]
+
+
 def panel_rect(window_size: tuple[int, int]) -> Rect:
     w, h = window_size
     width = min(PANEL_WIDTH_PX / w, 0.45)
@@ -134,11 +142,7 @@ def draw_material_panel(gui, window_size: tuple[int, int], picked: Pick, spec: M
                 changes[f.model_attr] = new
         for role in spec.textures:
             text_line(g, f"texture on {role} (kept)")
-        for line in notes:
-            text_line(g, line, ERROR_COLOR)
-        for label, action in ACTIONS:
-            if g.button(label):
-                actions.append(action)
+        actions += notes_and_actions(g, notes)
     if kind != spec.kind and "kind" not in changes:
         changes["kind"] = kind
     return (replace(spec, **changes) if changes else spec), actions
@@ -167,11 +171,7 @@ def draw_environment_panel(gui, window_size: tuple[int, int], spec: EnvironmentS
         for i, light in enumerate(lights):
             if g.button(f"lights[{i}]: {light.kind}  (edit)"):
                 actions.append(f"open_light:{i}")
-        for line in notes:
-            text_line(g, line, ERROR_COLOR)
-        for label, action in ACTIONS:
-            if g.button(label):
-                actions.append(action)
+        actions += notes_and_actions(g, notes)
     if "rotation" in changes and spec.to_world is not None:
         changes["to_world"] = None  # a turn set here replaces a file's matrix about the same axis
     return (replace(spec, **changes) if changes else spec), actions

@@ -16,8 +16,8 @@ from renderer.editing import ModelMaterialEdit
 from renderer.picking import Pick
 from renderer.scene.model_material_edits import changes_between
 from renderer.scene.schema import MODEL_MATERIAL
-from viewer.hud import ERROR_COLOR, text_line
-from viewer.material_panel import ACTIONS, emission_control, field_control, panel_rect
+from viewer.hud import text_line
+from viewer.material_panel import emission_control, field_control, notes_and_actions, panel_rect
 
 
 def draw_model_material_panel(gui, window_size: tuple[int, int], picked: Pick, material,
@@ -41,11 +41,7 @@ def draw_model_material_panel(gui, window_size: tuple[int, int], picked: Pick, m
                 changes[f.model_attr] = (*new, pbr.base_color_factor[3]) if f.name == "base_color" else new
         for slot in pbr.texture_slots:
             text_line(g, f"texture on {slot} (kept)")
-        for line in notes:
-            text_line(g, line, ERROR_COLOR)
-        for label, action in ACTIONS:
-            if g.button(label):
-                actions.append(action)
+        actions += notes_and_actions(g, notes)
     if not changes:
         return None, actions
     edited = replace(pbr, **changes)
