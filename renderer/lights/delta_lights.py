@@ -131,9 +131,15 @@ def make_delta_selector(kind: str, power: np.ndarray):
         return SingleEmitterSelector(1)
     if kind == "uniform":
         return UniformSelector(n)
+    return PowerSelector(power_bounds(power))
+
+
+def power_bounds(power) -> EmitterBounds:
+    """Lights without a surface as the power selector takes them: their powers alone."""
+    n = len(power)
     zeros = np.zeros((n, 3))
-    return PowerSelector(EmitterBounds(lo=zeros, hi=zeros, power=np.asarray(power, np.float64), axis=zeros,
-                                       theta_o=np.zeros(n), theta_e=np.zeros(n)))
+    return EmitterBounds(lo=zeros, hi=zeros, power=np.asarray(power, np.float64), axis=zeros, theta_o=np.zeros(n),
+                         theta_e=np.zeros(n))
 
 
 # --- device side ------------------------------------------------------------------------------
@@ -207,9 +213,7 @@ class DeltaLights:
         if [(s.kind, s.texture) for s in specs] != [(s.kind, s.texture) for s in self.specs]:
             return False
         power = np.array([light_power(s, scene_radius, im) for s, im in zip(specs, self.image_of)], np.float64)
-        if self.count > 1 and not self.selector.refit(EmitterBounds(
-                lo=np.zeros((self.count, 3)), hi=np.zeros((self.count, 3)), power=power,
-                axis=np.zeros((self.count, 3)), theta_o=np.zeros(self.count), theta_e=np.zeros(self.count))):
+        if self.count > 1 and not self.selector.refit(power_bounds(power)):
             return False
         self.specs, self.power = specs, power
         self.intensity = np.array([peak_intensity(s, p) for s, p in zip(specs, power)], np.float64)

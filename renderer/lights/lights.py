@@ -135,7 +135,7 @@ class Lights:
             # a point light four times its share of what reaches a point, and starve the surfaces
             # (their rare samples then come with large weights: fireflies).
             self.delta_share = ti.field(ti.f32, shape=())
-            self._set_delta_share()
+            self.refit_delta()
         # Emitters that shine from both faces: compiled in only where the scene has one (a lookup
         # per light sample otherwise paid by every scene).
         self.has_two_sided = self.has_area and bool(np.any(emitters.get("two_sided", ())))
@@ -156,16 +156,13 @@ class Lights:
         if self.has_env and self.env_is_map:
             self.env_sampler = EnvironmentSampler(env_image, environment)
 
-    def _set_delta_share(self) -> None:
+    def refit_delta(self) -> None:
+        """The share of the lights without a surface, from their intensities and the emitters'
+        powers (again after DeltaLights.refit or an emission edit)."""
         delta_intensity = float(self.delta.intensity.sum())
         area_intensity = float(np.sum(self.emitters["power"])) / math.pi if self.has_area else 0.0
         self.delta_share[None] = (delta_intensity / (delta_intensity + area_intensity) if area_intensity > 0.0
                                   else 1.0)
-
-    def refit_delta(self) -> None:
-        """The lights without a surface were edited in place (DeltaLights.refit): their share of
-        the samples follows their new intensities."""
-        self._set_delta_share()
 
     def refit(self, emitters: dict) -> bool:
         """Take `emitter_table`'s rows for the same emissive primitives with other radiance (an
@@ -183,7 +180,7 @@ class Lights:
                 return False
         self.emitters = emitters
         if self.has_delta:
-            self._set_delta_share()
+            self.refit_delta()
         return True
 
     @ti.func
