@@ -53,7 +53,7 @@ def material_table(spec: MaterialSpec, directory: Path) -> dict:
         value = spec.kind if f.name == "type" else getattr(spec, f.model_attr)
         if f.name in ("normal_map", "bump_map"):
             if value is not None:
-                table[f.name] = _relative(value.file, directory)
+                table[f.name] = relative_reference(value.file, directory)
             continue
         if value is None or (f.name not in ("type", "roughness") and value == f.default_for(spec.kind)):
             continue
@@ -66,10 +66,11 @@ def material_table(spec: MaterialSpec, directory: Path) -> dict:
 
 
 def save_edits(scene: Scene, loaded: Scene, path: Optional[Path] = None, overwrite: bool = False) -> Path:
-    """Write `scene`, the TOML scene `loaded` with materials or the environment edited, to `path`
-    (default: edited_path of the original): the original file's text with each changed material's
-    table replaced and the environment's changed values set. Writing over the original needs
-    `overwrite`. Returns the path written."""
+    """Write `scene`, the scene `loaded` with materials, the environment, lights or model
+    materials edited, to `path` (default: edited_path of the original). A TOML original: its text
+    with each changed material's table replaced and the other changed values set. Any other
+    format (or a scene of edits): a scene of edits of that file (edits_document). Writing over the
+    original needs `overwrite`. Returns the path written."""
     original = Path(loaded.path)
     target = Path(path) if path is not None else edited_path(original)
     if target.resolve() == original.resolve() and not overwrite:
@@ -84,14 +85,10 @@ def save_edits(scene: Scene, loaded: Scene, path: Optional[Path] = None, overwri
     if "materials" not in document:
         document["materials"] = tomlkit.table(is_super_table=True)
     for spec in scene.materials:
-        if was.get(spec.name) == spec:
-            continue
-        table = tomlkit.table()
-        for key, value in material_table(spec, target.parent).items():
-            table.add(key, value)
-        document["materials"][spec.name] = table
+        if was.get(spec.name) != spec:
+            document["materials"][spec.name] = _toml_table(material_table(spec, target.parent))
     if scene.environment != loaded.environment:
-        _environment_into(document, scene.environment, loaded.environment, original)
+        _environment_into(document, scene.environment, loaded.environment, target)
     for i, (spec, was_light) in enumerate(zip(scene.lights, loaded.lights)):
         if spec != was_light:  # the changed values set in the light's own [[lights]] table
             for key, value in _light_changes(spec, was_light, target).items():
@@ -125,6 +122,10 @@ def _write(target: Path, text: str) -> Path:
 def edits_document(scene: Scene, base: Scene, target: Path) -> str:
     """The TOML scene of edits, saved as `target`, that turns `base` (a scene of another format, as
     its file gives it) into `scene`."""
+    others = _other_changes(scene, base)
+    if others:
+        raise SceneError(base.path, f"a scene of edits holds materials, the environment and lights; its {others} "
+                                    "changed too")
     document = tomlkit.document()
     document.add(tomlkit.comment(f"Edits of {Path(base.path).name}: the values below replace that file's; "
                                  "everything else is read from it."))
@@ -154,9 +155,6 @@ def edits_document(scene: Scene, base: Scene, target: Path) -> str:
         document.add("lights", lights)
     if scene.model_material_edits:
         document.add("model_materials", model_materials_table(scene.model_material_edits))
-    if _other_changes(scene, base):
-        raise SceneError(base.path, f"a scene of edits holds materials and the environment; its {_other_changes(scene, base)} "
-                                    "changed too")
     return tomlkit.dumps(document)
 
 
@@ -179,7 +177,7 @@ def _changed_fields(spec, was, section, kind: str, directory: Path) -> dict:
         if isinstance(value, TextureSpec):
             if f.name not in ("normal_map", "bump_map"):
                 continue  # the read-back comparison names it
-            value = _relative(value.file, directory)
+            value = relative_reference(value.file, directory)
         table[f.name] = list(value) if isinstance(value, tuple) else value
     return table
 
@@ -194,10 +192,14 @@ def _changes_table(spec: MaterialSpec, was: MaterialSpec, target: Path, geometry
     return _toml_table(values)
 
 
-def _environment_changes(spec: EnvironmentSpec, was: EnvironmentSpec, target: Path, geometry: str):
+def _environment_values(spec: EnvironmentSpec, was: EnvironmentSpec, target: Path) -> dict:
     if (spec.kind, spec.file) != (was.kind, was.file):
         raise SceneError(target, "an edit of the environment keeps its kind and image")
-    values = _changed_fields(spec, was, ENVIRONMENT, spec.kind, target.parent)
+    return _changed_fields(spec, was, ENVIRONMENT, spec.kind, target.parent)
+
+
+def _environment_changes(spec: EnvironmentSpec, was: EnvironmentSpec, target: Path, geometry: str):
+    values = _environment_values(spec, was, target)
     _check_read_back(edited_environment(was, values, target, geometry), spec, "the environment", target)
     return _toml_table(values)
 
@@ -224,21 +226,10 @@ def _toml_table(values: dict):
     return table
 
 
-def _environment_into(document, spec, was, original: Path) -> None:
-    """The environment's values that changed (its kind and image stay: edits keep them)."""
-    if (spec.kind, spec.file) != (was.kind, was.file):
-        raise SceneError(original, "an edit of the environment keeps its kind and image")
+def _environment_into(document, spec, was, target: Path) -> None:
+    """The environment's values that changed, set in the TOML document's [environment]."""
     if "environment" not in document:
         document["environment"] = tomlkit.table()
         document["environment"]["type"] = spec.kind
-    table = document["environment"]
-    for f in ENVIRONMENT.fields:
-        if not f.in_model or f.name in ("type", "file") or not hasattr(spec, f.model_attr):
-            continue
-        value = getattr(spec, f.model_attr)
-        if value != getattr(was, f.model_attr):
-            table[f.name] = list(value) if isinstance(value, tuple) else value
-
-
-def _relative(file: Path, directory: Path) -> str:
-    return relative_reference(file, directory)
+    for key, value in _environment_values(spec, was, target).items():
+        document["environment"][key] = value
