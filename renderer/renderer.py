@@ -53,6 +53,9 @@ class MeshOptions:
     # triangles cost about one), scalar ones do not
     max_leaf_size: int | None = None
     instancing: bool = True  # False: every instance flattened into world triangles (a reference)
+    # Rays a packet on the CPU (renderer/packets/: 4, 8 or 16 lanes, one path a lane), for the
+    # combinations renderer/packets/support.py admits; 0: one ray per loop index throughout.
+    packets: int = 0
 
 
 # Measured (docs/findings.md, "Leaves tested four at a time"): with packet leaves, bench bvh's
@@ -168,6 +171,15 @@ class Renderer:
                  if scene.environment.kind == "map" else None)
         self.environment = Environment(scene.environment, image)
         self.geometry, self.materials, self._features, self._mesh = build_world(scene, mesh_options)
+        from renderer.packets.support import PACKET_WIDTHS
+
+        if mesh_options.packets and mesh_options.packets not in PACKET_WIDTHS:
+            raise ValueError(f"packets of {mesh_options.packets} rays (choose from 0 (off), "
+                             f"{', '.join(map(str, PACKET_WIDTHS))})")
+        self.packet_width = mesh_options.packets
+        self._packet_lights = None  # PacketLights, built with the first packet program
+        self._packet_records = None  # PrimitiveRecords, likewise (kept: the geometry does not change)
+        self._packet_reasons: dict[tuple, str | None] = {}  # packet_reason's, until emission changes
         self.media = MediaTable(scene, self.materials.volume_media)
         self._env_image = image
         self._lights = None
@@ -214,7 +226,9 @@ class Renderer:
         if key not in self._programs:
             chosen = make_integrator(integrator)
             lights = self.lights() if getattr(chosen, "uses_lights", False) else None
-            if hasattr(chosen, "make_program"):  # a multi-pass integrator (sppm) brings its own kernels
+            if key[4]:
+                self._programs[key] = self._packet_program(chosen, features, key)
+            elif hasattr(chosen, "make_program"):  # a multi-pass integrator (sppm) brings its own kernels
                 if features.pixel_filter[0] != "box":
                     warnings.warn(f"{self.scene.name}: {integrator} gathers photons per pixel and renders with the "
                                   f"box filter, not the scene's {features.pixel_filter[0]} filter", stacklevel=3)
@@ -229,8 +243,43 @@ class Renderer:
         """A program's cache key: the combination, and whether its kernel has the AOVs' feature
         samples compiled in: where the scene calls for them (its textures), so the viewer's toggle
         of the denoised view compiles nothing, or where feature_boost asks for them elsewhere."""
-        return integrator, features, sampler, self.aovs is not None and (self.feature_boost > 0
-                                                                          or self.scene_feature_boost > 0)
+        return (integrator, features, sampler, self.aovs is not None and (self.feature_boost > 0
+                                                                           or self.scene_feature_boost > 0),
+                self.packet_width if self.packet_width and self.packet_reason(integrator, features, sampler) is None
+                else 0)
+
+    def packet_reason(self, integrator: str, features: Features, sampler: str) -> str | None:
+        """Why this combination renders one ray at a time though packets were asked for (None:
+        it takes packets)."""
+        key = (integrator, features, sampler)
+        if key not in self._packet_reasons:
+            from renderer.lights.lights import emitter_table
+            from renderer.packets.support import unsupported
+
+            emitters = (emitter_table(self.geometry, self.materials.arrays)["prim"] if self.scene.geometry == "mesh"
+                        else ())
+            self._packet_reasons[key] = unsupported(self.geometry, features, integrator, sampler,
+                                                    self.aovs is not None, emitters)
+        return self._packet_reasons[key]
+
+    def _packet_program(self, chosen, features: Features, key: tuple):
+        from renderer.packets.lights import PacketLights
+        from renderer.packets.program import PacketProgram
+        from renderer.packets.records import PrimitiveRecords
+
+        if self._packet_records is None:
+            self._packet_records = PrimitiveRecords(self.geometry.data)
+        if self._packet_lights is None:
+            self._packet_lights = PacketLights(self.geometry, self._packet_records, self.materials, self.environment,
+                                               self.scene.environment)
+
+        def scalar():
+            return RenderProgram(self.geometry, self.materials, self.environment, chosen, self.film, self.work,
+                                 features, make_sampler(key[2]), self.lights() if chosen.uses_lights else None,
+                                 self.media, self.aovs, self.bands, key[3])
+
+        return PacketProgram(self.geometry, self._packet_records, self.materials, self.environment, chosen, self.film, self.work, features,
+                             self._packet_lights, self.bands, key[4], scalar)
 
     def lights(self):
         """The scene's emitters for direct lighting, built on first use (light selection structures
@@ -337,6 +386,7 @@ class Renderer:
         self.environment.set_spec(spec)
         self.scene = replace(self.scene, environment=spec)
         if environment_emits(spec) != environment_emits(old):
+            self._drop_packet_programs()
             self._drop_lights()
         else:
             self._refit_photons()
@@ -369,6 +419,7 @@ class Renderer:
         """Emission edited: the light structures weigh emitters by their power. The same emitters
         with other powers are taken in place (nothing compiles); where others emit now, the
         structures are built again on next use."""
+        self._drop_packet_programs()
         if self._lights is None:
             return
         from renderer.lights.lights import emitter_table
@@ -377,6 +428,14 @@ class Renderer:
             self._refit_photons()
         else:
             self._drop_lights()
+
+    def _drop_packet_programs(self) -> None:
+        """Packet programs and their light selection made again on next use: an emitter starting
+        or stopping to emit changes what they compile in."""
+        self._packet_reasons.clear()
+        if self._packet_lights is not None:
+            self._packet_lights = None
+            self._programs = {k: p for k, p in self._programs.items() if not k[4]}
 
     def _refit_photons(self) -> None:
         emission = self._shared.get("photon_emission")

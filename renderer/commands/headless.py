@@ -27,7 +27,7 @@ from renderer.output.atomic_write import creation_problem
 from renderer.output.image_io import write_exr, write_png
 from renderer.integrators import make_integrator
 from renderer.film.pixel_slices import ROUND_SLICES, spp_text
-from renderer.renderer import AdaptiveSettings, Renderer
+from renderer.renderer import AdaptiveSettings, MeshOptions, Renderer
 from renderer.scene.description import Scene
 from renderer.output.tonemap import tonemap_array
 from renderer.runtime.version import lantern_version
@@ -61,6 +61,7 @@ class RenderJob:
     aovs: bool = False  # albedo, normal, variance, raw colour and spp written with it
     noise_threshold: float | None = None  # adaptive sampling (renderer/film/adaptive.py); None: uniform
     min_spp: int = DEFAULT_MIN_SPP
+    packets: int = 0  # rays a packet on the CPU (renderer/packets/); 0: one ray at a time
 
     @property
     def keeps_aovs(self) -> bool:
@@ -181,7 +182,7 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
     make_integrator(integrator)  # a clear error before any compilation
     target_spp = job.spp
     if renderer is None:
-        renderer = Renderer(scene, (width, height), aovs=job.keeps_aovs)
+        renderer = Renderer(scene, (width, height), MeshOptions(packets=job.packets), aovs=job.keeps_aovs)
     else:
         renderer.reset(width, height)
     if job.noise_threshold is not None:
@@ -191,6 +192,9 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
         renderer.restore(resume.state, resume.spp_done * ROUND_SLICES + resume.slices_in_round)
         seconds_before = resume.seconds_rendered
     camera = camera if camera is not None else CameraFrame.from_spec(scene.camera)
+    if job.packets:
+        reason = renderer.packet_reason(integrator, renderer.features(camera), scene.render.sampler)
+        print(f"packets of {job.packets} rays: " + (f"not taken, {reason}" if reason else "taken"), file=sys.stderr)
     if stop is not None:
         stop.defer()  # from here on there is an image to save: a signal stops at the next pass
     start = time.perf_counter()

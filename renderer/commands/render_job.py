@@ -20,7 +20,8 @@ def job_from_arguments(args, scene, previous: CheckpointHeader | None) -> Render
     job = RenderJob(spp=spp, seconds=seconds, size=args.size, integrator=args.integrator, max_depth=args.max_depth,
                     seed=args.seed, exposure=exposure, tonemapper=args.tonemapper, denoise=bool(args.denoise),
                     aovs=args.aovs, noise_threshold=args.noise_threshold,
-                    min_spp=args.min_spp if args.min_spp is not None else DEFAULT_MIN_SPP)
+                    min_spp=args.min_spp if args.min_spp is not None else DEFAULT_MIN_SPP,
+                    packets=getattr(args, "packets", 0) or 0)
     if previous is not None:
         job = replace(job, size=job.size or (previous.width, previous.height),
                       integrator=job.integrator or previous.integrator,

@@ -1,0 +1,146 @@
+"""Light samples for a packet of path vertices: the scene's emissive triangles and quads, chosen by
+power (Vose's alias table, one gather per lane), and a constant environment, lane by lane.
+
+The packet path keeps its own light selection, so its densities are its own: the emitters by
+their power (light_select.alias_table over renderer/lights/lights.py's emitter_table), the
+environment with the share renderer/lights/lights.py gives it (half where emitters exist too),
+uniform directions on it. MIS at a BSDF-sampled hit asks the same densities back (pdf_hit,
+pdf_environment), so the estimator is unbiased whatever the scalar path's light tree would have
+chosen: images agree with the scalar path's in expectation (tests/packets test that).
+"""
+import math
+
+import numpy as np
+import taichi as ti
+
+from renderer.lights.light_select import alias_table
+from renderer.lights.lights import ENVIRONMENT_SHARE, emitter_table, environment_emits
+from renderer.packets.lanes import normalized, sincos_2pi
+from renderer.runtime.upload import upload_fields
+
+INV_4PI = 1.0 / (4.0 * math.pi)
+
+
+@ti.data_oriented
+class PacketLights:
+    """Emitter selection on the device: alias columns (q, alias), each emitter's primitive, and
+    per primitive the density of choosing a point on it by area (its pmf / area; 0 for
+    primitives that do not emit). `has_env`, `has_emitters`: compile-time, from the scene."""
+
+    def __init__(self, geometry, records, materials, environment, environment_spec):
+        """geometry: a MeshGeometry; records: its PrimitiveRecords; materials: its MaterialTable;
+        environment: the device Environment (a constant one: its radiance is one colour)."""
+        self.geometry = geometry
+        self.records = records
+        self.triangle_end = geometry.data.counts["triangle"]
+        self.materials = materials
+        self.environment = environment
+        self.has_env = environment_emits(environment_spec)
+        self.primitive_count = int(geometry.primitive_count())
+        self.env_share = ti.field(ti.f32, shape=())
+        self.count = ti.field(ti.i32, shape=())
+        self._allocated = 0
+        self.refit(materials.arrays)
+
+    def refit(self, material_arrays: dict) -> None:
+        """The selection for the materials' current emission (an edit of values compiles nothing;
+        a table that grows past what was allocated reallocates, which the program's next launch
+        picks up as new fields: Renderer drops its packet programs then)."""
+        table = emitter_table(self.geometry, material_arrays)
+        prims = table["prim"]
+        self.has_emitters = len(prims) > 0
+        n = max(1, len(prims))
+        if n > self._allocated:
+            self.q = ti.field(ti.f32, shape=n)
+            self.alias = ti.field(ti.i32, shape=n)
+            self.prim = ti.field(ti.i32, shape=n)
+            self.density = ti.field(ti.f32, shape=max(1, self.primitive_count))
+            self._allocated = n
+        density = np.zeros(max(1, self.primitive_count), np.float32)
+        q, alias, prim = np.ones(n, np.float32), np.zeros(n, np.int32), np.zeros(n, np.int32)
+        if self.has_emitters:
+            q[:len(prims)], alias[:len(prims)], pmf = alias_table(table["power"])
+            prim[:len(prims)] = prims
+            density[prims] = pmf / table["area"]
+        upload_fields([(self.q, q), (self.alias, alias), (self.prim, prim), (self.density, density)])
+        self.count[None] = len(prims)
+        share = 0.0
+        if self.has_env:
+            share = ENVIRONMENT_SHARE if self.has_emitters else 1.0
+        self.env_share[None] = share
+
+    @ti.func
+    def sample(self, px, py, pz, u_select, u1, u2):
+        """Light samples seen from the points p (lanes): (direction xyz, distance (INF towards the
+        environment), solid-angle density, the point and its normal xyz (for the shadow ray's far
+        end), radiance rgb, prim (-1: the environment)). Density 0: nothing to add."""
+        share = self.env_share[None]
+        use_env = u_select < share
+        u = ti.select(use_env, u_select / ti.max(share, 1e-30), (u_select - share) / ti.max(1.0 - share, 1e-30))
+        count = self.count[None]
+        column_f = u * count
+        column = ti.min(ti.cast(column_f, ti.i32), count - 1)
+        column = ti.max(column, 0)
+        frac = column_f - ti.cast(column, ti.f32)
+        prim = column
+        for k in ti.static(range(u.n)):
+            j = column[k]
+            prim[k] = self.prim[ti.select(frac[k] < self.q[j], j, self.alias[j])]
+        bx, by, bz, scale, ux, uy, uz, radius, vx, vy, vz, material = self.records.gather(prim, u)
+        # a triangle's point (v0 + b1 e1 + b2 e2, sqrt-warped) or a quad's (u1, u2) directly
+        is_triangle = prim < self.triangle_end
+        su = ti.sqrt(u1)
+        b1 = ti.select(is_triangle, 1.0 - su, u1)
+        b2 = ti.select(is_triangle, u2 * su, u2)
+        qx = bx + b1 * ux + b2 * vx
+        qy = by + b1 * uy + b2 * vy
+        qz = bz + b1 * uz + b2 * vz
+        cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        length = ti.sqrt(cx * cx + cy * cy + cz * cz)
+        area = ti.select(is_triangle, 0.5 * length, length)
+        inv_len = 1.0 / ti.max(length, 1e-30)
+        nx, ny, nz = cx * inv_len, cy * inv_len, cz * inv_len
+        wx, wy, wz = qx - px, qy - py, qz - pz
+        dist2 = wx * wx + wy * wy + wz * wz
+        dist = ti.sqrt(dist2)
+        wx, wy, wz = normalized(wx, wy, wz)
+        cos_l = -(nx * wx + ny * wy + nz * wz)  # > 0: the point's front faces p
+        pmf_area = u * 0.0
+        er, eg, eb = u * 0.0, u * 0.0, u * 0.0
+        two_sided = prim * 0
+        for k in ti.static(range(u.n)):
+            pmf_area[k] = self.density[prim[k]]
+            emission = self.materials.table[material[k]].emission
+            er[k], eg[k], eb[k] = emission.x, emission.y, emission.z
+            two_sided[k] = self.materials.table[material[k]].two_sided_emission
+        pdf = (1.0 - share) * pmf_area * dist2 / ti.max(ti.abs(cos_l), 1e-30)
+        lit = (cos_l > 0.0) | (two_sided != 0)
+        ok = (area > 0.0) & (ti.abs(cos_l) > 0.0) & (dist2 > 0.0) & (count > 0)
+        pdf = ti.select(ok, pdf, 0.0)
+        er, eg, eb = ti.select(lit, er, 0.0), ti.select(lit, eg, 0.0), ti.select(lit, eb, 0.0)
+        if ti.static(self.has_env):
+            # uniform directions, as renderer/lights/lights.py's environment_direction off a map
+            z = 1.0 - 2.0 * u1
+            r = ti.sqrt(ti.max(0.0, 1.0 - z * z))
+            s, c = sincos_2pi(u2)
+            env = self.environment.radiance(ti.math.vec3(0.0, 1.0, 0.0))
+            wx, wy, wz = ti.select(use_env, r * c, wx), ti.select(use_env, z, wy), ti.select(use_env, r * s, wz)
+            dist = ti.select(use_env, 1e30, dist)
+            pdf = ti.select(use_env, share * INV_4PI, pdf)
+            er, eg, eb = ti.select(use_env, env.x, er), ti.select(use_env, env.y, eg), ti.select(use_env, env.z, eb)
+            prim = ti.select(use_env, -1, prim)
+        return wx, wy, wz, dist, pdf, qx, qy, qz, nx, ny, nz, er, eg, eb, prim
+
+    @ti.func
+    def pdf_hit(self, prim, dist2, cos_l):
+        """The solid-angle density with which `sample` would have chosen the point a BSDF-sampled
+        ray hit on `prim` at squared distance dist2, where the ray meets its surface at cosine
+        cos_l (lanes)."""
+        density = cos_l * 0.0
+        for k in ti.static(range(cos_l.n)):
+            density[k] = self.density[ti.max(prim[k], 0)]
+        return (1.0 - self.env_share[None]) * density * dist2 / ti.max(ti.abs(cos_l), 1e-30)
+
+    @ti.func
+    def pdf_environment(self):
+        return self.env_share[None] * INV_4PI

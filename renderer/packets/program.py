@@ -1,0 +1,127 @@
+"""A rendering program whose kernel traces packets of rays: `width` neighbouring pixels of a pass
+per loop index, one path a lane (renderer/packets/path.py), on the CPU.
+
+It renders what RenderProgram renders for the scenes renderer/packets/support.py admits, with the
+same launch arguments, pixel slices, adaptive stops, crop windows and sample indices (each lane's
+pixel continues at its own count), the same sampler numbers per decision and the same film
+updates; picking and the picked objects' highlight go to the scalar program (`scalar`), made on
+first use. The lanes are a pass's consecutive loop indices: in a whole round, a row's neighbouring
+pixels, whose camera rays stay together through the first hit.
+"""
+import taichi as ti
+
+from renderer.camera import pinhole_ray
+from renderer.film.adaptive import STOPPED
+from renderer.film.pixel_slices import BANDS, ROUND_SLICES, interleaved_layout, pass_length, slice_pixel
+from renderer.packets.path import trace_paths, uniform2
+from renderer.sampling import dims
+from renderer.sampling.rng import sample_key
+
+
+@ti.data_oriented
+class PacketProgram:
+    sliced = True  # its passes are pixel slices, as RenderProgram's
+    writes_aovs = False
+    feature_samples = False
+
+    def __init__(self, geometry, records, materials, environment, integrator, film, work, features, lights, bands,
+                 width, make_scalar):
+        """records: PrimitiveRecords; lights: PacketLights; width: rays a packet (8: AVX2's lanes; 16: AVX-512's);
+        make_scalar: builds the scalar RenderProgram of the same combination (picking)."""
+        self.geometry = geometry
+        self.records = records
+        self.materials = materials
+        self.environment = environment
+        self.integrator = integrator
+        self.film = film
+        self.work = work
+        self.features = features
+        self.lights = lights
+        self.bands = bands
+        self.width = width
+        self._make_scalar = make_scalar
+        self._scalar = None
+
+    def scalar(self):
+        if self._scalar is None:
+            self._scalar = self._make_scalar()
+        return self._scalar
+
+    def pick(self, *args):
+        self.scalar().pick(*args)
+
+    def hit_primitives(self, *args):
+        self.scalar().hit_primitives(*args)
+
+    def render(self, width: int, height: int, spp: int, slice_first: int, slice_count: int, order: int,
+               *rest, feature_boost: int = 0, window=None) -> None:
+        """RenderProgram.render's contract (no feature samples: AOVs are not kept here)."""
+        if feature_boost > 0:
+            raise ValueError("feature samples asked of a packet program (it keeps no AOVs)")
+        if order == BANDS and slice_count < ROUND_SLICES:
+            self.bands.set_height(height)
+        window_args = window.kernel_args if window is not None else (width, height, 0, 0)
+        self._render(width, height, spp, slice_first, slice_count, order, *rest, *window_args)
+
+    @ti.kernel
+    def _render(self, width: ti.i32, height: ti.i32, spp: ti.i32, slice_first: ti.i32, slice_count: ti.i32,
+                order: ti.i32, seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3,
+                right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32, aperture: ti.f32, focus: ti.f32,
+                full_width: ti.i32, full_height: ti.i32, window_x: ti.i32, window_y: ti.i32):
+        lanes = ti.static(self.width)
+        banded = order == BANDS and slice_count < ROUND_SLICES
+        layout = interleaved_layout(slice_count, width)
+        n = self.bands.pass_length(slice_first, slice_count, width) if banded else pass_length(
+            slice_count, width, height, order)
+        for packet in range((n + lanes - 1) // lanes):
+            xs = ti.Vector([0] * lanes, dt=ti.i32)
+            ys = ti.Vector([0] * lanes, dt=ti.i32)
+            valid = ti.Vector([0] * lanes, dt=ti.i32)
+            first = ti.Vector([0] * lanes, dt=ti.i32)
+            pixel = ti.Vector([0] * lanes, dt=ti.u32)
+            for k in range(lanes):
+                i = packet * lanes + k
+                if i < n:
+                    x = 0
+                    y = 0
+                    if banded:
+                        x, y = self.bands.pixel(i, slice_first, width)
+                    else:
+                        x, y = slice_pixel(i, slice_first, slice_count, width, height, order, layout)
+                    if x < width and y < height:
+                        if self.film.adaptive[x, y] != STOPPED:
+                            xs[k], ys[k], valid[k] = x, y, 1
+                            first[k] = self.film.count[x, y] + self.film.rejected[x, y]
+                            pixel[k] = ti.cast((y + window_y) * full_width + x + window_x, ti.u32)
+            if valid.max() > 0:
+                work_v = ti.Vector([0.0] * lanes, dt=ti.f32)
+                work_t = ti.Vector([0.0] * lanes, dt=ti.f32)
+                work_r = ti.Vector([0.0] * lanes, dt=ti.f32)
+                aspect = full_width / full_height
+                for s in range(spp):
+                    # Each lane's key alone: sample_key on lanes whose values were set under
+                    # branches trips an assertion of Taichi 1.7.4's store-to-load forwarding.
+                    key = ti.Vector([0] * lanes, dt=ti.u32)
+                    for k in range(lanes):
+                        key[k] = sample_key(pixel[k], first[k] + s, seed)
+                    jx, jy = uniform2(key, dims.PIXEL)
+                    ox, oy, oz = jx * 0.0, jx * 0.0, jx * 0.0
+                    dx, dy, dz = jx * 0.0, jx * 0.0, jx * 0.0
+                    u = 2.0 * (ti.cast(xs + window_x, ti.f32) + jx) / full_width - 1.0
+                    v = 2.0 * (ti.cast(ys + window_y, ti.f32) + jy) / full_height - 1.0
+                    for k in range(lanes):
+                        o, d = pinhole_ray(u[k], v[k], aspect, origin, forward, right, up, half_height,
+                                           self.features.orthographic)
+                        ox[k], oy[k], oz[k] = o.x, o.y, o.z
+                        dx[k], dy[k], dz[k] = d.x, d.y, d.z
+                    r, g, b, visits, tests, rays = trace_paths(self, key, ox, oy, oz, dx, dy, dz, valid, max_depth)
+                    work_v += visits
+                    work_t += tests
+                    work_r += rays
+                    for k in range(lanes):
+                        if valid[k] == 1:
+                            self.film.add_sample(xs[k], ys[k], ti.math.vec3(r[k], g[k], b[k]))
+                for k in range(lanes):
+                    if valid[k] == 1:
+                        self.work[xs[k], ys[k]] = (self.work[xs[k], ys[k]]
+                                                   + ti.math.vec3(work_v[k], work_t[k], work_r[k]))

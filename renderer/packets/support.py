@@ -1,0 +1,64 @@
+"""Which renders the packet path takes: the CPU, and scenes whose every part has a lane-by-lane
+form (renderer/packets/). Anything else renders with the scalar RenderProgram, as before; the
+reason is said once per render (`unsupported` gives it)."""
+from __future__ import annotations
+
+import taichi as ti
+
+from renderer.packets.traversal import PACKET_KINDS
+
+PACKET_INTEGRATORS = ("path", "nee", "mis")
+PACKET_MATERIALS = frozenset({"diffuse"})
+# Features that must be off, with the words that say so
+_EFFECTS = (("has_textures", "textures"), ("has_normal_maps", "normal maps"), ("has_mapped_frames", "normal or bump maps"),
+            ("has_bump_maps", "bump maps"), ("has_anisotropy", "anisotropic materials"), ("has_mixes", "material mixes"),
+            ("has_media", "participating media"), ("analytic_fog", "fog"), ("has_dispersion", "dispersion"),
+            ("has_alpha", "alpha coverage"), ("has_vertex_colors", "vertex colours"), ("has_instances", "instances"),
+            ("has_flipped_normals", "turned-over normals"), ("has_thin", "thin walls"),
+            ("has_microfacet_models", "microfacet models"), ("has_sidedness", "one-sided materials"),
+            ("depth_of_field", "depth of field"), ("orthographic", "an orthographic camera"),
+            ("has_light_textures", "light textures"))
+PACKET_WIDTHS = (4, 8, 16)
+
+
+def on_cpu() -> bool:
+    return ti.lang.impl.current_cfg().arch in (ti.x64, ti.arm64)
+
+
+def unsupported(geometry, features, integrator: str, sampler: str, keeps_aovs: bool, emitter_prims) -> str | None:
+    """None where the packet path renders this combination, else why not (a short phrase)."""
+    if not on_cpu():
+        return "the packet path is for the CPU (GPUs run 32 lanes of their own)"
+    if features.geometry != "mesh":
+        return "SDF scenes are marched one ray at a time"
+    if integrator not in PACKET_INTEGRATORS:
+        return f"the {integrator} integrator has no packet form"
+    if sampler != "independent":
+        return f"the {sampler} sampler has no packet form"
+    if keeps_aovs:
+        return "the denoiser's AOVs are not written by packets"
+    if getattr(geometry, "traversal", "") not in ("wide4", "wide8"):
+        return f"the {geometry.traversal} traversal has no packet form"
+    kinds = set(geometry.kinds)
+    if not kinds <= PACKET_KINDS:
+        return "primitives of kind " + ", ".join(sorted(kinds - PACKET_KINDS)) + " have no packet test"
+    if geometry.has_normals:
+        return "shading normals have no packet form yet"
+    if not set(features.material_kinds) <= PACKET_MATERIALS:
+        return "materials of kind " + ", ".join(sorted(set(features.material_kinds) - PACKET_MATERIALS)) + \
+            " have no packet form"
+    for name, words in _EFFECTS:
+        if getattr(features, name):
+            return f"{words} have no packet form"
+    if features.environment != "constant":
+        return f"a {features.environment} environment has no packet form"
+    if features.light_kinds:
+        return "point, spot and directional lights have no packet form"
+    if features.pixel_filter[0] != "box":
+        return f"the {features.pixel_filter[0]} pixel filter has no packet form"
+    data = geometry.data
+    sphere_lo = data.counts["triangle"]
+    sphere_hi = sphere_lo + data.counts["sphere"]
+    if any(sphere_lo <= int(g) < sphere_hi for g in emitter_prims):
+        return "emissive spheres have no packet light sample"
+    return None
