@@ -12,7 +12,8 @@ from renderer.camera import generate_ray, pinhole_ray
 from renderer.geometry.interface import INF, Ray
 from renderer.materials.bsdf import Bsdf
 from renderer.film.pixel_filter import pixel_sample
-from renderer.film.pixel_slices import BANDS, ROUND_SLICES, interleaved_layout, pass_length, slice_pixel
+from renderer.film.band_table import pass_layout, pass_pixel
+from renderer.film.pixel_slices import BANDS, ROUND_SLICES
 from renderer.sampling import dims
 
 
@@ -65,21 +66,11 @@ class RenderProgram:
                 order: ti.i32, feature_boost: ti.i32, seed: ti.u32, max_depth: ti.i32, origin: ti.math.vec3, forward: ti.math.vec3,
                 right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32, aperture: ti.f32, focus: ti.f32,
                 full_width: ti.i32, full_height: ti.i32, window_x: ti.i32, window_y: ti.i32):
-        # A partial pass over bands visits its rows from the band table: the same pixels as
-        # slice_pixel's, without its divisions and skipped indices (renderer/film/band_table.py).
-        banded = order == BANDS and slice_count < ROUND_SLICES
-        layout = interleaved_layout(slice_count, width)
-        n = self.bands.pass_length(slice_first, slice_count, width) if banded else pass_length(
-            slice_count, width, height, order)
+        banded, layout, n = pass_layout(self.bands, slice_first, slice_count, width, height, order)
         # Threads take the loop's blocks as they finish (renderer/arch.cpu_scheduling_options), so
         # a pass's dear and cheap pixels are shared among them whatever their order.
         for i in range(n):
-            x = 0
-            y = 0
-            if banded:
-                x, y = self.bands.pixel(i, slice_first, width)
-            else:
-                x, y = slice_pixel(i, slice_first, slice_count, width, height, order, layout)
+            x, y = pass_pixel(self.bands, i, banded, slice_first, slice_count, width, height, order, layout)
             if x < width and y < height:
                 # A pixel adaptive sampling has stopped (renderer/film/adaptive.py) takes no more samples;
                 # a nested test: Taichi's `and` evaluates both sides, and (x, y) may lie outside the film.

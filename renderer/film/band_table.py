@@ -12,7 +12,8 @@ only their loop indices differ.
 import numpy as np
 import taichi as ti
 
-from renderer.film.pixel_slices import ROUND_SLICES, band_order_rows
+from renderer.film.pixel_slices import (BANDS, ROUND_SLICES, band_order_rows, interleaved_layout, pass_length,
+                                         slice_pixel)
 
 
 @ti.data_oriented
@@ -51,3 +52,27 @@ class BandTable:
         """(x, y) of loop index i of that pass: its rows in slice order, each left to right."""
         k = i // width
         return i - k * width, self.rows[self.starts[slice_first] + k]
+
+
+@ti.func
+def pass_layout(bands: ti.template(), slice_first, slice_count, width, height, order):
+    """(banded, layout, loop indices) of a render pass over slices [slice_first, slice_first +
+    slice_count): a partial pass over bands visits its rows from the table (the same pixels as
+    slice_pixel's, without its divisions and skipped indices); any other pass maps its indices
+    with slice_pixel and the interleaved layout."""
+    banded = order == BANDS and slice_count < ROUND_SLICES
+    layout = interleaved_layout(slice_count, width)
+    n = bands.pass_length(slice_first, slice_count, width) if banded else pass_length(slice_count, width, height, order)
+    return banded, layout, n
+
+
+@ti.func
+def pass_pixel(bands: ti.template(), i, banded, slice_first, slice_count, width, height, order, layout):
+    """The pixel (x, y) of loop index i of that pass (outside the film for padding indices)."""
+    x = 0
+    y = 0
+    if banded:
+        x, y = bands.pixel(i, slice_first, width)
+    else:
+        x, y = slice_pixel(i, slice_first, slice_count, width, height, order, layout)
+    return x, y

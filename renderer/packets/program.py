@@ -12,7 +12,8 @@ import taichi as ti
 
 from renderer.camera import pinhole_ray
 from renderer.film.adaptive import STOPPED
-from renderer.film.pixel_slices import BANDS, ROUND_SLICES, interleaved_layout, pass_length, slice_pixel
+from renderer.film.band_table import pass_layout, pass_pixel
+from renderer.film.pixel_slices import BANDS, ROUND_SLICES
 from renderer.packets.path import trace_paths, uniform2
 from renderer.sampling import dims
 from renderer.sampling.rng import sample_key
@@ -69,10 +70,7 @@ class PacketProgram:
                 right: ti.math.vec3, up: ti.math.vec3, half_height: ti.f32, aperture: ti.f32, focus: ti.f32,
                 full_width: ti.i32, full_height: ti.i32, window_x: ti.i32, window_y: ti.i32):
         lanes = ti.static(self.width)
-        banded = order == BANDS and slice_count < ROUND_SLICES
-        layout = interleaved_layout(slice_count, width)
-        n = self.bands.pass_length(slice_first, slice_count, width) if banded else pass_length(
-            slice_count, width, height, order)
+        banded, layout, n = pass_layout(self.bands, slice_first, slice_count, width, height, order)
         for packet in range((n + lanes - 1) // lanes):
             xs = ti.Vector([0] * lanes, dt=ti.i32)
             ys = ti.Vector([0] * lanes, dt=ti.i32)
@@ -82,12 +80,7 @@ class PacketProgram:
             for k in range(lanes):
                 i = packet * lanes + k
                 if i < n:
-                    x = 0
-                    y = 0
-                    if banded:
-                        x, y = self.bands.pixel(i, slice_first, width)
-                    else:
-                        x, y = slice_pixel(i, slice_first, slice_count, width, height, order, layout)
+                    x, y = pass_pixel(self.bands, i, banded, slice_first, slice_count, width, height, order, layout)
                     if x < width and y < height:
                         if self.film.adaptive[x, y] != STOPPED:
                             xs[k], ys[k], valid[k] = x, y, 1

@@ -19,7 +19,7 @@ scene is within that before a packet program is made.
 """
 import taichi as ti
 
-from renderer.geometry.wide_traversal import GROW_FAR, MISS_KEY, nearest_child
+from renderer.geometry.wide_traversal import MISS_KEY, nearest_child
 from renderer.packets import primitives
 from renderer.packets.lanes import any_lane, mask
 
