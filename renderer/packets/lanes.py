@@ -126,3 +126,16 @@ def offset_origin(px, py, pz, nx, ny, nz):
     """intersect.offset_ray_origin lane by lane: p moved off its surface along n by a few ulps of
     its own magnitude (Waechter and Binder 2019)."""
     return _offset_axis(px, nx), _offset_axis(py, ny), _offset_axis(pz, nz)
+
+
+@ti.func
+def seeded(x, j):
+    """x, after storing its lanes side by side in a local array of which lane j (a run-time value)
+    is read: LLVM's SLP vectoriser starts from runs of consecutive stores, and without them it
+    left most lane arithmetic scalar (a whole packet path had 633 scalar, 618 4-lane and 214
+    8-lane float operations); the dynamic read keeps the stores from being optimised away, as
+    wide_traversal's node keys are kept. Returns (x, the lane read) for the caller to keep."""
+    keep = x * 0.0
+    for c in ti.static(range(x.n)):
+        keep[c] = x[c]
+    return x, keep[j]

@@ -13,7 +13,7 @@ import taichi as ti
 from renderer.geometry.interface import INF
 from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
 from renderer.packets import traversal
-from renderer.packets.lanes import any_lane, cosine_hemisphere, mask, offset_origin
+from renderer.packets.lanes import any_lane, cosine_hemisphere, mask, offset_origin, seeded
 from renderer.packets.surfaces import hit_surface
 from renderer.sampling import dims
 from renderer.sampling.rng import uniform
@@ -65,6 +65,7 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
     visits, tests, rays = zero, zero, zero
     env = ctx.environment.radiance(ti.math.vec3(0.0, 1.0, 0.0))
     bounces = 0
+    seeds = 0.0
     for _ in range(MAX_VERTICES):
         if not any_lane(live):
             break
@@ -171,5 +172,23 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
             live &= mask(survives)
             inv_q = 1.0 / ti.max(q, 1e-30)
             tr, tg, tb = tr * inv_q, tg * inv_q, tb * inv_q
+        # The path's state stored lane by lane (lanes.seeded): what LLVM vectorises the bounce from.
+        j = bounces & (ox.n - 1)
+        ox, s0 = seeded(ox, j)
+        oy, s1 = seeded(oy, j)
+        oz, s2 = seeded(oz, j)
+        dx, s3 = seeded(dx, j)
+        dy, s4 = seeded(dy, j)
+        dz, s5 = seeded(dz, j)
+        tr, s6 = seeded(tr, j)
+        tg, s7 = seeded(tg, j)
+        tb, s8 = seeded(tb, j)
+        lr, s9 = seeded(lr, j)
+        lg, s10 = seeded(lg, j)
+        lb, s11 = seeded(lb, j)
+        prev_pdf, s12 = seeded(prev_pdf, j)
+        seeds += s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7 + s8 + s9 + s10 + s11 + s12
         bounces += 1
-    return lr, lg, lb, visits, tests, rays
+    # the seeds kept by a use the compiler cannot drop (a product with 0 it would fold away); the
+    # test never holds for a sum of path states
+    return lr, lg, lb, visits, tests, rays + ti.select(seeds == -1.0e-37, 1.0, 0.0)
