@@ -117,6 +117,12 @@ def main(argv=None) -> int:
         samples = args.size * args.size * args.spp
         entry["msamples_per_s"] = {w: samples / float(np.median(ts)) / 1e6 for w, ts in times.items()}
         entry["image_mean"] = {w: r.image().reshape(-1, 3).mean(axis=0).tolist() for w, r in renderers.items()}
+        entry["occupancy"] = {}
+        for w in widths:
+            program = renderers[w].program(scene.render.integrator, renderers[w].features(camera),
+                                           scene.render.sampler)
+            if hasattr(program, "occupancy"):
+                entry["occupancy"][w] = program.occupancy()
         report["scenes"][name] = entry
         print(f"{name}: packets {entry['reason'] or 'taken'}")
         for w in renderers:
@@ -124,6 +130,10 @@ def main(argv=None) -> int:
                     f"({entry['msamples_per_s'][w] / entry['msamples_per_s'][0]:.2f}x), first render "
                     f"{first[w]:.1f} s; closest + shadow rays: camera {ray_rates['camera'][w]:.2f}, random "
                     f"{ray_rates['random'][w]:.2f} M rays/s")
+            occupancy = entry["occupancy"].get(w)
+            if occupancy:
+                line += (f"; lanes live: closest {occupancy['closest']:.0%}, shadow "
+                         f"{occupancy['shadow']:.0%}" if occupancy["shadow"] is not None else "")
             print(line)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(report, indent=1, default=str))

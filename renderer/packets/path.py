@@ -49,9 +49,10 @@ def leave(px, py, pz, nx, ny, nz, eps, toward):
 
 @ti.func
 def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_depth):
-    """The radiance (rgb lanes) of the camera rays (o, d) of the live lanes, and the work done:
+    """The radiance (rgb lanes) of the camera rays (o, d) of the live lanes, the work done:
     (node visits, primitive tests, rays) lanes, the packet's visits and tests counted in every
-    lane that took part."""
+    lane that took part, and the packet's occupancy: (closest-hit traces, the live lanes they
+    carried, shadow traces, their live lanes)."""
     light_sampling = ti.static(ctx.integrator.light_sampling)
     use_mis = ti.static(ctx.integrator.mis)
     geometry = ctx.geometry
@@ -66,6 +67,7 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
     env = ctx.environment.radiance(ti.math.vec3(0.0, 1.0, 0.0))
     bounces = 0
     seeds = 0.0
+    occupancy = ti.math.ivec4(0)
     for _ in range(MAX_VERTICES):
         if not any_lane(live):
             break
@@ -73,6 +75,7 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
         prim, t, b1, b2, v, n_tests = traversal.trace(geometry, ox, oy, oz, dx, dy, dz,
                                                       ti.select(live == 1, INF, -1.0), False)
         took = ti.cast(live, ti.f32)
+        occupancy += ti.math.ivec4(1, live.sum(), 0, 0)
         visits += took * v
         tests += took * n_tests
         rays += took
@@ -148,6 +151,7 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
                 blocker, t_blocker, b1_blocker, b2_blocker, sv, st = traversal.trace(geometry, sx, sy, sz, gx, gy, gz,
                                                                                      t_max, True)
                 took = ti.cast(mask(t_max >= 0.0), ti.f32)
+                occupancy += ti.math.ivec4(0, 0, 1, mask(t_max >= 0.0).sum())
                 visits += took * sv
                 tests += took * st
                 rays += took
@@ -191,4 +195,4 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
         bounces += 1
     # the seeds kept by a use the compiler cannot drop (a product with 0 it would fold away); the
     # test never holds for a sum of path states
-    return lr, lg, lb, visits, tests, rays + ti.select(seeds == -1.0e-37, 1.0, 0.0)
+    return lr, lg, lb, visits, tests, rays + ti.select(seeds == -1.0e-37, 1.0, 0.0), occupancy

@@ -42,6 +42,20 @@ class PacketProgram:
         self.width = width
         self._make_scalar = make_scalar
         self._scalar = None
+        # Lane occupancy, summed over launches: (closest-hit traces, their live lanes, shadow
+        # traces, their live lanes); occupancy() reads it, reset_occupancy() clears it
+        self.traces = ti.field(ti.i64, shape=4)
+
+    def occupancy(self) -> dict:
+        """The share of a packet's lanes that carried a live ray, per kind of trace, since the last
+        reset_occupancy() (None where no trace of that kind ran)."""
+        calls, closest_lanes, shadow_calls, shadow_lanes = (int(v) for v in self.traces.to_numpy())
+        return {"closest": closest_lanes / (calls * self.width) if calls else None,
+                "shadow": shadow_lanes / (shadow_calls * self.width) if shadow_calls else None,
+                "closest_traces": calls, "shadow_traces": shadow_calls}
+
+    def reset_occupancy(self) -> None:
+        self.traces.fill(0)
 
     def scalar(self):
         if self._scalar is None:
@@ -90,6 +104,7 @@ class PacketProgram:
                 work_v = ti.Vector([0.0] * lanes, dt=ti.f32)
                 work_t = ti.Vector([0.0] * lanes, dt=ti.f32)
                 work_r = ti.Vector([0.0] * lanes, dt=ti.f32)
+                traces = ti.math.ivec4(0)
                 aspect = full_width / full_height
                 for s in range(spp):
                     # Each lane's key alone: sample_key on lanes whose values were set under
@@ -107,13 +122,17 @@ class PacketProgram:
                                            self.features.orthographic)
                         ox[k], oy[k], oz[k] = o.x, o.y, o.z
                         dx[k], dy[k], dz[k] = d.x, d.y, d.z
-                    r, g, b, visits, tests, rays = trace_paths(self, key, ox, oy, oz, dx, dy, dz, valid, max_depth)
+                    r, g, b, visits, tests, rays, occupancy = trace_paths(self, key, ox, oy, oz, dx, dy, dz, valid,
+                                                                          max_depth)
+                    traces += occupancy
                     work_v += visits
                     work_t += tests
                     work_r += rays
                     for k in range(lanes):
                         if valid[k] == 1:
                             self.film.add_sample(xs[k], ys[k], ti.math.vec3(r[k], g[k], b[k]))
+                for j in ti.static(range(4)):
+                    self.traces[j] += ti.cast(traces[j], ti.i64)  # one atomic add a packet
                 for k in range(lanes):
                     if valid[k] == 1:
                         self.work[xs[k], ys[k]] = (self.work[xs[k], ys[k]]

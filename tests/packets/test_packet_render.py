@@ -43,6 +43,15 @@ def test_the_same_seed_gives_the_same_image():
     # and the work is counted: node visits, primitive tests, rays
     work = a.work.to_numpy()[:20, :12]
     assert (work[..., 2] >= 4).all() and (work[..., 0] > 0).all()
+    # and the lanes' occupancy: every sample's camera rays fill their packet's live lanes (30
+    # packets of 8 pixels, 4 samples), later traces carry fewer; the rays add up to the work's
+    occupancy = a.program("mis", a.features(), "independent").occupancy()
+    assert occupancy["closest_traces"] >= 30 * 4 and occupancy["shadow_traces"] > 0
+    assert 0.0 < occupancy["shadow"] <= occupancy["closest"] <= 1.0
+    closest = occupancy["closest"] * occupancy["closest_traces"] * 8
+    shadow = occupancy["shadow"] * occupancy["shadow_traces"] * 8
+    assert closest >= 20 * 12 * 4
+    assert round(closest + shadow) == round(work[..., 2].sum())
 
 
 def test_packets_are_taken_only_where_the_scene_has_a_packet_form():
