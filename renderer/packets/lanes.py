@@ -75,8 +75,9 @@ def kept(x, zero):
 def sincos_2pi(u):
     """(sin 2 pi u, cos 2 pi u) for u in [0, 1], lane by lane, by polynomials: ti.sin and ti.cos
     are libm calls, one per lane, that stop the vectoriser. The angle is taken to [-pi/2, pi/2]
-    by symmetry, where the Taylor series to x^13 (sine) and x^12 (cosine) are within 3e-8 and
-    2.5e-7 of the truth (tests/packets/test_lanes.py measures them against numpy)."""
+    by symmetry, where the Taylor series to x^13 (sine) and x^12 (cosine) truncate below 1e-8; in
+    f32 the results are within 2.6e-7 (sine) and 3.6e-7 (cosine) of numpy's over 65,536 uniform
+    u (the f32 rounding of 2 pi u and of the sums; tests/packets/test_lanes.py holds them to 1e-6)."""
     x = 2.0 * PI * (u - 0.5)  # in [-pi, pi]: sin 2 pi u = -sin x, cos 2 pi u = -cos x
     folded = ti.abs(x) > 0.5 * PI
     r = ti.select(folded, ti.select(x > 0.0, PI - x, -PI - x), x)  # sin r = sin x; cos r = +-cos x

@@ -37,37 +37,27 @@ class PacketLights:
         self.environment = environment
         self.has_env = environment_emits(environment_spec)
         self.primitive_count = int(geometry.primitive_count())
-        self.env_share = ti.field(ti.f32, shape=())
-        self.count = ti.field(ti.i32, shape=())
-        self._allocated = 0
-        self.refit(materials.arrays)
-
-    def refit(self, material_arrays: dict) -> None:
-        """The selection for the materials' current emission (an edit of values compiles nothing;
-        a table that grows past what was allocated reallocates, which the program's next launch
-        picks up as new fields: Renderer drops its packet programs then)."""
-        table = emitter_table(self.geometry, material_arrays)
+        # Built once: an edit of emission or of the environment makes the Renderer drop its packet
+        # programs and these lights with them (Renderer._drop_packet_programs).
+        table = emitter_table(geometry, materials.arrays)
         prims = table["prim"]
         self.has_emitters = len(prims) > 0
         n = max(1, len(prims))
-        if n > self._allocated:
-            self.q = ti.field(ti.f32, shape=n)
-            self.alias = ti.field(ti.i32, shape=n)
-            self.prim = ti.field(ti.i32, shape=n)
-            self.density = ti.field(ti.f32, shape=max(1, self.primitive_count))
-            self._allocated = n
-        density = np.zeros(max(1, self.primitive_count), np.float32)
         q, alias, prim = np.ones(n, np.float32), np.zeros(n, np.int32), np.zeros(n, np.int32)
+        density = np.zeros(max(1, self.primitive_count), np.float32)
         if self.has_emitters:
             q[:len(prims)], alias[:len(prims)], pmf = alias_table(table["power"])
             prim[:len(prims)] = prims
             density[prims] = pmf / table["area"]
+        self.q = ti.field(ti.f32, shape=n)
+        self.alias = ti.field(ti.i32, shape=n)
+        self.prim = ti.field(ti.i32, shape=n)
+        self.density = ti.field(ti.f32, shape=len(density))
         upload_fields([(self.q, q), (self.alias, alias), (self.prim, prim), (self.density, density)])
+        self.count = ti.field(ti.i32, shape=())
         self.count[None] = len(prims)
-        share = 0.0
-        if self.has_env:
-            share = ENVIRONMENT_SHARE if self.has_emitters else 1.0
-        self.env_share[None] = share
+        self.env_share = ti.field(ti.f32, shape=())
+        self.env_share[None] = (ENVIRONMENT_SHARE if self.has_emitters else 1.0) if self.has_env else 0.0
 
     @ti.func
     def sample(self, px, py, pz, u_select, u1, u2):

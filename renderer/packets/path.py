@@ -51,8 +51,9 @@ def leave(px, py, pz, nx, ny, nz, eps, toward):
 def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_depth):
     """The radiance (rgb lanes) of the camera rays (o, d) of the live lanes, the work done:
     (node visits, primitive tests, rays) lanes, the packet's visits and tests counted in every
-    lane that took part, and the packet's occupancy: (closest-hit traces, the live lanes they
-    carried, shadow traces, their live lanes)."""
+    lane that took part, the packet's occupancy: (closest-hit traces, the live lanes they
+    carried, shadow traces, their live lanes), and the sum of the lanes lanes.seeded read, which
+    the caller must store somewhere (a product with 0 would be folded away, and the stores with it)."""
     light_sampling = ti.static(ctx.integrator.light_sampling)
     use_mis = ti.static(ctx.integrator.mis)
     geometry = ctx.geometry
@@ -193,6 +194,4 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
         prev_pdf, s12 = seeded(prev_pdf, j)
         seeds += s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7 + s8 + s9 + s10 + s11 + s12
         bounces += 1
-    # the seeds kept by a use the compiler cannot drop (a product with 0 it would fold away); the
-    # test never holds for a sum of path states
-    return lr, lg, lb, visits, tests, rays + ti.select(seeds == -1.0e-37, 1.0, 0.0), occupancy
+    return lr, lg, lb, visits, tests, rays, occupancy, seeds

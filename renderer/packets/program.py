@@ -45,6 +45,8 @@ class PacketProgram:
         # Lane occupancy, summed over launches: (closest-hit traces, their live lanes, shadow
         # traces, their live lanes); occupancy() reads it, reset_occupancy() clears it
         self.traces = ti.field(ti.i64, shape=4)
+        # Written, never read: what keeps lanes.seeded's stores (one plain store a packet)
+        self._seeds = ti.field(ti.f32, shape=())
 
     def occupancy(self) -> dict:
         """The share of a packet's lanes that carried a live ray, per kind of trace, since the last
@@ -122,9 +124,10 @@ class PacketProgram:
                                            self.features.orthographic)
                         ox[k], oy[k], oz[k] = o.x, o.y, o.z
                         dx[k], dy[k], dz[k] = d.x, d.y, d.z
-                    r, g, b, visits, tests, rays, occupancy = trace_paths(self, key, ox, oy, oz, dx, dy, dz, valid,
-                                                                          max_depth)
+                    r, g, b, visits, tests, rays, occupancy, seeds = trace_paths(self, key, ox, oy, oz, dx, dy, dz,
+                                                                                 valid, max_depth)
                     traces += occupancy
+                    self._seeds[None] = seeds
                     work_v += visits
                     work_t += tests
                     work_r += rays
