@@ -171,11 +171,12 @@ class Renderer:
                  if scene.environment.kind == "map" else None)
         self.environment = Environment(scene.environment, image)
         self.geometry, self.materials, self._features, self._mesh = build_world(scene, mesh_options)
-        from renderer.packets.support import PACKET_WIDTHS
+        if mesh_options.packets:  # (the packet modules imported only where packets are asked for)
+            from renderer.packets.support import PACKET_WIDTHS
 
-        if mesh_options.packets and mesh_options.packets not in PACKET_WIDTHS:
-            raise ValueError(f"packets of {mesh_options.packets} rays (choose from 0 (off), "
-                             f"{', '.join(map(str, PACKET_WIDTHS))})")
+            if mesh_options.packets not in PACKET_WIDTHS:
+                raise ValueError(f"packets of {mesh_options.packets} rays (choose from 0 (off), "
+                                 f"{', '.join(map(str, PACKET_WIDTHS))})")
         self.packet_width = mesh_options.packets
         self._packet_lights = None  # PacketLights, built with the first packet program
         self._packet_records = None  # PrimitiveRecords, likewise (kept: the geometry does not change)
