@@ -27,7 +27,7 @@ class MeshScene:
     data: MeshData
     rows: MaterialRows
     atlas: TextureAtlas | None
-    texture_slots: list  # (rect, wrap_s, wrap_t, uv_set, matrix[, nearest]) per texture slot
+    texture_slots: list  # (rect[+ levels], wrap_s, wrap_t, uv_set, matrix[, nearest]) per slot (slot_arrays)
     volume_media: tuple = ()  # MediumSpec of model files' volumes, numbered after the scene's media
     # The assembly's materials (the scene's, then model files' own) and which image each texture of
     # a scene material reads: what material_rows needs to make the rows again after an edit.
@@ -58,8 +58,11 @@ def prepare_mesh_scene(scene: Scene, instancing: bool = True) -> MeshScene:
     rows, slots = material_rows(scene, assembly.materials, assembly.spec_images)
     atlas, texture_slots = None, []
     if slots:
-        atlas = pack_atlas(assembly.images)
-        texture_slots = [(atlas.rects[slot[0]], *slot[1:]) for slot in slots]
+        mipmaps = scene.render.texture_filter != "none"
+        atlas = pack_atlas(assembly.images, mipmaps=mipmaps)
+        # Each slot's atlas row, with its image's mip levels (first row, count) where packed.
+        texture_slots = [((*atlas.rects[slot[0]], *atlas.level_span[slot[0]]) if mipmaps else atlas.rects[slot[0]],
+                          *slot[1:]) for slot in slots]
     return MeshScene(assembly.data, rows, atlas, texture_slots, assembly.volume_media, assembly.materials,
                      assembly.spec_images)
 

@@ -10,6 +10,7 @@ from renderer.film.adaptive import STOPPED
 from renderer.film.aovs import FEATURE_BOOSTED_SAMPLES, FEATURE_SEED_SALT
 from renderer.camera import generate_ray, pinhole_ray
 from renderer.geometry.interface import INF, Ray
+from renderer.geometry.texture_footprint import footprint_shrink
 from renderer.materials.bsdf import Bsdf
 from renderer.film.pixel_filter import pixel_sample
 from renderer.film.band_table import pass_layout, pass_pixel
@@ -40,6 +41,8 @@ class RenderProgram:
         # The feature-sample loop is compiled in only where asked for (Renderer.program: scenes
         # with texture or normal maps): unused, it cost the sample loop 2.5% and its compile 5-9%.
         self.feature_samples = self.writes_aovs and feature_samples
+        # Mip-mapped textures (mesh geometry only): each camera ray's cone narrows with its sample index.
+        self.filters_textures = getattr(geometry, "filters_textures", False)
 
     # A pass over slices samples its pixels in slice order (renderer/film/pixel_slices.py); the rounds a
     # film has seen are in its counts, so the whole-image passes of SPPM do not apply.
@@ -117,6 +120,10 @@ class RenderProgram:
         ray = generate_ray(ix, iy, full_width, full_height, jitter, self.sampler, state, origin, forward, right, up,
                            half_height, aperture, focus, self.features.depth_of_field,
                            self.features.orthographic)
+        if ti.static(self.filters_textures):  # the pixel's footprint narrows as its samples accumulate
+            shrink = footprint_shrink(index)
+            ray.cone_width *= shrink
+            ray.cone_spread *= shrink
         value, stats, albedo, normal = self._trace(ray, state, max_depth, features_only)
         if ti.static(self.features.pixel_filter[0] != "box"):
             value *= weight

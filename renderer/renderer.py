@@ -110,7 +110,8 @@ def build_world(scene: Scene, mesh_options: MeshOptions):
         layout = leaf_layout(mesh_options.leaves, mesh.data)
         bvh = build_scene_bvh(mesh.data, strategy=mesh_options.strategy,
                               max_leaf_size=max_leaf_size(mesh_options, layout, mesh.data.counts))
-        materials = MaterialTable(mesh.rows, TextureTable(mesh.atlas, mesh.texture_slots), mesh.volume_media)
+        textures = TextureTable(mesh.atlas, mesh.texture_slots, scene.render.texture_filter)
+        materials = MaterialTable(mesh.rows, textures, mesh.volume_media)
         # The geometry tests alpha coverage during traversal: it reads the material table.
         geometry = MeshGeometry(mesh.data, bvh, mesh_options.traversal, mesh_options.triangle_test, materials,
                                 layout)

@@ -10,7 +10,7 @@ from importlib import import_module
 
 BENCHMARKS = {name: f"renderer.bench.{name.replace('-', '_')}"
               for name in ("sdf", "startup", "bvh", "integrators", "features", "photons", "interactive", "denoise",
-                           "scale", "mitsuba-tests", "scenes", "report")}
+                           "scale", "mitsuba-tests", "scenes", "texture-filter", "report")}
 
 
 def run_benchmark(name: str, **options) -> int:

@@ -33,6 +33,7 @@ from renderer.bench.report_error_sections import (
     sdf_section,
 )
 from renderer.bench.report_generic import generic_section
+from renderer.bench.report_texture_section import texture_filter_section
 from renderer.bench.report_mitsuba_section import mitsuba_tests_section
 from renderer.bench.report_scenes_section import scenes_section
 from renderer.bench.report_markdown import Section, num
@@ -51,6 +52,7 @@ SECTIONS: dict[str, Callable[[dict], Section]] = {
     "sdf": sdf_section, "startup": startup_section, "bvh": bvh_section, "integrators": integrators_section,
     "features": features_section, "photons": photons_section, "interactive": interactive_section,
     "denoise": denoise_section, "mitsuba-tests": mitsuba_tests_section, "scenes": scenes_section,
+    "texture-filter": texture_filter_section,
 }
 
 

@@ -20,7 +20,8 @@ On the host, both kinds say which object of the scene file a primitive belongs t
   objects_of(prims) -> array            the scene object of each primitive id, -1 for a miss (-1)
 
 Rays carry a cone (width at the origin, spread per metre) so that the SDF marcher can grow its
-hit threshold with the pixel footprint; mesh geometry ignores it.
+hit threshold with the pixel footprint; mesh geometry turns it into the footprint that mip-mapped
+texture lookups filter over (Surface.uv_footprint).
 """
 import numpy as np
 import taichi as ti
@@ -47,9 +48,12 @@ Hit = ti.types.struct(hit=ti.i32, t=ti.f32, work=ti.i32, tests=ti.i32, inside=ti
 # dp_du, dp_dv: the partial derivatives of the point along texture coordinates set 0 (Mitsuba's
 # frame for its normal and bump maps), set only by geometry whose material rows need them
 # (renderer/geometry/uv_partials.py); zero elsewhere (a struct's unnamed members start at zero).
+# uv_footprint: the pixel's footprint in texture coordinates set 0, (du, dv) of its two axes
+# (renderer/geometry/texture_footprint.py), set only by geometry whose textures are mip-mapped.
 Surface = ti.types.struct(p=vec3, n_geo=vec3, n_shading=vec3, uv=ti.math.vec2, uv1=ti.math.vec2,
                           tangent=ti.math.vec4, material=ti.i32, prim=ti.i32, front_face=ti.i32, eps=ti.f32,
-                          cone_width=ti.f32, cone_spread=ti.f32, color=ti.math.vec4, dp_du=vec3, dp_dv=vec3)
+                          cone_width=ti.f32, cone_spread=ti.f32, color=ti.math.vec4, dp_du=vec3, dp_dv=vec3,
+                          uv_footprint=ti.math.vec4)
 
 # A point chosen on an emitter for direct lighting: position, outward normal, texture coordinates,
 # and the solid-angle density of choosing it as seen from the reference point (0 if impossible).

@@ -30,7 +30,8 @@ from renderer.geometry.interface import INF, EmitterPoint, Hit, Ray, Surface, ow
 from renderer.geometry.mesh_data import MeshData
 from renderer.geometry.shading import consistent_shading_normal
 from renderer.geometry.triangle_packets import TrianglePackets, build_packets, nearest_lane, permuted_origin
-from renderer.geometry.uv_partials import barycentric_partials, sphere_uv_partials, triangle_uv_partials
+from renderer.geometry.texture_footprint import uv_footprint
+from renderer.geometry.uv_partials import barycentric_partials, sphere_uv_partials, triangle_uv_partials, uv_area
 from renderer.geometry.wide_bvh import collapse, empty_wide_bvh
 from renderer.geometry.wide_traversal import WideNodes, stack_size
 from renderer.materials.kinds import BACK_CULLED
@@ -75,6 +76,10 @@ class MeshGeometry:
         # Coverage is tested in traversal for alpha (glTF MASK / BLEND, Mitsuba's mask) and back-face culling.
         self.has_alpha, self.has_uv_partials = self._material_flags(materials.arrays if materials is not None
                                                                     else None)
+        # Mip-mapped textures: hits carry the pixel's footprint in texture coordinates (and the
+        # dp/du, dp/dv it is measured with).
+        self.filters_textures = materials is not None and materials.textures.filters
+        self.needs_partials = self.has_uv_partials or self.filters_textures
         self.has_instances = data.has_instances
         # Spheres or quads with their normals turned over (Mitsuba's flip_normals): a sign per
         # analytic primitive, compiled in only where one is.
@@ -459,6 +464,7 @@ class MeshGeometry:
         tangent = ti.math.vec4(0.0)
         color = ti.math.vec4(1.0)
         dp_du, dp_dv = vec3(0.0), vec3(0.0)
+        footprinted = False  # texture coordinates that vary over the primitive (a footprint to filter)
         if ti.static("triangle" in self.kinds):
             if g < self.range_end[0]:
                 bary = hit.bary
@@ -484,10 +490,13 @@ class MeshGeometry:
                     if interp.dot(interp) > 1e-12:  # zero-length normals fall back to the geometric one
                         ns = ti.math.normalize(interp)
                 uv, uv1 = self.texture_coordinates(g, bary)
-                if ti.static(self.has_uv_partials):
+                if ti.static(self.needs_partials):
                     if ti.static(self.has_uvs):
                         dp_du, dp_dv = triangle_uv_partials(v0, v1, v2, self.tri_uv[g, 0], self.tri_uv[g, 1],
                                                             self.tri_uv[g, 2], n)
+                        if ti.static(self.filters_textures):
+                            # A triangle whose corners share texture coordinates reads one texel.
+                            footprinted = uv_area(self.tri_uv[g, 0], self.tri_uv[g, 1], self.tri_uv[g, 2]) != 0.0
                     else:
                         dp_du, dp_dv = barycentric_partials(v0, v1, v2)
                 if ti.static(self.has_tangents):
@@ -517,7 +526,8 @@ class MeshGeometry:
                 eps = isect.spawn_clearance(isect.max_abs(sp.xyz) + sp.w)
                 uv = isect.sphere_uv(self.sphere_frames[i, 0].dot(n), self.sphere_frames[i, 1].dot(n),
                                self.sphere_frames[i, 2].dot(n))
-                if ti.static(self.has_uv_partials):
+                footprinted = True
+                if ti.static(self.needs_partials):
                     dp_du, dp_dv = sphere_uv_partials(self.sphere_frames[i, 0], self.sphere_frames[i, 1],
                                                       self.sphere_frames[i, 2], sp.w, n)
         if ti.static("quad" in self.kinds):
@@ -530,6 +540,7 @@ class MeshGeometry:
                 ns = n
                 uv = hit.bary
                 dp_du, dp_dv = self.quads[i, 1], self.quads[i, 2]  # uv runs along the edges
+                footprinted = True
         if ti.static(self.has_flipped):
             # Turned over as Mitsuba's flip_normals: the normal only (texture coordinates and dp/du,
             # dp/dv stay), so the front face (emission, one-sided BSDFs) and inside (media) swap.
@@ -552,9 +563,14 @@ class MeshGeometry:
                 ns = n
         front = 1 if ray.d.dot(n) < 0.0 else 0
         ns = consistent_shading_normal(ns, n, -ray.d)
+        cone_width = ray.cone_width + ray.cone_spread * hit.t
+        footprint = ti.math.vec4(0.0)
+        if ti.static(self.filters_textures):
+            if footprinted:
+                footprint = uv_footprint(ray.d, n, cone_width, dp_du, dp_dv)
         return Surface(p=p, n_geo=n, n_shading=ns, uv=uv, uv1=uv1, tangent=tangent, material=self.prim_material[g],
-                       prim=g, front_face=front, eps=eps, cone_width=ray.cone_width + ray.cone_spread * hit.t,
-                       cone_spread=ray.cone_spread, color=color, dp_du=dp_du, dp_dv=dp_dv)
+                       prim=g, front_face=front, eps=eps, cone_width=cone_width, cone_spread=ray.cone_spread,
+                       color=color, dp_du=dp_du, dp_dv=dp_dv, uv_footprint=footprint)
 
     @ti.func
     def is_flipped(self, g):

@@ -33,6 +33,14 @@ def triangle_uv_partials(v0, v1, v2, uv0, uv1, uv2, n_geo):
 
 
 @ti.func
+def uv_area(uv0, uv1, uv2):
+    """Twice the signed area of a triangle in texture coordinates (zero: they do not vary over it)."""
+    d0 = uv1 - uv0
+    d1 = uv2 - uv0
+    return d0.x * d1.y - d0.y * d1.x
+
+
+@ti.func
 def barycentric_partials(v0, v1, v2):
     """(dp/du, dp/dv) of a triangle without texture coordinates (Mitsuba's barycentric ones)."""
     return v1 - v0, v2 - v0

@@ -113,55 +113,54 @@ class Bsdf:
             mat.transmittance = rec.transmittance
             if ti.static(self.features.has_textures):
                 if rec.transmittance_texture != NO_TEXTURE:
-                    mat.transmittance *= self.materials.textures.sample(rec.transmittance_texture, surface.uv,
-                                                                        surface.uv1).xyz
+                    mat.transmittance *= self.materials.textures.lookup(rec.transmittance_texture, surface).xyz
         if ti.static(self.features.has_vertex_colors):
             mat.base_color *= surface.color.xyz
         if ti.static(self.features.has_textures):
             tex = self.materials.textures
             if rec.textures[0] != NO_TEXTURE:
-                mat.base_color *= tex.sample(rec.textures[0], surface.uv, surface.uv1).xyz
+                mat.base_color *= tex.lookup(rec.textures[0], surface).xyz
             if rec.textures[1] != NO_TEXTURE:
-                mr = tex.sample(rec.textures[1], surface.uv, surface.uv1)
+                mr = tex.lookup(rec.textures[1], surface)
                 mat.alpha = alpha_of(rec.roughness * mr.y)
                 mat.metallic = rec.metallic * mr.z
             if rec.textures[3] != NO_TEXTURE:
-                mat.emission *= tex.sample(rec.textures[3], surface.uv, surface.uv1).xyz
+                mat.emission *= tex.lookup(rec.textures[3], surface).xyz
             if rec.alpha_textures[0] != NO_TEXTURE:  # a textured width, alpha itself (rough: at least MIN_ALPHA)
-                mat.alpha = ti.max(tex.sample(rec.alpha_textures[0], surface.uv, surface.uv1).x, MIN_ALPHA)
+                mat.alpha = ti.max(tex.lookup(rec.alpha_textures[0], surface).x, MIN_ALPHA)
                 if ti.static(self.features.has_anisotropy):
                     if rec.roughness_v < 0.0 and rec.alpha_textures[1] == NO_TEXTURE:
                         mat.alpha_v = mat.alpha
             if ti.static(self.features.has_anisotropy):
                 if rec.alpha_textures[1] != NO_TEXTURE:
-                    mat.alpha_v = ti.max(tex.sample(rec.alpha_textures[1], surface.uv, surface.uv1).x, MIN_ALPHA)
+                    mat.alpha_v = ti.max(tex.lookup(rec.alpha_textures[1], surface).x, MIN_ALPHA)
             if rec.transmission_texture != NO_TEXTURE:
-                mat.transmission *= tex.sample(rec.transmission_texture, surface.uv, surface.uv1).x
+                mat.transmission *= tex.lookup(rec.transmission_texture, surface).x
             if rec.specular_color_texture != NO_TEXTURE:
-                mat.specular_color *= tex.sample(rec.specular_color_texture, surface.uv, surface.uv1).xyz
+                mat.specular_color *= tex.lookup(rec.specular_color_texture, surface).xyz
             if rec.index_textures[0] != NO_TEXTURE:  # (the row's F_avg stays the untextured index's)
-                mat.eta *= tex.sample(rec.index_textures[0], surface.uv, surface.uv1).xyz
+                mat.eta *= tex.lookup(rec.index_textures[0], surface).xyz
             if rec.index_textures[1] != NO_TEXTURE:
-                mat.k *= tex.sample(rec.index_textures[1], surface.uv, surface.uv1).xyz
+                mat.k *= tex.lookup(rec.index_textures[1], surface).xyz
             if ti.static(self.features.has_kind("disney")):
                 if mat.kind == _DISNEY:
                     mat = _disney_textures(tex, rec, surface, mat)
             if ti.static(self.features.has_layer("clearcoat")):
                 if rec.layer_textures[0] != NO_TEXTURE:
-                    mat.clearcoat *= tex.sample(rec.layer_textures[0], surface.uv, surface.uv1).x
+                    mat.clearcoat *= tex.lookup(rec.layer_textures[0], surface).x
                 if rec.layer_textures[1] != NO_TEXTURE:
                     mat.clearcoat_alpha = alpha_of(rec.clearcoat_roughness
-                                                   * tex.sample(rec.layer_textures[1], surface.uv, surface.uv1).y)
+                                                   * tex.lookup(rec.layer_textures[1], surface).y)
             if ti.static(self.features.has_layer("sheen")):
                 if rec.layer_textures[2] != NO_TEXTURE:
-                    mat.sheen_color *= tex.sample(rec.layer_textures[2], surface.uv, surface.uv1).xyz
+                    mat.sheen_color *= tex.lookup(rec.layer_textures[2], surface).xyz
                 if rec.layer_textures[3] != NO_TEXTURE:
-                    mat.sheen_roughness *= tex.sample(rec.layer_textures[3], surface.uv, surface.uv1).w
+                    mat.sheen_roughness *= tex.lookup(rec.layer_textures[3], surface).w
             if ti.static(self.features.has_layer("specular")):
                 if rec.layer_textures2[0] != NO_TEXTURE:
-                    mat.specular *= tex.sample(rec.layer_textures2[0], surface.uv, surface.uv1).w
+                    mat.specular *= tex.lookup(rec.layer_textures2[0], surface).w
                 if rec.layer_textures2[1] != NO_TEXTURE:
-                    mat.specular_color *= tex.sample(rec.layer_textures2[1], surface.uv, surface.uv1).xyz
+                    mat.specular_color *= tex.lookup(rec.layer_textures2[1], surface).xyz
             if ti.static(self.features.has_mapped_frames):
                 if rec.textures[2] != NO_TEXTURE and rec.normal_map_model != TANGENT_SPACE_MAP:
                     mapped, tangent, unmapped = mapped_frame(tex, rec.textures[2], rec.normal_map_model,
@@ -191,7 +190,7 @@ class Bsdf:
                 w = rec.mix_weight
                 if ti.static(self.features.has_textures):
                     if rec.mix[2] != NO_TEXTURE:
-                        w *= self.materials.textures.sample(rec.mix[2], surface.uv, surface.uv1).x
+                        w *= self.materials.textures.lookup(rec.mix[2], surface).x
                 w = ti.math.clamp(w, 0.0, 1.0)
                 if u < w:
                     u = u / w
@@ -482,7 +481,7 @@ def _normal_mapped(tex, slot, scale, surface, n, wo):
     has no tangents or the map's normal degenerates)."""
     result = n
     if surface.tangent.xyz.dot(surface.tangent.xyz) > 0.0:
-        texel = tex.sample(slot, surface.uv, surface.uv1).xyz * 2.0 - 1.0
+        texel = tex.lookup(slot, surface).xyz * 2.0 - 1.0
         t = surface.tangent.xyz
         b = surface.tangent.w * n.cross(t)
         mapped = t * (texel.x * scale) + b * (texel.y * scale) + n * texel.z
@@ -506,7 +505,7 @@ def _times_texture(tex, slot, value, surface):
     """value times the first channel of the texture in `slot` (value where the slot is empty)."""
     result = value
     if slot != NO_TEXTURE:
-        result = value * tex.sample(slot, surface.uv, surface.uv1).x
+        result = value * tex.lookup(slot, surface).x
     return result
 
 

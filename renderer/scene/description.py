@@ -72,6 +72,9 @@ class RenderSettings:
     march: MarchSettings = field(default_factory=MarchSettings)
     sampler: str = "independent"  # "independent" | "sobol"
     energy_compensation: bool = True  # Kulla-Conty multiple scattering for rough GGX metals
+    # How textures are read over a pixel's footprint: "anisotropic" | "trilinear" mip-mapping, or
+    # "none" (the image itself; renderer/materials/texture_sampler.py)
+    texture_filter: str = "anisotropic"
     pixel_filter: str = "box"  # "box" | "tent" | "gaussian" (renderer/film/pixel_filter.py)
     filter_radius: float = 1.0  # tent, pixels
     filter_stddev: float = 0.5  # gaussian, pixels (cut off at four deviations)

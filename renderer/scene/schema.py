@@ -15,6 +15,7 @@ from renderer.materials.coat_bases import COAT_BASES
 from renderer.materials.metals import metal_names
 from renderer.film.filter_keys import PIXEL_FILTERS
 from renderer.sampling.names import SAMPLERS
+from renderer.scene.textures import TEXTURE_FILTERS
 
 from .description import (
     ENVIRONMENT_KINDS,
@@ -182,6 +183,13 @@ RENDER = Section(
               "diffuse base under its coat so that nothing is lost between them. Mitsuba 3 and pbrt "
               "have none of this: set it to false to compare rough materials with them. Only scenes "
               "with `conductor`, `dielectric` or `principled` materials compile it."),
+        Field("texture_filter", "string", "anisotropic", "How textures are read over the patch of surface "
+              "a pixel sees: `anisotropic` (mip-mapped at the patch's shorter side, with up to 8 lookups along "
+              "the longer), `trilinear` (mip-mapped at its longer side: cheaper, and blurry where surfaces are "
+              "seen at grazing angles) or `none` (the image itself, bilinear or nearest as each texture says). "
+              "The patch is the pixel's ray cone, which narrows as a pixel's samples accumulate, so filtering "
+              "smooths the first samples (no shimmering textures at 1 spp) and the converged image tends to "
+              "the unfiltered one. Only `mesh` scenes with textures compile it.", choices=TEXTURE_FILTERS),
         Field("march", "table", None, "Sphere-tracing settings, see `[render.march]`.",
               in_model=False, default_doc="see below", allowed_doc="see below",
               geometries=("sdf",)),

@@ -47,12 +47,13 @@ Non-finite UVs should be treated as (0, 0) before step 2 (the numpy reference do
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from renderer.scene.mesh_model import STORAGES, WRAP_MODES, TextureImage
 from renderer.scene.srgb import SRGB8_TO_LINEAR, srgb_to_linear
+from renderer.scene.texture_mips import mip_chain
 
 WRAP_REPEAT, WRAP_CLAMP, WRAP_MIRROR = 0, 1, 2
 WRAP_CODES = {"repeat": WRAP_REPEAT, "clamp": WRAP_CLAMP, "mirror": WRAP_MIRROR}
@@ -60,6 +61,9 @@ assert tuple(WRAP_CODES) == WRAP_MODES
 
 STORE_RGBA8, STORE_HALF, STORE_FLOAT = (STORAGES.index(s) for s in ("rgba8", "half", "float"))
 _PAGE_DTYPES = {STORE_RGBA8: np.uint8, STORE_HALF: np.float16, STORE_FLOAT: np.float32}
+
+# How lookups read textures over a pixel's footprint (RenderSettings.texture_filter).
+TEXTURE_FILTERS = ("anisotropic", "trilinear", "none")
 
 DEFAULT_PADDING = 2  # texels; bilinear needs 1, the second absorbs float round-off
 
@@ -69,6 +73,10 @@ class TextureAtlas:
     pages: dict[int, np.ndarray]  # storage code -> (H, W, 4) page (module docs); all three present
     rects: np.ndarray  # int32 (N, 6): x, y, w, h, storage, srgb of each image entry
     padding: int
+    # Mip-map levels (renderer/scene/texture_mips.py), when packed with them: rows as `rects` for
+    # every level below 0, and for entry i the first of its rows and their count (levels 1..count).
+    level_rects: np.ndarray = field(default_factory=lambda: np.zeros((0, 6), np.int32))
+    level_span: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int32))
 
     def page_size(self, storage: int) -> tuple[int, int]:
         """(width, height) in texels of one storage kind's page."""
@@ -149,15 +157,31 @@ def _shelf_pack(sizes: list[tuple[int, int]], width: int | None) -> tuple[list, 
     return origins, width, shelf_y + shelf_h
 
 
-def pack_atlas(images: list, padding: int = DEFAULT_PADDING, width: int | None = None) -> TextureAtlas:
+def pack_atlas(images: list, padding: int = DEFAULT_PADDING, width: int | None = None,
+               mipmaps: bool = False) -> TextureAtlas:
     """Pack images (`TextureImage`s or arrays, see `as_texture_image`) into one page per storage.
 
     Entries that share a pixel array are stored once. `width` forces every page's width in
     texels (it must fit the widest padded image); by default each page is roughly square.
+    `mipmaps`: each image's mip-map levels are packed too (`level_rects`, `level_span`), once per
+    pixel array and colour decoding (a colour and a data reading of one file average differently).
     """
     if padding < 0:
         raise ValueError("padding must be >= 0")
     entries = [as_texture_image(im) for im in images]
+    count = len(entries)
+    level_span = np.zeros((count if mipmaps else 0, 2), np.int32)
+    if mipmaps:
+        chains: dict[tuple, tuple[int, int]] = {}  # (id(pixels), srgb) -> (first row, count)
+        levels: list = []
+        for i, entry in enumerate(entries[:count]):
+            key = (id(entry.pixels), entry.srgb)
+            if key not in chains:
+                chain = mip_chain(entry)
+                chains[key] = (len(levels), len(chain))
+                levels += chain
+            level_span[i] = chains[key]
+        entries += levels
     unique: dict[int, int] = {}  # id(pixels) -> index of its first entry
     by_storage: dict[int, list[int]] = {s: [] for s in _PAGE_DTYPES}
     for i, entry in enumerate(entries):
@@ -185,6 +209,8 @@ def pack_atlas(images: list, padding: int = DEFAULT_PADDING, width: int | None =
     for i, entry in enumerate(entries):
         rects[i, :5] = rects[unique[id(entry.pixels)], :5]
         rects[i, 5] = int(entry.srgb)
+    if mipmaps:
+        return TextureAtlas(pages, rects[:count], padding, rects[count:], level_span)
     return TextureAtlas(pages, rects, padding)
 
 
@@ -215,10 +241,36 @@ def decode_texels(raw: np.ndarray, storage: int, srgb: bool) -> np.ndarray:
     return out
 
 
+def level_rect(tex: TextureAtlas, index: int, level: int) -> np.ndarray:
+    """The rect row of entry `index`'s mip level `level` (0: the image itself)."""
+    if level == 0:
+        return tex.rects[index]
+    first, count = (int(v) for v in tex.level_span[index])
+    if not 1 <= level <= count:
+        raise ValueError(f"entry {index} has mip levels 0..{count}, not {level}")
+    return tex.level_rects[first + level - 1]
+
+
+def sample_trilinear(tex: TextureAtlas, index: int, uv: np.ndarray, lod: float, wrap_s: str | int = "repeat",
+                     wrap_t: str | int = "repeat", matrix: np.ndarray | None = None) -> np.ndarray:
+    """Reference trilinear lookup: bilinear in the two levels around `lod` (clamped to the entry's
+    levels), blended by its fraction; a lod of 0 or less is the bilinear lookup of the image."""
+    count = int(tex.level_span[index, 1]) if len(tex.level_span) else 0
+    lod = min(max(float(lod), 0.0), float(count))
+    below = min(int(np.floor(lod)), count)
+    frac = lod - below
+    out = sample_bilinear(tex, index, uv, wrap_s, wrap_t, matrix, level=below)
+    if frac > 0.0:
+        above = sample_bilinear(tex, index, uv, wrap_s, wrap_t, matrix, level=below + 1)
+        out = ((1.0 - frac) * out.astype(np.float64) + frac * above).astype(np.float32)
+    return out
+
+
 def sample_bilinear(tex: TextureAtlas, index: int, uv: np.ndarray, wrap_s: str | int = "repeat",
-                    wrap_t: str | int = "repeat", matrix: np.ndarray | None = None) -> np.ndarray:
-    """Reference bilinear lookup of image entry `index` at uv (..., 2); returns (..., 4) float32."""
-    x, y, w, h, storage, srgb = (int(v) for v in tex.rects[index])
+                    wrap_t: str | int = "repeat", matrix: np.ndarray | None = None, level: int = 0) -> np.ndarray:
+    """Reference bilinear lookup of image entry `index` (its mip level `level`) at uv (..., 2);
+    returns (..., 4) float32."""
+    x, y, w, h, storage, srgb = (int(v) for v in level_rect(tex, index, level))
     uv = np.asarray(uv, dtype=np.float64)
     if matrix is not None:
         m = np.asarray(matrix, dtype=np.float64)

@@ -486,6 +486,32 @@ def denoise_report(out_dir: Path) -> dict:
         "frame_size": [960, 540], "scenes": scenes, "plots": [p.name for p in plots], "total_seconds": 80.0})
 
 
+# --- texture-filter ------------------------------------------------------------------------------
+
+def texture_filter_report(out_dir: Path) -> dict:
+    from renderer.bench import texture_filter
+
+    config = texture_filter.QUICK
+    curves = {f: [{"spp": n, "seconds": 0.01 * n * cost, "rmse": error / n ** 0.5} for n in config.horizon_spp]
+              for f, cost, error in (("trilinear", 1.1, 0.14), ("anisotropic", 1.25, 0.1), ("none", 1.0, 0.2))}
+    report = {"horizon": {"reference_spp": config.reference_spp, "curves": curves},
+              "speeds": [{"scene": scene, "first_frame_s": {"trilinear": 9.8, "anisotropic": 10.1, "none": 9.5},
+                          "msamples_per_s": {}, "median": {"trilinear": 2.4, "anisotropic": 2.2, "none": 2.7},
+                          "relative": {"trilinear": 2.4 / 2.7, "anisotropic": 2.2 / 2.7, "none": 1.0}}
+                         for scene in ("textured", "cornell_box")],
+              "denoise_target": {"size": list(config.size), "reference": {"spp": 900, "seconds": 8.0,
+                                                                         "rel_mse_floor": 1e-4},
+                                 "filters": {f: {"seconds_8": 0.2, "raw_8": 0.05, "denoised_8": d, "denoised_quick_8": 1.1 * d,
+                                                 "seconds_32": 0.8,
+                                                 "raw_32": 0.012, "passed": d < 0.012}
+                                             for f, d in (("trilinear", 0.01), ("anisotropic", 0.009),
+                                                          ("none", 0.015))}}}
+    plot = texture_filter.write_plot(report, out_dir)
+    return _write(out_dir, "texture-filter", {
+        **_header("texture-filter", quick=True, arch="cpu", config=asdict(config)), **report, "plots": [plot.name],
+        "total_seconds": 50.0})
+
+
 WRITERS = {"sdf": sdf_report, "startup": startup_report, "bvh": bvh_report, "integrators": integrators_report,
            "features": features_report, "photons": photons_report, "interactive": interactive_report,
-           "denoise": denoise_report}
+           "denoise": denoise_report, "texture-filter": texture_filter_report}

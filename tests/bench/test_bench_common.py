@@ -107,7 +107,7 @@ def test_table_and_json(tmp_path):
 
 def test_every_benchmark_name_maps_to_a_module_with_run():
     assert set(BENCHMARKS) == {"sdf", "startup", "bvh", "integrators", "features", "photons", "interactive", "denoise", "scale",
-                               "mitsuba-tests", "scenes", "report"}
+                               "mitsuba-tests", "scenes", "texture-filter", "report"}
     for name, module in BENCHMARKS.items():
         assert module == f"renderer.bench.{name.replace('-', '_')}" and callable(importlib.import_module(module).run)
 

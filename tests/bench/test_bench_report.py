@@ -10,7 +10,7 @@ import pytest
 
 from renderer.bench import BENCHMARKS
 from renderer.bench.report import PAGE_NAME, PLOT_FOLDER, build_page, how_to_produce, run
-from renderer.bench.report_markdown import listing, num, pct, table, times
+from renderer.bench.report_markdown import listing, num, pct, table, times, verdict
 from tests.bench.report_fixtures import WRITERS, integrators_report
 
 
@@ -334,3 +334,16 @@ def test_a_later_run_of_one_benchmark_keeps_the_others_sections(reports, tmp_pat
     # With no page before, the same single report leaves the others "none yet" (as it did).
     fresh = make_page(only, tmp_path / "fresh_docs")
     assert how_to_produce("sdf") in sections(fresh)["sdf"]
+
+
+def test_the_texture_filter_section_reads_its_report(reports, tmp_path):
+    folder, data = reports
+    text = sections(make_page(folder, tmp_path / "docs"))["texture-filter"]
+    report = data["texture-filter"]
+    first = report["horizon"]["curves"]["anisotropic"][0]
+    assert row(text, "anisotropic", "1")["RMSE"] == num(first["rmse"])
+    none = report["horizon"]["curves"]["none"][0]
+    assert f"{times(first['rmse'] / none['rmse'])} of unfiltered's error" in text
+    assert row(text, "trilinear", num(2.4))["vs none"] == num(2.4 / 2.7)
+    assert row(text, "none", num(0.015))["target"] == verdict(False)
+    assert row(text, "trilinear", num(0.01))["target"] == verdict(True)

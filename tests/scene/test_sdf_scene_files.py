@@ -382,7 +382,7 @@ BAD_SCENES = {
     "max_depth -2": (scene_text(extra="[render]\nmax_depth = -2\n"), "render.max_depth: -2 is out of range"),
     "seed negative": (scene_text(extra="[render]\nseed = -1\n"), "render.seed: -1 is out of range"),
     "integrator number": (scene_text(extra="[render]\nintegrator = 3\n"), "render.integrator: expected a string, got integer 3"),
-    "render unknown field": (scene_text(extra="[render]\nsamples = 3\n"), "render: unknown field 'samples' (allowed: width, height, spp, max_depth, integrator, seed, sampler, pixel_filter, filter_radius, filter_stddev, crop, exposure, energy_compensation, march)"),
+    "render unknown field": (scene_text(extra="[render]\nsamples = 3\n"), "render: unknown field 'samples' (allowed: width, height, spp, max_depth, integrator, seed, sampler, pixel_filter, filter_radius, filter_stddev, crop, exposure, energy_compensation, texture_filter, march)"),
     "march not table": (scene_text(extra="[render]\nmarch = 3\n"), "render.march: expected a table, got integer 3"),
     "over_relaxation 4": (scene_text(extra="[render.march]\nover_relaxation = 4.0\n"), "render.march.over_relaxation: 4 is out of range (allowed: [1, 4))"),
     "fixed over_relaxation 2": (scene_text(extra="[render.march]\nover_relaxation = 2.0\nadaptive = false\n"),
