@@ -5,7 +5,7 @@ import pytest
 
 from renderer.scene.mesh_model import TextureImage
 from renderer.scene.srgb import SRGB8_TO_LINEAR
-from renderer.scene.texture_mips import area_halve, linear_to_srgb, mip_chain
+from renderer.scene.texture_mips import area_halve, linear_to_srgb, mip_chain, srgb8_codes
 from renderer.scene.textures import level_rect, pack_atlas, sample_bilinear, sample_trilinear
 
 
@@ -80,3 +80,11 @@ def test_trilinear_reference_blends_the_two_levels_around_the_lod():
     np.testing.assert_array_equal(sample_trilinear(atlas, 0, uv, -3.0), sample_bilinear(atlas, 0, uv))
     top = sample_trilinear(atlas, 0, uv, 99.0)  # clamped to the 1x1 level: the image's mean everywhere
     np.testing.assert_allclose(top, np.broadcast_to(atlas.texels(0).mean(axis=(0, 1)), top.shape), rtol=1e-5)
+
+
+def test_srgb_codes_are_the_rounded_curve_of_every_linear_value():
+    linear = np.concatenate([np.linspace(0.0, 1.0, 200001), SRGB8_TO_LINEAR, [-0.5, 2.0]])
+    expected = np.rint(np.clip(linear_to_srgb(linear), 0.0, 1.0) * 255.0)
+    codes = srgb8_codes(linear)
+    assert np.count_nonzero(codes != expected) <= 4  # values within float32 rounding of an edge may differ
+    np.testing.assert_array_equal(srgb8_codes(SRGB8_TO_LINEAR), np.arange(256))  # every code's own value
