@@ -3,6 +3,7 @@ profiler could name, so the costs are measured by running less of the work.
 
     .venv/bin/python scripts/sample_profile.py [scene ...] [--size 256] [--spp 8] [--runs 5]
                                                [--optimize run|compile] [--nodes-only]
+                                               [--texture-filter anisotropic|trilinear|none]
 
 Two tables per scene (milliseconds per sample per pixel at --size x --size, median of --runs
 launches of --spp samples each, after a launch that compiles):
@@ -134,10 +135,16 @@ def profile(scene_name: str, args) -> None:
     from renderer.scene.catalog import load_any, resolve_scene
 
     scene = load_any(resolve_scene(scene_name))
+    if args.texture_filter is not None:
+        from dataclasses import replace
+
+        scene = replace(scene, render=replace(scene.render, texture_filter=args.texture_filter))
     size = args.size
     renderer = Renderer(scene, (size, size))
     camera = CameraFrame.from_spec(scene.camera)
     title = f"{scene.name} {size}x{size}, ms per spp (median of {args.runs} launches of {args.spp} spp)"
+    if args.texture_filter is not None:
+        title += f", texture filter {args.texture_filter}"
     if not args.nodes_only:
         print(f"\n{title}: integrators")
         print(f"{'integrator':10s} {'depth':>5s} {'sampler':12s} {'ms/spp':>8s} {'rays/sample':>11s} {'ms/spp/ray':>10s}")
@@ -175,6 +182,8 @@ def main(argv=None) -> int:
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--optimize", choices=("run", "compile"), default="run")
     parser.add_argument("--nodes-only", action="store_true", help="stub the leaf tests (nodes alone)")
+    parser.add_argument("--texture-filter", choices=("anisotropic", "trilinear", "none"),
+                        help="the scenes' render.texture_filter (default: each scene's own)")
     args = parser.parse_args(argv)
 
     from renderer.runtime.arch import init_taichi
