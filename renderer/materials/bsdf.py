@@ -121,27 +121,27 @@ class Bsdf:
             if rec.textures[0] != NO_TEXTURE:
                 mat.base_color *= tex.lookup(rec.textures[0], surface).xyz
             if rec.textures[1] != NO_TEXTURE:
-                mr = tex.lookup(rec.textures[1], surface)
+                mr = tex.unfiltered(rec.textures[1], surface)
                 mat.alpha = alpha_of(rec.roughness * mr.y)
                 mat.metallic = rec.metallic * mr.z
             if rec.textures[3] != NO_TEXTURE:
                 mat.emission *= tex.lookup(rec.textures[3], surface).xyz
             if rec.alpha_textures[0] != NO_TEXTURE:  # a textured width, alpha itself (rough: at least MIN_ALPHA)
-                mat.alpha = ti.max(tex.lookup(rec.alpha_textures[0], surface).x, MIN_ALPHA)
+                mat.alpha = ti.max(tex.unfiltered(rec.alpha_textures[0], surface).x, MIN_ALPHA)
                 if ti.static(self.features.has_anisotropy):
                     if rec.roughness_v < 0.0 and rec.alpha_textures[1] == NO_TEXTURE:
                         mat.alpha_v = mat.alpha
             if ti.static(self.features.has_anisotropy):
                 if rec.alpha_textures[1] != NO_TEXTURE:
-                    mat.alpha_v = ti.max(tex.lookup(rec.alpha_textures[1], surface).x, MIN_ALPHA)
+                    mat.alpha_v = ti.max(tex.unfiltered(rec.alpha_textures[1], surface).x, MIN_ALPHA)
             if rec.transmission_texture != NO_TEXTURE:
                 mat.transmission *= tex.lookup(rec.transmission_texture, surface).x
             if rec.specular_color_texture != NO_TEXTURE:
                 mat.specular_color *= tex.lookup(rec.specular_color_texture, surface).xyz
             if rec.index_textures[0] != NO_TEXTURE:  # (the row's F_avg stays the untextured index's)
-                mat.eta *= tex.lookup(rec.index_textures[0], surface).xyz
+                mat.eta *= tex.unfiltered(rec.index_textures[0], surface).xyz
             if rec.index_textures[1] != NO_TEXTURE:
-                mat.k *= tex.lookup(rec.index_textures[1], surface).xyz
+                mat.k *= tex.unfiltered(rec.index_textures[1], surface).xyz
             if ti.static(self.features.has_kind("disney")):
                 if mat.kind == _DISNEY:
                     mat = _disney_textures(tex, rec, surface, mat)
@@ -150,12 +150,12 @@ class Bsdf:
                     mat.clearcoat *= tex.lookup(rec.layer_textures[0], surface).x
                 if rec.layer_textures[1] != NO_TEXTURE:
                     mat.clearcoat_alpha = alpha_of(rec.clearcoat_roughness
-                                                   * tex.lookup(rec.layer_textures[1], surface).y)
+                                                   * tex.unfiltered(rec.layer_textures[1], surface).y)
             if ti.static(self.features.has_layer("sheen")):
                 if rec.layer_textures[2] != NO_TEXTURE:
                     mat.sheen_color *= tex.lookup(rec.layer_textures[2], surface).xyz
                 if rec.layer_textures[3] != NO_TEXTURE:
-                    mat.sheen_roughness *= tex.lookup(rec.layer_textures[3], surface).w
+                    mat.sheen_roughness *= tex.unfiltered(rec.layer_textures[3], surface).w
             if ti.static(self.features.has_layer("specular")):
                 if rec.layer_textures2[0] != NO_TEXTURE:
                     mat.specular *= tex.lookup(rec.layer_textures2[0], surface).w
@@ -481,7 +481,7 @@ def _normal_mapped(tex, slot, scale, surface, n, wo):
     has no tangents or the map's normal degenerates)."""
     result = n
     if surface.tangent.xyz.dot(surface.tangent.xyz) > 0.0:
-        texel = tex.lookup(slot, surface).xyz * 2.0 - 1.0
+        texel = tex.unfiltered(slot, surface).xyz * 2.0 - 1.0
         t = surface.tangent.xyz
         b = surface.tangent.w * n.cross(t)
         mapped = t * (texel.x * scale) + b * (texel.y * scale) + n * texel.z
@@ -505,7 +505,7 @@ def _times_texture(tex, slot, value, surface):
     """value times the first channel of the texture in `slot` (value where the slot is empty)."""
     result = value
     if slot != NO_TEXTURE:
-        result = value * tex.lookup(slot, surface).x
+        result = value * tex.unfiltered(slot, surface).x
     return result
 
 

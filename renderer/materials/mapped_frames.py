@@ -67,7 +67,7 @@ def mapped_frame(tex, slot, model, scale, surface, wo, has_height_maps: ti.templ
         if model == HEIGHT_MAP:
             local = to_local(_height_normal(tex, slot, scale, surface, n0), s0, t0, n0)
     if model != HEIGHT_MAP:
-        local = tex.lookup(slot, surface).xyz * 2.0 - 1.0
+        local = tex.unfiltered(slot, surface).xyz * 2.0 - 1.0
     side = 1.0 if wo.dot(n0) >= 0.0 else -1.0
     n_front = side * n0
     view = vec3(wo.dot(s0), wo.dot(t0), wo.dot(n_front))

@@ -11,7 +11,11 @@ surface's pixel footprint in texels (Surface.uv_footprint, renderer/geometry/tex
 trilinear at the footprint's longer axis, blending the two levels around it; anisotropic at its
 shorter axis (at least the longer one / MAX_ANISOTROPY) with up to MAX_ANISOTROPY trilinear probes
 spread along the longer axis. A slot's nearest flag is its magnification filter: it applies
-where level 0 is read. Slots of texture coordinate set 1, and points without a footprint, read
+where level 0 is read. Only what a BSDF is linear in is filtered (colours, emission, lobe and mix
+weights): a footprint's mean of those gives the mean appearance. Roughness, metallic-roughness
+maps, normal and bump maps, indices of refraction and Disney's scalars read level 0
+(`unfiltered`): averaged, a checker of mirror and rough squares would shade as one half-rough
+surface, an appearance no point of it has. Slots of texture coordinate set 1, and points without a footprint, read
 level 0. Coverage (alpha) tests in traversal and bump-map gradients read level 0 (`sample`).
 
 Pages are 32-bit integer fields (RGBA8 packed in one word per texel, half floats two to a word)
@@ -215,6 +219,12 @@ class TextureTable:
         """The image itself at the slot's texture coordinates (no mip levels)."""
         slot, taps, fx, fy = self._footprint(slot_id, uv0, uv1)
         return self._bilinear(slot, taps, fx, fy)
+
+    @ti.func
+    def unfiltered(self, slot_id, surface):
+        """The slot's texture at `surface`, the image itself: for the parameters the BSDF is not
+        linear in (module docs)."""
+        return self.sample(slot_id, surface.uv, surface.uv1)
 
     @ti.func
     def lookup(self, slot_id, surface):
