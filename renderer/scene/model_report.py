@@ -94,13 +94,14 @@ def device_lines(mesh_scene) -> list[str]:
     """Device memory of a `MeshScene` (renderer/mesh_world.py): texture pages, triangle arrays, BVH bound."""
     data = mesh_scene.data
     textures = mesh_scene.atlas.nbytes if mesh_scene.atlas is not None else 0
+    mipmapped = mesh_scene.atlas is not None and len(mesh_scene.atlas.level_rects) > 0
     triangles = sum(getattr(data, f.name).nbytes for f in fields(data)
                     if f.name.startswith("tri_") and getattr(data, f.name) is not None)
     n = data.primitive_count
     bvh = (2 * n - 1) * BVH_NODE_BYTES + n * BVH_SLOT_BYTES if n else 0
     return [
         "device memory:",
-        f"  textures   {megabytes(textures)}",
+        f"  textures   {megabytes(textures)}" + (" (with their mip levels: render.texture_filter)" if mipmapped else ""),
         f"  triangles  {megabytes(triangles)} ({len(data.tri_vertices)} triangles as uploaded)",
         f"  BVH        at most {megabytes(bvh)} (2N - 1 nodes of {BVH_NODE_BYTES} bytes and "
         f"{BVH_SLOT_BYTES} bytes per primitive, N = {n})",

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -55,7 +56,11 @@ def test_device_memory_lines_add_up():
     mesh = prepare_mesh_scene(scene)
     asset = scene.model_files.load(DATA / "textured_quad.gltf")
     lines = device_lines(mesh)
-    assert lines[1] == f"  textures   {pack_atlas(asset.images).nbytes / 1e6:.1f} MB"
+    # textures are mip-mapped by default (render.texture_filter): their levels are on the device too
+    assert lines[1] == (f"  textures   {pack_atlas(asset.images, mipmaps=True).nbytes / 1e6:.1f} MB"
+                        " (with their mip levels: render.texture_filter)")
+    unfiltered = replace(scene, render=replace(scene.render, texture_filter="none"))
+    assert device_lines(prepare_mesh_scene(unfiltered))[1] == f"  textures   {pack_atlas(asset.images).nbytes / 1e6:.1f} MB"
     n = mesh.data.primitive_count
     assert f"at most {((2 * n - 1) * BVH_NODE_BYTES + n * BVH_SLOT_BYTES) / 1e6:.1f} MB" in lines[3]
     assert model_lines(asset, "q")[0] == "model:       q"
