@@ -11,8 +11,9 @@ none, trilinear, anisotropic) costs in time and buys in error.
    filter compiles the same kernel), in interleaved rounds, medians.
 3. The denoising target on textured at `size` (the issue's 320x180): relMSE of the 8-spp render
    denoised (AOVs prefiltered, as `render --denoise`; and the noisy AOVs passed straight in, the
-   viewer's first denoise) and of the raw 128-spp render, each less the reference's own noise, against one reference of `reference_s` seconds (unfiltered: filtered
-   renders converge to it). Render seconds exclude the denoiser.
+   viewer's first denoise) and of the raw 128-spp render, each less the reference's own noise,
+   against one reference of `reference_s` seconds (unfiltered: filtered renders converge to it).
+   Render seconds exclude the denoiser.
 
 Writes <out_dir>/bench_texture_filter.json and bench_texture_filter.png (error against seconds).
 """

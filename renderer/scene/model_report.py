@@ -101,7 +101,8 @@ def device_lines(mesh_scene) -> list[str]:
     bvh = (2 * n - 1) * BVH_NODE_BYTES + n * BVH_SLOT_BYTES if n else 0
     return [
         "device memory:",
-        f"  textures   {megabytes(textures)}" + (" (with their mip levels: render.texture_filter)" if mipmapped else ""),
+        f"  textures   {megabytes(textures)}"
+        + (" (with their mip levels: render.texture_filter)" if mipmapped else ""),
         f"  triangles  {megabytes(triangles)} ({len(data.tri_vertices)} triangles as uploaded)",
         f"  BVH        at most {megabytes(bvh)} (2N - 1 nodes of {BVH_NODE_BYTES} bytes and "
         f"{BVH_SLOT_BYTES} bytes per primitive, N = {n})",
