@@ -68,6 +68,7 @@ import numpy as np
 import taichi as ti
 
 from renderer.camera import generate_ray
+from renderer.geometry.texture_footprint import footprint_shrink
 from renderer.film.accumulation import is_finite_vec3
 from renderer.geometry.interface import INF, Hit, Ray, Surface
 from renderer.integrators.light_sampling import emission_weight, environment_weight, sample_direct
@@ -407,7 +408,15 @@ class SppmProgram(RenderProgram):
                                self.sampler.get2d(sample, dims.PIXEL), self.sampler, sample,
                                origin, forward, right, up, half_height, aperture, focus,
                                self.features.depth_of_field, self.features.orthographic)
-            value, stats = self._trace_camera(x, y, ray, sample, max_depth, radius_pixels)
+            radius = radius_pixels
+            if ti.static(self.filters_textures):
+                # Textures filtered over a cone that narrows with the iterations, as camera samples'
+                # (renderer/program.py); the photon radius keeps the whole pixel's footprint.
+                shrink = footprint_shrink(index)
+                ray.cone_width *= shrink
+                ray.cone_spread *= shrink
+                radius = radius_pixels / shrink
+            value, stats = self._trace_camera(x, y, ray, sample, max_depth, radius)
             # Plain stores, not +=: on a global field += compiles to an atomic add, and each pixel
             # has one writer here.
             if is_finite_vec3(value):

@@ -79,3 +79,19 @@ def test_an_unknown_filter_in_a_scene_file_is_one_line_naming_it(tmp_path):
     message = str(error.value)
     assert "\n" not in message and "bicubic.toml" in message and "texture_filter" in message, message
     assert "anisotropic" in message
+
+
+def test_sppm_narrows_its_texture_cones_and_keeps_its_photon_radius():
+    """SPPM's camera pass narrows its rays' cones with the iteration, as camera samples do, and
+    sizes its visible points' footprints (which set their photon radii) from the whole pixel's
+    cone still: after three iterations (the cone at 1/sqrt(3)) the footprints are those of the
+    unfiltered render, whose cones never narrow."""
+    footprints = {}
+    for texture_filter in ("none", "anisotropic"):
+        scene = checker_horizon(texture_filter)
+        r = Renderer(scene, (32, 16))
+        r.render(CameraFrame.from_spec(scene.camera), 3, integrator="sppm", seed=5)
+        assert r.program("sppm", r.features(), "independent").filters_textures == (texture_filter != "none")
+        footprints[texture_filter] = r.shared("sppm_state", None).footprint.to_numpy()[:32, :16]
+    assert (footprints["none"] > 0).mean() > 0.5  # the floor's visible points
+    np.testing.assert_allclose(footprints["anisotropic"], footprints["none"], rtol=1e-5)
