@@ -11,6 +11,7 @@ import taichi as ti
 from renderer.film.accumulation import is_finite_f32
 from renderer.film.pixel_slices import (CELL, CELL_BITS, INTERLEAVED, ROUND_SLICES, filled_mean, interleaved_layout,
                                    pass_length, slice_pixel, slice_rank)
+from renderer.scene.srgb import srgb_oetf_array  # noqa: F401 (the numpy mirror of the kernels' curve)
 from renderer.spectral.luminance import LUMINANCE_WEIGHTS, luminance
 
 TONEMAPPERS = ("aces", "reinhard", "none")
@@ -252,13 +253,6 @@ def unpack_rgba8(packed: np.ndarray) -> np.ndarray:
 
 
 # --- numpy (float32, mirrors the Taichi code) ---------------------------------------------------
-
-
-def srgb_oetf_array(linear: np.ndarray) -> np.ndarray:
-    linear = np.asarray(linear, dtype=np.float32)
-    with np.errstate(invalid="ignore"):
-        curve = np.float32(1.055) * np.power(np.maximum(linear, 0.0), np.float32(1.0 / 2.4)) - np.float32(0.055)
-    return np.where(linear > np.float32(0.0031308), curve, np.float32(12.92) * linear).astype(np.float32)
 
 
 def display_array(linear_rgb: np.ndarray, exposure_ev: float, name: str) -> np.ndarray:

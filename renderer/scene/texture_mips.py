@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from renderer.scene.mesh_model import TextureImage
-from renderer.scene.srgb import srgb_to_linear
+from renderer.scene.srgb import linear_to_srgb, srgb_oetf_array, srgb_to_linear
 
 
 # Linear values at the boundaries between consecutive 8-bit sRGB codes: code k encodes the linear
@@ -24,19 +24,11 @@ _SRGB8_EDGES = srgb_to_linear((np.arange(255) + 0.5) / 255.0).astype(np.float32)
 STRIP_ROWS = 256
 
 
-def linear_to_srgb(c) -> np.ndarray:
-    """The sRGB encoding curve (the inverse of srgb_to_linear), elementwise, for values >= 0."""
-    c = np.maximum(np.asarray(c, dtype=np.float64), 0.0)
-    return np.where(c <= 0.0031308, c * 12.92, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
-
-
 def srgb8_codes(linear: np.ndarray) -> np.ndarray:
     """The 8-bit sRGB code of each linear value: the curve in float32, then corrected by one where
     that rounding put a value on the wrong side of a code's edge (_SRGB8_EDGES decides)."""
     c = np.clip(np.asarray(linear, np.float32), 0.0, 1.0)
-    curve = np.where(c <= 0.0031308, c * np.float32(12.92),
-                     np.float32(1.055) * np.power(c, np.float32(1.0 / 2.4)) - np.float32(0.055))
-    k = np.clip(np.rint(curve * np.float32(255.0)), 0, 255).astype(np.int32)
+    k = np.clip(np.rint(srgb_oetf_array(c) * np.float32(255.0)), 0, 255).astype(np.int32)
     edges = np.append(_SRGB8_EDGES, np.float32(np.inf))  # edges[k]: where code k ends
     k += c >= edges[k]
     k -= (k > 0) & (c < edges[np.maximum(k - 1, 0)])
