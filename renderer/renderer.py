@@ -273,7 +273,7 @@ class Renderer:
             self._packet_records = PrimitiveRecords(self.geometry.data)
         if self._packet_lights is None:
             self._packet_lights = PacketLights(self.geometry, self._packet_records, self.materials, self.environment,
-                                               self.scene.environment)
+                                               self.scene.environment, self._env_image)
 
         def scalar():
             return RenderProgram(self.geometry, self.materials, self.environment, chosen, self.film, self.work,

@@ -1,10 +1,12 @@
 """Light samples for a packet of path vertices: the scene's emissive triangles and quads, chosen by
-power (Vose's alias table, one gather per lane), and a constant environment, lane by lane.
+power (Vose's alias table, one gather per lane), and the environment: a constant one lane by lane,
+a map or a sky through renderer/lights/lights.py's environment_direction, one lane after another
+(a map importance-sampled as the scalar path samples it).
 
 The packet path keeps its own light selection, so its densities are its own: the emitters by
 their power (light_select.alias_table over renderer/lights/lights.py's emitter_table), the
 environment with the share renderer/lights/lights.py gives it (half where emitters exist too),
-uniform directions on it. MIS at a BSDF-sampled hit asks the same densities back (pdf_hit,
+directions on it as environment_direction draws them. MIS at a BSDF-sampled hit asks the same densities back (pdf_hit,
 pdf_environment), so the estimator is unbiased whatever the scalar path's light tree would have
 chosen: images agree with the scalar path's in expectation (tests/packets test that).
 """
@@ -14,7 +16,8 @@ import numpy as np
 import taichi as ti
 
 from renderer.lights.light_select import alias_table
-from renderer.lights.lights import ENVIRONMENT_SHARE, emitter_table, environment_emits
+from renderer.lights.env_sampling import EnvironmentSampler
+from renderer.lights.lights import ENVIRONMENT_SHARE, emitter_table, environment_direction, environment_emits
 from renderer.packets.lanes import normalized, sincos_2pi
 from renderer.runtime.upload import upload_fields
 
@@ -27,15 +30,18 @@ class PacketLights:
     per primitive the density of choosing a point on it by area (its pmf / area; 0 for
     primitives that do not emit). `has_env`, `has_emitters`: compile-time, from the scene."""
 
-    def __init__(self, geometry, records, materials, environment, environment_spec):
+    def __init__(self, geometry, records, materials, environment, environment_spec, env_image=None):
         """geometry: a MeshGeometry; records: its PrimitiveRecords; materials: its MaterialTable;
-        environment: the device Environment (a constant one: its radiance is one colour)."""
+        environment: the device Environment; env_image: the map of a "map" environment."""
         self.geometry = geometry
         self.records = records
         self.triangle_end = geometry.data.counts["triangle"]
         self.materials = materials
         self.environment = environment
         self.has_env = environment_emits(environment_spec)
+        self.env_constant = environment_spec.kind == "constant"
+        self.env_is_map = self.has_env and environment_spec.kind == "map"  # (names environment_direction reads)
+        self.env_sampler = EnvironmentSampler(env_image, environment) if self.env_is_map else None
         self.primitive_count = int(geometry.primitive_count())
         # Built once: an edit of emission or of the environment makes the Renderer drop its packet
         # programs and these lights with them (Renderer._drop_packet_programs).
@@ -109,15 +115,25 @@ class PacketLights:
         pdf = ti.select(ok, pdf, 0.0)
         er, eg, eb = ti.select(lit, er, 0.0), ti.select(lit, eg, 0.0), ti.select(lit, eb, 0.0)
         if ti.static(self.has_env):
-            # uniform directions, as renderer/lights/lights.py's environment_direction off a map
+            # directions as renderer/lights/lights.py's environment_direction draws them: uniform
+            # (lane arithmetic where the radiance is one colour), or one lane after another
             z = 1.0 - 2.0 * u1
             r = ti.sqrt(ti.max(0.0, 1.0 - z * z))
             s, c = sincos_2pi(u2)
+            ex, ey, ez = r * c, z, r * s
+            env_pdf = u * 0.0 + INV_4PI
             env = self.environment.radiance(ti.math.vec3(0.0, 1.0, 0.0))
-            wx, wy, wz = ti.select(use_env, r * c, wx), ti.select(use_env, z, wy), ti.select(use_env, r * s, wz)
+            vr, vg, vb = u * 0.0 + env.x, u * 0.0 + env.y, u * 0.0 + env.z
+            if ti.static(not self.env_constant):
+                for k in range(u.n):
+                    if use_env[k]:
+                        d, p, radiance = environment_direction(self, ti.math.vec2(u1[k], u2[k]))
+                        ex[k], ey[k], ez[k], env_pdf[k] = d.x, d.y, d.z, p
+                        vr[k], vg[k], vb[k] = radiance.x, radiance.y, radiance.z
+            wx, wy, wz = ti.select(use_env, ex, wx), ti.select(use_env, ey, wy), ti.select(use_env, ez, wz)
             dist = ti.select(use_env, 1e30, dist)
-            pdf = ti.select(use_env, share * INV_4PI, pdf)
-            er, eg, eb = ti.select(use_env, env.x, er), ti.select(use_env, env.y, eg), ti.select(use_env, env.z, eb)
+            pdf = ti.select(use_env, share * env_pdf, pdf)
+            er, eg, eb = ti.select(use_env, vr, er), ti.select(use_env, vg, eg), ti.select(use_env, vb, eb)
             prim = ti.select(use_env, -1, prim)
         return wx, wy, wz, dist, pdf, qx, qy, qz, nx, ny, nz, er, eg, eb, prim
 
@@ -132,5 +148,18 @@ class PacketLights:
         return (1.0 - self.env_share[None]) * density * dist2 / ti.max(ti.abs(cos_l), 1e-30)
 
     @ti.func
-    def pdf_environment(self):
-        return self.env_share[None] * INV_4PI
+    def environment_seen(self, dx, dy, dz, missed):
+        """The environment's radiance (rgb lanes) along the directions d of the lanes in `missed`
+        (0 elsewhere), and the solid-angle density with which `sample` would have chosen them."""
+        env = self.environment.radiance(ti.math.vec3(0.0, 1.0, 0.0))
+        vr, vg, vb = dx * 0.0 + env.x, dx * 0.0 + env.y, dx * 0.0 + env.z
+        pdf = dx * 0.0 + self.env_share[None] * INV_4PI
+        if ti.static(not self.env_constant):
+            for k in range(dx.n):
+                if missed[k] == 1:
+                    d = ti.math.vec3(dx[k], dy[k], dz[k])
+                    radiance = self.environment.radiance(d)
+                    vr[k], vg[k], vb[k] = radiance.x, radiance.y, radiance.z
+                    if ti.static(self.env_is_map):
+                        pdf[k] = self.env_share[None] * self.env_sampler.pdf(d)
+        return vr, vg, vb, pdf

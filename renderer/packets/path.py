@@ -1,6 +1,12 @@
 """The path tracer (`path`, `nee`, `mis`) for a packet of camera rays, lane by lane: the estimator
-of renderer/integrators/tracer.py for the scenes renderer/packets/support.py admits (Lambert
-surfaces, emissive triangles and quads, a constant environment, no media).
+of renderer/integrators/tracer.py for the scenes renderer/packets/support.py admits (untextured
+materials, shading normals or not, emissive triangles and quads, any environment, no media).
+
+Lambert surfaces are shaded in lane arithmetic. Lanes on any other kind of material (`general`,
+compiled only where the scene has such kinds) take the scalar BSDF (renderer/materials/bsdf.py),
+one lane after another in a run-time loop: its value and density toward the light sample and its
+own sample, with the same random numbers per decision as the scalar tracer. Traversal, light
+selection, emission, MIS and roulette stay packet-wide for every lane.
 
 Every lane is a path; the packet takes its vertices together (one closest-hit trace, then one
 shadow trace, per vertex) and a path that ends is masked off until all have. The depth limit, the
@@ -10,8 +16,9 @@ faces where the material says so) are the scalar tracer's; light selection is Pa
 """
 import taichi as ti
 
-from renderer.geometry.interface import INF
+from renderer.geometry.interface import INF, Hit, Ray, Surface
 from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
+from renderer.materials.kinds import KIND_IDS
 from renderer.packets import traversal
 from renderer.packets.lanes import any_lane, cosine_hemisphere, mask, offset_origin, seeded
 from renderer.packets.surfaces import hit_surface
@@ -19,6 +26,7 @@ from renderer.sampling import dims
 from renderer.sampling.rng import uniform
 
 INV_PI = 0.31830988618379067
+DIFFUSE = KIND_IDS["diffuse"]
 
 
 @ti.func
@@ -48,6 +56,51 @@ def leave(px, py, pz, nx, ny, nz, eps, toward):
 
 
 @ti.func
+def _general_lanes(ctx: ti.template(), toward_light: ti.template(), key, dim, general, ox, oy, oz, t, b1, b2,
+                   prim, px, py, pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz, v1, v2, bsdf_pdf, usable, bx,
+                   by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta):
+    """The lanes of `general` (materials other than Lambert's) through the scalar BSDF, one after
+    another (a run-time loop: the BSDF's code is compiled once, not once a lane): with
+    toward_light, f cos and the density toward the light direction w (0 where the material has no
+    smooth part, as the scalar tracer samples no light there); then the BSDF's own sample, from
+    the numbers (BSDF_LOBE, v1, v2) the scalar tracer draws. The ray (o) and its hit (t, b1, b2,
+    prim) make the geometry's own surface record where the mesh has shading normals (otherwise the
+    record is the point's and its geometric normal's). Returns the lanes given, with the general
+    lanes' values in place: (f cos rgb, bsdf_pdf, usable, the next direction xyz, its
+    weight rgb, pdf, valid, delta)."""
+    gr, gg, gb = wx * 0.0, wx * 0.0, wx * 0.0
+    lobe = uniform(key, dim + dims.BSDF_LOBE)
+    for k in range(general.n):
+        if general[k] == 1:
+            n = ti.math.vec3(nx[k], ny[k], nz[k])
+            wo = -ti.math.vec3(dx[k], dy[k], dz[k])
+            surface = Surface(p=ti.math.vec3(px[k], py[k], pz[k]), n_geo=n, n_shading=n, material=material[k],
+                              front_face=ti.select(wo.dot(n) > 0.0, 1, 0))
+            if ti.static(ctx.geometry.has_normals):
+                surface = ctx.geometry.surface(
+                    Ray(o=ti.math.vec3(ox[k], oy[k], oz[k]), d=-wo, cone_width=0.0, cone_spread=0.0),
+                    Hit(hit=1, t=t[k], prim=prim[k], bary=ti.math.vec2(b1[k], b2[k]), instance=-1))
+                n = surface.n_geo
+            mat, ns = ctx.bsdf.shade(surface, wo)
+            if ti.static(toward_light):
+                value = ti.math.vec3(0.0)
+                density = 0.0
+                if ctx.bsdf.has_smooth_part(mat):
+                    value, density = ctx.bsdf.eval_at(mat, ns, n, wo, ti.math.vec3(wx[k], wy[k], wz[k]))
+                gr[k], gg[k], gb[k] = value.x, value.y, value.z
+                bsdf_pdf[k] = density
+                usable[k] = ti.select(value.max() > 0.0, 1, 0)
+            bs = ctx.bsdf.sample_at(mat, ns, n, wo, lobe[k], ti.math.vec2(v1[k], v2[k]))
+            bx[k], by[k], bz[k] = bs.wi.x, bs.wi.y, bs.wi.z
+            weight_r[k], weight_g[k], weight_b[k] = bs.weight.x, bs.weight.y, bs.weight.z
+            next_pdf[k] = bs.pdf
+            next_valid[k] = bs.valid
+            next_delta[k] = bs.delta
+    return (gr, gg, gb, bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid,
+            next_delta)
+
+
+@ti.func
 def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_depth):
     """The radiance (rgb lanes) of the camera rays (o, d) of the live lanes, the work done:
     (node visits, primitive tests, rays) lanes, the packet's visits and tests counted in every
@@ -56,6 +109,7 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
     the caller must store somewhere (a product with 0 would be folded away, and the stores with it)."""
     light_sampling = ti.static(ctx.integrator.light_sampling)
     use_mis = ti.static(ctx.integrator.mis)
+    has_general = ti.static(ctx.has_general)
     geometry = ctx.geometry
     zero = ox * 0.0
     lr, lg, lb = zero, zero, zero
@@ -65,7 +119,6 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
     prev_delta = live_in  # the camera: what it sees directly is not light-sampled
     live = live_in
     visits, tests, rays = zero, zero, zero
-    env = ctx.environment.radiance(ti.math.vec3(0.0, 1.0, 0.0))
     bounces = 0
     seeds = 0.0
     occupancy = ti.math.ivec4(0)
@@ -82,13 +135,15 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
         rays += took
         missed = live & mask(prim < 0)
         if ti.static(ctx.lights.has_env):
-            weight = zero + 1.0
-            if ti.static(light_sampling):
-                other = ti.select(prev_delta == 1, 1.0, power_heuristic(prev_pdf, zero + ctx.lights.pdf_environment()))
-                weight = other if ti.static(use_mis) else ti.select(prev_delta == 1, 1.0, 0.0)
-            lr += ti.select(missed == 1, tr * weight * env.x, 0.0)
-            lg += ti.select(missed == 1, tg * weight * env.y, 0.0)
-            lb += ti.select(missed == 1, tb * weight * env.z, 0.0)
+            if any_lane(missed):
+                vr, vg, vb, env_pdf = ctx.lights.environment_seen(dx, dy, dz, missed)
+                weight = zero + 1.0
+                if ti.static(light_sampling):
+                    other = ti.select(prev_delta == 1, 1.0, power_heuristic(prev_pdf, env_pdf))
+                    weight = other if ti.static(use_mis) else ti.select(prev_delta == 1, 1.0, 0.0)
+                lr += ti.select(missed == 1, tr * weight * vr, 0.0)
+                lg += ti.select(missed == 1, tg * weight * vg, 0.0)
+                lb += ti.select(missed == 1, tb * weight * vb, 0.0)
         live &= mask(prim >= 0)
         if not any_lane(live):
             break
@@ -98,11 +153,14 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
         ar, ag, ab = zero, zero, zero
         er, eg, eb = zero, zero, zero
         two_sided = live * 0
+        kind = live * 0
         for k in ti.static(range(ox.n)):
             row = ctx.materials.table[material[k]]
             ar[k], ag[k], ab[k] = row.base_color.x, row.base_color.y, row.base_color.z
             er[k], eg[k], eb[k] = row.emission.x, row.emission.y, row.emission.z
             two_sided[k] = row.two_sided_emission
+            if ti.static(has_general):
+                kind[k] = row.kind
         # emission found by the ray
         emits = live & mask((cos_o > 0.0) | (two_sided != 0)) & mask(ti.max(er, ti.max(eg, eb)) > 0.0)
         if any_lane(emits):
@@ -125,15 +183,37 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
         # the Lambert lobe on wo's side of the surface
         side = ti.select(cos_o >= 0.0, 1.0, -1.0)
         fx, fy, fz = side * nx, side * ny, side * nz
+        general = live * 0
+        if ti.static(has_general):
+            # every lane where the mesh has shading normals (Lambert's lanes know only the geometric one)
+            general = live if ti.static(geometry.has_normals) else live & mask(kind != DIFFUSE)
+        # the next direction's numbers; a Lambert lane's direction, cosine-weighted about its side's normal
+        v1, v2 = uniform2(key, dim + dims.BSDF_DIRECTION)
+        bx, by, bz, cos_t = cosine_hemisphere(v1, v2, fx, fy, fz)
+        weight_r, weight_g, weight_b = ar, ag, ab
+        next_pdf = cos_t * INV_PI
+        next_valid = mask(cos_t > 0.0)
+        next_delta = live * 0
         if ti.static(light_sampling):
             u1, u2 = uniform2(key, dim + dims.LIGHT_POINT)
             wx, wy, wz, dist, pdf, qx, qy, qz, qnx, qny, qnz, rr, rg, rb, light = ctx.lights.sample(
                 px, py, pz, uniform(key, dim + dims.LIGHT_SELECT), u1, u2)
             cos_i = wx * fx + wy * fy + wz * fz
+            bsdf_pdf = cos_i * INV_PI
+            usable = mask(cos_i > 0.0)
+            # f cos toward the light of general lanes (Lambert lanes' is albedo * cos_i / pi)
+            gr, gg, gb = zero, zero, zero
+            if ti.static(has_general):
+                if any_lane(general):
+                    gr, gg, gb, bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, \
+                        next_delta = _general_lanes(ctx, True, key, dim, general, ox, oy, oz, t, b1, b2, prim, px, py,
+                                                    pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz, v1, v2, bsdf_pdf,
+                                                    usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf,
+                                                    next_valid, next_delta)
             scale = zero + 1.0 / ti.max(pdf, 1e-30)
             if ti.static(use_mis):
-                scale *= power_heuristic(pdf, cos_i * INV_PI)
-            found = live & mask((pdf > 0.0) & (ti.max(rr, ti.max(rg, rb)) > 0.0) & (cos_i > 0.0))
+                scale *= power_heuristic(pdf, bsdf_pdf)
+            found = live & mask((pdf > 0.0) & (ti.max(rr, ti.max(rg, rb)) > 0.0)) & usable
             if any_lane(found):
                 sx, sy, sz = leave(px, py, pz, nx, ny, nz, eps, wx * nx + wy * ny + wz * nz)
                 # the far end off the light's own surface (next_segment), or the environment
@@ -158,19 +238,30 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
                 rays += took
                 add = (t_max >= 0.0) & (blocker < 0)
                 f = cos_i * INV_PI * scale
-                lr += ti.select(add, tr * ar * f * rr, 0.0)
-                lg += ti.select(add, tg * ag * f * rg, 0.0)
-                lb += ti.select(add, tb * ab * f * rb, 0.0)
-        # the next direction: cosine-weighted about the side's normal
-        v1, v2 = uniform2(key, dim + dims.BSDF_DIRECTION)
-        wx, wy, wz, cos_t = cosine_hemisphere(v1, v2, fx, fy, fz)
-        live &= mask(cos_t > 0.0)
-        tr, tg, tb = tr * ar, tg * ag, tb * ab
+                if ti.static(has_general):
+                    is_general = general == 1
+                    lr += ti.select(add, tr * ti.select(is_general, gr * scale, ar * f) * rr, 0.0)
+                    lg += ti.select(add, tg * ti.select(is_general, gg * scale, ag * f) * rg, 0.0)
+                    lb += ti.select(add, tb * ti.select(is_general, gb * scale, ab * f) * rb, 0.0)
+                else:
+                    lr += ti.select(add, tr * ar * f * rr, 0.0)
+                    lg += ti.select(add, tg * ag * f * rg, 0.0)
+                    lb += ti.select(add, tb * ab * f * rb, 0.0)
+        if ti.static(has_general and not light_sampling):
+            if any_lane(general):
+                no_light = live * 0
+                _r, _g, _b, _p, _u, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta = \
+                    _general_lanes(ctx, False, key, dim, general, ox, oy, oz, t, b1, b2, prim, px, py, pz, nx, ny, nz,
+                                   dx, dy, dz, material, zero, zero, zero, v1, v2, zero, no_light, bx, by, bz,
+                                   weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta)
+        # the next direction
+        live &= next_valid
+        tr, tg, tb = tr * weight_r, tg * weight_g, tb * weight_b
         prev_x, prev_y, prev_z = px, py, pz
-        prev_pdf = cos_t * INV_PI
-        prev_delta = live * 0
-        ox, oy, oz = leave(px, py, pz, nx, ny, nz, eps, wx * nx + wy * ny + wz * nz)
-        dx, dy, dz = wx, wy, wz
+        prev_pdf = next_pdf
+        prev_delta = next_delta
+        ox, oy, oz = leave(px, py, pz, nx, ny, nz, eps, bx * nx + by * ny + bz * nz)
+        dx, dy, dz = bx, by, bz
         if bounces >= RR_DEPTH:
             q = ti.min(ti.max(tr, ti.max(tg, tb)), 0.95)
             survives = uniform(key, dim + dims.ROULETTE) < q

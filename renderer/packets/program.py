@@ -14,6 +14,7 @@ from renderer.camera import pinhole_ray
 from renderer.film.adaptive import STOPPED
 from renderer.film.band_table import pass_layout, pass_pixel
 from renderer.film.pixel_slices import BANDS, ROUND_SLICES
+from renderer.materials.bsdf import Bsdf
 from renderer.packets.path import trace_paths, uniform2
 from renderer.sampling import dims
 from renderer.sampling.rng import sample_key
@@ -40,6 +41,11 @@ class PacketProgram:
         self.lights = lights
         self.bands = bands
         self.width = width
+        # The scalar BSDF, for the lanes on materials other than Lambert's and every lane of a mesh
+        # with shading normals (renderer/packets/path.py); None where neither is found, which then
+        # compile none of it
+        self.has_general = bool(set(features.material_kinds) - {"diffuse"}) or geometry.has_normals
+        self.bsdf = Bsdf(materials, features) if self.has_general else None
         self._make_scalar = make_scalar
         self._scalar = None
         # Lane occupancy, summed over launches: (closest-hit traces, their live lanes, shadow

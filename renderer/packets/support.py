@@ -5,17 +5,20 @@ from __future__ import annotations
 
 import taichi as ti
 
+from renderer.materials.kinds import KINDS
 from renderer.packets.traversal import PACKET_KINDS
 
 PACKET_INTEGRATORS = ("path", "nee", "mis")
-PACKET_MATERIALS = frozenset({"diffuse"})
+# Lambert's in lane arithmetic; the others through the scalar BSDF lane by lane (renderer/packets/path.py).
+# Not the null boundary, whose crossing the scalar tracer counts apart from bounces.
+PACKET_MATERIALS = frozenset(kind.name for kind in KINDS) - {"null"}
 # Features that must be off, with the words that say so
 _EFFECTS = (("has_textures", "textures"), ("has_normal_maps", "normal maps"), ("has_mapped_frames", "normal or bump maps"),
             ("has_bump_maps", "bump maps"), ("has_anisotropy", "anisotropic materials"), ("has_mixes", "material mixes"),
             ("has_media", "participating media"), ("analytic_fog", "fog"), ("has_dispersion", "dispersion"),
             ("has_alpha", "alpha coverage"), ("has_vertex_colors", "vertex colours"), ("has_instances", "instances"),
             ("has_flipped_normals", "turned-over normals"), ("has_thin", "thin walls"),
-            ("has_microfacet_models", "microfacet models"), ("has_sidedness", "one-sided materials"),
+            ("has_sidedness", "one-sided materials"),
             ("depth_of_field", "depth of field"), ("orthographic", "an orthographic camera"),
             ("has_light_textures", "light textures"))
 PACKET_WIDTHS = (4, 8, 16)
@@ -42,16 +45,12 @@ def unsupported(geometry, features, integrator: str, sampler: str, keeps_aovs: b
     kinds = set(geometry.kinds)
     if not kinds <= PACKET_KINDS:
         return "primitives of kind " + ", ".join(sorted(kinds - PACKET_KINDS)) + " have no packet test"
-    if geometry.has_normals:
-        return "shading normals have no packet form yet"
     if not set(features.material_kinds) <= PACKET_MATERIALS:
         return "materials of kind " + ", ".join(sorted(set(features.material_kinds) - PACKET_MATERIALS)) + \
             " have no packet form"
     for name, words in _EFFECTS:
         if getattr(features, name):
-            return f"{words} have no packet form"
-    if features.environment != "constant":
-        return f"a {features.environment} environment has no packet form"
+            return f"no packet form for {words}"
     if features.light_kinds:
         return "point, spot and directional lights have no packet form"
     if features.pixel_filter[0] != "box":

@@ -1,6 +1,8 @@
 """The packet path renders what the scalar path renders (the suite's per-pixel and image-mean
 z-tests, independent seeds), takes the same seed to the same image, and is taken only where
 every part of the scene has a packet form, saying why not otherwise."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -12,6 +14,29 @@ from renderer.scene.catalog import load_any
 from tests.stats.image_tests import assert_agree
 
 CORNELL = "assets/scenes/cornell_box.toml"
+
+
+def cornell_of_materials(directory: Path) -> Path:
+    """The Cornell box with its tall box a rough conductor and its short box clear glass, and three
+    spheres: a mirror, frosted glass and a principled paint (every lane kind of the packet path:
+    Lambert, rough and delta reflection, refraction and total internal reflection, layered)."""
+    text = Path(CORNELL).read_text()
+    for box, kind in (("short_box", 'type = "dielectric"\nroughness = 0\nior = 1.5'),
+                      ("tall_box", 'type = "conductor"\nroughness = 0.25')):
+        old = f'[materials.{box}]\ntype = "diffuse"'
+        assert old in text
+        text = text.replace(old, f"[materials.{box}]\n{kind}")
+    for name, kind, extra, radius, at in (
+            ("mirror", "conductor", "roughness = 0", 0.2, (-0.55, 0.5, -0.4)),
+            ("frosted", "dielectric", "base_color = [0.9, 0.97, 1.0]\nroughness = 0.3\nior = 1.5", 0.2,
+             (0.5, 0.45, 0.2)),
+            ("paint", "principled", "base_color = [0.08, 0.2, 0.7]\nmetallic = 0\nroughness = 0.3", 0.15,
+             (0.0, -0.85, 0.5))):
+        text += (f'\n[materials.{name}]\ntype = "{kind}"\n{extra}\n\n[[objects]]\ntype = "sphere"\n'
+                 f'material = "{name}"\nradius = {radius}\ntranslate = {list(at)}\n')
+    path = directory / "cornell_materials.toml"
+    path.write_text(text)
+    return path
 
 
 def render(path, packets, integrator, seed, spp=64, size=(24, 24)):
@@ -34,6 +59,52 @@ def test_packets_render_the_scalar_paths_image(integrator):
     assert_agree(a, b, ("packets", "scalar"))
     # every lane's samples land on its own pixel: every pixel has its 64
     np.testing.assert_array_equal(packed.film.count.to_numpy()[:24, :24], 64)
+
+
+def test_packets_render_every_material_as_the_scalar_path_does(tmp_path):
+    """Lanes on conductors, glass and the principled model go through the scalar BSDF one by one;
+    the image is still the scalar path's (the suite's z-tests), and Lambert lanes keep theirs."""
+    scene = cornell_of_materials(tmp_path)
+    scalar = render(scene, 0, "mis", seed=21, spp=256, size=(20, 20))
+    packed = render(scene, 4, "mis", seed=22, spp=256, size=(20, 20))
+    features = packed.features()
+    assert {"conductor", "dielectric", "principled"} <= set(features.material_kinds)
+    assert isinstance(packed.program("mis", features, "independent"), PacketProgram)
+    assert isinstance(scalar.program("mis", scalar.features(), "independent"), RenderProgram)
+    assert_agree((packed.image(), packed.film.variance_of_mean_image()),
+                 (scalar.image(), scalar.film.variance_of_mean_image()), ("packets", "scalar"))
+
+
+def test_packets_render_shading_normals_as_the_scalar_path_does(tmp_path):
+    """A mesh with vertex normals: every lane's surface record is the geometry's own (its shading
+    normal), shaded by the scalar BSDF, Lambert lanes too; the image is the scalar path's."""
+    import trimesh
+
+    ball = trimesh.creation.icosphere(subdivisions=1, radius=0.3)  # coarse: the normals matter
+    ball.export(tmp_path / "ball.obj", include_normals=True)
+    text = Path(CORNELL).read_text() + (
+        '\n[materials.gold]\ntype = "conductor"\nbase_color = [1.0, 0.78, 0.34]\nroughness = 0.2\n'
+        '\n[[objects]]\ntype = "mesh"\nfile = "ball.obj"\nmaterial = "white"\ntranslate = [-0.45, 0.4, 0.1]\n'
+        '\n[[objects]]\ntype = "mesh"\nfile = "ball.obj"\nmaterial = "gold"\ntranslate = [0.45, 0.4, -0.2]\n')
+    scene = tmp_path / "cornell_balls.toml"
+    scene.write_text(text)
+    scalar = render(scene, 0, "mis", seed=31, spp=256, size=(20, 20))
+    packed = render(scene, 4, "mis", seed=32, spp=256, size=(20, 20))
+    assert packed.geometry.has_normals
+    assert isinstance(packed.program("mis", packed.features(), "independent"), PacketProgram)
+    assert_agree((packed.image(), packed.film.variance_of_mean_image()),
+                 (scalar.image(), scalar.film.variance_of_mean_image()), ("packets", "scalar"))
+
+
+def test_packets_render_a_map_environment_as_the_scalar_path_does():
+    """A model under the shipped environment map: misses read the map lane by lane, light samples
+    are importance-sampled on it as the scalar path samples them (glass, shading normals)."""
+    scalar = render("tests/data/glass_ball.obj", 0, "mis", seed=41, spp=128, size=(20, 20))
+    packed = render("tests/data/glass_ball.obj", 4, "mis", seed=42, spp=128, size=(20, 20))
+    assert packed.scene.environment.kind == "map"
+    assert isinstance(packed.program("mis", packed.features(), "independent"), PacketProgram)
+    assert_agree((packed.image(), packed.film.variance_of_mean_image()),
+                 (scalar.image(), scalar.film.variance_of_mean_image()), ("packets", "scalar"))
 
 
 def test_the_same_seed_gives_the_same_image():
@@ -61,10 +132,9 @@ def test_packets_are_taken_only_where_the_scene_has_a_packet_form():
     assert "sobol" in cornell.packet_reason("mis", features, "sobol")
     assert "sppm" in cornell.packet_reason("sppm", features, "independent")
     assert not isinstance(cornell.program("sppm", features), PacketProgram)  # sppm keeps its own program
-    bunnies = Renderer(load_any("assets/scenes/bunnies.toml"), (8, 8), MeshOptions(packets=8))
-    reason = bunnies.packet_reason("mis", bunnies.features(), "independent")
-    assert "conductor" in reason and "dielectric" in reason
-    assert isinstance(bunnies.program("mis", bunnies.features()), RenderProgram)
+    textured = Renderer(load_any("assets/scenes/textured.toml"), (8, 8), MeshOptions(packets=8))
+    assert "textures" in textured.packet_reason("mis", textured.features(), "independent")
+    assert isinstance(textured.program("mis", textured.features()), RenderProgram)
     with_aovs = Renderer(load_any(CORNELL), (8, 8), MeshOptions(packets=8), aovs=True)
     assert "AOV" in with_aovs.packet_reason("mis", features, "independent")
     with pytest.raises(ValueError, match="packets of 3 rays"):
