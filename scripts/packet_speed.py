@@ -3,7 +3,13 @@ shadow flags of the same rays (camera rays through a grid, and random rays in th
 and whole renders (samples per second), for each packet width. Prints medians and writes JSON.
 
     python scripts/packet_speed.py [--scenes cornell_box] [--size 256] [--spp 64] [--rounds 5]
-        [--widths 8,16] [--out reports/packet_speed.json]
+        [--widths 8,16] [--optimize compile|run] [--out reports/packet_speed.json]
+
+Samples per second compare estimators only where they are the same: the packet path selects
+lights by power where the scalar path may use its light tree. So each width also gets an
+equal-error speed: (v t) of one ray at a time over (v t) of the width, with t the median render
+time and v the median over pixels of the variance of the pixel's mean (medians: caustic
+fireflies make the mean variance of a few renders meaningless).
 
 The first render of each width compiles its kernel: its time is reported apart (cold where
 Taichi's offline cache has not seen the kernel yet).
@@ -56,13 +62,16 @@ def main(argv=None) -> int:
     parser.add_argument("--spp", type=int, default=64)
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--widths", default="8,16")
+    parser.add_argument("--optimize", choices=("compile", "run"), default="compile",
+                        help="kernel optimisation level (render's own for mesh scenes: compile; run compiles a "
+                             "scene of many material kinds for many minutes)")
     parser.add_argument("--out", type=Path, default=Path("reports/packet_speed.json"))
     args = parser.parse_args(argv)
     import taichi as ti
 
     from renderer.runtime.arch import cpu_scheduling_options, taichi_options
 
-    ti.init(arch=ti.cpu, log_level=ti.WARN, **taichi_options("run"), **cpu_scheduling_options())
+    ti.init(arch=ti.cpu, log_level=ti.WARN, **taichi_options(args.optimize), **cpu_scheduling_options())
     from renderer.bench.packet_rays import PacketShooter
     from renderer.bench.ray_batch import RayBatch
     from renderer.camera import CameraFrame
@@ -107,6 +116,7 @@ def main(argv=None) -> int:
             ray_rates[kind] = {w: 2 * n / float(np.median(ts)) / 1e6 for w, ts in times.items()}
         entry["mrays_per_s"] = ray_rates
         times = {w: [] for w in renderers}
+        variances = {w: [] for w in renderers}
         for k in range(args.rounds):
             for w, r in renderers.items():
                 r.reset()
@@ -114,8 +124,12 @@ def main(argv=None) -> int:
                 r.render(camera, args.spp, seed=k)
                 ti.sync()
                 times[w].append(time.perf_counter() - start)
+                variances[w].append(float(np.median(r.film.variance_of_mean_image().sum(axis=-1))))
         samples = args.size * args.size * args.spp
         entry["msamples_per_s"] = {w: samples / float(np.median(ts)) / 1e6 for w, ts in times.items()}
+        cost = {w: float(np.median(times[w])) * float(np.median(variances[w])) for w in renderers}
+        entry["median_pixel_variance"] = {w: float(np.median(v)) for w, v in variances.items()}
+        entry["equal_error_speed"] = {w: cost[0] / cost[w] if cost[w] > 0 else None for w in renderers}
         entry["image_mean"] = {w: r.image().reshape(-1, 3).mean(axis=0).tolist() for w, r in renderers.items()}
         entry["occupancy"] = {}
         for w in widths:
@@ -126,8 +140,10 @@ def main(argv=None) -> int:
         report["scenes"][name] = entry
         print(f"{name}: packets {entry['reason'] or 'taken'}")
         for w in renderers:
+            speed = entry["equal_error_speed"][w]
             line = (f"  width {w or 1:2d}: render {entry['msamples_per_s'][w]:.2f} M samples/s "
-                    f"({entry['msamples_per_s'][w] / entry['msamples_per_s'][0]:.2f}x), first render "
+                    f"({entry['msamples_per_s'][w] / entry['msamples_per_s'][0]:.2f}x; at equal error "
+                    f"{speed if speed is None else round(speed, 2)}x), first render "
                     f"{first[w]:.1f} s; closest + shadow rays: camera {ray_rates['camera'][w]:.2f}, random "
                     f"{ray_rates['random'][w]:.2f} M rays/s")
             occupancy = entry["occupancy"].get(w)

@@ -137,6 +137,9 @@ def packet_stage_kernels(program, width: int, height: int):
     from renderer.sampling.rng import sample_key, uniform
 
     lanes = program.width
+    if program.has_general:
+        raise SystemExit("the packet stage table shades Lambert lanes only: this scene's lanes take the scalar "
+                         "BSDF (materials other than Lambert's, or shading normals)")
     if width % lanes:
         raise SystemExit(f"--size must be a multiple of the packet width {lanes}")
     out = ti.field(ti.f32, shape=(width // lanes, height))

@@ -12,9 +12,12 @@ class PacketShooter:
     """Closest hits and blockers of many rays, `width` rays a packet in the order given (the last
     packet padded with rays that are not rays: t_max -1)."""
 
-    def __init__(self, geometry, width=8):
+    def __init__(self, geometry, width=8, one_at_a_time=False):
+        """one_at_a_time: each packet's rays through traversal.trace_lanes (the scalar walk lane by
+        lane, as the packet path traces a large world's bounce and shadow rays)."""
         self.geometry = geometry
         self.width = width
+        self.one_at_a_time = one_at_a_time
 
     @ti.kernel
     def _shoot(self, o: ti.types.ndarray(dtype=ti.math.vec3), d: ti.types.ndarray(dtype=ti.math.vec3),
@@ -29,7 +32,12 @@ class PacketShooter:
                 ox[k], oy[k], oz[k] = o[i].x, o[i].y, o[i].z
                 dx[k], dy[k], dz[k] = d[i].x, d[i].y, d[i].z
                 tm[k] = t_max[i]
-            g, tt, b1, b2, visits, tests = traversal.trace(self.geometry, ox, oy, oz, dx, dy, dz, tm, any_hit)
+            g, tt, b1, b2, visits, tests = tm * 0, tm, tm, tm, 0, 0
+            if ti.static(self.one_at_a_time):
+                g, tt, b1, b2, visits, tests = traversal.trace_lanes(self.geometry, ox, oy, oz, dx, dy, dz, tm,
+                                                                     any_hit)
+            else:
+                g, tt, b1, b2, visits, tests = traversal.trace(self.geometry, ox, oy, oz, dx, dy, dz, tm, any_hit)
             for k in ti.static(range(lanes)):
                 prim[p * lanes + k] = g[k]
                 t[p * lanes + k] = tt[k]

@@ -112,6 +112,7 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
     has_general = ti.static(ctx.has_general)
     geometry = ctx.geometry
     zero = ox * 0.0
+    prim_none = ti.select(live_in < 0, -1, -1)
     lr, lg, lb = zero, zero, zero
     tr, tg, tb = zero + 1.0, zero + 1.0, zero + 1.0
     prev_x, prev_y, prev_z = ox, oy, oz
@@ -126,8 +127,17 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
         if not any_lane(live):
             break
         dim = dims.BOUNCE_BASE + dims.PER_BOUNCE * bounces
-        prim, t, b1, b2, v, n_tests = traversal.trace(geometry, ox, oy, oz, dx, dy, dz,
-                                                      ti.select(live == 1, INF, -1.0), False)
+        prim, t, b1, b2, v, n_tests = prim_none, zero, zero, zero, 0, 0
+        if ti.static(ctx.scalar_bounces):
+            if bounces == 0:
+                prim, t, b1, b2, v, n_tests = traversal.trace(geometry, ox, oy, oz, dx, dy, dz,
+                                                              ti.select(live == 1, INF, -1.0), False)
+            else:
+                prim, t, b1, b2, v, n_tests = traversal.trace_lanes(geometry, ox, oy, oz, dx, dy, dz,
+                                                                    ti.select(live == 1, INF, -1.0), False)
+        else:
+            prim, t, b1, b2, v, n_tests = traversal.trace(geometry, ox, oy, oz, dx, dy, dz,
+                                                          ti.select(live == 1, INF, -1.0), False)
         took = ti.cast(live, ti.f32)
         occupancy += ti.math.ivec4(1, live.sum(), 0, 0)
         visits += took * v
@@ -229,8 +239,13 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
                 t_max = ti.select(to_env, INF, length * (1.0 - 1e-4))
                 t_max = ti.select((found == 1) & (length > 0.0), t_max, -1.0)
                 # (distinct names: `_` taken twice in one unpacking miscompiles in Taichi 1.7.4)
-                blocker, t_blocker, b1_blocker, b2_blocker, sv, st = traversal.trace(geometry, sx, sy, sz, gx, gy, gz,
-                                                                                     t_max, True)
+                blocker, t_blocker, b1_blocker, b2_blocker, sv, st = prim_none, zero, zero, zero, 0, 0
+                if ti.static(ctx.scalar_bounces):
+                    blocker, t_blocker, b1_blocker, b2_blocker, sv, st = traversal.trace_lanes(
+                        geometry, sx, sy, sz, gx, gy, gz, t_max, True)
+                else:
+                    blocker, t_blocker, b1_blocker, b2_blocker, sv, st = traversal.trace(
+                        geometry, sx, sy, sz, gx, gy, gz, t_max, True)
                 took = ti.cast(mask(t_max >= 0.0), ti.f32)
                 occupancy += ti.math.ivec4(0, 0, 1, mask(t_max >= 0.0).sum())
                 visits += took * sv

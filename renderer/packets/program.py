@@ -16,6 +16,7 @@ from renderer.film.band_table import pass_layout, pass_pixel
 from renderer.film.pixel_slices import BANDS, ROUND_SLICES
 from renderer.materials.bsdf import Bsdf
 from renderer.packets.path import trace_paths, uniform2
+from renderer.packets.support import scalar_bounces
 from renderer.sampling import dims
 from renderer.sampling.rng import sample_key
 
@@ -46,6 +47,7 @@ class PacketProgram:
         # compile none of it
         self.has_general = bool(set(features.material_kinds) - {"diffuse"}) or geometry.has_normals
         self.bsdf = Bsdf(materials, features) if self.has_general else None
+        self.scalar_bounces = scalar_bounces(geometry)  # a large world's incoherent rays: one lane at a time
         self._make_scalar = make_scalar
         self._scalar = None
         # Lane occupancy, summed over launches: (closest-hit traces, their live lanes, shadow

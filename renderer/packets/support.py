@@ -22,6 +22,19 @@ _EFFECTS = (("has_textures", "textures"), ("has_normal_maps", "normal maps"), ("
             ("depth_of_field", "depth of field"), ("orthographic", "an orthographic camera"),
             ("has_light_textures", "light textures"))
 PACKET_WIDTHS = (4, 8, 16)
+# From this many primitives on, a packet's bounce and shadow rays go through the scalar traversal
+# one lane after another (traversal.trace_lanes); its camera rays stay a packet. Incoherent rays
+# spread a packet over many more nodes than any one ray visits (scripts/packet_speed.py's random
+# rays, closest + shadow: the 1M-triangle stress scene 2.44 M rays/s in packets of 4 against 5.10
+# one at a time; bunnies, studio, many_lights (15-26k primitives) 14.7 / 23.3 / 6.8 against 12.0 /
+# 13.7 / 6.4). Whole renders of stress: packets 0.72x the scalar path, with scalar bounces 1.00x.
+# Between 26k and 1M nothing was measured: the threshold is their geometric mean.
+SCALAR_BOUNCE_PRIMITIVES = 160_000
+
+
+def scalar_bounces(geometry) -> bool:
+    """Whether the packet path traces this world's bounce and shadow rays one lane at a time."""
+    return int(geometry.primitive_count()) >= SCALAR_BOUNCE_PRIMITIVES
 
 
 def on_cpu() -> bool:

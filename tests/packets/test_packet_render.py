@@ -107,6 +107,20 @@ def test_packets_render_a_map_environment_as_the_scalar_path_does():
                  (scalar.image(), scalar.film.variance_of_mean_image()), ("packets", "scalar"))
 
 
+def test_packets_with_bounces_one_ray_at_a_time_render_the_scalar_paths_image(monkeypatch):
+    """A large world's packets trace their camera rays together and their bounce and shadow rays
+    one lane at a time (support.SCALAR_BOUNCE_PRIMITIVES, lowered here to take the Cornell box)."""
+    from renderer.packets import support
+
+    monkeypatch.setattr(support, "SCALAR_BOUNCE_PRIMITIVES", 1)
+    scalar = render(CORNELL, 0, "mis", seed=51)
+    packed = render(CORNELL, 4, "mis", seed=52)
+    program = packed.program("mis", packed.features(), "independent")
+    assert isinstance(program, PacketProgram) and program.scalar_bounces
+    assert_agree((packed.image(), packed.film.variance_of_mean_image()),
+                 (scalar.image(), scalar.film.variance_of_mean_image()), ("packets", "scalar"))
+
+
 def test_the_same_seed_gives_the_same_image():
     a = render(CORNELL, 8, "mis", seed=5, spp=4, size=(20, 12))
     b = render(CORNELL, 8, "mis", seed=5, spp=4, size=(20, 12))

@@ -63,6 +63,22 @@ def test_packets_find_the_scalar_traversals_hits(scene, traversal, leaves, width
             np.testing.assert_array_equal(packets.occluded(o, d, t_max), scalar.occluded(o, d, t_max))
 
 
+def test_rays_one_lane_at_a_time_find_the_scalar_traversals_hits(scene):
+    """traversal.trace_lanes (a large world's bounce and shadow rays) is the scalar walk per lane:
+    the same primitives and distances, and lanes that are not rays skipped."""
+    geometry = geometry_from(scene, traversal="wide8")
+    scalar, lanes = RayShooter(geometry), PacketShooter(geometry, 4, one_at_a_time=True)
+    for o, d in (random_rays(np.random.default_rng(5), 3000), coherent_rays(1024, 4)):
+        (t_a, prim_a), (t_b, prim_b) = lanes.closest(o, d), scalar.closest(o, d)
+        np.testing.assert_array_equal(prim_a, prim_b)
+        np.testing.assert_allclose(t_a[prim_a >= 0], t_b[prim_b >= 0], rtol=1e-6)
+        for t_max in (INF, 1.5):
+            np.testing.assert_array_equal(lanes.occluded(o, d, t_max), scalar.occluded(o, d, t_max))
+    o, d = coherent_rays(64, 4)
+    _, prim = lanes._run(o, d, np.where(np.arange(len(o)) % 2 == 0, INF, -1.0), False)
+    assert (prim[0::2] >= 0).any() and (prim[1::2] == -1).all()
+
+
 def test_rays_that_are_not_rays_hit_nothing(scene):
     """A lane with t_max < 0 (a finished path) finds nothing, however much lies ahead of it."""
     geometry = geometry_from(scene, traversal="wide8")
