@@ -127,17 +127,20 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
         if not any_lane(live):
             break
         dim = dims.BOUNCE_BASE + dims.PER_BOUNCE * bounces
-        prim, t, b1, b2, v, n_tests = prim_none, zero, zero, zero, 0, 0
+        # work (node visits, primitive tests) as lanes: the packet's steps in every lane, or each ray's own
+        prim, t, b1, b2, v, n_tests = prim_none, zero, zero, zero, zero, zero
         if ti.static(ctx.scalar_bounces):
             if bounces == 0:
-                prim, t, b1, b2, v, n_tests = traversal.trace(geometry, ox, oy, oz, dx, dy, dz,
-                                                              ti.select(live == 1, INF, -1.0), False)
+                prim, t, b1, b2, pv, pt = traversal.trace(geometry, ox, oy, oz, dx, dy, dz,
+                                                          ti.select(live == 1, INF, -1.0), False)
+                v, n_tests = zero + pv, zero + pt
             else:
                 prim, t, b1, b2, v, n_tests = traversal.trace_lanes(geometry, ox, oy, oz, dx, dy, dz,
                                                                     ti.select(live == 1, INF, -1.0), False)
         else:
-            prim, t, b1, b2, v, n_tests = traversal.trace(geometry, ox, oy, oz, dx, dy, dz,
-                                                          ti.select(live == 1, INF, -1.0), False)
+            prim, t, b1, b2, pv, pt = traversal.trace(geometry, ox, oy, oz, dx, dy, dz,
+                                                      ti.select(live == 1, INF, -1.0), False)
+            v, n_tests = zero + pv, zero + pt
         took = ti.cast(live, ti.f32)
         occupancy += ti.math.ivec4(1, live.sum(), 0, 0)
         visits += took * v
@@ -239,13 +242,14 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
                 t_max = ti.select(to_env, INF, length * (1.0 - 1e-4))
                 t_max = ti.select((found == 1) & (length > 0.0), t_max, -1.0)
                 # (distinct names: `_` taken twice in one unpacking miscompiles in Taichi 1.7.4)
-                blocker, t_blocker, b1_blocker, b2_blocker, sv, st = prim_none, zero, zero, zero, 0, 0
+                blocker, t_blocker, b1_blocker, b2_blocker, sv, st = prim_none, zero, zero, zero, zero, zero
                 if ti.static(ctx.scalar_bounces):
                     blocker, t_blocker, b1_blocker, b2_blocker, sv, st = traversal.trace_lanes(
                         geometry, sx, sy, sz, gx, gy, gz, t_max, True)
                 else:
-                    blocker, t_blocker, b1_blocker, b2_blocker, sv, st = traversal.trace(
+                    blocker, t_blocker, b1_blocker, b2_blocker, psv, pst = traversal.trace(
                         geometry, sx, sy, sz, gx, gy, gz, t_max, True)
+                    sv, st = zero + psv, zero + pst
                 took = ti.cast(mask(t_max >= 0.0), ti.f32)
                 occupancy += ti.math.ivec4(0, 0, 1, mask(t_max >= 0.0).sum())
                 visits += took * sv

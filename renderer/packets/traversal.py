@@ -147,19 +147,20 @@ def trace(geometry: ti.template(), ox, oy, oz, dx, dy, dz, t_max, any_hit: ti.te
 def trace_lanes(geometry: ti.template(), ox, oy, oz, dx, dy, dz, t_max, any_hit: ti.template()):
     """`trace`'s answer, each ray through the scalar traversal on its own (one lane after another,
     lanes with a negative t_max skipped): for rays so incoherent that a packet's union of nodes
-    costs more than its rays' own walks (work: the rays' visits and tests, summed)."""
+    costs more than its rays' own walks. Its work (node visits, primitive tests) is each ray's
+    own, as float lanes, where `trace` counts the packet's steps once for all."""
     prim = ti.select(t_max < 0.0, -1, -1)
     t = t_max
     b1 = t_max * 0.0
     b2 = b1
-    visits = 0
-    tests = 0
+    visits = t_max * 0.0
+    tests = t_max * 0.0
     for k in range(ox.n):
         if t_max[k] >= 0.0:
             hit = geometry.trace(Ray(o=ti.math.vec3(ox[k], oy[k], oz[k]), d=ti.math.vec3(dx[k], dy[k], dz[k]),
                                      cone_width=0.0, cone_spread=0.0), t_max[k], any_hit)
-            visits += hit.work
-            tests += hit.tests
+            visits[k] = hit.work
+            tests[k] = hit.tests
             if hit.hit == 1:
                 prim[k] = hit.prim
                 t[k] = hit.t

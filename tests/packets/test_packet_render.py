@@ -119,6 +119,10 @@ def test_packets_with_bounces_one_ray_at_a_time_render_the_scalar_paths_image(mo
     assert isinstance(program, PacketProgram) and program.scalar_bounces
     assert_agree((packed.image(), packed.film.variance_of_mean_image()),
                  (scalar.image(), scalar.film.variance_of_mean_image()), ("packets", "scalar"))
+    # the work counted is each ray's own walk after the camera rays: per ray, close to the scalar path's
+    work_packed, work_scalar = packed.work.to_numpy()[:24, :24], scalar.work.to_numpy()[:24, :24]
+    per_ray = [w[..., :2].sum(axis=(0, 1)) / w[..., 2].sum() for w in (work_packed, work_scalar)]
+    np.testing.assert_allclose(per_ray[0], per_ray[1], rtol=0.25)
 
 
 def test_the_same_seed_gives_the_same_image():
