@@ -32,10 +32,10 @@ class PacketShooter:
                 ox[k], oy[k], oz[k] = o[i].x, o[i].y, o[i].z
                 dx[k], dy[k], dz[k] = d[i].x, d[i].y, d[i].z
                 tm[k] = t_max[i]
-            g, tt, b1, b2, visits, tests = tm * 0, tm, tm, tm, 0, 0
+            g, tt = ti.cast(tm * 0.0, ti.i32), tm
             if ti.static(self.one_at_a_time):
-                g, tt, b1, b2, visits, tests = traversal.trace_lanes(self.geometry, ox, oy, oz, dx, dy, dz, tm,
-                                                                     any_hit)
+                g, tt, b1, b2, lane_visits, lane_tests = traversal.trace_lanes(self.geometry, ox, oy, oz, dx, dy, dz,
+                                                                               tm, any_hit)
             else:
                 g, tt, b1, b2, visits, tests = traversal.trace(self.geometry, ox, oy, oz, dx, dy, dz, tm, any_hit)
             for k in ti.static(range(lanes)):
