@@ -199,7 +199,8 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
             from renderer.packets.support import scalar_bounces
 
             if scalar_bounces(renderer.geometry):
-                taken += f" (bounce and shadow rays one at a time among {renderer.geometry.primitive_count():,} primitives)"
+                count = renderer.geometry.primitive_count()
+                taken += f" (bounce and shadow rays one at a time among {count:,} primitives)"
         print(f"packets of {job.packets} rays: " + (f"not taken, {reason}" if reason else taken), file=sys.stderr)
     if stop is not None:
         stop.defer()  # from here on there is an image to save: a signal stops at the next pass

@@ -74,13 +74,15 @@ def _general_lanes(ctx: ti.template(), toward_light: ti.template(), key, dim, ge
         if general[k] == 1:
             n = ti.math.vec3(nx[k], ny[k], nz[k])
             wo = -ti.math.vec3(dx[k], dy[k], dz[k])
-            surface = Surface(p=ti.math.vec3(px[k], py[k], pz[k]), n_geo=n, n_shading=n, material=material[k],
-                              front_face=ti.select(wo.dot(n) > 0.0, 1, 0))
+            surface = Surface()
             if ti.static(ctx.geometry.has_normals):
                 surface = ctx.geometry.surface(
                     Ray(o=ti.math.vec3(ox[k], oy[k], oz[k]), d=-wo, cone_width=0.0, cone_spread=0.0),
                     Hit(hit=1, t=t[k], prim=prim[k], bary=ti.math.vec2(b1[k], b2[k]), instance=-1))
                 n = surface.n_geo
+            else:  # what shade reads of a record without shading normals or textures
+                surface = Surface(p=ti.math.vec3(px[k], py[k], pz[k]), n_geo=n, n_shading=n, material=material[k],
+                                  front_face=ti.select(wo.dot(n) > 0.0, 1, 0))
             mat, ns = ctx.bsdf.shade(surface, wo)
             if ti.static(toward_light):
                 value = ti.math.vec3(0.0)
@@ -200,13 +202,19 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
         if ti.static(has_general):
             # every lane where the mesh has shading normals (Lambert's lanes know only the geometric one)
             general = live if ti.static(geometry.has_normals) else live & mask(kind != DIFFUSE)
-        # the next direction's numbers; a Lambert lane's direction, cosine-weighted about its side's normal
+        # the next direction's numbers; a Lambert lane's direction, cosine-weighted about its side's
+        # normal (not computed where shading normals send every lane to the scalar BSDF)
         v1, v2 = uniform2(key, dim + dims.BSDF_DIRECTION)
-        bx, by, bz, cos_t = cosine_hemisphere(v1, v2, fx, fy, fz)
+        bx, by, bz = zero, zero, zero
         weight_r, weight_g, weight_b = ar, ag, ab
-        next_pdf = cos_t * INV_PI
-        next_valid = mask(cos_t > 0.0)
+        next_pdf = zero
+        next_valid = live * 0
         next_delta = live * 0
+        if ti.static(not geometry.has_normals):
+            cos_t = zero
+            bx, by, bz, cos_t = cosine_hemisphere(v1, v2, fx, fy, fz)
+            next_pdf = cos_t * INV_PI
+            next_valid = mask(cos_t > 0.0)
         if ti.static(light_sampling):
             u1, u2 = uniform2(key, dim + dims.LIGHT_POINT)
             wx, wy, wz, dist, pdf, qx, qy, qz, qnx, qny, qnz, rr, rg, rb, light = ctx.lights.sample(
