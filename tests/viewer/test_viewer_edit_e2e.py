@@ -26,6 +26,7 @@ SIZE = (640, 480)
 # Seconds. Warm, the whole test takes ~8 s; on a clean machine under load, the kernel compiles (the
 # albedo view, picking, then the view with a conductor) dominate.
 TIMEOUT = 420
+CLICK_WAIT = 20  # seconds for a click of the panel's button to show before clicking again
 BUTTON = (43, 76, 116)  # imgui's button colour over the panel, 8-bit RGB as Xvfb shows it
 
 
@@ -108,8 +109,10 @@ def test_click_the_tall_box_make_it_gold_save_and_render(xserver, tmp_path):
             return tuple(pixels[y, x]) if is_gold(pixels[y, x]) else None
 
         # "make it gold". imgui acts on a release it sees frames after the press, over the button;
-        # when the window's frames and xdotool's events fall so that it does not, click again.
-        for attempt in range(3):
+        # when the window's frames and xdotool's events fall so that it does not (often, with the
+        # machine loaded), click again. Gold is the first button whatever the material, and a second
+        # click of it changes nothing, so a click while a first one's kernels compile does no harm.
+        while True:
             xdo(env, "mousemove", "--window", window, panel_left + 14, row)
             time.sleep(0.3)
             xdo(env, "mousedown", 1)
@@ -118,10 +121,10 @@ def test_click_the_tall_box_make_it_gold_save_and_render(xserver, tmp_path):
             time.sleep(0.3)
             xdo(env, "mousemove", "--window", window, 20, 20)  # off the panel and the box
             try:
-                gold = wait_for(gold_now, viewer, log_path, min(deadline, time.monotonic() + 90), "a gold box")
+                gold = wait_for(gold_now, viewer, log_path, min(deadline, time.monotonic() + CLICK_WAIT), "a gold box")
                 break
             except AssertionError:
-                if attempt == 2 or time.monotonic() > deadline:
+                if viewer.poll() is not None or time.monotonic() > deadline:
                     raise
         assert is_gold(gold)
         time.sleep(1.0)
