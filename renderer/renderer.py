@@ -256,12 +256,15 @@ class Renderer:
         key = (integrator, features, sampler)
         if key not in self._packet_reasons:
             from renderer.lights.lights import emitter_table
+            from renderer.materials.kinds import NO_TEXTURE
             from renderer.packets.support import unsupported
 
             emitters = (emitter_table(self.geometry, self.materials.arrays)["prim"] if self.scene.geometry == "mesh"
                         else ())
+            textured_emission = (self.scene.geometry == "mesh"
+                                 and bool((self.materials.arrays["textures"][:, 3] != NO_TEXTURE).any()))
             self._packet_reasons[key] = unsupported(self.geometry, features, integrator, sampler,
-                                                    self.aovs is not None, emitters)
+                                                    self.aovs is not None, emitters, textured_emission)
         return self._packet_reasons[key]
 
     def _packet_program(self, chosen, features: Features, key: tuple):

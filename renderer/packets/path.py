@@ -1,11 +1,14 @@
 """The path tracer (`path`, `nee`, `mis`) for a packet of camera rays, lane by lane: the estimator
-of renderer/integrators/tracer.py for the scenes renderer/packets/support.py admits (untextured
-materials, shading normals or not, emissive triangles and quads, any environment, no media).
+of renderer/integrators/tracer.py for the scenes renderer/packets/support.py admits (every material
+kind but the null boundary, textures, maps and shading normals, emissive triangles and quads of
+one colour, any environment, no media).
 
-Lambert surfaces are shaded in lane arithmetic. Lanes on any other kind of material (`general`,
-compiled only where the scene has such kinds) take the scalar BSDF (renderer/materials/bsdf.py),
-one lane after another in a run-time loop: its value and density toward the light sample and its
-own sample, with the same random numbers per decision as the scalar tracer. Traversal, light
+Lambert surfaces are shaded in lane arithmetic. Lanes on any other kind of material, and every
+lane where the look of a surface point needs the geometry's own record (textures, maps, shading
+normals: the program's surface_records), are `general`: compiled only where a scene has them,
+they take the scalar BSDF (renderer/materials/bsdf.py) one lane after another in a run-time loop:
+its value and density toward the light sample and its own sample, with the same random numbers
+per decision as the scalar tracer. Rays carry cones for texture filtering as the scalar path's. Traversal, light
 selection, emission, MIS and roulette stay packet-wide for every lane.
 
 Every lane is a path; the packet takes its vertices together (one closest-hit trace, then one
@@ -57,15 +60,16 @@ def leave(px, py, pz, nx, ny, nz, eps, toward):
 
 @ti.func
 def _general_lanes(ctx: ti.template(), toward_light: ti.template(), key, dim, general, ox, oy, oz, t, b1, b2,
-                   prim, px, py, pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz, v1, v2, bsdf_pdf, usable, bx,
-                   by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta):
+                   prim, cone, spread, px, py, pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz, v1, v2, bsdf_pdf,
+                   usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta):
     """The lanes of `general` (materials other than Lambert's) through the scalar BSDF, one after
     another (a run-time loop: the BSDF's code is compiled once, not once a lane): with
     toward_light, f cos and the density toward the light direction w (0 where the material has no
     smooth part, as the scalar tracer samples no light there); then the BSDF's own sample, from
-    the numbers (BSDF_LOBE, v1, v2) the scalar tracer draws. The ray (o) and its hit (t, b1, b2,
-    prim) make the geometry's own surface record where the mesh has shading normals (otherwise the
-    record is the point's and its geometric normal's). Returns the lanes given, with the general
+    the numbers (BSDF_LOBE, v1, v2) the scalar tracer draws. The ray (o, its cone's width and
+    spread) and its hit (t, b1, b2, prim) make the geometry's own surface record where the program
+    takes surface records (otherwise the record is the point's and its geometric normal's, all an
+    untextured material reads of it). Returns the lanes given, with the general
     lanes' values in place: (f cos rgb, bsdf_pdf, usable, the next direction xyz, its
     weight rgb, pdf, valid, delta)."""
     gr, gg, gb = wx * 0.0, wx * 0.0, wx * 0.0
@@ -75,12 +79,12 @@ def _general_lanes(ctx: ti.template(), toward_light: ti.template(), key, dim, ge
             n = ti.math.vec3(nx[k], ny[k], nz[k])
             wo = -ti.math.vec3(dx[k], dy[k], dz[k])
             surface = Surface()
-            if ti.static(ctx.geometry.has_normals):
+            if ti.static(ctx.surface_records):
                 surface = ctx.geometry.surface(
-                    Ray(o=ti.math.vec3(ox[k], oy[k], oz[k]), d=-wo, cone_width=0.0, cone_spread=0.0),
+                    Ray(o=ti.math.vec3(ox[k], oy[k], oz[k]), d=-wo, cone_width=cone[k], cone_spread=spread[k]),
                     Hit(hit=1, t=t[k], prim=prim[k], bary=ti.math.vec2(b1[k], b2[k]), instance=-1))
                 n = surface.n_geo
-            else:  # what shade reads of a record without shading normals or textures
+            else:  # what shade reads of a record without shading normals, textures or maps
                 surface = Surface(p=ti.math.vec3(px[k], py[k], pz[k]), n_geo=n, n_shading=n, material=material[k],
                                   front_face=ti.select(wo.dot(n) > 0.0, 1, 0))
             mat, ns = ctx.bsdf.shade(surface, wo)
@@ -103,8 +107,9 @@ def _general_lanes(ctx: ti.template(), toward_light: ti.template(), key, dim, ge
 
 
 @ti.func
-def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_depth):
-    """The radiance (rgb lanes) of the camera rays (o, d) of the live lanes, the work done:
+def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in, max_depth):
+    """The radiance (rgb lanes) of the camera rays (o, d) of the live lanes (their cones widening
+    by `spread` a unit of length, from nothing at the camera), the work done:
     (node visits, primitive tests, rays) lanes, the packet's visits and tests counted in every
     lane that took part, the packet's occupancy: (closest-hit traces, the live lanes they
     carried, shadow traces, their live lanes), and the sum of the lanes lanes.seeded read, which
@@ -114,6 +119,7 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
     has_general = ti.static(ctx.has_general)
     geometry = ctx.geometry
     zero = ox * 0.0
+    cone = zero  # each ray's cone's width where it starts
     prim_none = ti.select(live_in < 0, -1, -1)
     lr, lg, lb = zero, zero, zero
     tr, tg, tb = zero + 1.0, zero + 1.0, zero + 1.0
@@ -201,7 +207,7 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
         general = live * 0
         if ti.static(has_general):
             # every lane where the mesh has shading normals (Lambert's lanes know only the geometric one)
-            general = live if ti.static(geometry.has_normals) else live & mask(kind != DIFFUSE)
+            general = live if ti.static(ctx.surface_records) else live & mask(kind != DIFFUSE)
         # the next direction's numbers; a Lambert lane's direction, cosine-weighted about its side's
         # normal (not computed where shading normals send every lane to the scalar BSDF)
         v1, v2 = uniform2(key, dim + dims.BSDF_DIRECTION)
@@ -210,7 +216,7 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
         next_pdf = zero
         next_valid = live * 0
         next_delta = live * 0
-        if ti.static(not geometry.has_normals):
+        if ti.static(not ctx.surface_records):
             cos_t = zero
             bx, by, bz, cos_t = cosine_hemisphere(v1, v2, fx, fy, fz)
             next_pdf = cos_t * INV_PI
@@ -227,10 +233,10 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
             if ti.static(has_general):
                 if any_lane(general):
                     gr, gg, gb, bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, \
-                        next_delta = _general_lanes(ctx, True, key, dim, general, ox, oy, oz, t, b1, b2, prim, px, py,
-                                                    pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz, v1, v2, bsdf_pdf,
-                                                    usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf,
-                                                    next_valid, next_delta)
+                        next_delta = _general_lanes(ctx, True, key, dim, general, ox, oy, oz, t, b1, b2, prim, cone,
+                                                    spread, px, py, pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz,
+                                                    v1, v2, bsdf_pdf, usable, bx, by, bz, weight_r, weight_g,
+                                                    weight_b, next_pdf, next_valid, next_delta)
             scale = zero + 1.0 / ti.max(pdf, 1e-30)
             if ti.static(use_mis):
                 scale *= power_heuristic(pdf, bsdf_pdf)
@@ -278,13 +284,15 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, live_in, max_de
             if any_lane(general):
                 no_light = live * 0
                 _r, _g, _b, _p, _u, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta = \
-                    _general_lanes(ctx, False, key, dim, general, ox, oy, oz, t, b1, b2, prim, px, py, pz, nx, ny, nz,
-                                   dx, dy, dz, material, zero, zero, zero, v1, v2, zero, no_light, bx, by, bz,
-                                   weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta)
+                    _general_lanes(ctx, False, key, dim, general, ox, oy, oz, t, b1, b2, prim, cone, spread, px, py,
+                                   pz, nx, ny, nz, dx, dy, dz, material, zero, zero, zero, v1, v2, zero, no_light, bx,
+                                   by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta)
         # the next direction
         live &= next_valid
         tr, tg, tb = tr * weight_r, tg * weight_g, tb * weight_b
         prev_x, prev_y, prev_z = px, py, pz
+        if ti.static(ctx.filters_textures):
+            cone = cone + spread * t  # the next ray's cone starts as wide as this one arrived (Surface.cone_width)
         prev_pdf = next_pdf
         prev_delta = next_delta
         ox, oy, oz = leave(px, py, pz, nx, ny, nz, eps, bx * nx + by * ny + bz * nz)

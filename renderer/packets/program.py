@@ -16,7 +16,8 @@ from renderer.film.band_table import pass_layout, pass_pixel
 from renderer.film.pixel_slices import BANDS, ROUND_SLICES
 from renderer.materials.bsdf import Bsdf
 from renderer.packets.path import trace_paths, uniform2
-from renderer.packets.support import scalar_bounces
+from renderer.geometry.texture_footprint import footprint_shrink
+from renderer.packets.support import SURFACE_FEATURES, scalar_bounces
 from renderer.sampling import dims
 from renderer.sampling.rng import sample_key
 
@@ -42,10 +43,15 @@ class PacketProgram:
         self.lights = lights
         self.bands = bands
         self.width = width
-        # The scalar BSDF, for the lanes on materials other than Lambert's and every lane of a mesh
-        # with shading normals (renderer/packets/path.py); None where neither is found, which then
-        # compile none of it
-        self.has_general = bool(set(features.material_kinds) - {"diffuse"}) or geometry.has_normals
+        # Every lane takes the geometry's own surface record and the scalar BSDF where what the
+        # surface point looks like varies over a primitive or needs more than its kind and base colour
+        # (shading normals, textures, maps, vertex colours, mixes, anisotropic frames, one-sided faces)
+        self.surface_records = geometry.has_normals or any(getattr(features, name) for name in SURFACE_FEATURES)
+        # The scalar BSDF, for those lanes and the lanes on materials other than Lambert's
+        # (renderer/packets/path.py); None where neither is found, which then compile none of it
+        self.has_general = bool(set(features.material_kinds) - {"diffuse"}) or self.surface_records
+        # Rays carry cones (the pixel's footprint) where textures are filtered, as RenderProgram's
+        self.filters_textures = getattr(geometry, "filters_textures", False)
         self.bsdf = Bsdf(materials, features) if self.has_general else None
         self.scalar_bounces = scalar_bounces(geometry)  # a large world's incoherent rays: one lane at a time
         self._make_scalar = make_scalar
@@ -125,6 +131,11 @@ class PacketProgram:
                     jx, jy = uniform2(key, dims.PIXEL)
                     ox, oy, oz = jx * 0.0, jx * 0.0, jx * 0.0
                     dx, dy, dz = jx * 0.0, jx * 0.0, jx * 0.0
+                    # The cone's spread (RenderProgram's: a pixel's angle, narrowing as its samples accumulate)
+                    spread = jx * 0.0
+                    if ti.static(self.filters_textures):
+                        for k in range(lanes):
+                            spread[k] = 2.0 * half_height / full_height * footprint_shrink(first[k] + s)
                     u = 2.0 * (ti.cast(xs + window_x, ti.f32) + jx) / full_width - 1.0
                     v = 2.0 * (ti.cast(ys + window_y, ti.f32) + jy) / full_height - 1.0
                     for k in range(lanes):
@@ -133,7 +144,7 @@ class PacketProgram:
                         ox[k], oy[k], oz[k] = o.x, o.y, o.z
                         dx[k], dy[k], dz[k] = d.x, d.y, d.z
                     r, g, b, visits, tests, rays, occupancy, seeds = trace_paths(self, key, ox, oy, oz, dx, dy, dz,
-                                                                                 valid, max_depth)
+                                                                                 spread, valid, max_depth)
                     traces += occupancy
                     self._seeds[None] = seeds
                     work_v += visits

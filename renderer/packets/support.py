@@ -12,13 +12,14 @@ PACKET_INTEGRATORS = ("path", "nee", "mis")
 # Lambert's in lane arithmetic; the others through the scalar BSDF lane by lane (renderer/packets/path.py).
 # Not the null boundary, whose crossing the scalar tracer counts apart from bounces.
 PACKET_MATERIALS = frozenset(kind.name for kind in KINDS) - {"null"}
+# Features the scalar BSDF takes care of at the geometry's own surface record: with any of them on,
+# every lane is shaded through it (renderer/packets/program.py)
+SURFACE_FEATURES = ("has_textures", "has_normal_maps", "has_mapped_frames", "has_bump_maps", "has_anisotropy",
+                    "has_mixes", "has_vertex_colors", "has_sidedness")
 # Features that must be off, with the words that say so
-_EFFECTS = (("has_textures", "textures"), ("has_normal_maps", "normal maps"), ("has_mapped_frames", "normal or bump maps"),
-            ("has_bump_maps", "bump maps"), ("has_anisotropy", "anisotropic materials"), ("has_mixes", "material mixes"),
-            ("has_media", "participating media"), ("analytic_fog", "fog"), ("has_dispersion", "dispersion"),
-            ("has_alpha", "alpha coverage"), ("has_vertex_colors", "vertex colours"), ("has_instances", "instances"),
+_EFFECTS = (("has_media", "participating media"), ("analytic_fog", "fog"), ("has_dispersion", "dispersion"),
+            ("has_alpha", "alpha coverage"), ("has_instances", "instances"),
             ("has_flipped_normals", "turned-over normals"), ("has_thin", "thin walls"),
-            ("has_sidedness", "one-sided materials"),
             ("depth_of_field", "depth of field"), ("orthographic", "an orthographic camera"),
             ("has_light_textures", "light textures"))
 PACKET_WIDTHS = (4, 8, 16)
@@ -41,8 +42,11 @@ def on_cpu() -> bool:
     return ti.lang.impl.current_cfg().arch in (ti.x64, ti.arm64)
 
 
-def unsupported(geometry, features, integrator: str, sampler: str, keeps_aovs: bool, emitter_prims) -> str | None:
-    """None where the packet path renders this combination, else why not (a short phrase)."""
+def unsupported(geometry, features, integrator: str, sampler: str, keeps_aovs: bool, emitter_prims,
+                textured_emission: bool = False) -> str | None:
+    """None where the packet path renders this combination, else why not (a short phrase).
+    textured_emission: a material's emission is textured (the packet path's lights emit their
+    material's one colour)."""
     if not on_cpu():
         return "the packet path is for the CPU (GPUs run 32 lanes of their own)"
     if features.geometry != "mesh":
@@ -64,6 +68,8 @@ def unsupported(geometry, features, integrator: str, sampler: str, keeps_aovs: b
     for name, words in _EFFECTS:
         if getattr(features, name):
             return f"no packet form for {words}"
+    if textured_emission:
+        return "no packet form for textured emission"
     if features.light_kinds:
         return "point, spot and directional lights have no packet form"
     if features.pixel_filter[0] != "box":
