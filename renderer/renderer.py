@@ -253,7 +253,8 @@ class Renderer:
     def packet_reason(self, integrator: str, features: Features, sampler: str) -> str | None:
         """Why this combination renders one ray at a time though packets were asked for (None:
         it takes packets)."""
-        key = (integrator, features, sampler)
+        feature_samples = self.aovs is not None and (self.feature_boost > 0 or self.scene_feature_boost > 0)
+        key = (integrator, features, sampler, feature_samples)
         if key not in self._packet_reasons:
             from renderer.lights.lights import emitter_table
             from renderer.materials.kinds import NO_TEXTURE
@@ -264,7 +265,7 @@ class Renderer:
             textured_emission = (self.scene.geometry == "mesh"
                                  and bool((self.materials.arrays["textures"][:, 3] != NO_TEXTURE).any()))
             self._packet_reasons[key] = unsupported(self.geometry, features, integrator, sampler,
-                                                    self.aovs is not None, emitters, textured_emission)
+                                                    feature_samples, emitters, textured_emission)
         return self._packet_reasons[key]
 
     def _packet_program(self, chosen, features: Features, key: tuple):
@@ -283,8 +284,8 @@ class Renderer:
                                  features, make_sampler(key[2]), self.lights() if chosen.uses_lights else None,
                                  self.media, self.aovs, self.bands, key[3])
 
-        return PacketProgram(self.geometry, self._packet_records, self.materials, self.environment, chosen, self.film, self.work, features,
-                             self._packet_lights, self.bands, key[4], scalar)
+        return PacketProgram(self.geometry, self._packet_records, self.materials, self.environment, chosen, self.film,
+                             self.work, features, self._packet_lights, self.bands, key[4], scalar, self.aovs)
 
     def lights(self):
         """The scene's emitters for direct lighting, built on first use (light selection structures

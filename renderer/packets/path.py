@@ -20,6 +20,7 @@ faces where the material says so) are the scalar tracer's; light selection is Pa
 import taichi as ti
 
 from renderer.geometry.interface import INF, Hit, Ray, Surface
+from renderer.geometry.shading import MIN_SHADING_COSINE, consistent_shading_normal
 from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
 from renderer.materials.kinds import KIND_IDS
 from renderer.packets import traversal
@@ -59,9 +60,9 @@ def leave(px, py, pz, nx, ny, nz, eps, toward):
 
 
 @ti.func
-def _general_lanes(ctx: ti.template(), toward_light: ti.template(), key, dim, general, ox, oy, oz, t, b1, b2,
-                   prim, cone, spread, px, py, pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz, v1, v2, bsdf_pdf,
-                   usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta):
+def _general_lanes(ctx: ti.template(), toward_light: ti.template(), last, key, dim, general, ox, oy, oz, t, b1,
+                   b2, prim, cone, spread, px, py, pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz, v1, v2,
+                   bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta):
     """The lanes of `general` (materials other than Lambert's) through the scalar BSDF, one after
     another (a run-time loop: the BSDF's code is compiled once, not once a lane): with
     toward_light, f cos and the density toward the light direction w (0 where the material has no
@@ -69,10 +70,14 @@ def _general_lanes(ctx: ti.template(), toward_light: ti.template(), key, dim, ge
     the numbers (BSDF_LOBE, v1, v2) the scalar tracer draws. The ray (o, its cone's width and
     spread) and its hit (t, b1, b2, prim) make the geometry's own surface record where the program
     takes surface records (otherwise the record is the point's and its geometric normal's, all an
-    untextured material reads of it). Returns the lanes given, with the general
-    lanes' values in place: (f cos rgb, bsdf_pdf, usable, the next direction xyz, its
-    weight rgb, pdf, valid, delta)."""
+    untextured material reads of it). `last`: the path's last vertex, which only shades (for its
+    AOVs). Returns the lanes given, with the general lanes' values in place: (f cos rgb, bsdf_pdf,
+    usable, the next direction xyz, its weight rgb, pdf, valid, delta), then the general lanes'
+    AOV albedo rgb and shading normal xyz and whether the material has a smooth part."""
     gr, gg, gb = wx * 0.0, wx * 0.0, wx * 0.0
+    albedo_r, albedo_g, albedo_b = wx * 0.0, wx * 0.0, wx * 0.0
+    shading_x, shading_y, shading_z = wx * 0.0, wx * 0.0, wx * 0.0
+    smooth = general * 0
     lobe = uniform(key, dim + dims.BSDF_LOBE)
     for k in range(general.n):
         if general[k] == 1:
@@ -85,25 +90,32 @@ def _general_lanes(ctx: ti.template(), toward_light: ti.template(), key, dim, ge
                     Hit(hit=1, t=t[k], prim=prim[k], bary=ti.math.vec2(b1[k], b2[k]), instance=-1))
                 n = surface.n_geo
             else:  # what shade reads of a record without shading normals, textures or maps
-                surface = Surface(p=ti.math.vec3(px[k], py[k], pz[k]), n_geo=n, n_shading=n, material=material[k],
+                surface = Surface(p=ti.math.vec3(px[k], py[k], pz[k]), n_geo=n,
+                                  n_shading=consistent_shading_normal(n, n, wo), material=material[k],
                                   front_face=ti.select(wo.dot(n) > 0.0, 1, 0))
             mat, ns = ctx.bsdf.shade(surface, wo)
-            if ti.static(toward_light):
-                value = ti.math.vec3(0.0)
-                density = 0.0
-                if ctx.bsdf.has_smooth_part(mat):
-                    value, density = ctx.bsdf.eval_at(mat, ns, n, wo, ti.math.vec3(wx[k], wy[k], wz[k]))
-                gr[k], gg[k], gb[k] = value.x, value.y, value.z
-                bsdf_pdf[k] = density
-                usable[k] = ti.select(value.max() > 0.0, 1, 0)
-            bs = ctx.bsdf.sample_at(mat, ns, n, wo, lobe[k], ti.math.vec2(v1[k], v2[k]))
-            bx[k], by[k], bz[k] = bs.wi.x, bs.wi.y, bs.wi.z
-            weight_r[k], weight_g[k], weight_b[k] = bs.weight.x, bs.weight.y, bs.weight.z
-            next_pdf[k] = bs.pdf
-            next_valid[k] = bs.valid
-            next_delta[k] = bs.delta
+            has_smooth = ctx.bsdf.has_smooth_part(mat)
+            colour = ctx.bsdf.albedo(mat)
+            albedo_r[k], albedo_g[k], albedo_b[k] = colour.x, colour.y, colour.z
+            shading_x[k], shading_y[k], shading_z[k] = ns.x, ns.y, ns.z
+            smooth[k] = ti.select(has_smooth, 1, 0)
+            if not last:
+                if ti.static(toward_light):
+                    value = ti.math.vec3(0.0)
+                    density = 0.0
+                    if has_smooth:
+                        value, density = ctx.bsdf.eval_at(mat, ns, n, wo, ti.math.vec3(wx[k], wy[k], wz[k]))
+                    gr[k], gg[k], gb[k] = value.x, value.y, value.z
+                    bsdf_pdf[k] = density
+                    usable[k] = ti.select(value.max() > 0.0, 1, 0)
+                bs = ctx.bsdf.sample_at(mat, ns, n, wo, lobe[k], ti.math.vec2(v1[k], v2[k]))
+                bx[k], by[k], bz[k] = bs.wi.x, bs.wi.y, bs.wi.z
+                weight_r[k], weight_g[k], weight_b[k] = bs.weight.x, bs.weight.y, bs.weight.z
+                next_pdf[k] = bs.pdf
+                next_valid[k] = bs.valid
+                next_delta[k] = bs.delta
     return (gr, gg, gb, bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid,
-            next_delta)
+            next_delta, albedo_r, albedo_g, albedo_b, shading_x, shading_y, shading_z, smooth)
 
 
 @ti.func
@@ -131,6 +143,12 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
     bounces = 0
     seeds = 0.0
     occupancy = ti.math.ivec4(0)
+    # The denoiser's AOVs (RenderProgram's, where kept): the first vertex with a smooth part's albedo,
+    # scaled by the delta bounces' weights before it, and its shading normal
+    aovs = ti.static(ctx.writes_aovs)
+    aov_r, aov_g, aov_b, aov_nx, aov_ny, aov_nz = zero, zero, zero, zero, zero, zero
+    aov_wr, aov_wg, aov_wb = zero + 1.0, zero + 1.0, zero + 1.0
+    aov_open = live_in
     for _ in range(MAX_VERTICES):
         if not any_lane(live):
             break
@@ -165,6 +183,18 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
                 lr += ti.select(missed == 1, tr * weight * vr, 0.0)
                 lg += ti.select(missed == 1, tg * weight * vg, 0.0)
                 lb += ti.select(missed == 1, tb * weight * vb, 0.0)
+                if ti.static(aovs):  # the background, as far as an albedo goes
+                    seen = (missed == 1) & (aov_open == 1)
+                    aov_r = ti.select(seen, aov_wr * ti.math.clamp(vr, 0.0, 1.0), aov_r)
+                    aov_g = ti.select(seen, aov_wg * ti.math.clamp(vg, 0.0, 1.0), aov_g)
+                    aov_b = ti.select(seen, aov_wb * ti.math.clamp(vb, 0.0, 1.0), aov_b)
+        if ti.static(aovs):
+            seen = (missed == 1) & (aov_open == 1)
+            if ti.static(not ctx.lights.has_env):  # a black background
+                aov_r, aov_g, aov_b = (ti.select(seen, 0.0, aov_r), ti.select(seen, 0.0, aov_g),
+                                       ti.select(seen, 0.0, aov_b))
+            aov_nx, aov_ny, aov_nz = (ti.select(seen, 0.0, aov_nx), ti.select(seen, 0.0, aov_ny),
+                                      ti.select(seen, 0.0, aov_nz))
         live &= mask(prim >= 0)
         if not any_lane(live):
             break
@@ -199,17 +229,23 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
             lr += ti.select(emits == 1, tr * weight * er, 0.0)
             lg += ti.select(emits == 1, tg * weight * eg, 0.0)
             lb += ti.select(emits == 1, tb * weight * eb, 0.0)
-        if max_depth >= 0 and bounces + 1 >= max_depth:
-            break
+        general = live * 0
+        if ti.static(has_general):
+            # every lane where the program takes surface records (Lambert's lanes know only the geometric normal)
+            general = live if ti.static(ctx.surface_records) else live & mask(kind != DIFFUSE)
+        # The last vertex ends the path here, or once its open AOVs are known (below)
+        last = max_depth >= 0 and bounces + 1 >= max_depth
+        if last:
+            if ti.static(aovs):
+                if not any_lane(live & aov_open):
+                    break
+            else:
+                break
         # the Lambert lobe on wo's side of the surface
         side = ti.select(cos_o >= 0.0, 1.0, -1.0)
         fx, fy, fz = side * nx, side * ny, side * nz
-        general = live * 0
-        if ti.static(has_general):
-            # every lane where the mesh has shading normals (Lambert's lanes know only the geometric one)
-            general = live if ti.static(ctx.surface_records) else live & mask(kind != DIFFUSE)
         # the next direction's numbers; a Lambert lane's direction, cosine-weighted about its side's
-        # normal (not computed where shading normals send every lane to the scalar BSDF)
+        # normal (not computed where surface records send every lane to the scalar BSDF)
         v1, v2 = uniform2(key, dim + dims.BSDF_DIRECTION)
         bx, by, bz = zero, zero, zero
         weight_r, weight_g, weight_b = ar, ag, ab
@@ -221,22 +257,60 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
             bx, by, bz, cos_t = cosine_hemisphere(v1, v2, fx, fy, fz)
             next_pdf = cos_t * INV_PI
             next_valid = mask(cos_t > 0.0)
+        # the light sample (none at the last vertex)
+        wx, wy, wz, pdf, qx, qy, qz, qnx, qny, qnz, rr, rg, rb = zero, zero, zero, zero, zero, zero, zero, zero, zero, \
+            zero, zero, zero, zero
+        light = prim_none
+        cos_i = zero
+        bsdf_pdf = zero
+        usable = live * 0
         if ti.static(light_sampling):
-            u1, u2 = uniform2(key, dim + dims.LIGHT_POINT)
-            wx, wy, wz, dist, pdf, qx, qy, qz, qnx, qny, qnz, rr, rg, rb, light = ctx.lights.sample(
-                px, py, pz, uniform(key, dim + dims.LIGHT_SELECT), u1, u2)
-            cos_i = wx * fx + wy * fy + wz * fz
-            bsdf_pdf = cos_i * INV_PI
-            usable = mask(cos_i > 0.0)
-            # f cos toward the light of general lanes (Lambert lanes' is albedo * cos_i / pi)
-            gr, gg, gb = zero, zero, zero
-            if ti.static(has_general):
-                if any_lane(general):
-                    gr, gg, gb, bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, \
-                        next_delta = _general_lanes(ctx, True, key, dim, general, ox, oy, oz, t, b1, b2, prim, cone,
-                                                    spread, px, py, pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz,
-                                                    v1, v2, bsdf_pdf, usable, bx, by, bz, weight_r, weight_g,
-                                                    weight_b, next_pdf, next_valid, next_delta)
+            if not last:
+                u1, u2 = uniform2(key, dim + dims.LIGHT_POINT)
+                wx, wy, wz, dist, pdf, qx, qy, qz, qnx, qny, qnz, rr, rg, rb, light = ctx.lights.sample(
+                    px, py, pz, uniform(key, dim + dims.LIGHT_SELECT), u1, u2)
+                cos_i = wx * fx + wy * fy + wz * fz
+                bsdf_pdf = cos_i * INV_PI
+                usable = mask(cos_i > 0.0)
+        # General lanes: f cos toward the light (Lambert lanes' is albedo * cos_i / pi), their own
+        # sample, and what their AOVs are
+        gr, gg, gb = zero, zero, zero
+        albedo_r, albedo_g, albedo_b = ar, ag, ab
+        shading_x, shading_y, shading_z = nx, ny, nz
+        smooth = live
+        if ti.static(aovs):  # a Lambert lane's shading normal: the geometric one, kept off grazing (shading.py)
+            c = ti.abs(cos_o)
+            bend = ti.select(c < MIN_SHADING_COSINE, side * (MIN_SHADING_COSINE - c), 0.0)
+            sx, sy, sz = nx - bend * dx, ny - bend * dy, nz - bend * dz
+            inv = 1.0 / ti.sqrt(ti.max(sx * sx + sy * sy + sz * sz, 1e-30))
+            shading_x, shading_y, shading_z = sx * inv, sy * inv, sz * inv
+        if ti.static(has_general):
+            if any_lane(general):
+                gr, gg, gb, bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, \
+                    next_delta, g_albedo_r, g_albedo_g, g_albedo_b, g_x, g_y, g_z, g_smooth = _general_lanes(
+                        ctx, ti.static(light_sampling), last, key, dim, general, ox, oy, oz, t, b1, b2, prim, cone,
+                        spread, px, py, pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz, v1, v2, bsdf_pdf, usable,
+                        bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta)
+                is_general = general == 1
+                albedo_r = ti.select(is_general, g_albedo_r, albedo_r)
+                albedo_g = ti.select(is_general, g_albedo_g, albedo_g)
+                albedo_b = ti.select(is_general, g_albedo_b, albedo_b)
+                shading_x = ti.select(is_general, g_x, shading_x)
+                shading_y = ti.select(is_general, g_y, shading_y)
+                shading_z = ti.select(is_general, g_z, shading_z)
+                smooth = ti.select(is_general, g_smooth, smooth)
+        if ti.static(aovs):
+            # the first vertex with a smooth part closes the AOVs; a delta vertex stands in until then
+            here = (live == 1) & (aov_open == 1)
+            aov_r = ti.select(here, aov_wr * albedo_r, aov_r)
+            aov_g = ti.select(here, aov_wg * albedo_g, aov_g)
+            aov_b = ti.select(here, aov_wb * albedo_b, aov_b)
+            aov_nx, aov_ny, aov_nz = (ti.select(here, shading_x, aov_nx), ti.select(here, shading_y, aov_ny),
+                                      ti.select(here, shading_z, aov_nz))
+            aov_open = ti.select(here & (smooth == 1), 0, aov_open)
+        if last:
+            break
+        if ti.static(light_sampling):
             scale = zero + 1.0 / ti.max(pdf, 1e-30)
             if ti.static(use_mis):
                 scale *= power_heuristic(pdf, bsdf_pdf)
@@ -280,16 +354,14 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
                     lr += ti.select(add, tr * ar * f * rr, 0.0)
                     lg += ti.select(add, tg * ag * f * rg, 0.0)
                     lb += ti.select(add, tb * ab * f * rb, 0.0)
-        if ti.static(has_general and not light_sampling):
-            if any_lane(general):
-                no_light = live * 0
-                _r, _g, _b, _p, _u, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta = \
-                    _general_lanes(ctx, False, key, dim, general, ox, oy, oz, t, b1, b2, prim, cone, spread, px, py,
-                                   pz, nx, ny, nz, dx, dy, dz, material, zero, zero, zero, v1, v2, zero, no_light, bx,
-                                   by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta)
         # the next direction
         live &= next_valid
         tr, tg, tb = tr * weight_r, tg * weight_g, tb * weight_b
+        if ti.static(aovs):
+            still = (live == 1) & (aov_open == 1)
+            aov_wr, aov_wg, aov_wb = (ti.select(still, aov_wr * weight_r, aov_wr),
+                                      ti.select(still, aov_wg * weight_g, aov_wg),
+                                      ti.select(still, aov_wb * weight_b, aov_wb))
         prev_x, prev_y, prev_z = px, py, pz
         if ti.static(ctx.filters_textures):
             cone = cone + spread * t  # the next ray's cone starts as wide as this one arrived (Surface.cone_width)
@@ -320,4 +392,4 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
         prev_pdf, s12 = seeded(prev_pdf, j)
         seeds += s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7 + s8 + s9 + s10 + s11 + s12
         bounces += 1
-    return lr, lg, lb, visits, tests, rays, occupancy, seeds
+    return lr, lg, lb, visits, tests, rays, occupancy, seeds, (aov_r, aov_g, aov_b, aov_nx, aov_ny, aov_nz)

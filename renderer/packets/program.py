@@ -25,13 +25,13 @@ from renderer.sampling.rng import sample_key
 @ti.data_oriented
 class PacketProgram:
     sliced = True  # its passes are pixel slices, as RenderProgram's
-    writes_aovs = False
     feature_samples = False
 
     def __init__(self, geometry, records, materials, environment, integrator, film, work, features, lights, bands,
-                 width, make_scalar):
+                 width, make_scalar, aovs=None):
         """records: PrimitiveRecords; lights: PacketLights; width: rays a packet (8: AVX2's lanes; 16: AVX-512's);
-        make_scalar: builds the scalar RenderProgram of the same combination (picking)."""
+        make_scalar: builds the scalar RenderProgram of the same combination (picking); aovs: the
+        denoiser's AovFilm, written as RenderProgram writes it (no feature samples), or None."""
         self.geometry = geometry
         self.records = records
         self.materials = materials
@@ -43,6 +43,8 @@ class PacketProgram:
         self.lights = lights
         self.bands = bands
         self.width = width
+        self.aovs = aovs
+        self.writes_aovs = aovs is not None
         # Every lane takes the geometry's own surface record and the scalar BSDF where what the
         # surface point looks like varies over a primitive or needs more than its kind and base colour
         # (shading normals, textures, maps, vertex colours, mixes, anisotropic frames, one-sided faces)
@@ -86,9 +88,9 @@ class PacketProgram:
 
     def render(self, width: int, height: int, spp: int, slice_first: int, slice_count: int, order: int,
                *rest, feature_boost: int = 0, window=None) -> None:
-        """RenderProgram.render's contract (no feature samples: AOVs are not kept here)."""
+        """RenderProgram.render's contract (no feature samples: those scenes render one ray at a time)."""
         if feature_boost > 0:
-            raise ValueError("feature samples asked of a packet program (it keeps no AOVs)")
+            raise ValueError("feature samples asked of a packet program (it has none)")
         if order == BANDS and slice_count < ROUND_SLICES:
             self.bands.set_height(height)
         window_args = window.kernel_args if window is not None else (width, height, 0, 0)
@@ -143,8 +145,8 @@ class PacketProgram:
                                            self.features.orthographic)
                         ox[k], oy[k], oz[k] = o.x, o.y, o.z
                         dx[k], dy[k], dz[k] = d.x, d.y, d.z
-                    r, g, b, visits, tests, rays, occupancy, seeds = trace_paths(self, key, ox, oy, oz, dx, dy, dz,
-                                                                                 spread, valid, max_depth)
+                    r, g, b, visits, tests, rays, occupancy, seeds, aov = trace_paths(self, key, ox, oy, oz, dx, dy,
+                                                                                      dz, spread, valid, max_depth)
                     traces += occupancy
                     self._seeds[None] = seeds
                     work_v += visits
@@ -153,6 +155,9 @@ class PacketProgram:
                     for k in range(lanes):
                         if valid[k] == 1:
                             self.film.add_sample(xs[k], ys[k], ti.math.vec3(r[k], g[k], b[k]))
+                            if ti.static(self.writes_aovs):
+                                self.aovs.add(xs[k], ys[k], ti.math.vec3(aov[0][k], aov[1][k], aov[2][k]),
+                                              ti.math.vec3(aov[3][k], aov[4][k], aov[5][k]))
                 for j in ti.static(range(4)):
                     self.traces[j] += ti.cast(traces[j], ti.i64)  # one atomic add a packet
                 for k in range(lanes):

@@ -42,9 +42,10 @@ def on_cpu() -> bool:
     return ti.lang.impl.current_cfg().arch in (ti.x64, ti.arm64)
 
 
-def unsupported(geometry, features, integrator: str, sampler: str, keeps_aovs: bool, emitter_prims,
+def unsupported(geometry, features, integrator: str, sampler: str, feature_samples: bool, emitter_prims,
                 textured_emission: bool = False) -> str | None:
     """None where the packet path renders this combination, else why not (a short phrase).
+    feature_samples: the AOVs are kept with feature samples (renderer/film/aovs.py).
     textured_emission: a material's emission is textured (the packet path's lights emit their
     material's one colour)."""
     if not on_cpu():
@@ -55,8 +56,8 @@ def unsupported(geometry, features, integrator: str, sampler: str, keeps_aovs: b
         return f"the {integrator} integrator has no packet form"
     if sampler != "independent":
         return f"the {sampler} sampler has no packet form"
-    if keeps_aovs:
-        return "the denoiser's AOVs are not written by packets"
+    if feature_samples:
+        return "the denoiser's feature samples (textured scenes' AOVs) have no packet form"
     if getattr(geometry, "traversal", "") not in ("wide4", "wide8"):
         return f"the {geometry.traversal} traversal has no packet form"
     kinds = set(geometry.kinds)
