@@ -26,6 +26,7 @@ def taichi_runtime():
 # compiled) then ran alone at the end while the other core idled. Longest first shortens the run.
 LONGEST_FILES = (  # a cold run's order (clean offline cache, as in CI)
     "tests/commands/distributed/test_ray_render.py",
+    "tests/packets/test_packet_shading.py",
     "tests/viewer/test_window_offscreen.py",
     "tests/render/test_glass_furnace.py",
     "tests/render/test_integrator_agreement.py",
