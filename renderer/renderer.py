@@ -245,15 +245,18 @@ class Renderer:
         """A program's cache key: the combination, and whether its kernel has the AOVs' feature
         samples compiled in: where the scene calls for them (its textures), so the viewer's toggle
         of the denoised view compiles nothing, or where feature_boost asks for them elsewhere."""
-        return (integrator, features, sampler, self.aovs is not None and (self.feature_boost > 0
-                                                                           or self.scene_feature_boost > 0),
+        return (integrator, features, sampler, self._feature_samples(),
                 self.packet_width if self.packet_width and self.packet_reason(integrator, features, sampler) is None
                 else 0)
+
+    def _feature_samples(self) -> bool:
+        """Whether kernels take the AOVs' feature samples (renderer/film/aovs.py)."""
+        return self.aovs is not None and (self.feature_boost > 0 or self.scene_feature_boost > 0)
 
     def packet_reason(self, integrator: str, features: Features, sampler: str) -> str | None:
         """Why this combination renders one ray at a time though packets were asked for (None:
         it takes packets)."""
-        feature_samples = self.aovs is not None and (self.feature_boost > 0 or self.scene_feature_boost > 0)
+        feature_samples = self._feature_samples()
         key = (integrator, features, sampler, feature_samples)
         if key not in self._packet_reasons:
             from renderer.lights.lights import emitter_table

@@ -8,8 +8,8 @@ lane where the look of a surface point needs the geometry's own record (textures
 normals: the program's surface_records), are `general`: compiled only where a scene has them,
 they take the scalar BSDF (renderer/materials/bsdf.py) one lane after another in a run-time loop:
 its value and density toward the light sample and its own sample, with the same random numbers
-per decision as the scalar tracer. Rays carry cones for texture filtering as the scalar path's. Traversal, light
-selection, emission, MIS and roulette stay packet-wide for every lane.
+per decision as the scalar tracer. Rays carry cones for texture filtering as the scalar path's.
+Traversal, light selection, emission, MIS and roulette stay packet-wide for every lane.
 
 Every lane is a path; the packet takes its vertices together (one closest-hit trace, then one
 shadow trace, per vertex) and a path that ends is masked off until all have. The depth limit, the
@@ -20,7 +20,7 @@ faces where the material says so) are the scalar tracer's; light selection is Pa
 import taichi as ti
 
 from renderer.geometry.interface import INF, Hit, Ray, Surface
-from renderer.geometry.shading import MIN_SHADING_COSINE, consistent_shading_normal
+from renderer.geometry.shading import consistent_shading_normal
 from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
 from renderer.materials.kinds import KIND_IDS
 from renderer.packets import traversal
@@ -278,12 +278,11 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
         albedo_r, albedo_g, albedo_b = ar, ag, ab
         shading_x, shading_y, shading_z = nx, ny, nz
         smooth = live
-        if ti.static(aovs):  # a Lambert lane's shading normal: the geometric one, kept off grazing (shading.py)
-            c = ti.abs(cos_o)
-            bend = ti.select(c < MIN_SHADING_COSINE, side * (MIN_SHADING_COSINE - c), 0.0)
-            sx, sy, sz = nx - bend * dx, ny - bend * dy, nz - bend * dz
-            inv = 1.0 / ti.sqrt(ti.max(sx * sx + sy * sy + sz * sz, 1e-30))
-            shading_x, shading_y, shading_z = sx * inv, sy * inv, sz * inv
+        if ti.static(aovs):  # a Lambert lane's shading normal: its plain surface record's
+            for k in ti.static(range(ox.n)):
+                n = ti.math.vec3(nx[k], ny[k], nz[k])
+                ns = consistent_shading_normal(n, n, -ti.math.vec3(dx[k], dy[k], dz[k]))
+                shading_x[k], shading_y[k], shading_z[k] = ns.x, ns.y, ns.z
         if ti.static(has_general):
             if any_lane(general):
                 gr, gg, gb, bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, \

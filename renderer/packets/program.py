@@ -14,9 +14,9 @@ from renderer.camera import pinhole_ray
 from renderer.film.adaptive import STOPPED
 from renderer.film.band_table import pass_layout, pass_pixel
 from renderer.film.pixel_slices import BANDS, ROUND_SLICES
+from renderer.geometry.texture_footprint import footprint_shrink
 from renderer.materials.bsdf import Bsdf
 from renderer.packets.path import trace_paths, uniform2
-from renderer.geometry.texture_footprint import footprint_shrink
 from renderer.packets.support import SURFACE_FEATURES, scalar_bounces
 from renderer.sampling import dims
 from renderer.sampling.rng import sample_key

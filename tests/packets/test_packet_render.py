@@ -16,29 +16,6 @@ from tests.stats.image_tests import assert_agree
 CORNELL = "assets/scenes/cornell_box.toml"
 
 
-def cornell_of_materials(directory: Path) -> Path:
-    """The Cornell box with its tall box a rough conductor and its short box clear glass, and three
-    spheres: a mirror, frosted glass and a principled paint (every lane kind of the packet path:
-    Lambert, rough and delta reflection, refraction and total internal reflection, layered)."""
-    text = Path(CORNELL).read_text()
-    for box, kind in (("short_box", 'type = "dielectric"\nroughness = 0\nior = 1.5'),
-                      ("tall_box", 'type = "conductor"\nroughness = 0.25')):
-        old = f'[materials.{box}]\ntype = "diffuse"'
-        assert old in text
-        text = text.replace(old, f"[materials.{box}]\n{kind}")
-    for name, kind, extra, radius, at in (
-            ("mirror", "conductor", "roughness = 0", 0.2, (-0.55, 0.5, -0.4)),
-            ("frosted", "dielectric", "base_color = [0.9, 0.97, 1.0]\nroughness = 0.3\nior = 1.5", 0.2,
-             (0.5, 0.45, 0.2)),
-            ("paint", "principled", "base_color = [0.08, 0.2, 0.7]\nmetallic = 0\nroughness = 0.3", 0.15,
-             (0.0, -0.85, 0.5))):
-        text += (f'\n[materials.{name}]\ntype = "{kind}"\n{extra}\n\n[[objects]]\ntype = "sphere"\n'
-                 f'material = "{name}"\nradius = {radius}\ntranslate = {list(at)}\n')
-    path = directory / "cornell_materials.toml"
-    path.write_text(text)
-    return path
-
-
 def render(path, packets, integrator, seed, spp=64, size=(24, 24), max_depth=None):
     scene = load_any(path)
     r = Renderer(scene, size, MeshOptions(packets=packets))
