@@ -149,9 +149,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="render for this many seconds (after compiling)")
     render.add_argument("--size", type=_size, help="image size WxH (default: the scene's)")
     render.add_argument("--integrator", help="integrator name (see `list`)")
-    render.add_argument("--packets", type=int, choices=(0, 4, 8, 16), default=0,
+    render.add_argument("--packets", type=int, choices=(0, 4, 8, 16),
                         help="trace this many rays at a time on the CPU where the scene allows (renderer/packets/; "
-                             "default 0: one at a time)")
+                             "default 0: one at a time; on --resume, the checkpoint's)")
     render.add_argument("--out", type=Path, help="output .png (tone-mapped) or .exr (linear float32)")
     render.add_argument("--variance", type=Path, help="also write the variance of each pixel's mean to this .exr")
     render.add_argument("--max-depth", type=_render_setting("max_depth", I32_MAX),

@@ -289,7 +289,7 @@ def _header(scene, job: RenderJob, out: Path, variance: Path | None, arch: str, 
         max_depth=job.max_depth, spp_done=0, slices_in_round=0, spp_target=job.spp, seconds_budget=job.seconds, seconds_rendered=0.0,
         arch=arch, optimize=optimize, out=str(out.resolve()), variance=str(variance.resolve()) if variance else None,
         exposure=job.exposure, tonemapper=job.tonemapper, automatic=False, denoise=job.denoise, aovs=job.aovs,
-        noise_threshold=job.noise_threshold, min_spp=job.min_spp)
+        noise_threshold=job.noise_threshold, min_spp=job.min_spp, packets=job.packets)
 
 
 def _checkpoint_policy(args, job: RenderJob, out: Path, header: CheckpointHeader,

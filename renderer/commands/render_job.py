@@ -21,7 +21,7 @@ def job_from_arguments(args, scene, previous: CheckpointHeader | None) -> Render
                     seed=args.seed, exposure=exposure, tonemapper=args.tonemapper, denoise=bool(args.denoise),
                     aovs=args.aovs, noise_threshold=args.noise_threshold,
                     min_spp=args.min_spp if args.min_spp is not None else DEFAULT_MIN_SPP,
-                    packets=getattr(args, "packets", 0) or 0)
+                    packets=getattr(args, "packets", None) or 0)
     if previous is not None:
         job = replace(job, size=job.size or (previous.width, previous.height),
                       integrator=job.integrator or previous.integrator,
@@ -32,7 +32,8 @@ def job_from_arguments(args, scene, previous: CheckpointHeader | None) -> Render
                       aovs=job.aovs or previous.aovs,
                       noise_threshold=(previous.noise_threshold if job.noise_threshold is None
                                        else job.noise_threshold),
-                      min_spp=previous.min_spp if args.min_spp is None else job.min_spp)
+                      min_spp=previous.min_spp if args.min_spp is None else job.min_spp,
+                      packets=previous.packets if getattr(args, "packets", None) is None else job.packets)
     return job.resolved(scene)
 
 

@@ -69,6 +69,7 @@ class CheckpointHeader:
     # Ray workers of a distributed render (renderer/commands/distributed/): its pixel groups may stand at
     # different sample counts, so it continues distributed (with any number of workers). None: one process.
     workers: int | None = None
+    packets: int = 0  # rays a packet (render --packets; 0: one at a time): a resume continues alike
     format: int = FORMAT
 
     def mismatches(self, other: "CheckpointHeader") -> list[str]:

@@ -116,14 +116,19 @@ def test_a_second_ctrl_c_quits_at_once(tmp_path):
     assert not out.exists() and not variance.exists() and not checkpoint.exists()  # it did not wait
 
 
-def test_resume_after_a_real_interrupt_is_bit_identical(tmp_path, scene):
-    spp = 8000
+@pytest.mark.parametrize("packets", [0, 4])
+def test_resume_after_a_real_interrupt_is_bit_identical(tmp_path, scene, packets):
+    """With --packets, on a mesh scene: the checkpoint keeps the packet width, and the render
+    continues in packets of it."""
+    spp, extra = 8000, []
+    if packets:
+        scene, spp, extra = "cornell_box", 40000, ["--packets", packets]  # (faster a sample: more of them)
     reference, whole = tmp_path / "whole.exr", tmp_path / "whole.ckpt"
-    child = render_child(scene, "--spp", spp, "--out", reference, "--checkpoint", whole, *SMALL)
+    child = render_child(scene, "--spp", spp, "--out", reference, "--checkpoint", whole, *SMALL, *extra)
     assert child.finish(timeout=300) == 0, child.stderr
 
     part, checkpoint = tmp_path / "part.exr", tmp_path / "part.ckpt"
-    child = render_child(scene, "--spp", spp, "--out", part, "--checkpoint", checkpoint, *SMALL)
+    child = render_child(scene, "--spp", spp, "--out", part, "--checkpoint", checkpoint, *SMALL, *extra)
     child.wait_for(past_first_pass, timeout=240)
     child.proc.send_signal(signal.SIGINT)
     assert child.finish(timeout=60) == 130, child.stderr
@@ -136,6 +141,7 @@ def test_resume_after_a_real_interrupt_is_bit_identical(tmp_path, scene):
     child = render_child("--resume", checkpoint, "--out", final)
     assert child.finish(timeout=300) == 0, child.stderr
     assert f"continuing at {stopped_at} spp" in child.stderr
+    assert (f"packets of {packets} rays: taken" in child.stderr) == bool(packets)
     np.testing.assert_array_equal(read_exr(final), read_exr(reference))
     (h1, continued), (h2, uninterrupted) = load_checkpoint(checkpoint), load_checkpoint(whole)
     assert h1.spp_done == h2.spp_done == spp
