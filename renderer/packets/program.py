@@ -13,6 +13,7 @@ import taichi as ti
 from renderer.camera import pinhole_ray
 from renderer.film.adaptive import STOPPED
 from renderer.film.band_table import pass_layout, pass_pixel
+from renderer.film.pixel_filter import pixel_sample
 from renderer.film.pixel_slices import BANDS, ROUND_SLICES
 from renderer.geometry.texture_footprint import footprint_shrink
 from renderer.materials.bsdf import Bsdf
@@ -131,6 +132,14 @@ class PacketProgram:
                     for k in range(lanes):
                         key[k] = sample_key(pixel[k], first[k] + s, seed)
                     jx, jy = uniform2(key, dims.PIXEL)
+                    # Where in its pixel each lane's ray goes, drawn from the pixel filter as RenderProgram draws
+                    # it (the box's: the numbers themselves), and the sample's weight
+                    weight = jx * 0.0 + 1.0
+                    if ti.static(self.features.pixel_filter[0] != "box"):
+                        for k in range(lanes):
+                            position, w = pixel_sample(ti.math.vec2(jx[k], jy[k]), xs[k] + window_x, ys[k] + window_y,
+                                                       full_width, full_height, self.features.pixel_filter)
+                            jx[k], jy[k], weight[k] = position.x, position.y, w
                     ox, oy, oz = jx * 0.0, jx * 0.0, jx * 0.0
                     dx, dy, dz = jx * 0.0, jx * 0.0, jx * 0.0
                     # The cone's spread (RenderProgram's: a pixel's angle, narrowing as its samples accumulate)
@@ -154,7 +163,7 @@ class PacketProgram:
                     work_r += rays
                     for k in range(lanes):
                         if valid[k] == 1:
-                            self.film.add_sample(xs[k], ys[k], ti.math.vec3(r[k], g[k], b[k]))
+                            self.film.add_sample(xs[k], ys[k], ti.math.vec3(r[k], g[k], b[k]) * weight[k])
                             if ti.static(self.writes_aovs):
                                 self.aovs.add(xs[k], ys[k], ti.math.vec3(aov[0][k], aov[1][k], aov[2][k]),
                                               ti.math.vec3(aov[3][k], aov[4][k], aov[5][k]))

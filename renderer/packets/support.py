@@ -73,8 +73,6 @@ def unsupported(geometry, features, integrator: str, sampler: str, feature_sampl
         return "no packet form for textured emission"
     if features.light_kinds:
         return "point, spot and directional lights have no packet form"
-    if features.pixel_filter[0] != "box":
-        return f"the {features.pixel_filter[0]} pixel filter has no packet form"
     data = geometry.data
     sphere_lo = data.counts["triangle"]
     sphere_hi = sphere_lo + data.counts["sphere"]
