@@ -36,7 +36,6 @@ def high_frequency(path: Path) -> float:
     return float(np.abs(np.diff(pixels, axis=0)).mean() + np.abs(np.diff(pixels, axis=1)).mean())
 
 
-@pytest.mark.slow
 def test_a_fresh_clone_without_a_display_writes_the_best_image_it_can(tmp_path):
     clone = tmp_path / "lantern"
     shutil.copytree(ROOT, clone, ignore=shutil.ignore_patterns(*NOT_COPIED), symlinks=True)

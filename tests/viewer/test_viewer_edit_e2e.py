@@ -45,9 +45,12 @@ def tall_box_pixel(camera_fov: float = 39.3077, distance: float = 3.9) -> tuple[
 def wait_for(condition, viewer, log: Path, deadline: float, what: str):
     while True:
         assert viewer.poll() is None, log.read_text()
-        assert time.monotonic() < deadline, f"{what} within the time limit: {log.read_text()[-2000:]}"
+        assert time.monotonic() < deadline, \
+            f"{what} within the time limit (at {time.strftime('%H:%M:%S')}): {log.read_text()[-2000:]}"
         value = condition()
         if value is not None and value is not False:
+            # When each step came (shown with a failure: which step a slow machine spent its time on)
+            print(f"{time.strftime('%H:%M:%S')} {what}")
             return value
         time.sleep(0.4)
 
@@ -131,9 +134,17 @@ def test_click_the_tall_box_make_it_gold_save_and_render(xserver, tmp_path):
         xdo(env, "key", "ctrl+s")
         saved = tmp_path / "cornell_box_edited.toml"
         wait_for(saved.exists, viewer, log_path, deadline, "the saved scene")
-        xdo(env, "key", "p")
-        wait_for(lambda: list((tmp_path / "shots").glob("*.exr")) or None, viewer, log_path, deadline,
-                 "the screenshot")
+        # The screenshot: pressed again, like the button, when a loaded machine lost the key (a
+        # second screenshot is the same image under another name).
+        while True:
+            xdo(env, "key", "p")
+            try:
+                wait_for(lambda: sorted((tmp_path / "shots").glob("*.exr")) or None, viewer, log_path,
+                         min(deadline, time.monotonic() + CLICK_WAIT), "the screenshot")
+                break
+            except AssertionError:
+                if viewer.poll() is not None or time.monotonic() > deadline:
+                    raise
         time.sleep(0.5)
         xdo(env, "key", "Escape")
         code = viewer.wait(max(5, deadline - time.monotonic()))
@@ -153,7 +164,7 @@ def test_click_the_tall_box_make_it_gold_save_and_render(xserver, tmp_path):
                            f"{SIZE[0]}x{SIZE[1]}", "--integrator", "albedo", "--spp", "4", "--out", str(rendered)],
                           cwd=tmp_path, capture_output=True, text=True, timeout=TIMEOUT)
     assert done.returncode == 0, done.stderr
-    shown = read_exr(next((tmp_path / "shots").glob("*.exr")))
+    shown = read_exr(sorted((tmp_path / "shots").glob("*.exr"))[0])
     again = read_exr(rendered)
     assert shown.shape == again.shape == (SIZE[1], SIZE[0], 3)
     patch = (slice(y - 3, y + 4), slice(x - 3, x + 4))  # inside the box's face: no edge in either image
