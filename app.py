@@ -137,6 +137,9 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--frames", type=int, default=None, help="quit after this many frames")
     view.add_argument("--optimize", choices=OPTIMIZE_FOR, default="compile",
                       help="kernel optimisation: compile (fast compiling, the default) or run (every optimisation: a few %% faster, compiles several times longer)")
+    view.add_argument("--packets", type=int, choices=(0, 4, 8, 16), default=0,
+                      help="trace this many rays at a time on the CPU where the scene allows (renderer/packets/; "
+                           "default 0: one at a time); the HUD says where they are not taken, and why")
     _add_input_options(view)
 
     render = sub.add_parser("render", help="render headless to a file")
@@ -211,6 +214,8 @@ def build_parser() -> argparse.ArgumentParser:
     warm.add_argument("--size", type=_size, default=(960, 540), help="the viewer's window size WxH (default 960x540)")
     warm.add_argument("--integrators", metavar="A,B", help="comma-separated integrators (default: all)")
     warm.add_argument("--arch", choices=ARCHES, default="auto", help="the back-end the viewer will use")
+    warm.add_argument("--packets", type=int, choices=(0, 4, 8, 16), default=0,
+                      help="the rays a packet the viewer will take (view --packets)")
 
     compare = sub.add_parser("compare", help="Lantern and Mitsuba 3 on the same scene, at equal time")
     compare.add_argument("scene", help="scene name, scene file (.toml, Mitsuba 3 .xml) or model file")
@@ -237,6 +242,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="mitsuba-tests, scenes: only the scenes whose name contains TEXT")
     bench.add_argument("--mitsuba", action="store_true",
                        help="scenes: also render each scene that converts with Mitsuba 3 for the same time")
+    bench.add_argument("--packets", type=int, choices=(4, 8, 16),
+                       help="interactive: the viewer traces this many rays at a time where a scene allows")
     bench.add_argument("--time", type=float, metavar="S", dest="seconds",
                        help="scenes: seconds of sampling per scene (default 20; 2 with --quick)")
     return parser
@@ -325,7 +332,8 @@ def cmd_view(args) -> int:
     options = options_from_arguments(args)
     check_film(path, *args.size, options.budget, "--size", aovs=True)  # the viewer keeps denoising AOVs
     init_taichi(args.arch, optimize=args.optimize)
-    return run_viewer(path, size=args.size, integrator=args.integrator, max_frames=args.frames, load_options=options)
+    return run_viewer(path, size=args.size, integrator=args.integrator, max_frames=args.frames, load_options=options,
+                      packets=args.packets)
 
 
 def cmd_warm_cache(args) -> int:
@@ -341,7 +349,8 @@ def cmd_warm_cache(args) -> int:
             make_integrator(name)  # an unknown name: one line, before any process starts
     print(f"warming the viewer's kernels at {args.size[0]}x{args.size[1]}: {len(scenes)} scenes, "
           f"{', '.join(integrators or integrator_names())}", flush=True)
-    results = warm_scenes(scenes, args.size, integrators, args.arch, report=lambda line: print(line, flush=True))
+    results = warm_scenes(scenes, args.size, integrators, args.arch, report=lambda line: print(line, flush=True),
+                          packets=args.packets)
     return 1 if any(result["error"] for result in results) else 0
 
 
@@ -362,6 +371,10 @@ def cmd_bench(args) -> int:
         if args.seconds <= 0:
             raise ValueError(f"--time {args.seconds:g}: needs a positive number of seconds")
         options["seconds"] = args.seconds
+    if args.packets:
+        if args.name != "interactive":
+            raise ValueError(f"--packets is for bench interactive, not {args.name}")
+        options["packets"] = args.packets
     if args.mitsuba:
         if args.name != "scenes":
             raise ValueError(f"--mitsuba is for bench scenes, not {args.name}")

@@ -271,6 +271,21 @@ class Renderer:
                                                     feature_samples, emitters, textured_emission)
         return self._packet_reasons[key]
 
+    def packet_status(self, integrator: str, features: Features, sampler: str) -> str | None:
+        """What became of the packets asked for, in a line ("packets of 8 rays: taken", or not
+        taken and why); None where none were asked for."""
+        if not self.packet_width:
+            return None
+        reason = self.packet_reason(integrator, features, sampler)
+        if reason is not None:
+            return f"packets of {self.packet_width} rays: not taken, {reason}"
+        from renderer.packets.support import scalar_bounces
+
+        taken = "taken"
+        if scalar_bounces(self.geometry):
+            taken += f" (bounce and shadow rays one at a time among {self.geometry.primitive_count():,} primitives)"
+        return f"packets of {self.packet_width} rays: {taken}"
+
     def _packet_program(self, chosen, features: Features, key: tuple):
         from renderer.packets.lights import PacketLights
         from renderer.packets.program import PacketProgram

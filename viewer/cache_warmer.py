@@ -68,13 +68,14 @@ def warm_order(first: str, integrators: list[str]) -> list[str]:
     return ([first] if first in integrators else []) + [n for n in rest if n != "sppm"] + [n for n in rest if n == "sppm"]
 
 
-def warm_scene(scene_path: Path, size: tuple[int, int], integrators: list[str]) -> list[dict]:
+def warm_scene(scene_path: Path, size: tuple[int, int], integrators: list[str], packets: int = 0) -> list[dict]:
     """In this process (Taichi initialised as the viewer does it): open the viewer off-screen on
-    the scene and show each integrator's first image; what each took."""
+    the scene (with `view --packets` rays a packet) and show each integrator's first image; what
+    each took."""
     from viewer.window import ViewerApp
 
     with tempfile.TemporaryDirectory() as shots:
-        app = ViewerApp(scene_path, size=size, show_window=False, screenshot_folder=shots)
+        app = ViewerApp(scene_path, size=size, show_window=False, screenshot_folder=shots, packets=packets)
         results = []
         for integrator in warm_order(app.session.integrator, integrators):
             t0 = time.perf_counter()
@@ -87,13 +88,13 @@ def warm_scene(scene_path: Path, size: tuple[int, int], integrators: list[str]) 
 
 
 def _child(argv: list[str]) -> int:
-    """`python -m viewer.cache_warmer SCENE WxH INTEGRATORS ARCH`: warm one scene, print its results."""
-    scene, size, integrators, arch = argv
+    """`python -m viewer.cache_warmer SCENE WxH INTEGRATORS ARCH PACKETS`: warm one scene, print its results."""
+    scene, size, integrators, arch, packets = argv
     from renderer.runtime.arch import init_taichi
 
     init_taichi(arch, optimize="compile")  # as `app.py view` does
     width, height = (int(v) for v in size.split("x"))
-    combinations = warm_scene(Path(scene), (width, height), integrators.split(","))
+    combinations = warm_scene(Path(scene), (width, height), integrators.split(","), int(packets))
     print(RESULT_MARK + json.dumps({"combinations": combinations}), flush=True)
     return 0
 
@@ -104,7 +105,7 @@ def cached_kernels(cache_dir: Path) -> int:
 
 
 def warm_scenes(scene_paths: list[Path], size: tuple[int, int], integrators: Optional[list[str]] = None,
-                arch: str = "cpu", timeout_s: float = 3600.0, report=print) -> list[dict]:
+                arch: str = "cpu", timeout_s: float = 3600.0, report=print, packets: int = 0) -> list[dict]:
     """Warm each scene in a child process of its own (its kernels reach the cache when it exits);
     `report(line)` is told each scene's combinations as its child ends, with the kernels it added
     to the cache (0: every one was there already). A scene whose child fails is reported with
@@ -117,7 +118,7 @@ def warm_scenes(scene_paths: list[Path], size: tuple[int, int], integrators: Opt
     results = []
     for path in scene_paths:
         command = [sys.executable, "-m", "viewer.cache_warmer", str(path), f"{size[0]}x{size[1]}",
-                   ",".join(integrators), arch]
+                   ",".join(integrators), arch, str(packets)]
         before, started = cached_kernels(cache_dir), time.perf_counter()
         try:
             done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=timeout_s)

@@ -94,6 +94,7 @@ class HudStats:
     work_label: str = "march steps/ray"  # or "node visits/ray" on BVH scenes
     image: str = "raw"  # which image is shown: "raw", "denoised (8 spp)", "denoising..."
     adaptive: Optional[str] = None  # e.g. "35% of pixels stopped"; None when adaptive sampling is off
+    rays: Optional[str] = None  # what became of the packets asked for (Renderer.packet_status); None: none asked
 
 
 def format_rate(per_second: float) -> str:
@@ -132,6 +133,7 @@ def hud_lines(s: HudStats) -> list[str]:
         f"noise {format_noise(s.noise)}" + ("" if s.adaptive is None else f"   adaptive: {s.adaptive}"),
         f"non-finite dropped {s.rejected}",
         f"{s.work_label} {work}" + ("" if not s.tests_per_ray else f"   prim tests/ray {s.tests_per_ray:.1f}"),
+        *textwrap.wrap(s.rays or "", EFFECTS_WIDTH, subsequent_indent="  "),
     ]
 
 

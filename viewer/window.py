@@ -43,7 +43,7 @@ from renderer.output.denoise import DenoiseInput, Denoiser, unavailable_reason
 from renderer.output.image_io import write_exr, write_png
 from renderer.integrators import INTEGRATORS, integrator_names
 from renderer.film.pixel_slices import ROUND_SLICES, spp_text
-from renderer.renderer import AdaptiveSettings, Renderer
+from renderer.renderer import AdaptiveSettings, MeshOptions, Renderer
 from renderer.scene.catalog import load_any, scene_files
 from renderer.output.tonemap import TONEMAPPERS, quantize
 from viewer import hud
@@ -129,8 +129,9 @@ class ViewerApp:
                  show_window: bool = True, screenshot_folder=None, target_seconds: float = DEFAULT_TARGET_SECONDS,
                  settle_seconds: float = SETTLE_SECONDS, scenes: Optional[list] = None,
                  clock: Callable[[], float] = time.perf_counter, load_options=None,
-                 still_present_interval: Optional[float] = None):
+                 still_present_interval: Optional[float] = None, packets: int = 0):
         self.size = (int(size[0]), int(size[1]))
+        self.mesh_options = MeshOptions(packets=packets)  # rays a packet on the CPU where scenes allow
         self.load_options = load_options  # memory budget and model-folder rule (None: defaults)
         self.show_window = show_window
         self.clock = clock
@@ -220,7 +221,7 @@ class ViewerApp:
         path = Path(path).resolve()
         if path not in self.renderers:
             # With AOVs: the denoised view needs them, and toggling it must not recompile.
-            renderer = Renderer(load_any(path, self.load_options), max_size=self.size, aovs=True)
+            renderer = Renderer(load_any(path, self.load_options), self.size, self.mesh_options, aovs=True)
             # Still frames render a few slices each: after the first round, bands of rows (cheaper
             # per sample than interleaved pixels: renderer/film/pixel_slices.py)
             renderer.bands_after_first_round = True
@@ -263,7 +264,7 @@ class ViewerApp:
 
     def _rebuilt(self, scene) -> Renderer:
         """A Renderer for an edited scene the one on screen cannot take in place."""
-        renderer = Renderer(scene, max_size=self.size, aovs=True)
+        renderer = Renderer(scene, self.size, self.mesh_options, aovs=True)
         renderer.bands_after_first_round = True
         self.renderers[self.session.scene_path] = renderer
         return renderer
@@ -682,7 +683,8 @@ class ViewerApp:
             noise=self._stats["noise"], rejected=self._stats["rejected"],
             work_per_ray=self._stats["work_per_ray"], tests_per_ray=self._stats["tests_per_ray"],
             work_label="march steps/ray" if r.scene.geometry == "sdf" else "node visits/ray",
-            image=self.image_label, adaptive=self._adaptive_text(r))
+            image=self.image_label, adaptive=self._adaptive_text(r),
+            rays=r.packet_status(s.integrator, features, r.scene.render.sampler))
 
     @staticmethod
     def _adaptive_text(r: Renderer) -> Optional[str]:
@@ -775,7 +777,7 @@ def _one_line(error: BaseException) -> str:
 
 
 def run_viewer(path, size: tuple[int, int] = DEFAULT_SIZE, integrator: Optional[str] = None,
-               max_frames: Optional[int] = None, screenshot_folder=None, load_options=None) -> int:
+               max_frames: Optional[int] = None, screenshot_folder=None, load_options=None, packets: int = 0) -> int:
     """Open the viewer on a scene file; returns the process exit code.
 
     Screenshots go to `screenshot_folder`, else $LANTERN_SCREENSHOT_DIR, else <repo>/screenshots.
@@ -785,5 +787,5 @@ def run_viewer(path, size: tuple[int, int] = DEFAULT_SIZE, integrator: Optional[
         raise RuntimeError("the viewer needs a display (DISPLAY is not set): use `app.py render`, "
                            "or run it under Xvfb")
     app = ViewerApp(path, size=size, integrator=integrator, screenshot_folder=screenshot_folder,
-                    load_options=load_options)
+                    load_options=load_options, packets=packets)
     return app.run(max_frames)

@@ -47,7 +47,9 @@ integrator, still or moving, on a quiet machine; still samples/s at least 95% of
 passes. GGUI's own frame (software Vulkan: the canvas image and the HUD drawn, then read back
 off-screen or presented) takes ~10-15 ms whatever the viewer does, which is why the still view
 presents only on input and a few times a second. Writes <out_dir>/bench_interactive.json and
-bench_interactive.png.
+bench_interactive.png; with --packets N the viewer traces N rays a packet where a scene allows
+(`view --packets N`), and the files are bench_interactive_packetsN.*: the moving frames' film
+size, at the same frame budget, is what packets buy the moving view.
 """
 from __future__ import annotations
 
@@ -303,14 +305,18 @@ def measure_moving(app, seconds: float, rng: random.Random) -> dict:
     from viewer.window import FrameInput
 
     forwards = FrameInput(held=frozenset({"w"}))
-    times, moved_each_frame = [], True
+    times, pixels, moved_each_frame = [], [], True
     end = time.perf_counter() + seconds
     while time.perf_counter() < end or len(times) < 3:
         position = app.session.controller.state.position
         times.append(_step_timed(app, forwards))
+        pixels.append(app.renderer.film.width * app.renderer.film.height)
         moved_each_frame &= app.session.controller.state.position != position and app.last_plan.interactive
     settled = times[len(times) // 3:]  # the resolution control's first frames are its transient
+    full = app.size[0] * app.size[1]
     return {"frames": len(times), "frame_ms_median": 1000 * statistics.median(settled),
+            # the film the moving frames reached within their budget, a share of the window's pixels
+            "pixel_share_median": statistics.median(pixels[len(pixels) // 3:]) / full,
             "frame_ms_max": 1000 * max(settled), "latency_ms": [1000 * v for v in event_latencies(settled, rng)],
             "input_seen_in_frame": moved_each_frame}
 
@@ -335,7 +341,7 @@ def print_report(results: list[dict]) -> None:
     rows = []
     for r in results:
         if "skipped" in r:
-            rows.append([r["scene"], r["integrator"], "skipped: " + r["skipped"], *[""] * 11])
+            rows.append([r["scene"], r["integrator"], "skipped: " + r["skipped"], *[""] * 12])
             continue
         switch = r["switch"]
         compile_s = "-" if switch.get("compile_s") is None else f"{switch['compile_s']:.2f}"
@@ -343,12 +349,18 @@ def print_report(results: list[dict]) -> None:
                      f"{r['whole_samples_p95_ms']:.0f}",
                      f"{r['still']['samples_per_s'] / 1e6:.2f}", f"{r['still']['rate_ratio']:.3f}",
                      first_round_text(r['still']), f"{r['still']['frame_ms_median']:.0f}",
-                     f"{r['moving']['frame_ms_median']:.0f}",
+                     f"{r['moving']['frame_ms_median']:.0f}", moving_pixels_text(r["moving"]),
                      f"{switch.get('load_s', math.nan):.2f}", compile_s, f"{switch['first_image_s']:.2f}"])
     print_table(["scene", "integrator", "p50 ms", "p95 ms", "p95 ms whole-sample frames", "still Msamples/s",
                  "vs whole-sample frames", "first round vs whole", "still frame ms", "moving frame ms",
+                 "moving film (share of the window's pixels)",
                  "switch: load s", "compile s", "first image s"], rows,
                 title=f"Input latency (event -> presented frame), target p95 <= {TARGET_LATENCY_MS:.0f} ms")
+
+
+def moving_pixels_text(moving: dict) -> str:
+    share = moving.get("pixel_share_median")  # (reports from before it was measured have none)
+    return "-" if share is None else f"{100 * share:.1f} %"
 
 
 def first_round_text(still: dict) -> str:
@@ -358,7 +370,7 @@ def first_round_text(still: dict) -> str:
     return "-" if first is None else f"{first['rate_ratio']:.3f}"
 
 
-def write_plot(results: list[dict], out_dir: Path) -> Path | None:
+def write_plot(results: list[dict], out_dir: Path, suffix: str = "") -> Path | None:
     measured = [r for r in results if "skipped" not in r]
     if not measured:
         return None
@@ -376,10 +388,11 @@ def write_plot(results: list[dict], out_dir: Path) -> Path | None:
     right.axvline(TARGET_STILL_RATE, color="k", linestyle="--")
     right.set_yticks(y, [])
     right.set_xlabel("still samples/s: sliced frames / whole-sample frames")
-    return save_figure(fig, Path(out_dir) / "bench_interactive.png")
+    return save_figure(fig, Path(out_dir) / f"bench_interactive{suffix}.png")
 
 
-def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, integrators=None, size=None) -> int:
+def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, integrators=None, size=None,
+        packets: int = 0) -> int:
     from renderer.scene.catalog import resolve_scene, scene_files
     from viewer.window import ViewerApp
 
@@ -392,13 +405,17 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, integ
         config["integrators"] = tuple(integrators)
     if size is not None:
         config["size"] = tuple(size)
+    if packets:
+        config["packets"] = packets
+    suffix = f"_packets{packets}" if packets else ""
     t_start = time.perf_counter()
     arch = viewer_runtime()
     load_before = load_average()
     paths = [resolve_scene(name) for name in config["scenes"]]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        app = ViewerApp(paths[0], size=config["size"], show_window=False, screenshot_folder=tempfile.gettempdir())
+        app = ViewerApp(paths[0], size=config["size"], show_window=False, screenshot_folder=tempfile.gettempdir(),
+                        packets=packets)
     results = []
     for i, path in enumerate(paths):
         for j, integrator in enumerate(config["integrators"]):
@@ -416,11 +433,11 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, integ
                                      if r["integrator"] != "sppm")  # sppm's passes are whole iterations
     print(f"p95 latency <= {TARGET_LATENCY_MS:.0f} ms everywhere: {verdict(latency_ok)}; still samples/s >= "
           f"{TARGET_STILL_RATE:.0%} of whole passes: {verdict(rate_ok)}")
-    plot = write_plot(results, out_dir)
+    plot = write_plot(results, out_dir, suffix)
     report = {**report_header("interactive", quick, load_before, arch=arch, config=config),
               "latency_target_ms": TARGET_LATENCY_MS, "still_rate_target": TARGET_STILL_RATE,
               "latency_ok": latency_ok, "rate_ok": rate_ok, "results": results,
               "plots": [plot.name] if plot else [], "total_seconds": time.perf_counter() - t_start}
-    path = write_json(Path(out_dir) / "bench_interactive.json", report)
+    path = write_json(Path(out_dir) / f"bench_interactive{suffix}.json", report)
     print(f"wrote {path}  (total {report['total_seconds']:.0f} s)")
     return 0 if measured else 1

@@ -65,6 +65,14 @@ class Report:
 
     @property
     def name(self) -> str:
+        """The benchmark, and the variant a run with options of its own is (`interactive
+        --packets 8`: interactive-packets8), kept beside the plain run's report."""
+        config = self.data.get("config")
+        packets = config.get("packets") if isinstance(config, dict) else None
+        return self.data["benchmark"] + (f"-packets{packets}" if packets else "")
+
+    @property
+    def benchmark(self) -> str:
         return self.data["benchmark"]
 
     def plot_names(self) -> list[str]:
@@ -145,7 +153,7 @@ def provenance(data: dict) -> str:
 def _section(report: Report) -> tuple[Section, str | None]:
     """The benchmark's own section; the generic one (and why) if the report does not have the
     layout the section reads, so one changed benchmark cannot take the page down."""
-    build = SECTIONS.get(report.name)
+    build = SECTIONS.get(report.benchmark)
     if build is None:
         return generic_section(report.data), None
     try:
@@ -201,7 +209,8 @@ def build_page(reports_dir: Path, warn: Callable[[str], None] = print, previous:
     index = ["| benchmark | measures | latest report |", "| --- | --- | --- |"]
     body = []
     for name in page_names(found):
-        report, what = found.get(name), purpose(name)
+        report = found.get(name)
+        what = purpose(report.benchmark if report is not None else name)
         if report is None and name in kept:
             when, lines = kept[name]
             index.append(f"| [{name}](#{name}) | {what.replace('|', '/')} | {when} |")

@@ -324,6 +324,11 @@ def _first_round_ratio(result: dict):
     return None if first is None else first["rate_ratio"]
 
 
+def _moving_share(result: dict) -> str:
+    share = result["moving"].get("pixel_share_median")  # reports from before it was measured have none
+    return "-" if share is None else pct(share, 1)
+
+
 def interactive_section(report: dict) -> Section:
     section = Section()
     results = report.get("results", [])
@@ -333,16 +338,18 @@ def interactive_section(report: dict) -> Section:
              r["still"]["samples_per_s"] / 1e6, times(r["still"]["rate_ratio"], 3),
              "-" if _first_round_ratio(r) is None else times(_first_round_ratio(r), 3),
              r["still"]["frame_ms_median"],
-             r["moving"]["frame_ms_median"], r["switch"]["first_image_s"]] for r in measured]
+             r["moving"]["frame_ms_median"], _moving_share(r), r["switch"]["first_image_s"]] for r in measured]
     w, h = report.get("config", {}).get("size", ("?", "?"))
+    packets = report.get("config", {}).get("packets")
+    rays = f", {packets} rays a packet where a scene allows (`view --packets {packets}`)" if packets else ""
     section.blocks += [
-        f"Input latency (event to presented frame), viewer off-screen at {w}x{h}: target p95 ≤ {num(target)} ms "
+        f"Input latency (event to presented frame), viewer off-screen at {w}x{h}{rays}: target p95 ≤ {num(target)} ms "
         f"({verdict(report.get('latency_ok'))}); still samples/s of sliced frames against whole-sample frames (the "
         f"median over pairs of blocks of equal time, after the view's first round) ≥ "
         f"{pct(report.get('still_rate_target'), 0)} ({verdict(report.get('rate_ok'))}).",
         table(["scene", "integrator", "p50 ms", "p95 ms", "p95 ms, whole-sample frames", "still Msamples/s",
                "vs whole-sample frames", "first round vs whole-sample frames", "still frame ms", "moving frame ms",
-               "switch s"], rows)]
+               "moving film (share of the window)", "switch s"], rows)]
     skipped = [f"{r['scene']} / {r['integrator']}: {r['skipped']}" for r in results if "skipped" in r]
     if skipped:
         section.blocks.append("Not measured: " + "; ".join(skipped) + ".")

@@ -193,15 +193,7 @@ def render(scene: Scene, job: RenderJob, progress=None, stop=None, checkpoints: 
         seconds_before = resume.seconds_rendered
     camera = camera if camera is not None else CameraFrame.from_spec(scene.camera)
     if job.packets:
-        reason = renderer.packet_reason(integrator, renderer.features(camera), scene.render.sampler)
-        taken = "taken"
-        if reason is None:
-            from renderer.packets.support import scalar_bounces
-
-            if scalar_bounces(renderer.geometry):
-                count = renderer.geometry.primitive_count()
-                taken += f" (bounce and shadow rays one at a time among {count:,} primitives)"
-        print(f"packets of {job.packets} rays: " + (f"not taken, {reason}" if reason else taken), file=sys.stderr)
+        print(renderer.packet_status(integrator, renderer.features(camera), scene.render.sampler), file=sys.stderr)
     if stop is not None:
         stop.defer()  # from here on there is an image to save: a signal stops at the next pass
     start = time.perf_counter()

@@ -22,6 +22,7 @@ OPTIMIZE_FOR = ("compile", "run")
 # int: 2 GiB is the most it takes.
 OFFLINE_CACHE_MAX_BYTES = 2**31 - 1
 LANTERN_CACHE_FOLDER = "lantern-dynamic-loops"  # see default_cache_dir
+CACHE_PATH_VARIABLE = "TI_OFFLINE_CACHE_FILE_PATH"  # Taichi's cache root, read by default_cache_dir
 
 
 def taichi_options(optimize: str = "compile") -> dict:
@@ -57,7 +58,7 @@ def default_cache_dir() -> str:
     compiled with the per-thread shares was loaded as it was under the dynamic setting:
     scripts/cpu_scheduling_cost.py shows it), so the kernels compiled under Lantern's setting
     are kept apart from any compiled under Taichi's default."""
-    taichi_cache = os.environ.get("TI_OFFLINE_CACHE_FILE_PATH") or taichi_core.CompileConfig().offline_cache_file_path
+    taichi_cache = os.environ.get(CACHE_PATH_VARIABLE) or taichi_core.CompileConfig().offline_cache_file_path
     return os.path.join(taichi_cache, LANTERN_CACHE_FOLDER)
 
 
@@ -89,7 +90,14 @@ def init_taichi(arch: str = "auto", offline_cache: bool = True, cache_dir: str |
     wanted = {"auto": ti.cuda, "cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan}[arch]
     if cheaper_frontend:  # a third less compile time for large kernels (False: scripts/frontend_cost.py)
         taichi_frontend.install()
-    ti.init(arch=wanted, **kwargs)
+    # The cache folder passed is Lantern's own within TI_OFFLINE_CACHE_FILE_PATH (default_cache_dir):
+    # hidden from ti.init, which would warn on every start that the argument overrides it.
+    cache_root = os.environ.pop(CACHE_PATH_VARIABLE, None)
+    try:
+        ti.init(arch=wanted, **kwargs)
+    finally:
+        if cache_root is not None:
+            os.environ[CACHE_PATH_VARIABLE] = cache_root
     used = ti.lang.impl.current_cfg().arch
     if arch in ("cuda", "vulkan") and used != wanted:
         raise RuntimeError(f"arch '{arch}' is not available on this machine")

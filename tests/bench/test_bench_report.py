@@ -347,3 +347,20 @@ def test_the_texture_filter_section_reads_its_report(reports, tmp_path):
     assert row(text, "trilinear", num(2.4))["vs none"] == num(2.4 / 2.7)
     assert row(text, "none", num(0.015))["target"] == verdict(False)
     assert row(text, "trilinear", num(0.01))["target"] == verdict(True)
+
+
+def test_a_packets_run_of_the_interactive_benchmark_is_kept_beside_the_plain_one(reports, tmp_path):
+    folder, data = reports
+    source = tmp_path / "reports"
+    shutil.copytree(folder, source)
+    packed = json.loads((source / "bench_interactive.json").read_text())
+    packed["config"] = {**packed["config"], "packets": 8}
+    packed["command"] = "python app.py bench interactive --packets 8"
+    packed["results"][0]["moving"]["pixel_share_median"] = 0.375
+    (source / "bench_interactive_packets8.json").write_text(json.dumps(packed))
+    found = sections(make_page(source, tmp_path / "docs"))
+    assert f"`{data['interactive']['command']}`" in found["interactive"]
+    text = found["interactive-packets8"]
+    assert "`python app.py bench interactive --packets 8`" in text and "8 rays a packet" in text
+    assert row(text, "box", "path")["moving film (share of the window)"] == "37.5 %"
+    assert row(text, "box", "mis")["moving film (share of the window)"] == "-"
