@@ -57,6 +57,7 @@ FULL_TIER = (
     "tests/render/test_glass_furnace.py::test_white_glass_is_invisible_in_the_furnace_through_packets",
     "tests/render/test_glass_furnace.py::test_smooth_glass_under_nee_in_a_furnace_of_its_own",
     "tests/render/test_glass_furnace.py::test_sppm_keeps_the_light_of_thin_rough_glass",
+    "tests/render/test_glass_furnace.py::test_thin_walls_keep_the_light_inside_too",
     # the viewer on the heaviest catalog scenes (default: the others)
     "tests/viewer/test_window_offscreen.py::test_each_scene_shows_the_film[textured]",
     "tests/viewer/test_window_offscreen.py::test_each_scene_shows_the_film[studio]",
@@ -76,6 +77,11 @@ FULL_TIER = (
     "tests/render/test_model_material_edits.py::test_a_toml_scenes_model_material_edits_are_saved_in_its_copy",
     "tests/materials/test_principled_layers.py::test_white_layers_keep_their_energy[all over metal]",
     "tests/test_vulkan.py::test_vulkan_runs_media_and_dispersion[goblet]",
+    "tests/test_vulkan.py::test_vulkan_runs_media_and_dispersion[prism]",
+    # Mitsuba's agreement on textured materials (default: principled, the blend, the pbrt rooms)
+    "tests/commands/test_compare.py::test_textured_anisotropic_roughness_agrees_with_mitsuba",
+    "tests/commands/test_compare.py::test_textured_principled_agrees_with_mitsuba[principledthin]",
+    "tests/commands/test_compare.py::test_textured_specular_tints_agree_with_mitsuba",
     "tests/render/test_crop_render.py::test_a_crop_is_the_same_window_of_the_whole_render_bit_for_bit[tent]",
     "tests/render/test_crop_render.py::test_a_crop_is_the_same_window_of_the_whole_render_bit_for_bit[box]",
     "tests/render/test_material_edits.py::test_an_emission_edit_reweighs_the_lights_in_place[sppm]",
@@ -85,6 +91,7 @@ FULL_TIER = (
     "tests/bench/test_bench_denoise.py::test_tiny_run_writes_curves_targets_and_a_plot",
     "tests/bench/test_bench_photons.py::test_runs_on_a_tiny_glass_scene",
     "tests/commands/distributed/test_ray_render.py::test_bench_scale_on_a_tiny_image",
+    "tests/bench/test_bench_scenes.py::test_the_mitsuba_side_renders_what_converts_and_says_why_not_otherwise",
 )
 
 
