@@ -6,6 +6,7 @@ one-ray-at-a-time renderer's (z-tests at the suite's level, different seeds). Wh
 not taken, the HUD says why.
 """
 import numpy as np
+import pytest
 
 from renderer.camera import CameraFrame
 from renderer.packets.program import PacketProgram
@@ -19,9 +20,12 @@ SIZE = (32, 24)
 SPP = 48
 
 
-def viewer(tmp_path, scene: str) -> ViewerApp:
-    return ViewerApp(resolve_scene(scene), size=SIZE, show_window=False, screenshot_folder=tmp_path,
-                     settle_seconds=0.0, still_present_interval=0.0, packets=8)
+@pytest.fixture(scope="module")
+def app(tmp_path_factory):
+    # One viewer (one GGUI window) for the module, as the viewer is used: scenes are switched in it.
+    return ViewerApp(resolve_scene("cornell_box"), size=SIZE, show_window=False,
+                     screenshot_folder=tmp_path_factory.mktemp("shots"), settle_seconds=0.0,
+                     still_present_interval=0.0, packets=8)
 
 
 def current_program(app):
@@ -29,8 +33,7 @@ def current_program(app):
     return r.program(app.session.integrator, r.features(app._camera_frame()), r.scene.render.sampler)
 
 
-def test_the_viewer_traces_packets_and_shows_the_one_ray_at_a_time_image(tmp_path):
-    app = viewer(tmp_path, "cornell_box")
+def test_the_viewer_traces_packets_and_shows_the_one_ray_at_a_time_image(app):
     for _ in range(2000):
         if app.renderer.samples_done >= SPP:
             break
@@ -59,8 +62,8 @@ def test_the_viewer_traces_packets_and_shows_the_one_ray_at_a_time_image(tmp_pat
     assert np.isfinite(app.renderer.image()).all()
 
 
-def test_the_hud_says_why_a_scene_is_not_traced_in_packets(tmp_path):
-    app = viewer(tmp_path, "textured")  # textures: the denoiser's feature samples have no packet form
+def test_the_hud_says_why_a_scene_is_not_traced_in_packets(app):
+    app.select_scene(resolve_scene("textured"))  # textures: the denoiser's feature samples have no packet form
     for _ in range(4):
         app.step()
     assert not isinstance(current_program(app), PacketProgram)
