@@ -11,5 +11,6 @@ if [[ "${1:-}" == "--full" ]]; then
     tier=()
     shift
 fi
-# Two workers (the machine's two cores), whole files per worker so module fixtures are shared.
-exec .venv/bin/python -m pytest tests -n 2 --dist loadfile "${tier[@]}" "$@"
+# Two workers (the machine's two cores), whole files per worker so module fixtures are shared. A
+# worker that crashes ends the run with its test named: a replaced worker once left the run hanging.
+exec .venv/bin/python -m pytest tests -n 2 --dist loadfile --max-worker-restart 0 "${tier[@]}" "$@"
