@@ -40,6 +40,9 @@ U32_MAX = 2**32 - 1
 # render.exposure has the same bounds, renderer/scene/schema_types.py EXPOSURE_EV; not imported
 # here, where the options are checked before anything of the renderer loads).
 EXPOSURE_EV_RANGE = (-126.0, 127.0)
+# --packets: 0 (one ray at a time) or renderer/packets/support.py's PACKET_WIDTHS, written out here
+# because parsing arguments imports no Taichi (tests/commands/test_cli.py holds the two equal)
+PACKET_CHOICES = (0, 4, 8, 16)
 
 
 class OneLineErrorParser(argparse.ArgumentParser):
@@ -137,7 +140,7 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--frames", type=int, default=None, help="quit after this many frames")
     view.add_argument("--optimize", choices=OPTIMIZE_FOR, default="compile",
                       help="kernel optimisation: compile (fast compiling, the default) or run (every optimisation: a few %% faster, compiles several times longer)")
-    view.add_argument("--packets", type=int, choices=(0, 4, 8, 16), default=0,
+    view.add_argument("--packets", type=int, choices=PACKET_CHOICES, default=0,
                       help="trace this many rays at a time on the CPU where the scene allows (renderer/packets/; "
                            "default 0: one at a time); the HUD says where they are not taken, and why")
     _add_input_options(view)
@@ -152,7 +155,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="render for this many seconds (after compiling)")
     render.add_argument("--size", type=_size, help="image size WxH (default: the scene's)")
     render.add_argument("--integrator", help="integrator name (see `list`)")
-    render.add_argument("--packets", type=int, choices=(0, 4, 8, 16),
+    render.add_argument("--packets", type=int, choices=PACKET_CHOICES,
                         help="trace this many rays at a time on the CPU where the scene allows (renderer/packets/; "
                              "default 0: one at a time; on --resume, the checkpoint's)")
     render.add_argument("--out", type=Path, help="output .png (tone-mapped) or .exr (linear float32)")
@@ -214,7 +217,7 @@ def build_parser() -> argparse.ArgumentParser:
     warm.add_argument("--size", type=_size, default=(960, 540), help="the viewer's window size WxH (default 960x540)")
     warm.add_argument("--integrators", metavar="A,B", help="comma-separated integrators (default: all)")
     warm.add_argument("--arch", choices=ARCHES, default="auto", help="the back-end the viewer will use")
-    warm.add_argument("--packets", type=int, choices=(0, 4, 8, 16), default=0,
+    warm.add_argument("--packets", type=int, choices=PACKET_CHOICES, default=0,
                       help="the rays a packet the viewer will take (view --packets)")
 
     compare = sub.add_parser("compare", help="Lantern and Mitsuba 3 on the same scene, at equal time")
@@ -242,7 +245,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="mitsuba-tests, scenes: only the scenes whose name contains TEXT")
     bench.add_argument("--mitsuba", action="store_true",
                        help="scenes: also render each scene that converts with Mitsuba 3 for the same time")
-    bench.add_argument("--packets", type=int, choices=(4, 8, 16),
+    bench.add_argument("--packets", type=int, choices=PACKET_CHOICES[1:],
                        help="interactive: the viewer traces this many rays at a time where a scene allows")
     bench.add_argument("--time", type=float, metavar="S", dest="seconds",
                        help="scenes: seconds of sampling per scene (default 20; 2 with --quick)")

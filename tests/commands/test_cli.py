@@ -325,3 +325,9 @@ def test_the_scenes_exposure_is_the_default_and_the_option_overrides_it():
     parse = app.build_parser().parse_args
     assert job_from_arguments(parse(["render", "s"]), scene, None).exposure == 1.5
     assert job_from_arguments(parse(["render", "s", "--exposure", "0"]), scene, None).exposure == 0.0
+
+
+def test_the_packet_choices_are_the_packet_widths_and_zero():
+    from renderer.packets.support import PACKET_WIDTHS
+
+    assert app.PACKET_CHOICES == (0, *PACKET_WIDTHS)
