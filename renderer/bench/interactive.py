@@ -434,7 +434,8 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, integ
     print(f"p95 latency <= {TARGET_LATENCY_MS:.0f} ms everywhere: {verdict(latency_ok)}; still samples/s >= "
           f"{TARGET_STILL_RATE:.0%} of whole passes: {verdict(rate_ok)}")
     plot = write_plot(results, out_dir, suffix)
-    report = {**report_header("interactive", quick, load_before, arch=arch, config=config),
+    variant = {"variant": f"packets{packets}"} if packets else {}  # its report kept beside the plain run's
+    report = {**report_header("interactive", quick, load_before, arch=arch, config=config, **variant),
               "latency_target_ms": TARGET_LATENCY_MS, "still_rate_target": TARGET_STILL_RATE,
               "latency_ok": latency_ok, "rate_ok": rate_ok, "results": results,
               "plots": [plot.name] if plot else [], "total_seconds": time.perf_counter() - t_start}

@@ -65,11 +65,10 @@ class Report:
 
     @property
     def name(self) -> str:
-        """The benchmark, and the variant a run with options of its own is (`interactive
-        --packets 8`: interactive-packets8), kept beside the plain run's report."""
-        config = self.data.get("config")
-        packets = config.get("packets") if isinstance(config, dict) else None
-        return self.data["benchmark"] + (f"-packets{packets}" if packets else "")
+        """The benchmark, and the variant its header names for a run with options of its own
+        (`interactive --packets 8`: interactive-packets8), kept beside the plain run's report."""
+        variant = self.data.get("variant")
+        return self.data["benchmark"] + (f"-{variant}" if isinstance(variant, str) and variant else "")
 
     @property
     def benchmark(self) -> str:

@@ -355,6 +355,7 @@ def test_a_packets_run_of_the_interactive_benchmark_is_kept_beside_the_plain_one
     shutil.copytree(folder, source)
     packed = json.loads((source / "bench_interactive.json").read_text())
     packed["config"] = {**packed["config"], "packets": 8}
+    packed["variant"] = "packets8"  # as interactive.run writes it
     packed["command"] = "python app.py bench interactive --packets 8"
     packed["results"][0]["moving"]["pixel_share_median"] = 0.375
     (source / "bench_interactive_packets8.json").write_text(json.dumps(packed))
