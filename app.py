@@ -226,6 +226,9 @@ def build_parser() -> argparse.ArgumentParser:
                          help="seconds each renderer renders (default 10); the reference takes four times that")
     compare.add_argument("--size", type=_size, help="image size WxH (default: the scene's)")
     compare.add_argument("--threads", type=_positive_int, help="Mitsuba's threads (default: all, as Lantern's)")
+    compare.add_argument("--packets", type=int, choices=PACKET_CHOICES, default=0,
+                         help="trace Lantern's rays this many at a time on the CPU where the scene allows "
+                              "(renderer/packets/; default 0: one at a time)")
     compare.add_argument("--out-dir", type=Path, default=ROOT / "out", help="where the PNG and JSON go (default out/)")
     _add_input_options(compare)
 

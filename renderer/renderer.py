@@ -259,16 +259,13 @@ class Renderer:
         feature_samples = self._feature_samples()
         key = (integrator, features, sampler, feature_samples)
         if key not in self._packet_reasons:
-            from renderer.lights.lights import emitter_table
             from renderer.materials.kinds import NO_TEXTURE
             from renderer.packets.support import unsupported
 
-            emitters = (emitter_table(self.geometry, self.materials.arrays)["prim"] if self.scene.geometry == "mesh"
-                        else ())
             textured_emission = (self.scene.geometry == "mesh"
                                  and bool((self.materials.arrays["textures"][:, 3] != NO_TEXTURE).any()))
             self._packet_reasons[key] = unsupported(self.geometry, features, integrator, sampler,
-                                                    feature_samples, emitters, textured_emission)
+                                                    feature_samples, textured_emission)
         return self._packet_reasons[key]
 
     def packet_status(self, integrator: str, features: Features, sampler: str) -> str | None:

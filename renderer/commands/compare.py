@@ -1,4 +1,4 @@
-"""`python app.py compare SCENE [--time S]`: Lantern and Mitsuba 3 on the same scene, side by side.
+"""`python app.py compare SCENE [--time S] [--packets N]`: Lantern and Mitsuba 3 on the same scene, side by side.
 
 A Mitsuba 3 scene file (.xml) is given to Mitsuba as it is (its -D parameters too) and to Lantern
 through its reader; any other scene Mitsuba can express is converted by
@@ -11,6 +11,12 @@ and RMSE, the reference's noise floor subtracted), the time each needs to reach 
 (error ~ 1 / time for unbiased estimators), the image means, and whether Lantern's image agrees
 with Mitsuba's in expectation (renderer/bench/agreement.py: per-pixel z-tests at 1% with Sidak's
 correction, and the image mean); it writes a PNG of the two images and the |z| map, and a JSON.
+
+Both draw their samples alike: a converted scene gives Mitsuba the independent sampler, and
+Lantern renders it with its own independent sampler too (not the file's: a stratified sampler's
+lower error would be credited to the renderer); a Mitsuba file's sampler is read by both.
+--packets N traces Lantern's rays N at a time on the CPU (renderer/packets/), where the scene allows;
+the line printed says whether the packets were taken.
 """
 from __future__ import annotations
 
@@ -72,7 +78,8 @@ def run_compare(args) -> int:
             description, notes = scene_dict(scene, Path(mesh_dir), size)
             mitsuba_scene = mi.load_dict(description)
         mitsuba_load = time.perf_counter() - t0
-        result = _measure(mi, mitsuba_scene, scene, size, args.seconds)
+        sampler = scene.render.sampler if is_xml else "independent"
+        result = _measure(mi, mitsuba_scene, scene, size, args.seconds, getattr(args, "packets", 0) or 0, sampler)
     result.update(scene=str(path), size=list(size), mitsuba_variant=variant, mitsuba_note=note, notes=notes,
                   mitsuba_load_seconds=mitsuba_load, seconds=args.seconds)
     _print(result)
@@ -84,13 +91,14 @@ def run_compare(args) -> int:
     return 0
 
 
-def _measure(mi, mitsuba_scene, scene, size, seconds: float) -> dict:
+def _measure(mi, mitsuba_scene, scene, size, seconds: float, packets: int, sampler: str) -> dict:
     from renderer.camera import CameraFrame
-    from renderer.renderer import Renderer
+    from renderer.renderer import MeshOptions, Renderer
 
-    renderer = Renderer(scene, size)
+    renderer = Renderer(scene, size, MeshOptions(packets=packets))
     camera = CameraFrame.from_spec(scene.camera)
     integrator, depth = scene.render.integrator, scene.render.max_depth
+    packet_status = renderer.packet_status(integrator, renderer.features(camera), sampler)
 
     import taichi as ti
 
@@ -99,7 +107,7 @@ def _measure(mi, mitsuba_scene, scene, size, seconds: float) -> dict:
         spp, t0 = 0, time.perf_counter()
         launch = 1
         while True:
-            renderer.render(camera, launch, integrator, max_depth=depth, seed=1 + spp)
+            renderer.render(camera, launch, integrator, max_depth=depth, seed=1 + spp, sampler=sampler)
             ti.sync()
             spp += launch
             elapsed = time.perf_counter() - t0
@@ -115,7 +123,7 @@ def _measure(mi, mitsuba_scene, scene, size, seconds: float) -> dict:
         return Side(image, None, spp, time.perf_counter() - t0)
 
     t0 = time.perf_counter()
-    renderer.render(camera, 1, integrator, max_depth=depth, seed=0)  # compiles (or loads) the kernels
+    renderer.render(camera, 1, integrator, max_depth=depth, seed=0, sampler=sampler)  # compiles (or loads) the kernels
     lantern_start = time.perf_counter() - t0
     warm = mitsuba(1, 0)  # JIT-compiles Mitsuba's kernels
     mitsuba_start = warm.seconds
@@ -133,7 +141,9 @@ def _measure(mi, mitsuba_scene, scene, size, seconds: float) -> dict:
         rounds.append((ours, theirs))
     reference = _reference(mitsuba, rate, seconds)
     ours, theirs = rounds[-1]
-    return _judge(ours, theirs, reference, lantern_start, mitsuba_start, rounds)
+    result = _judge(ours, theirs, reference, lantern_start, mitsuba_start, rounds)
+    result["lantern"].update(sampler=sampler, packets=packets, packet_status=packet_status)
+    return result
 
 
 def _reference(mitsuba, rate: float, seconds: float) -> Side:
@@ -205,6 +215,8 @@ def _print(result: dict) -> None:
                  "s to the other's error", "image mean (R, G, B)"], rows,
                 title=f"{result['scene']} at {result['size'][0]}x{result['size'][1]}, {result['seconds']:g} s each "
                       f"(Mitsuba {result['mitsuba_variant']}; reference {result['reference']['spp']} spp)")
+    print(f"Lantern's sampler: {result['lantern']['sampler']}"
+          + (f"; {result['lantern']['packet_status']}" if result["lantern"]["packet_status"] else ""))
     a = result["agreement"]
     verdict = "agree" if a["passed"] else "DIFFER"
     print(f"Lantern vs Mitsuba's reference: {verdict} ({a['pixel_fraction_passing']:.2%} of pixel channels pass the "

@@ -1,5 +1,6 @@
-"""Light samples for a packet of path vertices: the scene's emissive triangles and quads, chosen by
-power (Vose's alias table, one gather per lane), and the environment: a constant one lane by lane,
+"""Light samples for a packet of path vertices: the scene's emissive triangles, quads and spheres,
+chosen by power (Vose's alias table, one gather per lane; a sphere's point by the cone it subtends,
+renderer/packets/sphere_lights.py), and the environment: a constant one lane by lane,
 a map or a sky through renderer/lights/lights.py's environment_direction, one lane after another
 (a map importance-sampled as the scalar path samples it).
 
@@ -18,6 +19,7 @@ import taichi as ti
 from renderer.lights.light_select import alias_table
 from renderer.lights.env_sampling import EnvironmentSampler
 from renderer.lights.lights import ENVIRONMENT_SHARE, emitter_table, environment_direction, environment_emits
+from renderer.packets import sphere_lights
 from renderer.packets.lanes import normalized, sincos_2pi
 from renderer.runtime.upload import upload_fields
 
@@ -28,7 +30,8 @@ INV_4PI = 1.0 / (4.0 * math.pi)
 class PacketLights:
     """Emitter selection on the device: alias columns (q, alias), each emitter's primitive, and
     per primitive the density of choosing a point on it by area (its pmf / area; 0 for
-    primitives that do not emit). `has_env`, `has_emitters`: compile-time, from the scene."""
+    primitives that do not emit). `has_env`, `has_emitters`, `has_spheres` (an emitter is a
+    sphere): compile-time, from the scene."""
 
     def __init__(self, geometry, records, materials, environment, environment_spec, env_image=None):
         """geometry: a MeshGeometry; records: its PrimitiveRecords; materials: its MaterialTable;
@@ -48,6 +51,8 @@ class PacketLights:
         table = emitter_table(geometry, materials.arrays)
         prims = table["prim"]
         self.has_emitters = len(prims) > 0
+        sphere_end = self.triangle_end + geometry.data.counts["sphere"]
+        self.has_spheres = bool(((prims >= self.triangle_end) & (prims < sphere_end)).any())
         n = max(1, len(prims))
         q, alias, prim = np.ones(n, np.float32), np.zeros(n, np.int32), np.zeros(n, np.int32)
         density = np.zeros(max(1, self.primitive_count), np.float32)
@@ -101,6 +106,20 @@ class PacketLights:
         dist = ti.sqrt(dist2)
         wx, wy, wz = normalized(wx, wy, wz)
         cos_l = -(nx * wx + ny * wy + nz * wz)  # > 0: the point's front faces p
+        by_cone = prim * 0  # sphere lanes whose point was drawn in the cone they subtend
+        cone = u * 0.0
+        if ti.static(self.has_spheres):
+            is_sphere = radius > 0.0
+            sx, sy, sz, snx, sny, snz, inside, cone = sphere_lights.sample(bx, by, bz, radius, px, py, pz, u1, u2)
+            qx, qy, qz = ti.select(is_sphere, sx, qx), ti.select(is_sphere, sy, qy), ti.select(is_sphere, sz, qz)
+            nx, ny, nz = ti.select(is_sphere, snx, nx), ti.select(is_sphere, sny, ny), ti.select(is_sphere, snz, nz)
+            area = ti.select(is_sphere, 4.0 * math.pi * radius * radius, area)
+            by_cone = ti.select(is_sphere & (inside == 0), 1, 0)
+            wx, wy, wz = qx - px, qy - py, qz - pz
+            dist2 = wx * wx + wy * wy + wz * wz
+            dist = ti.sqrt(dist2)
+            wx, wy, wz = normalized(wx, wy, wz)
+            cos_l = -(nx * wx + ny * wy + nz * wz)
         pmf_area = u * 0.0
         er, eg, eb = u * 0.0, u * 0.0, u * 0.0
         two_sided = prim * 0
@@ -110,6 +129,8 @@ class PacketLights:
             er[k], eg[k], eb[k] = emission.x, emission.y, emission.z
             two_sided[k] = self.materials.table[material[k]].two_sided_emission
         pdf = (1.0 - share) * pmf_area * dist2 / ti.max(ti.abs(cos_l), 1e-30)
+        if ti.static(self.has_spheres):  # by the cone: the sphere's chance (pmf_area x area) over its solid angle
+            pdf = ti.select(by_cone == 1, (1.0 - share) * pmf_area * area / ti.max(cone, 1e-30), pdf)
         lit = (cos_l > 0.0) | (two_sided != 0)
         ok = (area > 0.0) & (ti.abs(cos_l) > 0.0) & (dist2 > 0.0) & (count > 0)
         pdf = ti.select(ok, pdf, 0.0)
@@ -138,14 +159,21 @@ class PacketLights:
         return wx, wy, wz, dist, pdf, qx, qy, qz, nx, ny, nz, er, eg, eb, prim
 
     @ti.func
-    def pdf_hit(self, prim, dist2, cos_l):
-        """The solid-angle density with which `sample` would have chosen the point a BSDF-sampled
-        ray hit on `prim` at squared distance dist2, where the ray meets its surface at cosine
-        cos_l (lanes)."""
+    def pdf_hit(self, prim, dist2, cos_l, ox, oy, oz):
+        """The solid-angle density with which `sample` would have chosen, from the points o, the
+        point a BSDF-sampled ray hit on `prim` at squared distance dist2, where the ray meets its
+        surface at cosine cos_l (lanes)."""
         density = cos_l * 0.0
         for k in ti.static(range(cos_l.n)):
             density[k] = self.density[ti.max(prim[k], 0)]
-        return (1.0 - self.env_share[None]) * density * dist2 / ti.max(ti.abs(cos_l), 1e-30)
+        pdf = (1.0 - self.env_share[None]) * density * dist2 / ti.max(ti.abs(cos_l), 1e-30)
+        if ti.static(self.has_spheres):
+            bx, by, bz, scale, ux, uy, uz, radius, vx, vy, vz, material = self.records.gather(prim, cos_l)
+            inside, per_cone = sphere_lights.pdf_scale(bx, by, bz, radius, ox, oy, oz)
+            by_cone = (radius > 0.0) & (inside == 0)
+            pdf = ti.select(by_cone, (1.0 - self.env_share[None]) * density * 4.0 * math.pi * radius * radius
+                            * per_cone, pdf)
+        return pdf
 
     @ti.func
     def environment_seen(self, dx, dy, dz, missed):

@@ -1,7 +1,7 @@
 """The path tracer (`path`, `nee`, `mis`) for a packet of camera rays, lane by lane: the estimator
 of renderer/integrators/tracer.py for the scenes renderer/packets/support.py admits (every material
-kind but the null boundary, textures, maps and shading normals, emissive triangles and quads of
-one colour, any environment, no media).
+kind but the null boundary, textures, maps and shading normals, emissive triangles, quads and
+spheres of one colour, any environment, no media).
 
 Lambert surfaces are shaded in lane arithmetic. Lanes on any other kind of material, and every
 lane where the look of a surface point needs the geometry's own record (textures, maps, shading
@@ -220,7 +220,7 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
                 wx, wy, wz = px - prev_x, py - prev_y, pz - prev_z
                 dist2 = wx * wx + wy * wy + wz * wz
                 cos_l = (wx * nx + wy * ny + wz * nz) / ti.sqrt(ti.max(dist2, 1e-30))
-                light_pdf = ctx.lights.pdf_hit(prim, dist2, cos_l)
+                light_pdf = ctx.lights.pdf_hit(prim, dist2, cos_l, prev_x, prev_y, prev_z)
                 sampled = (prev_delta == 0) & (light_pdf > 0.0)
                 if ti.static(use_mis):
                     weight = ti.select(sampled, power_heuristic(prev_pdf, light_pdf), 1.0)

@@ -42,7 +42,7 @@ def on_cpu() -> bool:
     return ti.lang.impl.current_cfg().arch in (ti.x64, ti.arm64)
 
 
-def unsupported(geometry, features, integrator: str, sampler: str, feature_samples: bool, emitter_prims,
+def unsupported(geometry, features, integrator: str, sampler: str, feature_samples: bool,
                 textured_emission: bool = False) -> str | None:
     """None where the packet path renders this combination, else why not (a short phrase).
     feature_samples: the AOVs are kept with feature samples (renderer/film/aovs.py).
@@ -73,9 +73,4 @@ def unsupported(geometry, features, integrator: str, sampler: str, feature_sampl
         return "no packet form for textured emission"
     if features.light_kinds:
         return "point, spot and directional lights have no packet form"
-    data = geometry.data
-    sphere_lo = data.counts["triangle"]
-    sphere_hi = sphere_lo + data.counts["sphere"]
-    if any(sphere_lo <= int(g) < sphere_hi for g in emitter_prims):
-        return "emissive spheres have no packet light sample"
     return None
