@@ -250,6 +250,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="scenes: also render each scene that converts with Mitsuba 3 for the same time")
     bench.add_argument("--packets", type=int, choices=PACKET_CHOICES[1:],
                        help="interactive: the viewer traces this many rays at a time where a scene allows")
+    bench.add_argument("--flight", type=_positive_seconds, metavar="S",
+                       help="interactive: seconds of each view's flight, W held (default 2; 0.7 with --quick)")
     bench.add_argument("--time", type=float, metavar="S", dest="seconds",
                        help="scenes: seconds of sampling per scene (default 20; 2 with --quick)")
     return parser
@@ -381,6 +383,10 @@ def cmd_bench(args) -> int:
         if args.name != "interactive":
             raise ValueError(f"--packets is for bench interactive, not {args.name}")
         options["packets"] = args.packets
+    if args.flight is not None:
+        if args.name != "interactive":
+            raise ValueError(f"--flight is for bench interactive, not {args.name}")
+        options["flight"] = args.flight
     if args.mitsuba:
         if args.name != "scenes":
             raise ValueError(f"--mitsuba is for bench scenes, not {args.name}")

@@ -87,6 +87,13 @@ def pinhole_ray(u, v, aspect, origin, forward, right, up, half_height, orthograp
 
 
 @ti.func
+def pixel_footprint(half_height, height):
+    """A pixel's footprint, which ray cones start from and the SDF marcher scales its hit threshold
+    with: 2 half_height / height radians wide (perspective) or metres wide (orthographic)."""
+    return 2.0 * half_height / height
+
+
+@ti.func
 def generate_ray(x, y, width, height, jitter, sampler: ti.template(), state, origin, forward, right, up,
                  half_height, aperture, focus, depth_of_field: ti.template(), orthographic: ti.template()):
     """A camera ray through the point `jitter` of pixel (x, y)'s own [0, 1)^2 frame (y up; the pixel
@@ -98,9 +105,7 @@ def generate_ray(x, y, width, height, jitter, sampler: ti.template(), state, ori
         lens = concentric_disk(sampler.get2d(state, dims.LENS)) * aperture
         o = o + lens.x * right + lens.y * up
         d = ti.math.normalize(focus_point - o)
-    # A pixel's footprint, which the SDF marcher scales its hit threshold with: 2 half_height /
-    # height radians wide (perspective) or metres wide (orthographic).
-    pixel = 2.0 * half_height / height
+    pixel = pixel_footprint(half_height, height)
     cone_width = 0.0
     cone_spread = pixel
     if ti.static(orthographic):

@@ -39,7 +39,7 @@ LONGEST_FILES = (  # a cold run's order (clean offline cache, as in CI)
 
 
 # The full tier (`bash scripts/test.sh --full`; the default run leaves these out, marked slow).
-# Each costs 15-100 s on a clean machine, mostly compiling a kernel of its own, and repeats a
+# Each costs 10-100 s on a clean machine, mostly compiling a kernel of its own, and repeats a
 # property a default test holds on another case: the default run stays near 15 minutes on 2 cores.
 FULL_TIER = (
     # packets through every material, map and AOV case (default: textures at depth 2, glass AOVs)
@@ -51,6 +51,8 @@ FULL_TIER = (
     "tests/packets/test_packet_shading.py::test_packets_write_the_denoisers_aovs_as_the_scalar_path_does[materials-8]",
     "tests/packets/test_packet_shading.py::test_packets_write_the_denoisers_aovs_as_the_scalar_path_does[materials-1]",
     "tests/packets/test_packet_render.py::test_packets_draw_rays_from_the_pixel_filter_as_the_scalar_path_does[tent]",
+    # emissive spheres seen from inside (default: from outside; the inside branch's lanes alone)
+    "tests/packets/test_packet_sphere_lights.py::test_packets_sample_emissive_spheres_as_the_scalar_path_does[inside]",
     # the furnace under every integrator and glass (default: path, the shapes, SPPM's smooth glass)
     "tests/render/test_glass_furnace.py::test_every_white_glass_is_invisible_in_the_furnace[nee]",
     "tests/render/test_glass_furnace.py::test_every_white_glass_is_invisible_in_the_furnace[mis]",

@@ -85,23 +85,31 @@ class FrameInput:
     buttons: frozenset = frozenset()
     ctrl: bool = False  # Control down at the end of the frame (keys pressed with it come as "ctrl+z")
     released: tuple[str, ...] = ()  # keys and buttons released since the last frame ('LMB': a click ends)
+    chorded: bool = False  # Control is down and a ctrl+<key> came since it went down
 
 
-def poll_input(window, ctrl_before: bool = False) -> FrameInput:
-    """This frame's input. A key pressed in a frame in which Control was down (down at the end of
-    the last frame, `ctrl_before`, or pressed in this one) arrives as "ctrl+<key>": GGUI's events
-    carry no order between presses and releases, and a quick ctrl+s may end in the next frame."""
+def poll_input(window, before: Optional[FrameInput] = None) -> FrameInput:
+    """This frame's input, after the last frame's `before`. A key pressed in a frame in which
+    Control was down (down at the end of the last frame, or pressed in this one) arrives as
+    "ctrl+<key>": GGUI's events carry no order between presses and releases, and a quick ctrl+s
+    may end in the next frame. But once a ctrl+<key> has come while Control stayed down, a key
+    pressed in the frame that releases Control is taken as pressed after the release (p right
+    after ctrl+s is p, not ctrl+p)."""
     presses = [e.key for e in window.get_events(ti.ui.PRESS)]
     released = tuple(e.key for e in window.get_events(ti.ui.RELEASE))  # read, or GGUI keeps them queued
-    ctrl_down = ctrl_before or ti.ui.CTRL in presses
+    before = before or FrameInput()
+    chord_ended = before.chorded and ti.ui.CTRL in released and ti.ui.CTRL not in presses
+    ctrl_down = (before.ctrl and not chord_ended) or ti.ui.CTRL in presses
     pressed = tuple(f"ctrl+{key}" if ctrl_down else key for key in presses if key != ti.ui.CTRL)
     ctrl = bool(window.is_pressed(ti.ui.CTRL))  # (not from events: a release may not arrive as one)
+    # a chord came since Control went down (and it is still down)
+    chorded = ctrl and ((before.chorded and ti.ui.CTRL not in presses) or any(k.startswith("ctrl+") for k in pressed))
     held = {k for k in MOVEMENT_KEYS if window.is_pressed(k)}
     if window.is_pressed(ti.ui.SHIFT):
         held.add("shift")
     buttons = frozenset(b for b in (ti.ui.LMB, ti.ui.RMB) if window.is_pressed(b))
     x, y = window.get_cursor_pos()
-    return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons, ctrl, released)
+    return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons, ctrl, released, chorded)
 
 
 def camera_frame(state: CameraState) -> CameraFrame:
@@ -147,7 +155,7 @@ class ViewerApp:
         self.last_saved: Optional[Path] = None
         self._save_over_until = -1.0  # until when a ctrl+s saves over the scene's own file (asked once)
         self.highlight: Optional[tuple] = None  # (mask of the picked object's pixels, until when)
-        self._ctrl = False  # Control down at the end of the last frame's events
+        self._last_input = FrameInput()  # the last frame's (poll_input reads Control's state from it)
 
         path = Path(scene_path).resolve()
         scene_list = [Path(p).resolve() for p in (scenes if scenes is not None else scene_files())]
@@ -765,8 +773,8 @@ class ViewerApp:
     # --- the loop -----------------------------------------------------------------------------
     def run(self, max_frames: Optional[int] = None) -> int:
         while self.running and self.window.running and (max_frames is None or self.frames < max_frames):
-            inp = poll_input(self.window, self._ctrl) if self.show_window else FrameInput()
-            self._ctrl = inp.ctrl
+            inp = poll_input(self.window, self._last_input) if self.show_window else FrameInput()
+            self._last_input = inp
             self.step(inp)
         return 0
 

@@ -392,7 +392,8 @@ def write_plot(results: list[dict], out_dir: Path, suffix: str = "") -> Path | N
 
 
 def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, integrators=None, size=None,
-        packets: int = 0) -> int:
+        packets: int = 0, flight: float | None = None) -> int:
+    """flight: seconds of each view's moving phase (W held), instead of MOVING_SECONDS (QUICK's)."""
     from renderer.scene.catalog import resolve_scene, scene_files
     from viewer.window import ViewerApp
 
@@ -405,6 +406,8 @@ def run(quick: bool = False, out_dir: Path = Path("reports"), scenes=None, integ
         config["integrators"] = tuple(integrators)
     if size is not None:
         config["size"] = tuple(size)
+    if flight is not None:
+        config["moving_seconds"] = float(flight)
     if packets:
         config["packets"] = packets
     suffix = f"_packets{packets}" if packets else ""

@@ -10,7 +10,7 @@ pixels, whose camera rays stay together through the first hit.
 """
 import taichi as ti
 
-from renderer.camera import pinhole_ray
+from renderer.camera import pinhole_ray, pixel_footprint
 from renderer.film.adaptive import STOPPED
 from renderer.film.band_table import pass_layout, pass_pixel
 from renderer.film.pixel_filter import pixel_sample
@@ -146,7 +146,7 @@ class PacketProgram:
                     spread = jx * 0.0
                     if ti.static(self.filters_textures):
                         for k in range(lanes):
-                            spread[k] = 2.0 * half_height / full_height * footprint_shrink(first[k] + s)
+                            spread[k] = pixel_footprint(half_height, full_height) * footprint_shrink(first[k] + s)
                     u = 2.0 * (ti.cast(xs + window_x, ti.f32) + jx) / full_width - 1.0
                     v = 2.0 * (ti.cast(ys + window_y, ti.f32) + jy) / full_height - 1.0
                     for k in range(lanes):

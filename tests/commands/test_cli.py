@@ -331,3 +331,16 @@ def test_the_packet_choices_are_the_packet_widths_and_zero():
     from renderer.packets.support import PACKET_WIDTHS
 
     assert app.PACKET_CHOICES == (0, *PACKET_WIDTHS)
+
+
+def test_bench_flight_reaches_the_interactive_benchmark_and_only_it(capsys, monkeypatch):
+    import renderer.bench.interactive as interactive
+
+    calls = []
+    monkeypatch.setattr(interactive, "run", lambda **options: calls.append(options) or 0)
+    code, _, _ = run_main(["bench", "interactive", "--flight", "10", "--packets", "4"], capsys)
+    assert code == 0 and calls[-1]["flight"] == 10.0 and calls[-1]["packets"] == 4
+    code, _, err = run_main(["bench", "bvh", "--flight", "10"], capsys)
+    assert code == 2 and "--flight is for bench interactive, not bvh" in one_line_error(err)
+    with pytest.raises(SystemExit):
+        app.build_parser().parse_args(["bench", "interactive", "--flight", "0"])
