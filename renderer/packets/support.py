@@ -29,8 +29,12 @@ PACKET_WIDTHS = (4, 8, 16)
 # rays, closest + shadow: the 1M-triangle stress scene 2.44 M rays/s in packets of 4 against 5.10
 # one at a time; bunnies, studio, many_lights (15-26k primitives) 14.7 / 23.3 / 6.8 against 12.0 /
 # 13.7 / 6.4). Whole renders of stress: packets 0.72x the scalar path, with scalar bounces 1.00x.
-# Between 26k and 1M nothing was measured: the threshold is their geometric mean.
-SCALAR_BOUNCE_PRIMITIVES = 160_000
+# Whole `mis` renders in packets of 4 against one ray at a time, packet / scalar bounces
+# (docs/findings.md, "Bounce rays one at a time from 32,000 primitives"): Mitsuba's 61,600-triangle
+# material-preview mesh 0.78x / 1.00x (textured: 0.78x / 0.92x); many_lights (25.7k) 3.01x /
+# 3.03x; bunnies (17.0k) 1.11x / 1.05x; studio (14.8k) 1.02x / 1.06x. The threshold lies between
+# the bunnies and the preview mesh (their geometric mean, rounded).
+SCALAR_BOUNCE_PRIMITIVES = 32_000
 
 
 def scalar_bounces(geometry) -> bool:
