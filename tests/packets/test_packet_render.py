@@ -130,3 +130,32 @@ def test_packets_are_taken_only_where_the_scene_has_a_packet_form(tmp_path):
     assert isinstance(textured.program("mis", textured.features()), RenderProgram)
     with pytest.raises(ValueError, match="packets of 3 rays"):
         Renderer(load_any(CORNELL), (8, 8), MeshOptions(packets=3))
+
+
+def grid_obj(directory: Path, triangles: int) -> Path:
+    """A flat grid of `triangles` triangles (two a cell, one row) as an OBJ file."""
+    cells = triangles // 2
+    xs = np.arange(cells + 1, dtype=np.float64) * 0.01
+    vertices = [f"v {x:.4f} 0 {z}" for z in (0.0, 0.01) for x in xs]
+    faces = []
+    for i in range(cells):
+        a, b, c, d = i + 1, i + 2, cells + 2 + i, cells + 3 + i
+        faces += [f"f {a} {b} {d}", f"f {a} {d} {c}"]
+    path = directory / f"grid{triangles}.obj"
+    path.write_text("\n".join(vertices + faces) + "\n")
+    return path
+
+
+def test_large_worlds_trace_bounce_rays_one_lane_at_a_time_and_say_so(tmp_path):
+    """From support.SCALAR_BOUNCE_PRIMITIVES on, bounce and shadow rays go one lane at a time
+    (a packet's incoherent rays visit more nodes than a ray does), and the status line says so."""
+    from renderer.packets import support
+
+    limit = support.SCALAR_BOUNCE_PRIMITIVES
+    for triangles, one_at_a_time in ((limit - 2, False), (limit, True)):
+        r = Renderer(load_any(grid_obj(tmp_path, triangles)), (8, 8), MeshOptions(packets=4))
+        assert r.geometry.primitive_count() == triangles
+        status = r.packet_status("mis", r.features(), "independent")
+        assert status.startswith("packets of 4 rays: taken")
+        assert ("bounce and shadow rays one at a time" in status) == one_at_a_time, status
+        assert support.scalar_bounces(r.geometry) == one_at_a_time
