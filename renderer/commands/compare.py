@@ -79,7 +79,7 @@ def run_compare(args) -> int:
             mitsuba_scene = mi.load_dict(description)
         mitsuba_load = time.perf_counter() - t0
         sampler = scene.render.sampler if is_xml else "independent"
-        result = _measure(mi, mitsuba_scene, scene, size, args.seconds, getattr(args, "packets", 0) or 0, sampler)
+        result = _measure(mi, mitsuba_scene, scene, size, args.seconds, args.packets, sampler)
     result.update(scene=str(path), size=list(size), mitsuba_variant=variant, mitsuba_note=note, notes=notes,
                   mitsuba_load_seconds=mitsuba_load, seconds=args.seconds)
     _print(result)

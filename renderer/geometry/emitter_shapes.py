@@ -83,8 +83,13 @@ def disc_pdf(normal, radius, ref, p, n):
     return area_to_solid_angle(1.0 / (PI * radius * radius), ref, p, normal)
 
 
+# A reference point within this many r^2 (squared distance) of a sphere's centre counts as inside or
+# on it: its points are then chosen by area, not by the cone (renderer/packets/sphere_lights.py too)
+SPHERE_INSIDE_SLACK = 1.0001
+
+
 @ti.func
-def _cone_solid_angle(sin2_max):
+def cone_solid_angle(sin2_max):
     # 2 pi (1 - cos(theta_max)), written as 2 pi sin^2 / (1 + cos) to keep small cones accurate.
     cos_max = ti.sqrt(ti.max(0.0, 1.0 - sin2_max))
     return 2.0 * PI * sin2_max / (1.0 + cos_max), cos_max
@@ -96,7 +101,7 @@ def sphere_sample(centre, radius, ref, u):
     d2 = to_c.dot(to_c)
     r2 = radius * radius
     result = EmitterPoint(p=centre, n=vec3(0.0, 1.0, 0.0), uv=ti.math.vec2(0.0), pdf=0.0)
-    if d2 <= r2 * 1.0001:
+    if d2 <= r2 * SPHERE_INSIDE_SLACK:
         # Inside (or on) the sphere: uniform over its area.
         z = 1.0 - 2.0 * u.x
         s = ti.sqrt(ti.max(0.0, 1.0 - z * z))
@@ -108,7 +113,7 @@ def sphere_sample(centre, radius, ref, u):
         dc = ti.sqrt(d2)
         wc = to_c / dc
         sin2_max = r2 / d2
-        cone, cos_max = _cone_solid_angle(sin2_max)
+        cone, cos_max = cone_solid_angle(sin2_max)
         # Uniform in the cone; 1 - cos(theta) = u (1 - cos_max), kept in that form for precision.
         one_minus_cos = u.x * sin2_max / (1.0 + cos_max)
         cos_t = 1.0 - one_minus_cos
@@ -130,9 +135,9 @@ def sphere_pdf(centre, radius, ref, p, n):
     d2 = to_c.dot(to_c)
     r2 = radius * radius
     pdf = 0.0
-    if d2 <= r2 * 1.0001:
+    if d2 <= r2 * SPHERE_INSIDE_SLACK:
         pdf = area_to_solid_angle(1.0 / (4.0 * PI * r2), ref, p, n)
     else:
-        cone, _ = _cone_solid_angle(r2 / d2)
+        cone, _ = cone_solid_angle(r2 / d2)
         pdf = 1.0 / cone
     return pdf

@@ -101,11 +101,6 @@ class PacketLights:
         area = ti.select(is_triangle, 0.5 * length, length)
         inv_len = 1.0 / ti.max(length, 1e-30)
         nx, ny, nz = cx * inv_len, cy * inv_len, cz * inv_len
-        wx, wy, wz = qx - px, qy - py, qz - pz
-        dist2 = wx * wx + wy * wy + wz * wz
-        dist = ti.sqrt(dist2)
-        wx, wy, wz = normalized(wx, wy, wz)
-        cos_l = -(nx * wx + ny * wy + nz * wz)  # > 0: the point's front faces p
         by_cone = prim * 0  # sphere lanes whose point was drawn in the cone they subtend
         cone = u * 0.0
         if ti.static(self.has_spheres):
@@ -115,11 +110,11 @@ class PacketLights:
             nx, ny, nz = ti.select(is_sphere, snx, nx), ti.select(is_sphere, sny, ny), ti.select(is_sphere, snz, nz)
             area = ti.select(is_sphere, 4.0 * math.pi * radius * radius, area)
             by_cone = ti.select(is_sphere & (inside == 0), 1, 0)
-            wx, wy, wz = qx - px, qy - py, qz - pz
-            dist2 = wx * wx + wy * wy + wz * wz
-            dist = ti.sqrt(dist2)
-            wx, wy, wz = normalized(wx, wy, wz)
-            cos_l = -(nx * wx + ny * wy + nz * wz)
+        wx, wy, wz = qx - px, qy - py, qz - pz
+        dist2 = wx * wx + wy * wy + wz * wz
+        dist = ti.sqrt(dist2)
+        wx, wy, wz = normalized(wx, wy, wz)
+        cos_l = -(nx * wx + ny * wy + nz * wz)  # > 0: the point's front faces p
         pmf_area = u * 0.0
         er, eg, eb = u * 0.0, u * 0.0, u * 0.0
         two_sided = prim * 0

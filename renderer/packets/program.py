@@ -125,6 +125,7 @@ class PacketProgram:
                 work_r = ti.Vector([0.0] * lanes, dt=ti.f32)
                 traces = ti.math.ivec4(0)
                 aspect = full_width / full_height
+                footprint = pixel_footprint(half_height, full_height)  # a pixel's, before its samples narrow it
                 for s in range(spp):
                     # Each lane's key alone: sample_key on lanes whose values were set under
                     # branches trips an assertion of Taichi 1.7.4's store-to-load forwarding.
@@ -146,7 +147,7 @@ class PacketProgram:
                     spread = jx * 0.0
                     if ti.static(self.filters_textures):
                         for k in range(lanes):
-                            spread[k] = pixel_footprint(half_height, full_height) * footprint_shrink(first[k] + s)
+                            spread[k] = footprint * footprint_shrink(first[k] + s)
                     u = 2.0 * (ti.cast(xs + window_x, ti.f32) + jx) / full_width - 1.0
                     v = 2.0 * (ti.cast(ys + window_y, ti.f32) + jy) / full_height - 1.0
                     for k in range(lanes):

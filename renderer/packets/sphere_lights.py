@@ -2,25 +2,24 @@
 sphere_pdf in lane arithmetic. Seen from outside, a direction uniform in the cone the sphere
 subtends, to the nearest point along it; from inside (or on) it, a point uniform over its area.
 
-The cone's solid angle is 2 pi sin^2 / (1 + cos) of its half angle, and a direction's 1 - cos
-theta is drawn in that form too, so small or distant spheres (a sun) keep their precision in f32.
+The cone's solid angle is emitter_shapes.cone_solid_angle's (2 pi sin^2 / (1 + cos) of its half
+angle), and a direction's 1 - cos theta is drawn in that form too, so small or distant spheres (a
+sun) keep their precision in f32.
 """
-import math
-
 import taichi as ti
 
+from renderer.geometry.emitter_shapes import SPHERE_INSIDE_SLACK, cone_solid_angle
 from renderer.packets.lanes import basis, sincos_2pi
-
-INSIDE_SLACK = 1.0001  # squared distances up to this many r^2 count as on the sphere (emitter_shapes)
 
 
 @ti.func
 def _cone(d2, r2):
     """(sin^2 of the cone's half angle, its cosine, the cone's solid angle) of a sphere of squared
-    radius r2 seen from squared distance d2 outside it."""
+    radius r2 seen from squared distance d2, and whether that point is inside (i32 lanes; there
+    sin^2 is held at 1, the cone unused)."""
     sin2_max = ti.min(r2 / ti.max(d2, 1e-30), 1.0)
-    cos_max = ti.sqrt(ti.max(0.0, 1.0 - sin2_max))
-    return sin2_max, cos_max, 2.0 * math.pi * sin2_max / (1.0 + cos_max)
+    cone, cos_max = cone_solid_angle(sin2_max)
+    return sin2_max, cos_max, cone, ti.select(d2 <= r2 * SPHERE_INSIDE_SLACK, 1, 0)
 
 
 @ti.func
@@ -31,13 +30,12 @@ def sample(cx, cy, cz, radius, px, py, pz, u1, u2):
     tx, ty, tz = cx - px, cy - py, cz - pz
     d2 = tx * tx + ty * ty + tz * tz
     r2 = radius * radius
-    inside = d2 <= r2 * INSIDE_SLACK
+    sin2_max, cos_max, cone, inside = _cone(d2, r2)
     s, c = sincos_2pi(u2)
     # from outside: a direction in the cone, then the angle at the centre of the point it meets
     dc = ti.sqrt(d2)
     inv = 1.0 / ti.max(dc, 1e-30)
     ax, ay, az = -tx * inv, -ty * inv, -tz * inv  # from the centre towards p
-    sin2_max, cos_max, cone = _cone(d2, r2)
     one_minus_cos = u1 * sin2_max / (1.0 + cos_max)
     cos_t = 1.0 - one_minus_cos
     sin2_t = ti.max(0.0, one_minus_cos * (2.0 - one_minus_cos))
@@ -51,8 +49,9 @@ def sample(cx, cy, cz, radius, px, py, pz, u1, u2):
     # from inside: uniform over the whole sphere
     z = 1.0 - 2.0 * u1
     rz = ti.sqrt(ti.max(0.0, 1.0 - z * z))
-    nx, ny, nz = ti.select(inside, rz * c, nx), ti.select(inside, rz * s, ny), ti.select(inside, z, nz)
-    return cx + radius * nx, cy + radius * ny, cz + radius * nz, nx, ny, nz, ti.select(inside, 1, 0), cone
+    from_inside = inside == 1
+    nx, ny, nz = ti.select(from_inside, rz * c, nx), ti.select(from_inside, rz * s, ny), ti.select(from_inside, z, nz)
+    return cx + radius * nx, cy + radius * ny, cz + radius * nz, nx, ny, nz, inside, cone
 
 
 @ti.func
@@ -62,6 +61,5 @@ def pdf_scale(cx, cy, cz, radius, px, py, pz):
     density is by area, as a flat emitter's (the caller's)."""
     tx, ty, tz = cx - px, cy - py, cz - pz
     d2 = tx * tx + ty * ty + tz * tz
-    r2 = radius * radius
-    sin2_max, cos_max, cone = _cone(d2, r2)
-    return ti.select(d2 <= r2 * INSIDE_SLACK, 1, 0), 1.0 / ti.max(cone, 1e-30)
+    sin2_max, cos_max, cone, inside = _cone(d2, radius * radius)
+    return inside, 1.0 / ti.max(cone, 1e-30)
