@@ -29,7 +29,6 @@ import math
 import os
 import sys
 import time
-from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 from typing import Callable, NamedTuple, Optional
@@ -50,6 +49,7 @@ from viewer import hud
 from viewer.camera_state import CameraState
 from viewer.denoise_worker import BackgroundDenoiser
 from viewer.display import DenoisedDisplay, DisplayImages, DisplaySettings, show_on_canvas, tinted
+from viewer.frame_input import FrameInput, poll_input
 from viewer.hotkeys import KeyMap
 from viewer.light_panel import draw_light_panel
 from viewer.material_panel import draw_environment_panel, draw_material_panel, panel_rect
@@ -61,55 +61,11 @@ from viewer.session import (DEFAULT_TARGET_SECONDS, MAX_PRESENT_INTERVAL, MOVING
 
 TITLE = "Lantern"
 DEFAULT_SIZE = (960, 540)
-MOVEMENT_KEYS = ("w", "a", "s", "d", "q", "e")
 MAX_QUEUED_KEYS = 32
 CTRL_ACTIONS = {"ctrl+z": "undo_edit", "ctrl+y": "redo_edit", "ctrl+s": "save_scene"}
 HIGHLIGHT_SECONDS = 1.0  # how long a picked object stays tinted
 SAVE_OVER_SECONDS = 5.0  # a second ctrl+s within this saves over the scene's own file
 CLICK_TOLERANCE = 0.004  # how far (window fractions) a press may move and still be a click, not a drag
-
-
-@dataclass(frozen=True)
-class FrameInput:
-    """One frame of user input, as GGUI reports it (or as a test makes it up).
-
-    pressed: keys pressed since the last frame, GGUI names ('p', 'Escape', 'LMB'...).
-    held:    movement keys held now, lower case ('w', ..., 'shift').
-    cursor:  GGUI cursor position, [0, 1]^2 with the origin at the bottom left; None = unknown.
-    buttons: mouse buttons held now ('LMB', 'RMB').
-    """
-
-    pressed: tuple[str, ...] = ()
-    held: frozenset = frozenset()
-    cursor: Optional[tuple[float, float]] = None
-    buttons: frozenset = frozenset()
-    ctrl: bool = False  # Control down at the end of the frame (keys pressed with it come as "ctrl+z")
-    released: tuple[str, ...] = ()  # keys and buttons released since the last frame ('LMB': a click ends)
-    chorded: bool = False  # Control is down and a ctrl+<key> came since it went down
-
-
-def poll_input(window, before: Optional[FrameInput] = None) -> FrameInput:
-    """This frame's input, after the last frame's `before`. A key pressed in a frame in which
-    Control was down (down at the end of the last frame, or pressed in this one) arrives as
-    "ctrl+<key>": GGUI's events carry no order between presses and releases, and a quick ctrl+s
-    may end in the next frame. But once a ctrl+<key> has come while Control stayed down, a key
-    pressed in the frame that releases Control is taken as pressed after the release (p right
-    after ctrl+s is p, not ctrl+p)."""
-    presses = [e.key for e in window.get_events(ti.ui.PRESS)]
-    released = tuple(e.key for e in window.get_events(ti.ui.RELEASE))  # read, or GGUI keeps them queued
-    before = before or FrameInput()
-    chord_ended = before.chorded and ti.ui.CTRL in released and ti.ui.CTRL not in presses
-    ctrl_down = (before.ctrl and not chord_ended) or ti.ui.CTRL in presses
-    pressed = tuple(f"ctrl+{key}" if ctrl_down else key for key in presses if key != ti.ui.CTRL)
-    ctrl = bool(window.is_pressed(ti.ui.CTRL))  # (not from events: a release may not arrive as one)
-    # a chord came since Control went down (and it is still down)
-    chorded = ctrl and ((before.chorded and ti.ui.CTRL not in presses) or any(k.startswith("ctrl+") for k in pressed))
-    held = {k for k in MOVEMENT_KEYS if window.is_pressed(k)}
-    if window.is_pressed(ti.ui.SHIFT):
-        held.add("shift")
-    buttons = frozenset(b for b in (ti.ui.LMB, ti.ui.RMB) if window.is_pressed(b))
-    x, y = window.get_cursor_pos()
-    return FrameInput(pressed, frozenset(held), (float(x), float(y)), buttons, ctrl, released, chorded)
 
 
 def camera_frame(state: CameraState) -> CameraFrame:
