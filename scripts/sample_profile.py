@@ -137,9 +137,10 @@ def packet_stage_kernels(program, width: int, height: int):
     from renderer.sampling.rng import sample_key, uniform
 
     lanes = program.width
-    if program.has_general:
-        raise SystemExit("the packet stage table shades Lambert lanes only: this scene's lanes take the scalar "
-                         "BSDF (materials other than Lambert's, or shading normals)")
+    if program.has_general or program.shading_normals:
+        raise SystemExit("the packet stage table shades Lambert lanes about the geometric normal only: this "
+                         "scene's lanes take the scalar BSDF (materials other than Lambert's, textures or maps) "
+                         "or vertex normals")
     if width % lanes:
         raise SystemExit(f"--size must be a multiple of the packet width {lanes}")
     out = ti.field(ti.f32, shape=(width // lanes, height))

@@ -3,9 +3,10 @@ of renderer/integrators/tracer.py for the scenes renderer/packets/support.py adm
 kind but the null boundary, textures, maps and shading normals, emissive triangles, quads and
 spheres of one colour, any environment, no media).
 
-Lambert surfaces are shaded in lane arithmetic. Lanes on any other kind of material, and every
-lane where the look of a surface point needs the geometry's own record (textures, maps, shading
-normals: the program's surface_records), are `general`: compiled only where a scene has them,
+Lambert surfaces are shaded in lane arithmetic, about the shading normal (vertex normals
+interpolated, renderer/packets/shading_normals.py). Lanes on any other kind of material, and every
+lane where the look of a surface point needs the geometry's own record (textures, maps, vertex
+colours: the program's surface_records), are `general`: compiled only where a scene has them,
 they take the scalar BSDF (renderer/materials/bsdf.py) one lane after another in a run-time loop:
 its value and density toward the light sample and its own sample, with the same random numbers
 per decision as the scalar tracer. Rays carry cones for texture filtering as the scalar path's.
@@ -20,11 +21,11 @@ faces where the material says so) are the scalar tracer's; light selection is Pa
 import taichi as ti
 
 from renderer.geometry.interface import INF, Hit, Ray, Surface
-from renderer.geometry.shading import consistent_shading_normal
 from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
 from renderer.materials.kinds import KIND_IDS
-from renderer.packets import traversal
-from renderer.packets.lanes import any_lane, cosine_hemisphere, mask, offset_origin, seeded
+from renderer.packets import lambert, traversal
+from renderer.packets.lanes import any_lane, mask, offset_origin, seeded
+from renderer.packets.shading_normals import consistent_normals, interpolated_normals
 from renderer.packets.surfaces import hit_surface
 from renderer.sampling import dims
 from renderer.sampling.rng import uniform
@@ -61,16 +62,17 @@ def leave(px, py, pz, nx, ny, nz, eps, toward):
 
 @ti.func
 def _general_lanes(ctx: ti.template(), toward_light: ti.template(), last, key, dim, general, ox, oy, oz, t, b1,
-                   b2, prim, cone, spread, px, py, pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz, v1, v2,
-                   bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta):
+                   b2, prim, cone, spread, px, py, pz, nx, ny, nz, snx, sny, snz, dx, dy, dz, material, wx, wy, wz,
+                   v1, v2, bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid,
+                   next_delta):
     """The lanes of `general` (materials other than Lambert's) through the scalar BSDF, one after
     another (a run-time loop: the BSDF's code is compiled once, not once a lane): with
     toward_light, f cos and the density toward the light direction w (0 where the material has no
     smooth part, as the scalar tracer samples no light there); then the BSDF's own sample, from
     the numbers (BSDF_LOBE, v1, v2) the scalar tracer draws. The ray (o, its cone's width and
     spread) and its hit (t, b1, b2, prim) make the geometry's own surface record where the program
-    takes surface records (otherwise the record is the point's and its geometric normal's, all an
-    untextured material reads of it). `last`: the path's last vertex, which only shades (for its
+    takes surface records (otherwise the record is the point's, its geometric normal's and its
+    shading normal's sn, all an untextured material reads of it). `last`: the path's last vertex, which only shades (for its
     AOVs). Returns the lanes given, with the general lanes' values in place: (f cos rgb, bsdf_pdf,
     usable, the next direction xyz, its weight rgb, pdf, valid, delta), then the general lanes'
     AOV albedo rgb and shading normal xyz and whether the material has a smooth part."""
@@ -89,9 +91,9 @@ def _general_lanes(ctx: ti.template(), toward_light: ti.template(), last, key, d
                     Ray(o=ti.math.vec3(ox[k], oy[k], oz[k]), d=-wo, cone_width=cone[k], cone_spread=spread[k]),
                     Hit(hit=1, t=t[k], prim=prim[k], bary=ti.math.vec2(b1[k], b2[k]), instance=-1))
                 n = surface.n_geo
-            else:  # what shade reads of a record without shading normals, textures or maps
+            else:  # what shade reads of a record without textures or maps
                 surface = Surface(p=ti.math.vec3(px[k], py[k], pz[k]), n_geo=n,
-                                  n_shading=consistent_shading_normal(n, n, wo), material=material[k],
+                                  n_shading=ti.math.vec3(snx[k], sny[k], snz[k]), material=material[k],
                                   front_face=ti.select(wo.dot(n) > 0.0, 1, 0))
             mat, ns = ctx.bsdf.shade(surface, wo)
             has_smooth = ctx.bsdf.has_smooth_part(mat)
@@ -201,6 +203,13 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
         px, py, pz, nx, ny, nz, eps, material = hit_surface(ctx.records, ti.static("sphere" in geometry.kinds), prim, t,
                                                             b1, b2, ox, oy, oz, dx, dy, dz)
         cos_o = -(dx * nx + dy * ny + dz * nz)  # wo . n: > 0 on the front face
+        # The shading normal, as the scalar path's surface record has it (consistent with the viewer;
+        # where the world has vertex normals, a triangle's interpolated)
+        snx, sny, snz = nx, ny, nz
+        if ti.static(not ctx.surface_records):
+            if ti.static(ctx.shading_normals):
+                snx, sny, snz = interpolated_normals(geometry, prim, b1, b2, nx, ny, nz)
+            snx, sny, snz = consistent_normals(snx, sny, snz, nx, ny, nz, -dx, -dy, -dz)
         ar, ag, ab = zero, zero, zero
         er, eg, eb = zero, zero, zero
         two_sided = live * 0
@@ -241,9 +250,8 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
                     break
             else:
                 break
-        # the Lambert lobe on wo's side of the surface
-        side = ti.select(cos_o >= 0.0, 1.0, -1.0)
-        fx, fy, fz = side * nx, side * ny, side * nz
+        # the Lambert lobe about the shading normal on wo's side
+        fx, fy, fz = lambert.lobe_normal(snx, sny, snz, cos_o)
         # the next direction's numbers; a Lambert lane's direction, cosine-weighted about its side's
         # normal (not computed where surface records send every lane to the scalar BSDF)
         v1, v2 = uniform2(key, dim + dims.BSDF_DIRECTION)
@@ -253,10 +261,8 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
         next_valid = live * 0
         next_delta = live * 0
         if ti.static(not ctx.surface_records):
-            cos_t = zero
-            bx, by, bz, cos_t = cosine_hemisphere(v1, v2, fx, fy, fz)
-            next_pdf = cos_t * INV_PI
-            next_valid = mask(cos_t > 0.0)
+            bx, by, bz, next_pdf, next_valid = lambert.sample(v1, v2, fx, fy, fz, snx, sny, snz, nx, ny, nz, -dx,
+                                                              -dy, -dz)
         # the light sample (none at the last vertex)
         wx, wy, wz, pdf, qx, qy, qz, qnx, qny, qnz, rr, rg, rb = zero, zero, zero, zero, zero, zero, zero, zero, zero, \
             zero, zero, zero, zero
@@ -269,27 +275,21 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
                 u1, u2 = uniform2(key, dim + dims.LIGHT_POINT)
                 wx, wy, wz, dist, pdf, qx, qy, qz, qnx, qny, qnz, rr, rg, rb, light = ctx.lights.sample(
                     px, py, pz, uniform(key, dim + dims.LIGHT_SELECT), u1, u2)
-                cos_i = wx * fx + wy * fy + wz * fz
-                bsdf_pdf = cos_i * INV_PI
-                usable = mask(cos_i > 0.0)
+                cos_i, bsdf_pdf, usable = lambert.toward(wx, wy, wz, fx, fy, fz, snx, sny, snz, nx, ny, nz, -dx, -dy,
+                                                         -dz)
         # General lanes: f cos toward the light (Lambert lanes' is albedo * cos_i / pi), their own
         # sample, and what their AOVs are
         gr, gg, gb = zero, zero, zero
         albedo_r, albedo_g, albedo_b = ar, ag, ab
-        shading_x, shading_y, shading_z = nx, ny, nz
+        shading_x, shading_y, shading_z = snx, sny, snz
         smooth = live
-        if ti.static(aovs):  # a Lambert lane's shading normal: its plain surface record's
-            for k in ti.static(range(ox.n)):
-                n = ti.math.vec3(nx[k], ny[k], nz[k])
-                ns = consistent_shading_normal(n, n, -ti.math.vec3(dx[k], dy[k], dz[k]))
-                shading_x[k], shading_y[k], shading_z[k] = ns.x, ns.y, ns.z
         if ti.static(has_general):
             if any_lane(general):
                 gr, gg, gb, bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, \
                     next_delta, g_albedo_r, g_albedo_g, g_albedo_b, g_x, g_y, g_z, g_smooth = _general_lanes(
                         ctx, ti.static(light_sampling), last, key, dim, general, ox, oy, oz, t, b1, b2, prim, cone,
-                        spread, px, py, pz, nx, ny, nz, dx, dy, dz, material, wx, wy, wz, v1, v2, bsdf_pdf, usable,
-                        bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta)
+                        spread, px, py, pz, nx, ny, nz, snx, sny, snz, dx, dy, dz, material, wx, wy, wz, v1, v2,
+                        bsdf_pdf, usable, bx, by, bz, weight_r, weight_g, weight_b, next_pdf, next_valid, next_delta)
                 is_general = general == 1
                 albedo_r = ti.select(is_general, g_albedo_r, albedo_r)
                 albedo_g = ti.select(is_general, g_albedo_g, albedo_g)

@@ -47,9 +47,12 @@ class PacketProgram:
         self.aovs = aovs
         self.writes_aovs = aovs is not None
         # Every lane takes the geometry's own surface record and the scalar BSDF where what the
-        # surface point looks like varies over a primitive or needs more than its kind and base colour
-        # (shading normals, textures, maps, vertex colours, mixes, anisotropic frames, one-sided faces)
-        self.surface_records = geometry.has_normals or any(getattr(features, name) for name in SURFACE_FEATURES)
+        # surface point looks like varies over a primitive or needs more than its kind, base colour and
+        # shading normal (textures, maps, vertex colours, mixes, anisotropic frames, one-sided faces)
+        self.surface_records = any(getattr(features, name) for name in SURFACE_FEATURES)
+        # Vertex normals, interpolated in lanes (renderer/packets/shading_normals.py) where the
+        # records are not taken
+        self.shading_normals = geometry.has_normals
         # The scalar BSDF, for those lanes and the lanes on materials other than Lambert's
         # (renderer/packets/path.py); None where neither is found, which then compile none of it
         self.has_general = bool(set(features.material_kinds) - {"diffuse"}) or self.surface_records

@@ -55,8 +55,9 @@ def test_packets_render_every_material_as_the_scalar_path_does(tmp_path):
 
 
 def test_packets_render_shading_normals_as_the_scalar_path_does(tmp_path):
-    """A mesh with vertex normals: every lane's surface record is the geometry's own (its shading
-    normal), shaded by the scalar BSDF, Lambert lanes too; the image is the scalar path's."""
+    """A mesh with vertex normals: Lambert lanes interpolate them in lane arithmetic, the gold ball's
+    lanes hand them to the scalar BSDF with a plain record (no surface records); the image is the
+    scalar path's."""
     import trimesh
 
     ball = trimesh.creation.icosphere(subdivisions=1, radius=0.3)  # coarse: the normals matter
@@ -70,7 +71,8 @@ def test_packets_render_shading_normals_as_the_scalar_path_does(tmp_path):
     scalar = render(scene, 0, "mis", seed=31, spp=256, size=(20, 20))
     packed = render(scene, 4, "mis", seed=32, spp=256, size=(20, 20))
     assert packed.geometry.has_normals
-    assert isinstance(packed.program("mis", packed.features(), "independent"), PacketProgram)
+    program = packed.program("mis", packed.features(), "independent")
+    assert isinstance(program, PacketProgram) and program.shading_normals and not program.surface_records
     assert_agree((packed.image(), packed.film.variance_of_mean_image()),
                  (scalar.image(), scalar.film.variance_of_mean_image()), ("packets", "scalar"))
 
