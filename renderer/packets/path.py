@@ -23,6 +23,7 @@ import taichi as ti
 from renderer.geometry.interface import INF, Hit, Ray, Surface
 from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
 from renderer.materials.kinds import KIND_IDS
+from renderer.packets import conductor as conductor_lanes
 from renderer.packets import lambert, traversal
 from renderer.packets.lanes import any_lane, mask, offset_origin, seeded
 from renderer.packets.shading_normals import consistent_normals, interpolated_normals
@@ -32,6 +33,7 @@ from renderer.sampling.rng import uniform
 
 INV_PI = 0.31830988618379067
 DIFFUSE = KIND_IDS["diffuse"]
+CONDUCTOR = KIND_IDS["conductor"]
 
 
 @ti.func
@@ -239,9 +241,14 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
             lg += ti.select(emits == 1, tg * weight * eg, 0.0)
             lb += ti.select(emits == 1, tb * weight * eb, 0.0)
         general = live * 0
+        conductor = live * 0  # rough conductors shaded as lanes (renderer/packets/conductor.py)
+        alpha = zero
+        if ti.static(ctx.lane_conductors):
+            alpha = conductor_lanes.gather(ctx.materials.table, material, zero)
+            conductor = live & mask(kind == CONDUCTOR) & mask(alpha > 0.0)
         if ti.static(has_general):
             # every lane where the program takes surface records (Lambert's lanes know only the geometric normal)
-            general = live if ti.static(ctx.surface_records) else live & mask(kind != DIFFUSE)
+            general = live if ti.static(ctx.surface_records) else live & mask(kind != DIFFUSE) & (1 - conductor)
         # The last vertex ends the path here, or once its open AOVs are known (below)
         last = max_depth >= 0 and bounces + 1 >= max_depth
         if last:
@@ -298,6 +305,26 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
                 shading_y = ti.select(is_general, g_y, shading_y)
                 shading_z = ti.select(is_general, g_z, shading_z)
                 smooth = ti.select(is_general, g_smooth, smooth)
+        if ti.static(ctx.lane_conductors):  # (no AOVs: those scenes take the conductors through general lanes)
+            if not last and any_lane(conductor):
+                is_conductor = conductor == 1
+                if ti.static(light_sampling):
+                    cr, cg, cb, c_pdf = conductor_lanes.toward(ctx.materials.table, material, alpha, wx, wy, wz, fx,
+                                                               fy, fz, snx, sny, snz, nx, ny, nz, -dx, -dy, -dz)
+                    gr, gg, gb = ti.select(is_conductor, cr, gr), ti.select(is_conductor, cg, gg), \
+                        ti.select(is_conductor, cb, gb)
+                    bsdf_pdf = ti.select(is_conductor, c_pdf, bsdf_pdf)
+                    usable = ti.select(is_conductor, mask(ti.max(cr, ti.max(cg, cb)) > 0.0), usable)
+                cx, cy, cz, cwr, cwg, cwb, c_next_pdf, c_valid = conductor_lanes.sample(
+                    ctx.materials.table, material, alpha, v1, v2, fx, fy, fz, snx, sny, snz, nx, ny, nz, -dx, -dy, -dz)
+                bx, by, bz = ti.select(is_conductor, cx, bx), ti.select(is_conductor, cy, by), \
+                    ti.select(is_conductor, cz, bz)
+                weight_r, weight_g, weight_b = (ti.select(is_conductor, cwr, weight_r),
+                                                ti.select(is_conductor, cwg, weight_g),
+                                                ti.select(is_conductor, cwb, weight_b))
+                next_pdf = ti.select(is_conductor, c_next_pdf, next_pdf)
+                next_valid = ti.select(is_conductor, c_valid, next_valid)
+                next_delta = ti.select(is_conductor, 0, next_delta)
         if ti.static(aovs):
             # the first vertex with a smooth part closes the AOVs; a delta vertex stands in until then
             here = (live == 1) & (aov_open == 1)
@@ -345,7 +372,7 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
                 add = (t_max >= 0.0) & (blocker < 0)
                 f = cos_i * INV_PI * scale
                 if ti.static(has_general):
-                    is_general = general == 1
+                    is_general = (general | conductor) == 1  # their f cos is in g (rgb)
                     lr += ti.select(add, tr * ti.select(is_general, gr * scale, ar * f) * rr, 0.0)
                     lg += ti.select(add, tg * ti.select(is_general, gg * scale, ag * f) * rg, 0.0)
                     lb += ti.select(add, tb * ti.select(is_general, gb * scale, ab * f) * rb, 0.0)

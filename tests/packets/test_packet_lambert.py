@@ -86,7 +86,7 @@ def configurations(count: int, seed: int):
     wo = unit(rng.normal(size=(count, 3)))
     graze = slice(count // 10, count // 5)
     in_plane = unit(wo[graze] - np.einsum("ij,ij->i", wo[graze], ng[graze])[:, None] * ng[graze])
-    lift = rng.uniform(-0.005, 0.005, (count // 10, 1))
+    lift = rng.uniform(-0.005, 0.005, (len(in_plane), 1))
     wo[graze] = unit(in_plane + lift * ng[graze])
     wi = unit(rng.normal(size=(count, 3)))
     u = rng.random((count, 2))
