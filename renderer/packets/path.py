@@ -309,14 +309,16 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
             if not last and any_lane(conductor):
                 is_conductor = conductor == 1
                 if ti.static(light_sampling):
-                    cr, cg, cb, c_pdf = conductor_lanes.toward(ctx.materials.table, material, alpha, wx, wy, wz, fx,
-                                                               fy, fz, snx, sny, snz, nx, ny, nz, -dx, -dy, -dz)
+                    cr, cg, cb, c_pdf = conductor_lanes.toward(ctx.materials.table, ctx.bsdf.energy, material, alpha,
+                                                               wx, wy, wz, fx, fy, fz, snx, sny, snz, nx, ny, nz, -dx,
+                                                               -dy, -dz)
                     gr, gg, gb = ti.select(is_conductor, cr, gr), ti.select(is_conductor, cg, gg), \
                         ti.select(is_conductor, cb, gb)
                     bsdf_pdf = ti.select(is_conductor, c_pdf, bsdf_pdf)
                     usable = ti.select(is_conductor, mask(ti.max(cr, ti.max(cg, cb)) > 0.0), usable)
                 cx, cy, cz, cwr, cwg, cwb, c_next_pdf, c_valid = conductor_lanes.sample(
-                    ctx.materials.table, material, alpha, v1, v2, fx, fy, fz, snx, sny, snz, nx, ny, nz, -dx, -dy, -dz)
+                    ctx.materials.table, ctx.bsdf.energy, material, alpha, uniform(key, dim + dims.BSDF_LOBE), v1, v2,
+                    fx, fy, fz, snx, sny, snz, nx, ny, nz, -dx, -dy, -dz)
                 bx, by, bz = ti.select(is_conductor, cx, bx), ti.select(is_conductor, cy, by), \
                     ti.select(is_conductor, cz, bz)
                 weight_r, weight_g, weight_b = (ti.select(is_conductor, cwr, weight_r),

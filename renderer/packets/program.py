@@ -59,11 +59,10 @@ class PacketProgram:
         # Rays carry cones (the pixel's footprint) where textures are filtered, as RenderProgram's
         self.filters_textures = getattr(geometry, "filters_textures", False)
         self.bsdf = Bsdf(materials, features) if self.has_general else None
-        # Rough conductors as lanes (renderer/packets/conductor.py) where their lobe is plain GGX
-        # without energy compensation (pbrt's and Mitsuba's scenes), and no AOVs are asked for
-        self.lane_conductors = ("conductor" in features.material_kinds and not features.energy_compensation
-                                and not self.surface_records and not features.has_microfacet_models
-                                and not self.writes_aovs)
+        # Rough conductors as lanes (renderer/packets/conductor.py) where their lobe is isotropic GGX
+        # and no AOVs are asked for
+        self.lane_conductors = ("conductor" in features.material_kinds and not self.surface_records
+                                and not features.has_microfacet_models and not self.writes_aovs)
         self.scalar_bounces = scalar_bounces(geometry)  # a large world's incoherent rays: one lane at a time
         self._make_scalar = make_scalar
         self._scalar = None

@@ -1,5 +1,5 @@
 """Rough conductors as lanes (renderer/packets/conductor.py) against the scalar BSDF they stand in
-for (no energy compensation, as in pbrt's and Mitsuba's scenes): the value and density toward a
+for, without energy compensation (as in pbrt's and Mitsuba's scenes) and with it: the value and density toward a
 direction (Bsdf.eval_at, shading normals and pbrt's sides rule included), each sample's weight and
 density (the scalar f cos / pdf and pdf at the sampled direction) and validity, and the samples'
 distribution (chi-square against the scalar density, level 0.01 with Sidak's correction)."""
@@ -25,23 +25,24 @@ SPECS = (MaterialSpec(name="copper", kind="conductor", roughness=0.45, eta=(0.2,
          MaterialSpec(name="gold", kind="conductor", roughness=0.3, base_color=(1.0, 0.78, 0.34),
                       edge_tint=(0.9, 0.9, 0.6), specular_color=(0.9, 1.0, 1.0)),
          MaterialSpec(name="polished", kind="conductor", roughness=0.1, eta=(0.2, 0.92, 1.1), k=(3.9, 2.45, 2.14)))
-FEATURES = Features(material_kinds=frozenset({"conductor"}), energy_compensation=False)
 
 
-@pytest.fixture(scope="module")
-def bench():
-    return FixedBench(SPECS, FEATURES)
+@pytest.fixture(scope="module", params=[False, True], ids=["single", "compensated"])
+def bench(request):
+    bench = FixedBench(SPECS, Features(material_kinds=frozenset({"conductor"}), energy_compensation=request.param))
+    assert (bench.bsdf.energy is not None) == request.param
+    return bench
 
 
 @ti.kernel
-def _lanes(table: ti.template(), material: ti.types.ndarray(dtype=ti.i32, ndim=1),
+def _lanes(table: ti.template(), energy: ti.template(), material: ti.types.ndarray(dtype=ti.i32, ndim=1),
            ng: ti.types.ndarray(dtype=vec3, ndim=1), s: ti.types.ndarray(dtype=vec3, ndim=1),
            wo: ti.types.ndarray(dtype=vec3, ndim=1), wi: ti.types.ndarray(dtype=vec3, ndim=1),
-           u: ti.types.ndarray(dtype=ti.math.vec2, ndim=1), out: ti.types.ndarray(ndim=2)):
+           u: ti.types.ndarray(dtype=vec3, ndim=1), out: ti.types.ndarray(ndim=2)):
     for p in range(ng.shape[0] // W):
         z = ti.Vector([0.0] * W)
         m = ti.Vector([0] * W)
-        nx, ny, nz, sx, sy, sz, ox, oy, oz, ix, iy, iz, v1, v2 = z, z, z, z, z, z, z, z, z, z, z, z, z, z
+        nx, ny, nz, sx, sy, sz, ox, oy, oz, ix, iy, iz, lobe, v1, v2 = z, z, z, z, z, z, z, z, z, z, z, z, z, z, z
         for k in ti.static(range(W)):
             i = p * W + k
             m[k] = material[i]
@@ -49,14 +50,14 @@ def _lanes(table: ti.template(), material: ti.types.ndarray(dtype=ti.i32, ndim=1
             sx[k], sy[k], sz[k] = s[i].x, s[i].y, s[i].z
             ox[k], oy[k], oz[k] = wo[i].x, wo[i].y, wo[i].z
             ix[k], iy[k], iz[k] = wi[i].x, wi[i].y, wi[i].z
-            v1[k], v2[k] = u[i].x, u[i].y
+            lobe[k], v1[k], v2[k] = u[i].x, u[i].y, u[i].z
         snx, sny, snz = consistent_normals(sx, sy, sz, nx, ny, nz, ox, oy, oz)
         fx, fy, fz = lobe_normal(snx, sny, snz, ox * nx + oy * ny + oz * nz)
         alpha = conductor.gather(table, m, z)
-        vr, vg, vb, pdf = conductor.toward(table, m, alpha, ix, iy, iz, fx, fy, fz, snx, sny, snz, nx, ny, nz, ox, oy,
-                                           oz)
-        bx, by, bz, wr, wg, wb, b_pdf, valid = conductor.sample(table, m, alpha, v1, v2, fx, fy, fz, snx, sny, snz,
-                                                                nx, ny, nz, ox, oy, oz)
+        vr, vg, vb, pdf = conductor.toward(table, energy, m, alpha, ix, iy, iz, fx, fy, fz, snx, sny, snz, nx, ny, nz,
+                                           ox, oy, oz)
+        bx, by, bz, wr, wg, wb, b_pdf, valid = conductor.sample(table, energy, m, alpha, lobe, v1, v2, fx, fy, fz, snx,
+                                                                sny, snz, nx, ny, nz, ox, oy, oz)
         for k in ti.static(range(W)):
             i = p * W + k
             out[i, 0], out[i, 1], out[i, 2], out[i, 3] = vr[k], vg[k], vb[k], pdf[k]
@@ -84,13 +85,14 @@ def _scalar(bsdf: ti.template(), material: ti.types.ndarray(dtype=ti.i32, ndim=1
 
 def run_lanes(bench, material, ng, s, wo, wi, u):
     out = np.zeros((len(ng), 12), np.float32)
-    _lanes(bench.table.table, material, ng, s, wo, wi, u, out)
+    _lanes(bench.table.table, bench.bsdf.energy, material, ng, s, wo, wi, u, out)
     return out
 
 
 def test_conductor_lanes_evaluate_and_sample_as_the_scalar_bsdf_does(bench):
     count = 12288
-    ng, s, wo, wi, u = configurations(count, seed=11)
+    ng, s, wo, wi, u2 = configurations(count, seed=11)
+    u = np.concatenate([np.random.default_rng(13).random((count, 1)), u2], axis=1).astype(np.float32)
     # light directions near the mirror direction about the shading normal as well, where the
     # narrow lobes have their value
     near = slice(count // 2, count)
@@ -142,16 +144,17 @@ def test_conductor_lane_samples_follow_the_scalar_density(bench, spec, cos_o):
     rng = np.random.default_rng(100 + spec * 10 + int(cos_o * 100))
     tile = lambda v: np.tile(v, (count, 1)).astype(np.float32)  # noqa: E731
     material = np.full(count, bench.ids[SPECS[spec]], np.int32)
-    lanes = run_lanes(bench, material, tile(n), tile(n), tile(wo), tile(n), rng.random((count, 2)).astype(np.float32))
+    lanes = run_lanes(bench, material, tile(n), tile(n), tile(wo), tile(n), rng.random((count, 3)).astype(np.float32))
     result = chi2_adaptive(lanes[:, 4:7].astype(np.float64), bench.pdf_callable(bench.ids[SPECS[spec]], n, wo),
                            valid=lanes[:, 11] == 1, lossy=True, alpha=0.01, num_tests=len(CASES))
     assert result, result.report
 
 
-def test_packets_render_rough_conductors_as_lanes_with_the_scalar_paths_image(tmp_path):
+@pytest.mark.parametrize("compensation", [False, True])
+def test_packets_render_rough_conductors_as_lanes_with_the_scalar_paths_image(tmp_path, compensation):
     """The Cornell box of every material kind (a rough conductor box, a mirror, glass, a principled
-    paint) without energy compensation: the rough conductor's lanes are shaded as lanes, the others
-    through the scalar BSDF; the image is the scalar path's (the suite's z-tests)."""
+    paint), with and without energy compensation: the rough conductor's lanes are shaded as lanes,
+    the others through the scalar BSDF; the image is the scalar path's (the suite's z-tests)."""
     from renderer.packets.program import PacketProgram
     from tests.packets.test_packet_render import render
     from tests.packets.test_packet_shading import cornell_of_materials
@@ -160,10 +163,11 @@ def test_packets_render_rough_conductors_as_lanes_with_the_scalar_paths_image(tm
     path = cornell_of_materials(tmp_path)
     text = path.read_text()
     assert "[render]\n" in text
-    path.write_text(text.replace("[render]\n", "[render]\nenergy_compensation = false\n", 1))
+    path.write_text(text.replace("[render]\n", f"[render]\nenergy_compensation = {str(compensation).lower()}\n", 1))
     scalar = render(path, 0, "mis", seed=81, spp=256, size=(20, 20))
     packed = render(path, 4, "mis", seed=82, spp=256, size=(20, 20))
     program = packed.program("mis", packed.features(), "independent")
     assert isinstance(program, PacketProgram) and program.lane_conductors
+    assert (program.bsdf.energy is not None) == compensation
     assert_agree((packed.image(), packed.film.variance_of_mean_image()),
                  (scalar.image(), scalar.film.variance_of_mean_image()), ("packets", "scalar"))
