@@ -305,7 +305,16 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
                 shading_y = ti.select(is_general, g_y, shading_y)
                 shading_z = ti.select(is_general, g_z, shading_z)
                 smooth = ti.select(is_general, g_smooth, smooth)
-        if ti.static(ctx.lane_conductors):  # (no AOVs: those scenes take the conductors through general lanes)
+        if ti.static(ctx.lane_conductors and aovs):
+            # a rough conductor lane's AOV albedo: Bsdf.albedo's (its base colour, or for a complex index
+            # the head-on reflectance); its shading normal is the lanes', and it has a smooth part
+            for k in ti.static(range(ox.n)):
+                row = ctx.materials.table[material[k]]
+                if conductor[k] == 1 and row.complex_ior == 1:
+                    e, x = row.eta, row.k
+                    head_on = ((e - 1.0) ** 2 + x * x) / ((e + 1.0) ** 2 + x * x)
+                    albedo_r[k], albedo_g[k], albedo_b[k] = head_on.x, head_on.y, head_on.z
+        if ti.static(ctx.lane_conductors):
             if not last and any_lane(conductor):
                 is_conductor = conductor == 1
                 if ti.static(light_sampling):

@@ -60,9 +60,8 @@ class PacketProgram:
         self.filters_textures = getattr(geometry, "filters_textures", False)
         self.bsdf = Bsdf(materials, features) if self.has_general else None
         # Rough conductors as lanes (renderer/packets/conductor.py) where their lobe is isotropic GGX
-        # and no AOVs are asked for
         self.lane_conductors = ("conductor" in features.material_kinds and not self.surface_records
-                                and not features.has_microfacet_models and not self.writes_aovs)
+                                and not features.has_microfacet_models)
         self.scalar_bounces = scalar_bounces(geometry)  # a large world's incoherent rays: one lane at a time
         self._make_scalar = make_scalar
         self._scalar = None
