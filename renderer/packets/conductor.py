@@ -33,19 +33,38 @@ def gather(table: ti.template(), material, like):
 
 
 @ti.func
-def fresnel(table: ti.template(), material, cos_i):
-    """lobes.conductor_reflectance of each lane's material row at cos_i: (r, g, b) lanes."""
+def _reflectance(table: ti.template(), material, cos_i, average: ti.template()):
+    """Per lane, lobes.conductor_reflectance of its material row at cos_i or (average) its
+    cosine-weighted mean, lobes.conductor_reflectance_average: (r, g, b) lanes."""
     fr, fg, fb = cos_i * 0.0, cos_i * 0.0, cos_i * 0.0
     for k in ti.static(range(cos_i.n)):
         row = table[material[k]]
         f = ti.math.vec3(0.0)
-        if row.complex_ior == 1:
-            f = mf.fresnel_conductor(cos_i[k], row.eta, row.k)
+        if ti.static(average):
+            if row.complex_ior == 1:
+                f = row.fresnel_avg
+            else:
+                f = lobes.conductor_fresnel_average(row.base_color, row.edge_tint)
         else:
-            f = lobes.conductor_fresnel(cos_i[k], row.base_color, row.edge_tint)
+            if row.complex_ior == 1:
+                f = mf.fresnel_conductor(cos_i[k], row.eta, row.k)
+            else:
+                f = lobes.conductor_fresnel(cos_i[k], row.base_color, row.edge_tint)
         f *= row.specular_color
         fr[k], fg[k], fb[k] = f.x, f.y, f.z
     return fr, fg, fb
+
+
+@ti.func
+def fresnel(table: ti.template(), material, cos_i):
+    """lobes.conductor_reflectance of each lane's material row at cos_i: (r, g, b) lanes."""
+    return _reflectance(table, material, cos_i, False)
+
+
+@ti.func
+def fresnel_average(table: ti.template(), material, like):
+    """lobes.conductor_reflectance_average of each lane's material row: (r, g, b) lanes."""
+    return _reflectance(table, material, like, True)
 
 
 @ti.func
@@ -73,22 +92,6 @@ def compensates(energy) -> bool:
     """Whether the lanes add the multiple-scattering lobe: energy is the scene's GgxAlbedo tables,
     or None (a compile-time choice)."""
     return energy is not None
-
-
-@ti.func
-def fresnel_average(table: ti.template(), material, like):
-    """lobes.conductor_reflectance_average of each lane's material row: (r, g, b) lanes."""
-    fr, fg, fb = like * 0.0, like * 0.0, like * 0.0
-    for k in ti.static(range(like.n)):
-        row = table[material[k]]
-        f = ti.math.vec3(0.0)
-        if row.complex_ior == 1:
-            f = row.fresnel_avg
-        else:
-            f = lobes.conductor_fresnel_average(row.base_color, row.edge_tint)
-        f *= row.specular_color
-        fr[k], fg[k], fb[k] = f.x, f.y, f.z
-    return fr, fg, fb
 
 
 @ti.func
