@@ -470,8 +470,7 @@ class Bsdf:
         value = mat.base_color
         if ti.static(self.features.has_kind("conductor") or self.features.has_kind("coated")):
             if mat.complex_ior == 1:
-                e, k = mat.eta, mat.k
-                value = ((e - 1.0) ** 2 + k * k) / ((e + 1.0) ** 2 + k * k)
+                value = mf.head_on_reflectance(mat.eta, mat.k)
         return value
 
 

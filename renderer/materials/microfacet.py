@@ -375,6 +375,12 @@ def _fresnel_conductor_channel(c, s2, eta, k):
 
 
 @ti.func
+def head_on_reflectance(eta, k):
+    """fresnel_conductor at normal incidence, ((eta - 1)^2 + k^2) / ((eta + 1)^2 + k^2) (vec3)."""
+    return ((eta - 1.0) ** 2 + k * k) / ((eta + 1.0) ** 2 + k * k)
+
+
+@ti.func
 def fresnel_conductor(cos_i, eta, k):
     """Exact unpolarised Fresnel reflectance at an interface to a conductor of complex index
     eta + i k (relative to the outside; vec3 per channel), cos_i in [0, 1]. k = 0 is the dielectric

@@ -14,22 +14,9 @@ import taichi as ti
 from renderer.materials import lobes
 from renderer.materials import microfacet as mf
 from renderer.materials.energy import MIN_LOSS
-from renderer.materials.table import alpha_of
-from renderer.packets.lanes import basis, cosine_hemisphere, dot, mask, normalized, sincos_2pi
+from renderer.packets.lanes import PI, basis, cosine_hemisphere, dot, mask, normalized, sincos_2pi
 from renderer.packets.shading_normals import sides_agree
-
-PI = 3.141592653589793
-INV_PI = 0.31830988618379067
-
-
-@ti.func
-def gather(table: ti.template(), material, like):
-    """Per lane, the GGX width of its material row (Bsdf.shade's alpha: 0 for a smooth one);
-    `like`: float lanes for the width."""
-    alpha = like * 0.0
-    for k in ti.static(range(like.n)):
-        alpha[k] = alpha_of(table[material[k]].roughness)
-    return alpha
+from renderer.sampling.warps import INV_PI
 
 
 @ti.func

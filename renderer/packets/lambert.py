@@ -8,8 +8,7 @@ import taichi as ti
 
 from renderer.packets.lanes import cosine_hemisphere, mask
 from renderer.packets.shading_normals import sides_agree
-
-INV_PI = 0.31830988618379067
+from renderer.sampling.warps import INV_PI
 
 
 @ti.func

@@ -3,8 +3,9 @@ of renderer/integrators/tracer.py for the scenes renderer/packets/support.py adm
 kind but the null boundary, textures, maps and shading normals, emissive triangles, quads and
 spheres of one colour, any environment, no media).
 
-Lambert surfaces are shaded in lane arithmetic, about the shading normal (vertex normals
-interpolated, renderer/packets/shading_normals.py). Lanes on any other kind of material, and every
+Lambert surfaces and rough GGX conductors (lambert.py, conductor.py) are shaded in lane
+arithmetic, about the shading normal (vertex normals interpolated, shading_normals.py). Lanes on
+any other kind of material (delta mirrors included), and every
 lane where the look of a surface point needs the geometry's own record (textures, maps, vertex
 colours: the program's surface_records), are `general`: compiled only where a scene has them,
 they take the scalar BSDF (renderer/materials/bsdf.py) one lane after another in a run-time loop:
@@ -23,6 +24,8 @@ import taichi as ti
 from renderer.geometry.interface import INF, Hit, Ray, Surface
 from renderer.integrators.tracer import MAX_VERTICES, RR_DEPTH
 from renderer.materials.kinds import KIND_IDS
+from renderer.materials.microfacet import head_on_reflectance
+from renderer.materials.table import alpha_of
 from renderer.packets import conductor as conductor_lanes
 from renderer.packets import lambert, traversal
 from renderer.packets.lanes import any_lane, mask, offset_origin, seeded
@@ -30,8 +33,8 @@ from renderer.packets.shading_normals import consistent_normals, interpolated_no
 from renderer.packets.surfaces import hit_surface
 from renderer.sampling import dims
 from renderer.sampling.rng import uniform
+from renderer.sampling.warps import INV_PI
 
-INV_PI = 0.31830988618379067
 DIFFUSE = KIND_IDS["diffuse"]
 CONDUCTOR = KIND_IDS["conductor"]
 
@@ -74,8 +77,8 @@ def _general_lanes(ctx: ti.template(), toward_light: ti.template(), last, key, d
     the numbers (BSDF_LOBE, v1, v2) the scalar tracer draws. The ray (o, its cone's width and
     spread) and its hit (t, b1, b2, prim) make the geometry's own surface record where the program
     takes surface records (otherwise the record is the point's, its geometric normal's and its
-    shading normal's sn, all an untextured material reads of it). `last`: the path's last vertex, which only shades (for its
-    AOVs). Returns the lanes given, with the general lanes' values in place: (f cos rgb, bsdf_pdf,
+    shading normal's sn, all an untextured material reads of it). `last`: the path's last vertex,
+    which only shades (for its AOVs). Returns the lanes given, with the general lanes' values in place: (f cos rgb, bsdf_pdf,
     usable, the next direction xyz, its weight rgb, pdf, valid, delta), then the general lanes'
     AOV albedo rgb and shading normal xyz and whether the material has a smooth part."""
     gr, gg, gb = wx * 0.0, wx * 0.0, wx * 0.0
@@ -216,6 +219,8 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
         er, eg, eb = zero, zero, zero
         two_sided = live * 0
         kind = live * 0
+        alpha = zero  # a rough conductor lane's GGX width (renderer/packets/conductor.py)
+        albedo_r, albedo_g, albedo_b = zero, zero, zero  # the AOV albedo, Bsdf.albedo's
         for k in ti.static(range(ox.n)):
             row = ctx.materials.table[material[k]]
             ar[k], ag[k], ab[k] = row.base_color.x, row.base_color.y, row.base_color.z
@@ -223,6 +228,14 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
             two_sided[k] = row.two_sided_emission
             if ti.static(has_general):
                 kind[k] = row.kind
+            if ti.static(ctx.lane_conductors):
+                alpha[k] = alpha_of(row.roughness)
+            if ti.static(aovs):
+                albedo = row.base_color
+                if ti.static(ctx.lane_conductors):  # a measured metal's: its head-on reflectance
+                    if row.complex_ior == 1:
+                        albedo = head_on_reflectance(row.eta, row.k)
+                albedo_r[k], albedo_g[k], albedo_b[k] = albedo.x, albedo.y, albedo.z
         # emission found by the ray
         emits = live & mask((cos_o > 0.0) | (two_sided != 0)) & mask(ti.max(er, ti.max(eg, eb)) > 0.0)
         if any_lane(emits):
@@ -241,13 +254,11 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
             lg += ti.select(emits == 1, tg * weight * eg, 0.0)
             lb += ti.select(emits == 1, tb * weight * eb, 0.0)
         general = live * 0
-        conductor = live * 0  # rough conductors shaded as lanes (renderer/packets/conductor.py)
-        alpha = zero
+        conductor = live * 0  # rough conductors shaded as lanes
         if ti.static(ctx.lane_conductors):
-            alpha = conductor_lanes.gather(ctx.materials.table, material, zero)
             conductor = live & mask(kind == CONDUCTOR) & mask(alpha > 0.0)
         if ti.static(has_general):
-            # every lane where the program takes surface records (Lambert's lanes know only the geometric normal)
+            # every lane where the program takes surface records (which only the scalar code reads)
             general = live if ti.static(ctx.surface_records) else live & mask(kind != DIFFUSE) & (1 - conductor)
         # The last vertex ends the path here, or once its open AOVs are known (below)
         last = max_depth >= 0 and bounces + 1 >= max_depth
@@ -287,7 +298,6 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
         # General lanes: f cos toward the light (Lambert lanes' is albedo * cos_i / pi), their own
         # sample, and what their AOVs are
         gr, gg, gb = zero, zero, zero
-        albedo_r, albedo_g, albedo_b = ar, ag, ab
         shading_x, shading_y, shading_z = snx, sny, snz
         smooth = live
         if ti.static(has_general):
@@ -305,15 +315,6 @@ def trace_paths(ctx: ti.template(), key, ox, oy, oz, dx, dy, dz, spread, live_in
                 shading_y = ti.select(is_general, g_y, shading_y)
                 shading_z = ti.select(is_general, g_z, shading_z)
                 smooth = ti.select(is_general, g_smooth, smooth)
-        if ti.static(ctx.lane_conductors and aovs):
-            # a rough conductor lane's AOV albedo: Bsdf.albedo's (its base colour, or for a complex index
-            # the head-on reflectance); its shading normal is the lanes', and it has a smooth part
-            for k in ti.static(range(ox.n)):
-                row = ctx.materials.table[material[k]]
-                if conductor[k] == 1 and row.complex_ior == 1:
-                    e, x = row.eta, row.k
-                    head_on = ((e - 1.0) ** 2 + x * x) / ((e + 1.0) ** 2 + x * x)
-                    albedo_r[k], albedo_g[k], albedo_b[k] = head_on.x, head_on.y, head_on.z
         if ti.static(ctx.lane_conductors):
             if not last and any_lane(conductor):
                 is_conductor = conductor == 1

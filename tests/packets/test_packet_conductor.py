@@ -9,6 +9,7 @@ import taichi as ti
 
 from renderer.geometry.interface import Surface
 from renderer.geometry.shading import consistent_shading_normal
+from renderer.materials.table import alpha_of
 from renderer.packets import conductor
 from renderer.packets.lambert import lobe_normal
 from renderer.packets.shading_normals import consistent_normals
@@ -53,7 +54,9 @@ def _lanes(table: ti.template(), energy: ti.template(), material: ti.types.ndarr
             lobe[k], v1[k], v2[k] = u[i].x, u[i].y, u[i].z
         snx, sny, snz = consistent_normals(sx, sy, sz, nx, ny, nz, ox, oy, oz)
         fx, fy, fz = lobe_normal(snx, sny, snz, ox * nx + oy * ny + oz * nz)
-        alpha = conductor.gather(table, m, z)
+        alpha = z * 0.0
+        for k in ti.static(range(W)):
+            alpha[k] = alpha_of(table[m[k]].roughness)
         vr, vg, vb, pdf = conductor.toward(table, energy, m, alpha, ix, iy, iz, fx, fy, fz, snx, sny, snz, nx, ny, nz,
                                            ox, oy, oz)
         bx, by, bz, wr, wg, wb, b_pdf, valid = conductor.sample(table, energy, m, alpha, lobe, v1, v2, fx, fy, fz, snx,
